@@ -1,0 +1,72 @@
+"""The ``antsim`` command line: one console script with a subcommand per job.
+
+Every subcommand lives in :mod:`antsim.commands` as a module with ``configure(parser)`` and
+``main(args) -> int``; modules are imported only when their subcommand runs, so ``--help``
+stays fast. Bad input of any kind ends with one line on stderr and exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from controller.errors import InputError
+
+from ._version import __version__
+
+#: subcommand -> (module, one-line help)
+SUBCOMMANDS: dict[str, tuple[str, str]] = {
+    "run": ("antsim.commands.run", "simulate a pointing campaign, reduce, fit and report"),
+    "fit": ("antsim.commands.fit", "fit a pointing model to recordings or a TPOINT data file"),
+    "diagnose": ("antsim.commands.diagnose", "find the physics a pointing model misses"),
+    "plan": ("antsim.commands.plan", "answer what-if questions about an observing plan"),
+    "blindtest": ("antsim.commands.blindtest", "score diagnose on recordings with hidden effects"),
+    "demo": ("antsim.commands.demo", "teaching walk-through: cold start to closed loop"),
+}
+
+EXIT_INPUT = 2
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """An ArgumentParser whose usage errors are one line and exit status 2."""
+
+    def error(self, message: str):  # type: ignore[override]
+        self.exit(EXIT_INPUT, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = OneLineParser(
+        prog="antsim",
+        description="Simulate a radio telescope being pointed, and calibrate its pointing.",
+    )
+    parser.add_argument("--version", action="version", version=f"antsim {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser)
+    for name, (module_name, help_text) in SUBCOMMANDS.items():
+        sp = sub.add_parser(name, help=help_text, description=help_text)
+        module = importlib.import_module(module_name)
+        module.configure(sp)
+        sp.set_defaults(_module=module_name)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "command", None):
+        parser.print_help()
+        return EXIT_INPUT
+    module = importlib.import_module(args._module)
+    try:
+        return int(module.main(args) or 0)
+    except InputError as err:
+        print(f"antsim {args.command}: error: {err.line()}", file=sys.stderr)
+        return EXIT_INPUT
+    except KeyboardInterrupt:
+        print(f"antsim {args.command}: interrupted; recordings written so far are kept",
+              file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
