@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .terms import Term, get_term
+from .terms import Term, combine_scalar, evaluate_basis, get_term
 from .units import ARCSEC_PER_RAD, RAD_PER_ARCSEC, to_value
 
 __all__ = ["NAMED_MODELS", "PointingModel", "named_model_terms"]
@@ -116,15 +116,9 @@ class PointingModel:
     # ------------------------------------------------------------------ evaluation (floats)
     def design_matrix(self, az_rad, el_rad) -> tuple[np.ndarray, np.ndarray]:
         """TPOINT-sign correction basis, each of shape ``(N, M)``: dA and dE per radian."""
-        az = np.atleast_1d(np.asarray(az_rad, dtype=float))
-        el = np.atleast_1d(np.asarray(el_rad, dtype=float))
-        az, el = np.broadcast_arrays(az, el)
-        n, m = az.size, len(self.terms)
-        basis_az = np.empty((n, m))
-        basis_el = np.empty((n, m))
-        for j, term in enumerate(self.terms):
-            basis_az[:, j], basis_el[:, j] = term.basis(az.ravel(), el.ravel())
-        return basis_az, basis_el
+        az, el = np.broadcast_arrays(np.atleast_1d(np.asarray(az_rad, dtype=float)),
+                                     np.atleast_1d(np.asarray(el_rad, dtype=float)))
+        return evaluate_basis(self.terms, az.reshape(-1), el.reshape(-1))
 
     def offset_rad(self, az_rad, el_rad) -> tuple[np.ndarray, np.ndarray]:
         """Indicated minus true (daz, del) in radians at true position(s), plain floats."""
@@ -134,6 +128,19 @@ class PointingModel:
         basis_az, basis_el = self.design_matrix(az_rad, el_rad)
         coeff_rad = self.values_arcsec * RAD_PER_ARCSEC
         return -(basis_az @ coeff_rad).reshape(shape), -(basis_el @ coeff_rad).reshape(shape)
+
+    def offset_scalar_rad(self, az_rad: float, el_rad: float) -> tuple[float, float]:
+        """:meth:`offset_rad` at one point with plain floats (a fast path for simulations)."""
+        corr_az, corr_el = combine_scalar(self.terms, self._coeff_rad, az_rad, el_rad)
+        return -corr_az, -corr_el
+
+    @property
+    def _coeff_rad(self) -> list[float]:
+        cached = self.__dict__.get("_coeff_cache")
+        if cached is None:
+            cached = [float(v) * RAD_PER_ARCSEC for v in self.values_arcsec]
+            object.__setattr__(self, "_coeff_cache", cached)
+        return cached
 
     def apply_rad(self, az_rad, el_rad) -> tuple[np.ndarray, np.ndarray]:
         """Encoder position to command for true position(s), radians."""

@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Callable
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 
@@ -47,11 +47,19 @@ __all__ = [
     "KATPOINT_EQUIVALENTS",
     "Term",
     "TermError",
+    "combine_scalar",
+    "evaluate_basis",
     "get_term",
     "is_term_name",
 ]
 
-Basis = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+# A term is a sum of components; each component is sign * product of factors, landing in
+# dA (axis "A"), dE (axis "E") or left-right on the sky (axis "S": dA cos E). A factor is
+# (function, argument, multiplier): functions sin cos tan sec cot lin one; arguments
+# "AS" (TPOINT's South-based azimuth), "AN" (North-based azimuth), "E" (elevation) and
+# "Z" (zenith distance). Models evaluate each distinct factor once (see ``evaluate_basis``).
+Factor = tuple[str, str, int]
+Component = tuple[str, float, tuple[Factor, ...]]
 
 
 class TermError(KeyError):
@@ -72,65 +80,147 @@ class Term:
 
     name: str
     description: str
-    _basis: Basis = field(repr=False, compare=False)
+    components: tuple[Component, ...] = field(repr=False)
     kind: str = "angle"
 
     def basis(self, az_rad, el_rad) -> tuple[np.ndarray, np.ndarray]:
         """TPOINT-sign correction (dA, dE) per unit coefficient, radians per radian."""
-        az = np.asarray(az_rad, dtype=float)
-        el = np.asarray(el_rad, dtype=float)
-        d_az, d_el = self._basis(az, el)
-        shape = np.broadcast(az, el).shape
-        return np.broadcast_to(d_az, shape).astype(float), np.broadcast_to(d_el, shape).astype(float)
+        az, el = np.broadcast_arrays(np.asarray(az_rad, dtype=float),
+                                     np.asarray(el_rad, dtype=float))
+        basis_az, basis_el = evaluate_basis((self,), az.reshape(-1), el.reshape(-1))
+        return basis_az[:, 0].reshape(az.shape), basis_el[:, 0].reshape(az.shape)
 
 
-def _zeros(az, el):
-    return np.zeros(np.broadcast(az, el).shape)
+def _argument(arg: str, az: np.ndarray, el: np.ndarray) -> np.ndarray:
+    if arg == "AS":
+        return az - math.pi
+    if arg == "AN":
+        return az
+    if arg == "E":
+        return el
+    return 0.5 * math.pi - el  # "Z"
 
 
-def _az_s(az):
-    """TPOINT's South-based azimuth from our North-based one."""
-    return az - math.pi
+_FUNCTIONS = {
+    "sin": np.sin,
+    "cos": np.cos,
+    "tan": np.tan,
+    "sec": lambda x: 1.0 / np.cos(x),
+    "cot": lambda x: 1.0 / np.tan(x),
+    "lin": lambda x: x,
+}
 
 
-def _sec(el):
-    return 1.0 / np.cos(el)
+def evaluate_basis(terms: Sequence[Term], az_rad: np.ndarray,
+                   el_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """TPOINT-sign correction basis of ``terms`` at 1-D arrays of points: two (N, M) arrays."""
+    n = az_rad.shape[0]
+    basis_az = np.zeros((n, len(terms)))
+    basis_el = np.zeros((n, len(terms)))
+    cache: dict[Factor, np.ndarray] = {}
+    sec_el = None
+    for j, term in enumerate(terms):
+        for axis, sign, factors in term.components:
+            value = None
+            for factor in factors:
+                arr = cache.get(factor)
+                if arr is None:
+                    func, arg, mult = factor
+                    x = _argument(arg, az_rad, el_rad)
+                    arr = _FUNCTIONS[func](x if mult == 1 else mult * x)
+                    cache[factor] = arr
+                value = arr if value is None else value * arr
+            if value is None:
+                value = 1.0
+            if axis == "A":
+                basis_az[:, j] += sign * value
+            elif axis == "E":
+                basis_el[:, j] += sign * value
+            else:  # "S": left-right on the sky, dA = value / cos E
+                if sec_el is None:
+                    sec_el = 1.0 / np.cos(el_rad)
+                basis_az[:, j] += sign * value * sec_el
+    return basis_az, basis_el
+
+
+_MATH = {"sin": math.sin, "cos": math.cos, "tan": math.tan,
+         "sec": lambda x: 1.0 / math.cos(x), "cot": lambda x: 1.0 / math.tan(x),
+         "lin": lambda x: x}
+
+
+def _argument_scalar(arg: str, az: float, el: float) -> float:
+    if arg == "AS":
+        return az - math.pi
+    if arg == "AN":
+        return az
+    if arg == "E":
+        return el
+    return 0.5 * math.pi - el
+
+
+def combine_scalar(terms: Sequence[Term], coeffs: Sequence[float], az_rad: float,
+                   el_rad: float) -> tuple[float, float]:
+    """``sum_j coeffs[j] * basis_j`` at one point, with plain floats (fast for scalars)."""
+    cache: dict[Factor, float] = {}
+    total_az = total_el = 0.0
+    for term, coeff in zip(terms, coeffs, strict=True):
+        if coeff == 0.0:
+            continue
+        for axis, sign, factors in term.components:
+            value = sign * coeff
+            for factor in factors:
+                f = cache.get(factor)
+                if f is None:
+                    func, arg, mult = factor
+                    f = _MATH[func](mult * _argument_scalar(arg, az_rad, el_rad))
+                    cache[factor] = f
+                value *= f
+            if axis == "A":
+                total_az += value
+            elif axis == "E":
+                total_el += value
+            else:
+                total_az += value / math.cos(el_rad)
+    return total_az, total_el
+
+
+def _t(name, desc, *components, kind="angle") -> Term:
+    return Term(name, desc, tuple((ax, float(sg), tuple(fs)) for ax, sg, fs in components), kind)
+
+
+SIN_AS, COS_AS = ("sin", "AS", 1), ("cos", "AS", 1)
+SIN_AN, COS_AN = ("sin", "AN", 1), ("cos", "AN", 1)
+TAN_E, SEC_E, COT_E = ("tan", "E", 1), ("sec", "E", 1), ("cot", "E", 1)
+SIN_E, COS_E = ("sin", "E", 1), ("cos", "E", 1)
 
 
 # ---------------------------------------------------------------------------------------------
 # TPOINT's basic terms (alt-az mount)
 # ---------------------------------------------------------------------------------------------
 def _tpoint_terms() -> dict[str, Term]:
-    t: dict[str, Term] = {}
-
-    def add(name, desc, fn, kind="angle"):
-        t[name] = Term(name, desc, fn, kind)
-
-    add("IA", "azimuth index (encoder zero): dA = -IA",
-        lambda a, e: (-np.ones_like(a + e), _zeros(a, e)))
-    add("IE", "elevation index (encoder zero): dE = +IE",
-        lambda a, e: (_zeros(a, e), np.ones_like(a + e)))
-    add("CA", "collimation, left-right: dA = -CA sec E",
-        lambda a, e: (-_sec(e) + 0 * a, _zeros(a, e)))
-    add("NPAE", "az/el axis non-perpendicularity: dA = -NPAE tan E",
-        lambda a, e: (-np.tan(e) + 0 * a, _zeros(a, e)))
-    add("AN", "azimuth axis tilt, north-south: dA = -AN sin A tan E, dE = -AN cos A",
-        lambda a, e: (-np.sin(_az_s(a)) * np.tan(e), -np.cos(_az_s(a)) + 0 * e))
-    add("AW", "azimuth axis tilt, east-west: dA = -AW cos A tan E, dE = +AW sin A",
-        lambda a, e: (-np.cos(_az_s(a)) * np.tan(e), np.sin(_az_s(a)) + 0 * e))
-    add("TF", "tube flexure (gravitational sag), cos E law: dE = -TF cos E",
-        lambda a, e: (_zeros(a, e), -np.cos(e) + 0 * a))
-    add("TX", "tube flexure / refraction error, cot E law: dE = -TX cot E",
-        lambda a, e: (_zeros(a, e), -1.0 / np.tan(e) + 0 * a))
-    add("ACEC", "azimuth centering error, cos component: dA = +ACEC cos A",
-        lambda a, e: (np.cos(_az_s(a)) + 0 * e, _zeros(a, e)))
-    add("ACES", "azimuth centering error, sin component: dA = +ACES sin A",
-        lambda a, e: (np.sin(_az_s(a)) + 0 * e, _zeros(a, e)))
-    add("ECEC", "elevation centering error, cos component: dE = +ECEC cos E",
-        lambda a, e: (_zeros(a, e), np.cos(e) + 0 * a))
-    add("ECES", "elevation centering error, sin component: dE = +ECES sin E",
-        lambda a, e: (_zeros(a, e), np.sin(e) + 0 * a))
-    return t
+    terms = [
+        _t("IA", "azimuth index (encoder zero): dA = -IA", ("A", -1, ())),
+        _t("IE", "elevation index (encoder zero): dE = +IE", ("E", 1, ())),
+        _t("CA", "collimation, left-right: dA = -CA sec E", ("A", -1, (SEC_E,))),
+        _t("NPAE", "az/el axis non-perpendicularity: dA = -NPAE tan E", ("A", -1, (TAN_E,))),
+        _t("AN", "azimuth axis tilt, north-south: dA = -AN sin A tan E, dE = -AN cos A",
+           ("A", -1, (SIN_AS, TAN_E)), ("E", -1, (COS_AS,))),
+        _t("AW", "azimuth axis tilt, east-west: dA = -AW cos A tan E, dE = +AW sin A",
+           ("A", -1, (COS_AS, TAN_E)), ("E", 1, (SIN_AS,))),
+        _t("TF", "tube flexure (gravitational sag), cos E law: dE = -TF cos E",
+           ("E", -1, (COS_E,))),
+        _t("TX", "tube flexure / refraction error, cot E law: dE = -TX cot E",
+           ("E", -1, (COT_E,))),
+        _t("ACEC", "azimuth centering error, cos component: dA = +ACEC cos A",
+           ("A", 1, (COS_AS,))),
+        _t("ACES", "azimuth centering error, sin component: dA = +ACES sin A",
+           ("A", 1, (SIN_AS,))),
+        _t("ECEC", "elevation centering error, cos component: dE = +ECEC cos E",
+           ("E", 1, (COS_E,))),
+        _t("ECES", "elevation centering error, sin component: dE = +ECES sin E",
+           ("E", 1, (SIN_E,))),
+    ]
+    return {t.name: t for t in terms}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -139,124 +229,84 @@ def _tpoint_terms() -> dict[str, Term]:
 _HARMONIC = re.compile(r"^H([AESZ])([SC])([AEZ])(\d*)(?:([SC])([AEZ])(\d*))?$")
 
 
-def _argument(letter: str, az, el):
-    if letter == "A":
-        return _az_s(az)
-    if letter == "E":
-        return el
-    return 0.5 * math.pi - el  # Z: zenith distance
-
-
 def _harmonic(name: str) -> Term | None:
     m = _HARMONIC.match(name)
     if not m:
         return None
     result, f1, a1, n1, f2, a2, n2 = m.groups()
-    factors = [(f1, a1, int(n1) if n1 else 1)]
+    raw = [(f1, a1, int(n1) if n1 else 1)]
     if f2:
-        factors.append((f2, a2, int(n2) if n2 else 1))
-    if any(n == 0 for _, _, n in factors):
+        raw.append((f2, a2, int(n2) if n2 else 1))
+    if any(n == 0 for _, _, n in raw):
         return None
-
-    def fn(az, el):
-        value = np.ones(np.broadcast(az, el).shape)
-        for func, arg, mult in factors:
-            x = mult * _argument(arg, az, el)
-            value = value * (np.sin(x) if func == "S" else np.cos(x))
-        zero = np.zeros_like(value)
-        if result == "A":
-            return value, zero
-        if result == "E":
-            return zero, value
-        if result == "Z":
-            return zero, -value
-        return value / np.cos(el), zero  # S: left-right on the sky
-
-    words = {"A": "dA", "E": "dE", "S": "dA cos E", "Z": "dZ"}
-    desc = " * ".join(
-        f"{'sin' if f == 'S' else 'cos'}({'' if n == 1 else n}{a})" for f, a, n in factors
+    factors = tuple(
+        ("sin" if f == "S" else "cos", "AS" if a == "A" else a, n) for f, a, n in raw
     )
-    return Term(name, f"harmonic: {words[result]} = {name} {desc}", fn)
+    axis, sign = {"A": ("A", 1), "E": ("E", 1), "S": ("S", 1), "Z": ("E", -1)}[result]
+    words = {"A": "dA", "E": "dE", "S": "dA cos E", "Z": "dZ"}
+    desc = " * ".join(f"{'sin' if f == 'S' else 'cos'}({'' if n == 1 else n}{a})"
+                      for f, a, n in raw)
+    return _t(name, f"harmonic: {words[result]} = {name} {desc}", (axis, sign, factors))
 
 
 # ---------------------------------------------------------------------------------------------
-# Ghigo (1990) W1..W10: indicated - true, North-based azimuth (see module docstring)
+# Ghigo (1990) W1..W10: indicated - true, North-based azimuth (see module docstring); the
+# TPOINT correction is the negative, hence the minus signs below.
 # ---------------------------------------------------------------------------------------------
 def _ghigo_terms() -> dict[str, Term]:
-    t: dict[str, Term] = {}
-
-    def add(name, desc, fn):
-        # fn returns indicated - true; the TPOINT correction is its negative
-        def basis(a, e, fn=fn):
-            d_az, d_el = fn(a, e)
-            return -d_az, -d_el
-
-        t[name] = Term(name, desc, basis)
-
-    add("W1", "azimuth encoder zero: dA = W1",
-        lambda a, e: (np.ones_like(a + e), _zeros(a, e)))
-    add("W2", "collimation: dA = W2 sec E", lambda a, e: (_sec(e) + 0 * a, _zeros(a, e)))
-    add("W3", "az/el axis non-perpendicularity: dA = W3 tan E",
-        lambda a, e: (np.tan(e) + 0 * a, _zeros(a, e)))
-    add("W4", "gravitational sag: dE = W4 cos E", lambda a, e: (_zeros(a, e), np.cos(e) + 0 * a))
-    add("W5", "refraction error: dE = W5 cot E",
-        lambda a, e: (_zeros(a, e), 1.0 / np.tan(e) + 0 * a))
-    add("W6", "elevation encoder zero: dE = W6", lambda a, e: (_zeros(a, e), np.ones_like(a + e)))
-    add("W7", "azimuth axis tilt seen in elevation: dE = W7 cos A",
-        lambda a, e: (_zeros(a, e), np.cos(a) + 0 * e))
-    add("W8", "azimuth axis tilt seen in elevation: dE = W8 sin A",
-        lambda a, e: (_zeros(a, e), np.sin(a) + 0 * e))
-    add("W9", "azimuth axis tilt seen in azimuth: dA = W9 sin A tan E",
-        lambda a, e: (np.sin(a) * np.tan(e), _zeros(a, e)))
-    add("W10", "azimuth axis tilt seen in azimuth: dA = W10 cos A tan E",
-        lambda a, e: (np.cos(a) * np.tan(e), _zeros(a, e)))
-    return t
+    terms = [
+        _t("W1", "azimuth encoder zero: dA = W1", ("A", -1, ())),
+        _t("W2", "collimation: dA = W2 sec E", ("A", -1, (SEC_E,))),
+        _t("W3", "az/el axis non-perpendicularity: dA = W3 tan E", ("A", -1, (TAN_E,))),
+        _t("W4", "gravitational sag: dE = W4 cos E", ("E", -1, (COS_E,))),
+        _t("W5", "refraction error: dE = W5 cot E", ("E", -1, (COT_E,))),
+        _t("W6", "elevation encoder zero: dE = W6", ("E", -1, ())),
+        _t("W7", "azimuth axis tilt seen in elevation: dE = W7 cos A", ("E", -1, (COS_AN,))),
+        _t("W8", "azimuth axis tilt seen in elevation: dE = W8 sin A", ("E", -1, (SIN_AN,))),
+        _t("W9", "azimuth axis tilt seen in azimuth: dA = W9 sin A tan E",
+           ("A", -1, (SIN_AN, TAN_E))),
+        _t("W10", "azimuth axis tilt seen in azimuth: dA = W10 cos A tan E",
+           ("A", -1, (COS_AN, TAN_E))),
+    ]
+    return {t.name: t for t in terms}
 
 
 # ---------------------------------------------------------------------------------------------
-# katpoint P1..P22 (katpoint.PointingModel.offset: indicated - true, North-based azimuth)
+# katpoint P1..P22 (katpoint.PointingModel.offset: indicated - true, North-based azimuth);
+# negated like Ghigo's.
 # ---------------------------------------------------------------------------------------------
 def _katpoint_terms() -> dict[str, Term]:
-    t: dict[str, Term] = {}
+    def kp(name, desc, *components, kind="angle"):
+        flipped = tuple((ax, -sg, fs) for ax, sg, fs in components)
+        return _t(name, f"katpoint {name}: {desc}", *flipped, kind=kind)
 
-    def add(name, desc, fn, kind="angle"):
-        def basis(a, e, fn=fn):
-            d_az, d_el = fn(a, e)
-            return -d_az, -d_el
-
-        t[name] = Term(name, f"katpoint {name}: {desc}", basis, kind)
-
-    z = _zeros
-    add("P1", "az offset: daz = P1", lambda a, e: (np.ones_like(a + e), z(a, e)))
-    add("P2", "az gravitational sag (unused by katpoint for alt-az)", lambda a, e: (z(a, e), z(a, e)))
-    add("P3", "left-right axis skew: daz = P3 tan E", lambda a, e: (np.tan(e) + 0 * a, z(a, e)))
-    add("P4", "collimation: daz = -P4 sec E", lambda a, e: (-_sec(e) + 0 * a, z(a, e)))
-    add("P5", "tilt out: daz = P5 sin A tan E, del = P5 cos A",
-        lambda a, e: (np.sin(a) * np.tan(e), np.cos(a) + 0 * e))
-    add("P6", "tilt over: daz = -P6 cos A tan E, del = P6 sin A",
-        lambda a, e: (-np.cos(a) * np.tan(e), np.sin(a) + 0 * e))
-    add("P7", "el offset: del = P7", lambda a, e: (z(a, e), np.ones_like(a + e)))
-    add("P8", "gravity sag: del = P8 cos E", lambda a, e: (z(a, e), np.cos(e) + 0 * a))
-    add("P9", "el excess scale: del = P9 E", lambda a, e: (z(a, e), e + 0 * a), "scale")
-    add("P10", "cos E in del, redundant with P8 (unused by katpoint)",
-        lambda a, e: (z(a, e), z(a, e)))
-    add("P11", "asymmetric sag: del = P11 sin E", lambda a, e: (z(a, e), np.sin(e) + 0 * a))
-    add("P12", "az excess scale: daz = P12 A", lambda a, e: (a + 0 * e, z(a, e)), "scale")
-    add("P13", "az centering: daz = P13 cos A", lambda a, e: (np.cos(a) + 0 * e, z(a, e)))
-    add("P14", "az centering: daz = P14 sin A", lambda a, e: (np.sin(a) + 0 * e, z(a, e)))
-    add("P15", "el nod twice per turn: del = P15 cos 2A",
-        lambda a, e: (z(a, e), np.cos(2 * a) + 0 * e))
-    add("P16", "el nod twice per turn: del = P16 sin 2A",
-        lambda a, e: (z(a, e), np.sin(2 * a) + 0 * e))
-    add("P17", "az encoder tilt: daz = P17 cos 2A", lambda a, e: (np.cos(2 * a) + 0 * e, z(a, e)))
-    add("P18", "az encoder tilt: daz = P18 sin 2A", lambda a, e: (np.sin(2 * a) + 0 * e, z(a, e)))
-    add("P19", "el encoder scale distortion: del = P19 cos 8E",
-        lambda a, e: (z(a, e), np.cos(8 * e) + 0 * a))
-    add("P20", "el encoder scale distortion: del = P20 sin 8E",
-        lambda a, e: (z(a, e), np.sin(8 * e) + 0 * a))
-    add("P21", "el nod once per turn: del = P21 cos A", lambda a, e: (z(a, e), np.cos(a) + 0 * e))
-    add("P22", "el nod once per turn: del = P22 sin A", lambda a, e: (z(a, e), np.sin(a) + 0 * e))
-    return t
+    terms = [
+        kp("P1", "az offset: daz = P1", ("A", 1, ())),
+        kp("P2", "az gravitational sag (unused by katpoint for alt-az)"),
+        kp("P3", "left-right axis skew: daz = P3 tan E", ("A", 1, (TAN_E,))),
+        kp("P4", "collimation: daz = -P4 sec E", ("A", -1, (SEC_E,))),
+        kp("P5", "tilt out: daz = P5 sin A tan E, del = P5 cos A",
+           ("A", 1, (SIN_AN, TAN_E)), ("E", 1, (COS_AN,))),
+        kp("P6", "tilt over: daz = -P6 cos A tan E, del = P6 sin A",
+           ("A", -1, (COS_AN, TAN_E)), ("E", 1, (SIN_AN,))),
+        kp("P7", "el offset: del = P7", ("E", 1, ())),
+        kp("P8", "gravity sag: del = P8 cos E", ("E", 1, (COS_E,))),
+        kp("P9", "el excess scale: del = P9 E", ("E", 1, (("lin", "E", 1),)), kind="scale"),
+        kp("P10", "cos E in del, redundant with P8 (unused by katpoint)"),
+        kp("P11", "asymmetric sag: del = P11 sin E", ("E", 1, (SIN_E,))),
+        kp("P12", "az excess scale: daz = P12 A", ("A", 1, (("lin", "AN", 1),)), kind="scale"),
+        kp("P13", "az centering: daz = P13 cos A", ("A", 1, (COS_AN,))),
+        kp("P14", "az centering: daz = P14 sin A", ("A", 1, (SIN_AN,))),
+        kp("P15", "el nod twice per turn: del = P15 cos 2A", ("E", 1, (("cos", "AN", 2),))),
+        kp("P16", "el nod twice per turn: del = P16 sin 2A", ("E", 1, (("sin", "AN", 2),))),
+        kp("P17", "az encoder tilt: daz = P17 cos 2A", ("A", 1, (("cos", "AN", 2),))),
+        kp("P18", "az encoder tilt: daz = P18 sin 2A", ("A", 1, (("sin", "AN", 2),))),
+        kp("P19", "el encoder scale distortion: del = P19 cos 8E", ("E", 1, (("cos", "E", 8),))),
+        kp("P20", "el encoder scale distortion: del = P20 sin 8E", ("E", 1, (("sin", "E", 8),))),
+        kp("P21", "el nod once per turn: del = P21 cos A", ("E", 1, (COS_AN,))),
+        kp("P22", "el nod once per turn: del = P22 sin A", ("E", 1, (SIN_AN,))),
+    ]
+    return {t.name: t for t in terms}
 
 
 _FIXED: dict[str, Term] = {**_tpoint_terms(), **_ghigo_terms(), **_katpoint_terms()}

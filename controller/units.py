@@ -39,7 +39,8 @@ def to_value(quantity, unit: str, name: str) -> np.ndarray | float:
 
     if not isinstance(quantity, u.Quantity):
         raise TypeError(
-            f"{name} must be an astropy Quantity (e.g. {name} * u.{unit}); got {type(quantity).__name__}"
+            f"{name} must be an astropy Quantity (e.g. {name} * u.{unit}); "
+            f"got {type(quantity).__name__}"
         )
     value = quantity.to_value(unit)
     return float(value) if np.ndim(value) == 0 else np.asarray(value, dtype=float)

@@ -1,0 +1,52 @@
+"""`antsim run SCENARIO.toml --out DIR`: simulate a campaign, reduce, fit and report."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from controller.errors import InputError
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("scenario", help="scenario file (TOML), e.g. scenarios/ghigo1990.toml")
+    parser.add_argument("--out", required=True, help="output directory")
+    parser.add_argument("--seed", type=int, default=None,
+                        help="random seed (default: the scenario's)")
+    parser.add_argument("--model", default=None,
+                        help="pointing model the controller uses: a named model with zero "
+                             "coefficients (none, ghigo10, ...), a model.dat/.mod file or a "
+                             "fit.json (default: the scenario's)")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue an interrupted run in DIR (byte-identical result)")
+    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                        help="progress bar (default: when stderr is a terminal)")
+
+
+def main(args: argparse.Namespace) -> int:
+    from antsim.runner import run_campaign
+    from antsim.scenario import load_scenario
+
+    if args.seed is not None and args.seed < 0:
+        raise InputError("command line", "--seed", args.seed, "must be >= 0")
+    scenario = load_scenario(args.scenario)
+    model = None
+    if args.model is not None:
+        from controller.modelio import load_model
+
+        model = load_model(args.model)
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise InputError("command line", "--out", str(out), "exists and is not a directory")
+    if not args.resume and (out / "recordings.ecsv").exists():
+        raise InputError("command line", "--out", str(out),
+                         "already holds recordings.ecsv",
+                         "use --resume to continue that run, or another directory")
+    result = run_campaign(scenario, out, seed=args.seed, model=model, resume=args.resume,
+                          show_progress=args.progress)
+    from antsim.outputs import write_outputs
+
+    summary = write_outputs(result)
+    print(summary, file=sys.stdout)
+    return 0

@@ -1,0 +1,130 @@
+"""The one interface every physical effect implements.
+
+An effect is configured by parameters (validated from the scenario's ``[[truth.effects]]``
+tables), bound to a world with :meth:`Effect.start` (where it draws its random realisation
+from its own generator), and then asked, for the state of the antenna and the sky at time t,
+for the pointing error it causes: **indicated minus true** (Ghigo's sign), azimuth and
+elevation in radians. Effects that vary faster than an integration (wind, servo jitter) set
+``per_sample`` and answer :meth:`Effect.sample_error` on arrays of sample times instead.
+Effects that act on one polarization channel's beam (squint) answer :meth:`Effect.beam_offset`;
+effects that change the world itself (clock, source structure, beam width) do it in
+:meth:`Effect.start`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from antsim.tomlcheck import Table
+
+__all__ = ["Effect", "Param", "PointingState"]
+
+
+@dataclass
+class PointingState:
+    """State of the antenna at one instant (radians, seconds since the epoch).
+
+    ``az_rad``/``el_rad`` are the true direction of the beam (North-based azimuth),
+    ``*_rate_rad_s`` the commanded axis rates, ``approach_*`` the sign (+1/-1) of the last
+    motion of each axis, ``source`` the name of the source being observed.
+    """
+
+    t_s: float
+    az_rad: float
+    el_rad: float
+    az_rate_rad_s: float = 0.0
+    el_rate_rad_s: float = 0.0
+    approach_az: float = 1.0
+    approach_el: float = 1.0
+    source: str = ""
+    feed_angle_rad: float = 0.0
+
+
+@dataclass(frozen=True)
+class Param:
+    """A numeric effect parameter with its default, bounds and meaning (units in the name)."""
+
+    default: float | None
+    doc: str
+    min: float | None = None
+    max: float | None = None
+    kind: str = "number"  # "number", "string", "table" (name -> number)
+
+
+class Effect:
+    """Base class of the physical-effects catalogue."""
+
+    name: ClassVar[str] = ""
+    #: TPOINT (or W) terms that express this effect where it has them
+    terms: ClassVar[tuple[str, ...]] = ()
+    #: a plain explanation of the physical cause
+    explanation: ClassVar[str] = ""
+    per_sample: ClassVar[bool] = False
+    PARAMS: ClassVar[dict[str, Param]] = {}
+
+    def __init__(self, **params: Any):
+        unknown = set(params) - set(self.PARAMS)
+        if unknown:
+            raise TypeError(f"{self.name}: unknown parameter(s) {sorted(unknown)}")
+        values = {}
+        for key, spec in self.PARAMS.items():
+            value = params.get(key, spec.default)
+            if value is None and spec.default is None and key not in params:
+                raise TypeError(f"{self.name}: parameter {key!r} is required")
+            values[key] = value
+        self.p = values
+
+    # ------------------------------------------------------------------ configuration
+    @classmethod
+    def from_table(cls, table: Table) -> Effect:
+        """Build from a scenario table; every bad value is an InputError naming the key."""
+        params: dict[str, Any] = {}
+        for key, spec in cls.PARAMS.items():
+            if spec.kind == "string":
+                params[key] = table.string(key, spec.default)
+            elif spec.kind == "table":
+                sub = table.table(key, spec.default if spec.default is not None else {})
+                params[key] = {k: sub.number(k) for k in sub}
+            else:
+                params[key] = table.number(key, spec.default, min=spec.min, max=spec.max,
+                                           allow_none=spec.default is None)
+                if params[key] is None and key in table:
+                    raise table.error(key, None, "must be a number")
+            if spec.default is None and key not in table and spec.kind == "number":
+                raise table.error(key, "<missing>", "required parameter is missing",
+                                  spec.doc)
+        table.finish()
+        return cls(**params)
+
+    def params(self) -> dict[str, Any]:
+        """Parameters as plain JSON-able values."""
+        return {k: (dict(v) if isinstance(v, dict) else v) for k, v in self.p.items()}
+
+    def truth(self) -> dict[str, Any]:
+        """This effect's entry in ``truth.json``."""
+        return {"effect": self.name, "terms": list(self.terms), "params": self.params()}
+
+    # ------------------------------------------------------------------ runtime
+    def start(self, world: Any, rng: np.random.Generator) -> None:
+        """Bind to a world (time span, sky, weather) and draw the random realisation."""
+
+    def pointing_error(self, state: PointingState) -> tuple[float, float]:
+        """Indicated minus true (azimuth, elevation) in radians at ``state``."""
+        return 0.0, 0.0
+
+    def sample_error(self, t_s: np.ndarray, el_rad: float) -> tuple[np.ndarray, np.ndarray]:
+        """Per-sample indicated minus true (azimuth, elevation) in radians (``per_sample``)."""
+        zero = np.zeros_like(t_s)
+        return zero, zero
+
+    def beam_offset(self, channel: str, state: PointingState) -> tuple[float, float]:
+        """Offset of one channel's beam from the antenna's pointing, (xel, el) radians."""
+        return 0.0, 0.0
+
+    def __repr__(self) -> str:
+        body = ", ".join(f"{k}={v!r}" for k, v in self.p.items())
+        return f"{type(self).__name__}({body})"

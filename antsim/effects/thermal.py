@@ -1,0 +1,198 @@
+"""Thermal pointing errors: solar heating, lagging structure temperatures, sunset drift.
+
+Physics (DESIGN section 5): differential heating of the structure by the Sun dominates the
+elevation errors by day (Ghigo 1990: day el rms 40", night 26"); the structure's
+temperatures follow their drivers with time constants of an hour or more, so the error
+persists and relaxes after sunset (Fomalont 1973: elevation changed systematically by 1.0'
+for 4 hours after sunset); the JCMT corrects 6.5" per kelvin of front-to-back difference.
+
+Model, on a one-minute grid over the campaign plus a day of spin-up:
+
+* insolation ``I(t) = max(0, sin h_sun)`` times a cloud factor, an Ornstein-Uhlenbeck
+  modulation drawn per run (clear sky on 8 Feb 1990: small modulation);
+* front-to-back gradient ``dT_fb`` relaxes towards ``solar_gradient_k * I`` with time
+  constant ``gradient_tau_s``; left-right gradient ``dT_lr`` towards a random, sun-driven
+  forcing (which side the Sun heats changes as the antenna moves);
+* bulk structure temperature ``T_s`` relaxes towards the air temperature with
+  ``bulk_tau_s``;
+* error (indicated - true): ``el = el_arcsec_per_k * dT_fb + bulk_arcsec_per_k *
+  (T_s - reference_c)``, ``xel = xel_arcsec_per_k * dT_lr``.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+from typing import ClassVar
+
+import numpy as np
+
+from controller.units import RAD_PER_ARCSEC
+
+from .base import Effect, Param, PointingState
+
+__all__ = ["OUProcess", "SunsetDrift", "ThermalEffect", "ou_series", "relax"]
+
+GRID_STEP_S = 60.0
+SPINUP_S = 86400.0
+
+
+def relax(forcing: np.ndarray, step_s: float, tau_s: float, initial: float) -> np.ndarray:
+    """First-order lag of ``forcing`` sampled every ``step_s`` (exact for piecewise-linear
+    forcing is not needed here: exponential smoothing with the exact decay per step)."""
+    from scipy.signal import lfilter
+
+    alpha = math.exp(-step_s / tau_s)
+    out, _ = lfilter([1.0 - alpha], [1.0, -alpha], forcing, zi=[alpha * initial])
+    return out
+
+
+def ou_series(rng: np.random.Generator, n: int, step_s: float, tau_s: float,
+              rms: float) -> np.ndarray:
+    """Stationary Ornstein-Uhlenbeck series of ``n`` points (exact discretisation)."""
+    from scipy.signal import lfilter
+
+    if rms == 0.0 or n == 0:
+        return np.zeros(n)
+    rho = math.exp(-step_s / tau_s)
+    draws = rng.standard_normal(n)
+    draws[0] /= math.sqrt(1.0 - rho * rho)  # stationary start
+    out = lfilter([math.sqrt(1.0 - rho * rho) * rms], [1.0, -rho], draws)
+    return out
+
+
+class OUProcess:
+    """Ornstein-Uhlenbeck process(es) sampled at increasing times, continuous across calls.
+
+    ``rms`` may be an array (one independent process per element). Within a call the samples
+    must be evenly spaced (an integration's samples are); the step from the previous call's
+    last sample may be anything (exact discretisation, stationary start).
+    """
+
+    def __init__(self, rng: np.random.Generator, rms, timescale_s: float):
+        self.rng = rng
+        self.rms = np.atleast_1d(np.asarray(rms, dtype=float))
+        self.tau = float(timescale_s)
+        self.state = np.zeros_like(self.rms)
+        self.t_last: float | None = None
+
+    def sample(self, t_s: np.ndarray) -> np.ndarray:
+        """Values at times ``t_s`` (evenly spaced), shape (n, len(rms))."""
+        n = t_s.size
+        draws = self.rng.standard_normal((n, self.rms.size)) * self.rms
+        if self.t_last is None:
+            first = draws[0]
+        else:
+            rho0 = math.exp(-max(float(t_s[0]) - self.t_last, 0.0) / self.tau)
+            first = rho0 * self.state + math.sqrt(1.0 - rho0 * rho0) * draws[0]
+        if n == 1:
+            out = first[None, :]
+        else:
+            rho = math.exp(-float(t_s[1] - t_s[0]) / self.tau)
+            powers, kernel = _ar1_kernel(n, rho)
+            draws[0] = 0.0
+            out = kernel @ draws + powers[:, None] * first[None, :]
+        self.state = out[-1].copy()
+        self.t_last = float(t_s[-1])
+        return out
+
+
+@lru_cache(maxsize=64)
+def _ar1_kernel(n: int, rho: float) -> tuple[np.ndarray, np.ndarray]:
+    """``rho**k`` and the lower-triangular AR(1) kernel ``sqrt(1-rho^2) rho**(k-j)``, j>=1:
+    x_k = rho^k x_0 + sum_{j=1..k} sqrt(1-rho^2) rho^(k-j) e_j, as one small matrix product."""
+    k = np.arange(n)
+    lag = k[:, None] - k[None, :]
+    kernel = np.where(lag >= 0, rho ** np.clip(lag, 0, None), 0.0) * math.sqrt(1.0 - rho * rho)
+    kernel[:, 0] = 0.0
+    return rho ** k, kernel
+
+
+class ThermalEffect(Effect):
+    """Solar heating and structure-temperature lag (see module docstring)."""
+
+    name: ClassVar[str] = "thermal"
+    explanation: ClassVar[str] = (
+        "the Sun heats one side of the structure more than the other; the temperature "
+        "differences bend the dish and its support, lag the Sun by an hour or more, and "
+        "relax after sunset"
+    )
+    PARAMS: ClassVar[dict[str, Param]] = {
+        "el_arcsec_per_k": Param(6.5, "elevation error per kelvin of front-back gradient"),
+        "xel_arcsec_per_k": Param(3.0, "cross-elevation error per kelvin of left-right gradient"),
+        "solar_gradient_k": Param(6.0, "front-back gradient under full overhead Sun (K)",
+                                  min=0.0),
+        "lateral_gradient_k": Param(3.0, "rms left-right gradient under full Sun (K)", min=0.0),
+        "gradient_tau_s": Param(5400.0, "time constant of the gradients (s)", min=60.0),
+        "cloud_modulation": Param(0.3, "rms relative modulation of the insolation (clouds)",
+                                  min=0.0, max=1.0),
+        "cloud_timescale_s": Param(1800.0, "correlation time of the modulation (s)", min=60.0),
+        "lateral_timescale_s": Param(3600.0, "correlation time of the lateral forcing (s)",
+                                     min=60.0),
+        "bulk_arcsec_per_k": Param(0.0, "elevation error per kelvin of bulk temperature"),
+        "bulk_tau_s": Param(7200.0, "time constant of the bulk structure temperature (s)",
+                            min=60.0),
+        "reference_c": Param(0.0, "bulk temperature of zero bulk error (C)"),
+    }
+
+    def start(self, world, rng: np.random.Generator) -> None:
+        step = GRID_STEP_S
+        t = np.arange(-SPINUP_S, world.duration_s + 2 * step, step)
+        sun_el = world.sun_el_rad_periodic(t)
+        insolation = np.clip(np.sin(sun_el), 0.0, None)
+        n = t.size
+        p = self.p
+        modulation = 1.0 + ou_series(rng, n, step, p["cloud_timescale_s"], p["cloud_modulation"])
+        insolation_eff = insolation * np.clip(modulation, 0.0, None)
+        lateral = ou_series(rng, n, step, p["lateral_timescale_s"], 1.0)
+        dt_fb = relax(p["solar_gradient_k"] * insolation_eff, step, p["gradient_tau_s"], 0.0)
+        dt_lr = relax(p["lateral_gradient_k"] * insolation_eff * lateral, step,
+                      p["gradient_tau_s"], 0.0)
+        air = world.air_temperature_c(t)
+        t_struct = relax(air, step, p["bulk_tau_s"], float(air[0]))
+        self.t_grid = t
+        self.el_arcsec = p["el_arcsec_per_k"] * dt_fb \
+            + p["bulk_arcsec_per_k"] * (t_struct - p["reference_c"])
+        self.xel_arcsec = p["xel_arcsec_per_k"] * dt_lr
+        self.gradient_fb_k = dt_fb
+        self.structure_c = t_struct
+
+    def errors_arcsec(self, t_s) -> tuple[np.ndarray, np.ndarray]:
+        """(xel, el) thermal error in arcsec at time(s) ``t_s`` (for tests and reports)."""
+        return (np.interp(t_s, self.t_grid, self.xel_arcsec),
+                np.interp(t_s, self.t_grid, self.el_arcsec))
+
+    def pointing_error(self, state: PointingState) -> tuple[float, float]:
+        xel, el = self.errors_arcsec(state.t_s)
+        return (float(xel) * RAD_PER_ARCSEC / math.cos(state.el_rad),
+                float(el) * RAD_PER_ARCSEC)
+
+
+class SunsetDrift(Effect):
+    """Elevation drift after sunset: ``a (1 - exp(-(t - t_set) / tau))``, relaxing back
+    with the same time constant after sunrise (Fomalont 1973's 1' in 4 hours)."""
+
+    name: ClassVar[str] = "sunset_drift"
+    explanation: ClassVar[str] = (
+        "after sunset the structure cools and relaxes from its daytime shape with a time "
+        "constant of hours, so the elevation error drifts systematically"
+    )
+    PARAMS: ClassVar[dict[str, Param]] = {
+        "amplitude_arcsec": Param(60.0, "total elevation change after sunset (arcsec)"),
+        "tau_s": Param(5400.0, "time constant of the drift (s)", min=60.0),
+    }
+
+    def start(self, world, rng: np.random.Generator) -> None:
+        step = GRID_STEP_S
+        t = np.arange(-SPINUP_S, world.duration_s + 2 * step, step)
+        night = (world.sun_el_rad_periodic(t) < 0.0).astype(float)
+        # relaxing towards 1 at night and 0 by day gives the exponential approach after
+        # each sunset and the return after each sunrise
+        self.t_grid = t
+        self.level = relax(night, step, self.p["tau_s"], float(night[0]))
+
+    def error_arcsec(self, t_s) -> np.ndarray:
+        return self.p["amplitude_arcsec"] * np.interp(t_s, self.t_grid, self.level)
+
+    def pointing_error(self, state: PointingState) -> tuple[float, float]:
+        return 0.0, float(self.error_arcsec(state.t_s)) * RAD_PER_ARCSEC

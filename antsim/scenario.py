@@ -1,0 +1,404 @@
+"""Scenarios: TOML files describing a complete, runnable situation, loaded and validated.
+
+A scenario names the telescope and its site, the campaign window, the sources, the injected
+truth (a pointing model plus a list of physical effects), the receiver, beam, atmosphere and
+weather, and the control program's own settings (the pointing model in use, the scan, the
+scheduler). Every bad value becomes one :class:`~controller.errors.InputError` line naming the
+file, the key and the value; unknown keys are errors too. See ``scenarios/ghigo1990.toml``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from itertools import pairwise
+from pathlib import Path
+from typing import Any
+
+from controller.astro import Site
+from controller.config import (
+    CatalogSource,
+    ControllerConfig,
+    ScanConfig,
+    SchedulerConfig,
+    SearchConfig,
+)
+from controller.errors import InputError
+from controller.model import NAMED_MODELS, PointingModel
+from controller.terms import TermError, get_term
+
+from .atmosphere import AtmosphereConfig
+from .beam import BeamConfig
+from .effects import EFFECTS
+from .mount import AxisConfig, MountConfig
+from .receiver import ChannelConfig, ReceiverConfig
+from .sky import SourceConfig
+from .tomlcheck import Table, load_toml
+from .weather import WeatherConfig
+
+__all__ = ["EffectSpec", "Scenario", "load_scenario"]
+
+UNIT_ARCSEC = {"arcsec": 1.0, "arcmin": 60.0, "deg": 3600.0}
+ESTIMATORS = ("clark", "lsq")
+
+
+@dataclass(frozen=True)
+class EffectSpec:
+    """An effect as configured: its catalogue name and validated parameters."""
+
+    name: str
+    params: dict[str, Any]
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A validated scenario (units in the field names)."""
+
+    name: str
+    path: str
+    description: str
+    seed: int
+    site: Site
+    epoch_utc: str
+    duration_s: float
+    mount: MountConfig
+    beam: BeamConfig
+    receiver: ReceiverConfig
+    atmosphere: AtmosphereConfig
+    weather: WeatherConfig
+    sources: tuple[SourceConfig, ...]
+    truth_model: PointingModel
+    effects: tuple[EffectSpec, ...]
+    controller: ControllerConfig
+    text: str = field(default="", repr=False)
+
+    def with_controller_model(self, model: PointingModel) -> Scenario:
+        """The same scenario with another pointing model in use by the controller."""
+        return replace(self, controller=replace(self.controller, model=model))
+
+    def with_effects(self, effects: tuple[EffectSpec, ...]) -> Scenario:
+        return replace(self, effects=tuple(effects))
+
+
+# ---------------------------------------------------------------------------------------------
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario file; raises InputError on the first bad value."""
+    path = Path(path)
+    root = load_toml(path)
+    text = path.read_text(encoding="utf-8")
+    name = root.string("name")
+    description = root.string("description", "")
+    seed = root.integer("seed", 1, min=0)
+    site = _site(root.table("site"))
+    campaign = root.table("campaign")
+    epoch = _epoch(campaign)
+    duration_s = campaign.number("duration_h", gt=0.0, max=24.0 * 366) * 3600.0
+    campaign.finish()
+    mount = _mount(root.table("mount", {}))
+    beam = _beam(root.table("beam", {}))
+    receiver = _receiver(root.table("receiver", {}))
+    atmosphere = _atmosphere(root.table("atmosphere", {}))
+    weather = _weather(root.table("weather", {}))
+    sources = tuple(_source(t) for t in root.tables("sources"))
+    if not sources:
+        raise root.error("sources", [], "the scenario lists no sources")
+    names = [s.name for s in sources]
+    for i, s in enumerate(names):
+        if names.index(s) != i:
+            raise root.error(f"sources[{i}].name", s, "duplicate source name")
+    truth = root.table("truth", {})
+    truth_model = _model(truth, default="none", base=path.parent)
+    effects = tuple(_effect(t) for t in truth.tables("effects", []))
+    _check_effect_sources(effects, names, truth)
+    truth.finish()
+    controller = _controller(root.table("controller", {}), site, epoch, duration_s, sources,
+                             receiver, mount, name, path.parent)
+    root.finish()
+    return Scenario(name=name, path=str(path), description=description, seed=seed, site=site,
+                    epoch_utc=epoch, duration_s=duration_s, mount=mount, beam=beam,
+                    receiver=receiver, atmosphere=atmosphere, weather=weather, sources=sources,
+                    truth_model=truth_model, effects=effects, controller=controller, text=text)
+
+
+def _site(t: Table) -> Site:
+    site = Site(
+        latitude_deg=t.number("latitude_deg", min=-90.0, max=90.0),
+        longitude_deg=t.number("longitude_deg", min=-180.0, max=360.0),
+        height_m=t.number("height_m", min=-500.0, max=9000.0),
+        name=t.string("name", ""),
+    )
+    t.finish()
+    return site
+
+
+def _epoch(t: Table) -> str:
+    text = t.string("start_utc")
+    from astropy.time import Time
+
+    try:
+        epoch = Time(text, scale="utc")
+        iso = epoch.isot
+    except (ValueError, TypeError):
+        raise t.error("start_utc", text, "not an ISO UTC time",
+                      "write e.g. 1990-02-08T17:00:00") from None
+    if not 1900 <= epoch.datetime.year <= 2200:
+        raise t.error("start_utc", text, "year outside 1900..2200")
+    return iso
+
+
+def _axis(t: Table, default: AxisConfig) -> AxisConfig:
+    axis = AxisConfig(
+        speed_deg_s=t.number("speed_deg_s", default.speed_deg_s, gt=0.0, max=30.0),
+        accel_deg_s2=t.number("accel_deg_s2", default.accel_deg_s2, gt=0.0, max=30.0),
+        min_deg=t.number("min_deg", default.min_deg),
+        max_deg=t.number("max_deg", default.max_deg),
+    )
+    if axis.max_deg <= axis.min_deg:
+        raise t.error("max_deg", axis.max_deg, f"must exceed min_deg = {axis.min_deg:g}")
+    t.finish()
+    return axis
+
+
+def _mount(t: Table) -> MountConfig:
+    d = MountConfig()
+    kind = t.string("kind", d.kind, choices=("altaz",))
+    az = _axis(t.table("az", {}), d.az)
+    el = _axis(t.table("el", {}), d.el)
+    if az.max_deg - az.min_deg < 360.0:
+        raise t.error("az.max_deg", az.max_deg, "the azimuth range must span at least 360 deg")
+    if not (0.0 <= el.min_deg < 90.0):
+        raise t.error("el.min_deg", el.min_deg, "must be in 0..90 deg")
+    if el.max_deg > 90.0:
+        raise t.error("el.max_deg", el.max_deg, "must be <= 90 deg")
+    mount = MountConfig(kind=kind, az=az, el=el,
+                        settle_s=t.number("settle_s", d.settle_s, min=0.0, max=600.0),
+                        wrap_margin_s=t.number("wrap_margin_s", d.wrap_margin_s, min=0.0))
+    t.finish()
+    return mount
+
+
+def _beam(t: Table) -> BeamConfig:
+    d = BeamConfig()
+    el = tuple(t.numbers("efficiency_el_deg", list(d.efficiency_el_deg), min_length=1))
+    eff = tuple(t.numbers("efficiency", list(d.efficiency), min_length=1))
+    if len(el) != len(eff):
+        raise t.error("efficiency", list(eff), f"needs {len(el)} values, one per efficiency_el_deg")
+    if any(b <= a for a, b in pairwise(el)):
+        raise t.error("efficiency_el_deg", list(el), "must increase")
+    if any(not 0.0 < e <= 1.5 for e in eff):
+        raise t.error("efficiency", list(eff), "values must be in (0, 1.5]")
+    beam = BeamConfig(
+        hpbw_arcmin=t.number("hpbw_arcmin", d.hpbw_arcmin, gt=0.0, max=600.0),
+        efficiency_el_deg=el, efficiency=eff,
+        gain_k_per_jy=t.number("gain_k_per_jy", d.gain_k_per_jy, gt=0.0, max=100.0),
+    )
+    t.finish()
+    return beam
+
+
+def _receiver(t: Table) -> ReceiverConfig:
+    d = ReceiverConfig()
+    channels = []
+    for ct in t.tables("channels", [{"name": c.name, "tsys_k": c.tsys_k} for c in d.channels]):
+        channels.append(ChannelConfig(ct.string("name"), ct.number("tsys_k", gt=0.0, max=1e5)))
+        ct.finish()
+    if not channels:
+        raise t.error("channels", [], "the receiver needs at least one channel")
+    rec = ReceiverConfig(
+        channels=tuple(channels),
+        frequency_ghz=t.number("frequency_ghz", d.frequency_ghz, gt=0.0, max=1000.0),
+        bandwidth_mhz=t.number("bandwidth_mhz", d.bandwidth_mhz, gt=0.0),
+        sample_interval_s=t.number("sample_interval_s", d.sample_interval_s, gt=0.0, max=60.0),
+        gain_fluctuation=t.number("gain_fluctuation", d.gain_fluctuation, min=0.0, max=0.1),
+        gain_timescale_s=t.number("gain_timescale_s", d.gain_timescale_s, gt=0.0),
+    )
+    t.finish()
+    return rec
+
+
+def _atmosphere(t: Table) -> AtmosphereConfig:
+    d = AtmosphereConfig()
+    atm = AtmosphereConfig(
+        zenith_opacity=t.number("zenith_opacity", d.zenith_opacity, min=0.0, max=5.0),
+        temperature_k=t.number("temperature_k", d.temperature_k, gt=0.0, max=400.0),
+    )
+    t.finish()
+    return atm
+
+
+def _weather(t: Table) -> WeatherConfig:
+    d = WeatherConfig()
+    w = WeatherConfig(
+        air_min_c=t.number("air_min_c", d.air_min_c, min=-90.0, max=60.0),
+        air_max_c=t.number("air_max_c", d.air_max_c, min=-90.0, max=60.0),
+        min_local_h=t.number("min_local_h", d.min_local_h, min=0.0, lt=24.0),
+        max_local_h=t.number("max_local_h", d.max_local_h, min=0.0, lt=24.0),
+        wander_rms_c=t.number("wander_rms_c", d.wander_rms_c, min=0.0, max=20.0),
+        wander_timescale_s=t.number("wander_timescale_s", d.wander_timescale_s, gt=0.0),
+        pressure_hpa=t.number("pressure_hpa", d.pressure_hpa, min=100.0, max=1100.0),
+        relative_humidity=t.number("relative_humidity", d.relative_humidity, min=0.0, max=1.0),
+        wind_speed_m_s=t.number("wind_speed_m_s", d.wind_speed_m_s, min=0.0, max=60.0),
+    )
+    if w.air_max_c < w.air_min_c:
+        raise t.error("air_max_c", w.air_max_c, f"is below air_min_c = {w.air_min_c:g}")
+    if w.min_local_h == w.max_local_h:
+        raise t.error("max_local_h", w.max_local_h, "must differ from min_local_h")
+    t.finish()
+    return w
+
+
+def _angle(t: Table, key: str, unit: str, lo: float, hi: float) -> float:
+    """An angle in degrees from ``key_deg`` (number) or ``key`` (sexagesimal string)."""
+    if f"{key}_deg" in t:
+        return t.number(f"{key}_deg", min=lo, max=hi)
+    text = t.string(key)
+    from astropy.coordinates import Angle
+
+    try:
+        value = Angle(text, unit=unit).deg
+    except Exception:  # astropy raises several types for unparseable angles
+        example = "03h16m29.6s" if unit == "hourangle" else "+41d19m52s"
+        raise t.error(key, text, "not an angle", f"write e.g. {example}") from None
+    if not lo <= value <= hi:
+        raise t.error(key, text, f"must be within {lo:g}..{hi:g} deg")
+    return float(value)
+
+
+def _source(t: Table) -> SourceConfig:
+    src = SourceConfig(
+        name=t.string("name"),
+        ra_deg=_angle(t, "ra", "hourangle", 0.0, 360.0),
+        dec_deg=_angle(t, "dec", "deg", -90.0, 90.0),
+        frame=t.string("frame", "fk4", choices=("fk4", "fk5", "icrs")),
+        flux_jy=t.number("flux_jy", gt=0.0, max=1e7),
+        size_arcmin=t.number("size_arcmin", 0.0, min=0.0, max=600.0),
+        note=t.string("note", ""),
+    )
+    if not src.name.strip():
+        raise t.error("name", src.name, "must not be empty")
+    t.finish()
+    return src
+
+
+def _model(t: Table, default: str, base: Path) -> PointingModel:
+    """A pointing model from ``model`` (named, or a .mod/.json file) and ``terms``."""
+    spec = t.string("model", default)
+    unit = t.string("units", "arcsec", choices=tuple(UNIT_ARCSEC))
+    scale = UNIT_ARCSEC[unit]
+    values_table = t.table("terms", {})
+    values: dict[str, float] = {}
+    for key in values_table:
+        try:
+            values[get_term(key).name] = values_table.number(key) * scale
+        except TermError as err:
+            raise values_table.error(key, values_table.raw(key), "not a pointing term",
+                                     str(err)) from None
+    values_table.finish()
+    if spec in NAMED_MODELS:
+        model = PointingModel(spec)
+    else:
+        model = _model_file(t, spec, base)
+    unknown = set(values) - set(model.names)
+    if unknown:
+        name = sorted(unknown)[0]
+        raise values_table.error(name, values[name] / scale,
+                                 f"is not a term of model {model.name!r}",
+                                 f"its terms are {' '.join(model.names) or '(none)'}")
+    return model.with_values(values) if values else model
+
+
+def _model_file(t: Table, spec: str, base: Path) -> PointingModel:
+    from controller.modelio import load_model
+
+    path = Path(spec)
+    if not path.is_absolute():
+        path = base / path
+    if not path.exists():
+        raise t.error("model", spec, "neither a named model nor an existing file",
+                      f"named models: {', '.join(sorted(NAMED_MODELS))}")
+    return load_model(path)
+
+
+def _effect(t: Table) -> EffectSpec:
+    name = t.string("effect")
+    cls = EFFECTS.get(name)
+    if cls is None:
+        raise t.error("effect", name, "unknown effect",
+                      f"known effects: {', '.join(sorted(EFFECTS))}")
+    effect = cls.from_table(t)
+    params = effect.params() if name != "terms" else {"terms_arcsec": effect.model.as_dict()}
+    return EffectSpec(name, params)
+
+
+def _check_effect_sources(effects, names, truth: Table) -> None:
+    for i, spec in enumerate(effects):
+        source = spec.params.get("source")
+        if source is not None and source not in names:
+            raise InputError(truth.where, f"truth.effects[{i}].source", source,
+                             "unknown source", f"sources are {', '.join(names)}")
+
+
+def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, receiver,
+                mount: MountConfig, scenario_name: str, base: Path) -> ControllerConfig:
+    model = _model(t, default="none", base=base)
+    names = [s.name for s in sources]
+    scan_t = t.table("scan", {})
+    ds = ScanConfig()
+    scan = ScanConfig(
+        step_arcmin=scan_t.number("step_arcmin", ds.step_arcmin, gt=0.0),
+        integration_s=scan_t.number("integration_s", ds.integration_s, gt=0.0, max=3600.0),
+        hpbw_arcmin=scan_t.number("hpbw_arcmin", ds.hpbw_arcmin, gt=0.0),
+        estimator=scan_t.string("estimator", ds.estimator, choices=ESTIMATORS),
+        snr_min=scan_t.number("snr_min", ds.snr_min, min=0.0),
+        overhead_s=scan_t.number("overhead_s", ds.overhead_s, min=0.0, max=3600.0),
+    )
+    if scan.step_arcmin > 1.2 * scan.hpbw_arcmin:
+        raise scan_t.error("step_arcmin", scan.step_arcmin,
+                           f"the +-D points would lie outside the main beam (HPBW "
+                           f"{scan.hpbw_arcmin:g}')",
+                           f"use at most {1.2 * scan.hpbw_arcmin:.1f}'")
+    scan_t.finish()
+    sched_t = t.table("scheduler", {})
+    dsch = SchedulerConfig()
+    chosen = tuple(sched_t.strings("sources", list(dsch.sources)))
+    for s in chosen:
+        if s not in names:
+            raise sched_t.error("sources", s, "unknown source", f"sources are {', '.join(names)}")
+    sched = SchedulerConfig(
+        policy=sched_t.string("policy", dsch.policy, choices=("spread", "round_robin")),
+        elevation_min_deg=sched_t.number("elevation_min_deg", dsch.elevation_min_deg,
+                                         min=0.0, max=89.0),
+        elevation_max_deg=sched_t.number("elevation_max_deg", dsch.elevation_max_deg,
+                                         min=1.0, max=90.0),
+        min_revisit_s=sched_t.number("min_revisit_s", dsch.min_revisit_s, min=0.0),
+        slew_weight=sched_t.number("slew_weight", dsch.slew_weight, min=0.0),
+        window=sched_t.string("window", dsch.window, choices=("all", "day", "night")),
+        sources=chosen,
+    )
+    if sched.elevation_max_deg <= sched.elevation_min_deg:
+        raise sched_t.error("elevation_max_deg", sched.elevation_max_deg,
+                            f"must exceed elevation_min_deg = {sched.elevation_min_deg:g}")
+    lowest = sched.elevation_min_deg - 4.0 * scan.step_arcmin / 60.0
+    if lowest < mount.el.min_deg:
+        raise InputError(t.where, "controller.scan.step_arcmin", scan.step_arcmin,
+                         f"the -4D point at the lowest scheduled elevation "
+                         f"({sched.elevation_min_deg:g} deg) falls below the mount's limit "
+                         f"({mount.el.min_deg:g} deg)",
+                         "use a smaller step or raise controller.scheduler.elevation_min_deg")
+    sched_t.finish()
+    search_t = t.table("search", {})
+    dse = SearchConfig()
+    search = SearchConfig(
+        enabled=search_t.boolean("enabled", dse.enabled),
+        step_factor=search_t.number("step_factor", dse.step_factor, min=1.0, max=5.0),
+        update_gain=search_t.number("update_gain", dse.update_gain, min=0.0, max=1.0),
+    )
+    search_t.finish()
+    refraction = t.string("refraction", "weather", choices=("weather", "standard", "none"))
+    t.finish()
+    catalog = tuple(CatalogSource(s.name, s.ra_deg, s.dec_deg, s.frame, s.flux_jy)
+                    for s in sources)
+    return ControllerConfig(
+        site_latitude_deg=site.latitude_deg, site_longitude_deg=site.longitude_deg,
+        site_height_m=site.height_m, epoch_utc=epoch, duration_s=duration_s, sources=catalog,
+        model=model, scan=scan, scheduler=sched, search=search, refraction=refraction,
+        frequency_ghz=receiver.frequency_ghz, scenario_name=scenario_name, site_name=site.name)

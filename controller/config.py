@@ -1,0 +1,83 @@
+"""Configuration of the control program: what an observer sets before a pointing run."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .model import PointingModel
+
+__all__ = ["CatalogSource", "ControllerConfig", "ScanConfig", "SchedulerConfig", "SearchConfig"]
+
+
+@dataclass(frozen=True)
+class CatalogSource:
+    """A pointing source as the observer's catalogue gives it (position, expected flux)."""
+
+    name: str
+    ra_deg: float
+    dec_deg: float
+    frame: str = "fk4"
+    flux_jy: float = 0.0
+
+
+@dataclass(frozen=True)
+class ScanConfig:
+    """Five-point cross scan: offsets ``n * step`` (sky), integrations per position."""
+
+    step_arcmin: float = 7.0
+    integration_s: float = 15.0
+    offsets_n: tuple[int, ...] = (-4, -1, 0, 1, 4)
+    hpbw_arcmin: float = 11.0
+    estimator: str = "clark"
+    snr_min: float = 4.0
+    #: time spent per scan outside the integrations: noise-cal firing, data logging (s)
+    overhead_s: float = 0.0
+
+
+@dataclass(frozen=True)
+class SchedulerConfig:
+    """Which source next: a coverage-spreading policy over the visible sources."""
+
+    policy: str = "spread"
+    elevation_min_deg: float = 10.0
+    elevation_max_deg: float = 85.0
+    #: do not observe the same source again within this time (s)
+    min_revisit_s: float = 900.0
+    #: weight of the slew time (per minute) against the sky-coverage gain
+    slew_weight: float = 0.5
+    #: windows to observe in: "all", "day" (Sun above 0 deg) or "night" (Sun below -12 deg)
+    window: str = "all"
+    sources: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class SearchConfig:
+    """How the controller finds a source it misses (cold start, large errors)."""
+
+    enabled: bool = True
+    #: step of the wide search cross scan, as a multiple of the scan step
+    step_factor: float = 2.0
+    #: smoothing of the running pointing correction (0: none, 1: last scan only)
+    update_gain: float = 0.5
+
+
+@dataclass(frozen=True)
+class ControllerConfig:
+    """Everything the control program is told; never the truth of a simulation."""
+
+    site_latitude_deg: float
+    site_longitude_deg: float
+    site_height_m: float
+    epoch_utc: str
+    duration_s: float
+    sources: tuple[CatalogSource, ...]
+    model: PointingModel = field(default_factory=PointingModel)
+    scan: ScanConfig = field(default_factory=ScanConfig)
+    scheduler: SchedulerConfig = field(default_factory=SchedulerConfig)
+    search: SearchConfig = field(default_factory=SearchConfig)
+    #: refraction the controller corrects: "weather" (from its sensors), "standard"
+    #: (fixed 10 C, 1013.25 hPa scaled to the site height, 50% RH) or "none"
+    refraction: str = "weather"
+    frequency_ghz: float = 8.4
+    scenario_name: str = ""
+    site_name: str = ""

@@ -1,0 +1,246 @@
+"""The control program: a pointing campaign as one simpy process.
+
+Loop until the campaign window ends: ask the scheduler for the next source, compute its
+trajectory (apparent place, the controller's refraction, the pointing model in use and any
+running correction), run a five-point cross scan, reduce it, and record one row per
+polarization. When a scan misses its source (large errors, e.g. a cold start with no model:
+the 45-ft's elevation zero offset alone, 12', exceeds the beam) the controller searches with
+a wider cross, adopts what it finds as a running correction, and scans again.
+
+It uses only the protocol (:mod:`controller.protocol`) and its own configuration.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from .astro import Ephemeris, FixedSource, Site, Weather
+from .config import ControllerConfig
+from .protocol import Antenna, AntennaError
+from .reduction import Flag
+from .scan import AXES, RawScan, ReducedScan, cross_scan, reduce_scan
+from .scheduler import Observer, Target, make_scheduler
+from .tracking import RefractionCorrection, SourceTrajectory, standard_weather
+from .units import ARCMIN_PER_RAD
+
+__all__ = ["ControlProgram", "ScanOutcome"]
+
+#: the controller's ephemeris reaches this far past the window (scans running at its end)
+EPHEMERIS_MARGIN_S = 3600.0
+#: flags that do not invalidate a search detection (wide steps distort the width estimate)
+SEARCH_TOLERATED = Flag.WIDTH_INCONSISTENT
+FWHM_PER_SIGMA = 2.0 * math.sqrt(2.0 * math.log(2.0))
+
+
+@dataclass
+class ScanOutcome:
+    """One recorded scan: the raw data, its reduction and the rows written."""
+
+    target: Target
+    reduced: ReducedScan
+    rows: list[dict]
+    searches: int
+
+
+class ControlProgram:
+    """The 1990-style pointing program, driving any :class:`~controller.protocol.Antenna`."""
+
+    def __init__(self, config: ControllerConfig, antenna: Antenna,
+                 sink: Callable[[list[dict]], None] | None = None,
+                 progress: Callable[[float], None] | None = None,
+                 ephemeris: Ephemeris | None = None):
+        self.config = config
+        self.antenna = antenna
+        self.sink = sink
+        self.progress = progress
+        site = Site(config.site_latitude_deg, config.site_longitude_deg, config.site_height_m,
+                    config.site_name)
+        sources = tuple(FixedSource(s.name, s.ra_deg, s.dec_deg, s.frame)
+                        for s in config.sources)
+        self.ephemeris = ephemeris or Ephemeris(site, config.epoch_utc,
+                                                config.duration_s + EPHEMERIS_MARGIN_S, sources)
+        self.observer = Observer(self.ephemeris)
+        names = config.scheduler.sources or tuple(s.name for s in config.sources)
+        all_names = [s.name for s in config.sources]
+        self.targets = [Target(n, all_names.index(n)) for n in names]
+        scan = config.scan
+        n_pos = len(scan.offsets_n)
+        self.scan_duration_s = 2 * n_pos * (scan.integration_s + 6.0) + scan.overhead_s
+        self.scheduler = make_scheduler(config.scheduler, self.observer, self.targets,
+                                        self.scan_duration_s)
+        self.correction_arcmin = (0.0, 0.0)
+        self.outcomes: list[ScanOutcome] = []
+        self.scan_number = 0
+        self.searches = 0
+        self.misses = 0
+        self._standard = standard_weather(config.site_height_m)
+
+    # ------------------------------------------------------------------ helpers
+    def refraction(self) -> RefractionCorrection:
+        mode = self.config.refraction
+        if mode == "weather":
+            w = self.antenna.weather()
+            weather = Weather(w.temperature_c, w.pressure_hpa, w.relative_humidity)
+        elif mode == "standard":
+            weather = self._standard
+        else:
+            weather = None
+        return RefractionCorrection(mode, weather, self.config.frequency_ghz)
+
+    def trajectory(self, target: Target, t_s: float) -> SourceTrajectory:
+        return SourceTrajectory(self.ephemeris, target.index, self.config.model,
+                                self.refraction(), t_s, self.correction_arcmin)
+
+    # ------------------------------------------------------------------ the campaign
+    def run(self, env):
+        """simpy process: the whole campaign."""
+        end = self.config.duration_s
+        while True:
+            now = self.antenna.clock_s()
+            if self.progress:
+                self.progress(now)
+            if now + self.scan_duration_s > end:
+                break
+            target = self.scheduler.next_target(now + 30.0, self.antenna.encoder_deg())
+            if target is None:
+                yield self.antenna.wait(60.0)
+                continue
+            try:
+                outcome = yield env.process(self.observe(env, target))
+            except AntennaError:
+                # the target left the limits while we slewed: let the revisit rule skip it
+                self.scheduler.record(now, target)
+                continue
+            if outcome is not None:
+                self.outcomes.append(outcome)
+        if self.progress:
+            self.progress(end)
+
+    def observe(self, env, target: Target):
+        """simpy process: scan ``target`` (searching if it is missed) and record it."""
+        before = self.antenna.encoder_deg()
+        searches = 0
+        while True:
+            traj = self.trajectory(target, self.antenna.clock_s())
+            raw = yield env.process(cross_scan(env, self.antenna, traj, self.config.scan,
+                                               label=target.name))
+            reduced = reduce_scan(raw, self.config.scan)
+            if self._detected(reduced, tolerated=Flag(0)) or searches >= 2 \
+                    or not self.config.search.enabled:
+                break
+            found = yield env.process(self.search(env, target))
+            searches += 1
+            if not found:
+                break
+        if not self._detected(reduced, tolerated=Flag(0)):
+            self.misses += 1
+        self.scheduler.record(raw.t_mid_s, target)
+        rows = self.rows(target, traj, reduced, before)
+        if self.sink:
+            self.sink(rows)
+        self.scan_number += 1
+        gain = self.config.search.update_gain
+        if gain > 0 and self._detected(reduced, tolerated=Flag(0)):
+            avg = reduced.axes
+            self.correction_arcmin = (
+                self.correction_arcmin[0] + gain * float(avg["az"].offset_arcmin[-1]),
+                self.correction_arcmin[1] + gain * float(avg["el"].offset_arcmin[-1]),
+            )
+        return ScanOutcome(target, reduced, rows, searches)
+
+    def search(self, env, target: Target):
+        """simpy process: a wide cross scan; adopt the offsets it finds. Returns found axes."""
+        self.searches += 1
+        scan = self.config.scan
+        step = scan.step_arcmin * self.config.search.step_factor
+        traj = self.trajectory(target, self.antenna.clock_s())
+        raw = yield env.process(cross_scan(env, self.antenna, traj, scan, label=target.name,
+                                           step_arcmin=step,
+                                           integration_s=max(scan.integration_s / 3.0, 1.0)))
+        reduced = reduce_scan(raw, scan, estimator="lsq", step_arcmin=step)
+        found = 0
+        xel, el = self.correction_arcmin
+        for axis in AXES:
+            red = reduced.axes[axis]
+            flags = int(red.flags[-1]) & ~int(SEARCH_TOLERATED)
+            if flags == 0 and math.isfinite(float(red.offset_arcmin[-1])):
+                found += 1
+                if axis == "az":
+                    xel += float(red.offset_arcmin[-1])
+                else:
+                    el += float(red.offset_arcmin[-1])
+        self.correction_arcmin = (xel, el)
+        return found
+
+    @staticmethod
+    def _detected(reduced: ReducedScan, tolerated: Flag) -> bool:
+        return all((int(reduced.axes[a].flags[-1]) & ~int(tolerated)) == 0 for a in AXES)
+
+    # ------------------------------------------------------------------ recording
+    def rows(self, target: Target, traj: SourceTrajectory, reduced: ReducedScan,
+             before: tuple[float, float]) -> list[dict]:
+        raw: RawScan = reduced.raw
+        t_mid = raw.t_mid_s
+        az, el = traj.observed_rad(np.array([t_mid]))
+        az, el = float(az[0]), float(el[0])
+        cmd_az, cmd_el = traj(np.array([t_mid]))
+        d_az, d_el = self.config.model.offset_rad(az, el)
+        model_xel = float(d_az) * math.cos(el) * ARCMIN_PER_RAD
+        model_el = float(d_el) * ARCMIN_PER_RAD
+        mid = raw.integrations["el"][0]
+        weather = mid.weather
+        sun_el = float(self.observer.sun_el_deg(t_mid)[0])
+        first = raw.integrations["az"][0]
+        slew_az = int(np.sign(round((first.enc_az_deg - before[0]) * 1000)))
+        slew_el = int(np.sign(round((first.enc_el_deg - before[1]) * 1000)))
+        power, std, _ = raw.powers()
+        std_axis = np.sqrt(np.mean(std ** 2, axis=-1))  # (axes, channels + AVG)
+        rows = []
+        for p, pol in enumerate(reduced.polarizations):
+            ax, ex = reduced.axes["az"], reduced.axes["el"]
+            row = {
+                "scan": self.scan_number,
+                "time": "",  # filled by the sink, which knows the epoch's calendar
+                "t_s": t_mid,
+                "source": target.name,
+                "polarization": pol,
+                "az_deg": math.degrees(az) % 360.0,
+                "el_deg": math.degrees(el),
+                "cmd_az_deg": float(cmd_az[0]),
+                "cmd_el_deg": float(cmd_el[0]),
+                "model_xel_arcmin": model_xel,
+                "model_el_arcmin": model_el,
+                "applied_xel_arcmin": traj.correction_arcmin[0],
+                "applied_el_arcmin": traj.correction_arcmin[1],
+                "xel_arcmin": float(ax.offset_arcmin[p]),
+                "el_arcmin": float(ex.offset_arcmin[p]),
+                "xel_sigma_arcmin": float(ax.sigma_offset_arcmin[p]),
+                "el_sigma_arcmin": float(ex.sigma_offset_arcmin[p]),
+                "xel_amp_k": float(ax.amplitude_k[p]),
+                "el_amp_k": float(ex.amplitude_k[p]),
+                "xel_snr": float(ax.snr[p]),
+                "el_snr": float(ex.snr[p]),
+                "xel_std_k": float(std_axis[0, p]),
+                "el_std_k": float(std_axis[1, p]),
+                "xel_width_arcmin": float(ax.width_arcmin[p]) * FWHM_PER_SIGMA,
+                "el_width_arcmin": float(ex.width_arcmin[p]) * FWHM_PER_SIGMA,
+                "xel_flags": int(ax.flags[p]),
+                "el_flags": int(ex.flags[p]),
+                "good": bool(int(ax.flags[p]) == 0 and int(ex.flags[p]) == 0),
+                "air_temp_c": weather.temperature_c,
+                "pressure_hpa": weather.pressure_hpa,
+                "humidity": weather.relative_humidity,
+                "wind_m_s": weather.wind_speed_m_s,
+                "sun_el_deg": sun_el,
+                "slew_az": slew_az,
+                "slew_el": slew_el,
+            }
+            for a, axis in enumerate(AXES):
+                for k, name in enumerate(("m4", "m1", "0", "p1", "p4")):
+                    row[f"p_{axis}_{name}"] = float(power[a, p, k])
+            rows.append(row)
+        return rows

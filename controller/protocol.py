@@ -1,0 +1,105 @@
+"""The narrow protocol through which the control program drives an antenna.
+
+Commands: track a trajectory (the control program computes where the encoders must point,
+pointing model and refraction included), set an offset from it, integrate for N seconds.
+Readings: the antenna's clock, commanded and encoder positions, total power per
+polarization with the standard deviation of its samples, and weather sensors. Nothing here
+exposes the truth of a simulation: a real antenna could implement this interface.
+
+All commands return simpy events; the control program is a simpy process that yields them.
+Angles are degrees (encoder frame: azimuth North-based, possibly beyond 0..360 on the cable
+wrap); times are seconds on the antenna's clock since the campaign epoch.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+__all__ = [
+    "Antenna",
+    "AntennaError",
+    "Integration",
+    "Trajectory",
+    "WeatherReading",
+]
+
+#: Encoder trajectory: antenna-clock seconds (array) -> (azimuth deg, elevation deg) arrays,
+#: azimuth North-based in [0, 360); the antenna chooses the cable-wrap turn itself.
+Trajectory = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
+
+
+class AntennaError(RuntimeError):
+    """A command the antenna cannot carry out (target below the elevation limit, ...)."""
+
+
+@dataclass(frozen=True)
+class WeatherReading:
+    """Weather sensors: air temperature (C), pressure (hPa), relative humidity (0..1),
+    wind speed (m/s)."""
+
+    temperature_c: float
+    pressure_hpa: float
+    relative_humidity: float
+    wind_speed_m_s: float
+
+
+@dataclass(frozen=True)
+class Integration:
+    """One total-power integration, as the backend reports it.
+
+    ``power_k`` and ``std_k`` map channel name (``"XR"``, ``"XL"``) to the mean total power
+    and the standard deviation of the samples within the integration (kelvin).
+    ``enc_az_deg``/``enc_el_deg`` are the mean encoder readings during the integration.
+    """
+
+    t_start_s: float
+    t_end_s: float
+    power_k: dict[str, float]
+    std_k: dict[str, float]
+    enc_az_deg: float
+    enc_el_deg: float
+    weather: WeatherReading
+    n_samples: int = 0
+    extra: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def t_mid_s(self) -> float:
+        return 0.5 * (self.t_start_s + self.t_end_s)
+
+
+@runtime_checkable
+class Antenna(Protocol):
+    """What the control program may ask of an antenna."""
+
+    #: channel names of the receiver, e.g. ("XR", "XL")
+    channels: tuple[str, ...]
+
+    def clock_s(self) -> float:
+        """The antenna's clock: seconds since the campaign epoch."""
+
+    def track(self, trajectory: Trajectory, label: str = ""):
+        """Slew to and track ``trajectory``; the event fires once on track and settled.
+
+        The offset is reset to zero. The event fails with :class:`AntennaError` if the
+        trajectory is outside the mount's limits at arrival.
+        """
+
+    def set_offset(self, d_az_deg: float, d_el_deg: float):
+        """Offset the encoder command from the trajectory (degrees of encoder angle);
+        the event fires once settled."""
+
+    def integrate(self, seconds: float):
+        """Integrate total power for ``seconds``; the event's value is an :class:`Integration`."""
+
+    def wait(self, seconds: float):
+        """Let time pass (the antenna keeps tracking)."""
+
+    def weather(self) -> WeatherReading:
+        """Current weather-sensor readings."""
+
+    def encoder_deg(self) -> tuple[float, float]:
+        """Current encoder azimuth and elevation (degrees)."""
