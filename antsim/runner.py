@@ -115,9 +115,28 @@ def simulate(scenario: Scenario, seed: int | None = None, model: PointingModel |
             sink(scan_rows)
 
     program = ControlProgram(scenario.controller, world.antenna, sink=collect, progress=progress)
+    _check_visibility(scenario, program)
     env.run(until=env.process(program.run(env)))
     return RunResult(scenario=scenario, seed=seed, model=model, rows=rows, truth=world.truth(),
                      program=program, world=world, wall_s=time.perf_counter() - t0)
+
+
+def _check_visibility(scenario: Scenario, program: ControlProgram) -> None:
+    """A listed source that never enters the elevation window is an input error."""
+    from controller.errors import InputError
+    from controller.scheduler import never_visible
+
+    sched = scenario.controller.scheduler
+    missing = never_visible(program.observer, program.targets, sched, scenario.duration_s)
+    if missing:
+        name = missing[0].name
+        key = ("controller.scheduler.sources" if sched.sources
+               else f"sources[{[s.name for s in scenario.sources].index(name)}].dec")
+        raise InputError(scenario.path, key, name,
+                         f"never between {sched.elevation_min_deg:g} and "
+                         f"{sched.elevation_max_deg:g} deg elevation during the campaign",
+                         "remove it, or list the observable ones in "
+                         "controller.scheduler.sources")
 
 
 def run_campaign(scenario: Scenario, out_dir: str | Path, seed: int | None = None,

@@ -30,6 +30,7 @@ __all__ = [
     "Target",
     "WindowConstraint",
     "make_scheduler",
+    "never_visible",
 ]
 
 #: Sun elevations that separate day and night (deg): civil/nautical twilight in between
@@ -221,6 +222,22 @@ class SpreadScheduler(Scheduler):
             if score > best_score + 1e-9:
                 best, best_score = tg, score
         return best
+
+
+def never_visible(observer: Observer, targets: Sequence[Target], config: SchedulerConfig,
+                  duration_s: float, step_s: float = 300.0) -> list[Target]:
+    """Targets never inside the elevation window during the campaign (checked every
+    ``step_s``): a plan that lists them cannot be carried out."""
+    times = np.arange(0.0, duration_s + step_s, step_s)
+    times = times[times <= duration_s]
+    missing = []
+    for tg in targets:
+        _, el = observer.ephemeris.altaz_rad(tg.index, times)
+        el_deg = np.degrees(el)
+        inside = (el_deg >= config.elevation_min_deg) & (el_deg <= config.elevation_max_deg)
+        if not inside.any():
+            missing.append(tg)
+    return missing
 
 
 def make_scheduler(config: SchedulerConfig, observer: Observer, targets: Sequence[Target],
