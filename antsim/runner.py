@@ -122,21 +122,31 @@ def simulate(scenario: Scenario, seed: int | None = None, model: PointingModel |
 
 
 def _check_visibility(scenario: Scenario, program: ControlProgram) -> None:
-    """A listed source that never enters the elevation window is an input error."""
+    """Sources the plan cannot observe are input errors: a catalogue source that never rises
+    above the elevation limit at this site, or a source the scheduler is told to observe that
+    is never inside the elevation window during the campaign."""
     from controller.errors import InputError
-    from controller.scheduler import never_visible
+    from controller.scheduler import never_rises, never_visible
 
     sched = scenario.controller.scheduler
-    missing = never_visible(program.observer, program.targets, sched, scenario.duration_s)
-    if missing:
-        name = missing[0].name
-        key = ("controller.scheduler.sources" if sched.sources
-               else f"sources[{[s.name for s in scenario.sources].index(name)}].dec")
-        raise InputError(scenario.path, key, name,
-                         f"never between {sched.elevation_min_deg:g} and "
-                         f"{sched.elevation_max_deg:g} deg elevation during the campaign",
+    names = [s.name for s in scenario.sources]
+    low = never_rises(program.observer, program.targets, scenario.site.latitude_deg,
+                      sched.elevation_min_deg)
+    if low:
+        name = low[0].name
+        raise InputError(scenario.path, f"sources[{names.index(name)}].dec", name,
+                         f"never rises above controller.scheduler.elevation_min_deg = "
+                         f"{sched.elevation_min_deg:g} deg at latitude "
+                         f"{scenario.site.latitude_deg:g}",
                          "remove it, or list the observable ones in "
                          "controller.scheduler.sources")
+    if sched.sources:
+        missing = never_visible(program.observer, program.targets, sched, scenario.duration_s)
+        if missing:
+            raise InputError(scenario.path, "controller.scheduler.sources", missing[0].name,
+                             f"never between {sched.elevation_min_deg:g} and "
+                             f"{sched.elevation_max_deg:g} deg elevation during the campaign",
+                             "remove it or lengthen the campaign")
 
 
 def run_campaign(scenario: Scenario, out_dir: str | Path, seed: int | None = None,

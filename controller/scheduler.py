@@ -30,6 +30,7 @@ __all__ = [
     "Target",
     "WindowConstraint",
     "make_scheduler",
+    "never_rises",
     "never_visible",
 ]
 
@@ -227,7 +228,7 @@ class SpreadScheduler(Scheduler):
 def never_visible(observer: Observer, targets: Sequence[Target], config: SchedulerConfig,
                   duration_s: float, step_s: float = 300.0) -> list[Target]:
     """Targets never inside the elevation window during the campaign (checked every
-    ``step_s``): a plan that lists them cannot be carried out."""
+    ``step_s``)."""
     times = np.arange(0.0, duration_s + step_s, step_s)
     times = times[times <= duration_s]
     missing = []
@@ -238,6 +239,18 @@ def never_visible(observer: Observer, targets: Sequence[Target], config: Schedul
         if not inside.any():
             missing.append(tg)
     return missing
+
+
+def never_rises(observer: Observer, targets: Sequence[Target], latitude_deg: float,
+                min_el_deg: float) -> list[Target]:
+    """Targets whose transit elevation, 90 - |latitude - declination|, stays below
+    ``min_el_deg``: unobservable from this site on any day."""
+    out = []
+    for tg in targets:
+        _, dec = observer.ephemeris.hadec_rad(tg.index, 0.0)
+        if 90.0 - abs(latitude_deg - math.degrees(float(dec))) < min_el_deg:
+            out.append(tg)
+    return out
 
 
 def make_scheduler(config: SchedulerConfig, observer: Observer, targets: Sequence[Target],

@@ -1,0 +1,76 @@
+"""Wall time of simulated campaigns (simulation + reduction, after imports).
+
+    python benchmarks/campaign.py [--days 30] [--repeats 3]
+
+Prints the 24-hour campaign of ``scenarios/ghigo1990.toml`` (target: at most 1 s, i.e.
+86,400 times faster than real time), a 30-day campaign (cost should grow linearly with the
+duration), and the whole ``antsim run`` command with Python start-up (target: under 3 s).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import replace
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from antsim.runner import simulate  # noqa: E402
+from antsim.scenario import load_scenario  # noqa: E402
+
+
+def campaign_seconds(scenario, repeats: int) -> tuple[float, int]:
+    times, scans = [], 0
+    for i in range(repeats):
+        t0 = time.perf_counter()
+        result = simulate(scenario, seed=scenario.seed + i)
+        times.append(time.perf_counter() - t0)
+        scans = result.n_scans
+    return statistics.median(times), scans
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--days", type=float, default=30.0)
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+
+    base = load_scenario(ROOT / "scenarios" / "ghigo1990.toml")
+    simulate(replace(base, duration_s=3600.0,
+                     controller=replace(base.controller, duration_s=3600.0)))  # warm caches
+
+    day_s, day_scans = campaign_seconds(base, args.repeats)
+    print(f"24-hour campaign: {day_s:.2f} s wall ({day_scans} scans), "
+          f"{86400.0 / day_s:,.0f}x real time; target <= 1 s: "
+          f"{'met' if day_s <= 1.0 else 'NOT met'}")
+
+    long_s = args.days * 86400.0
+    long = replace(base, duration_s=long_s, controller=replace(base.controller,
+                                                                duration_s=long_s))
+    long_t, long_scans = campaign_seconds(long, 1)
+    per_day = long_t / args.days
+    print(f"{args.days:g}-day campaign: {long_t:.1f} s wall ({long_scans} scans), "
+          f"{per_day:.2f} s per day = {per_day / day_s:.2f}x the 24-hour cost per day "
+          f"(1.00 = linear)")
+
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = [sys.executable, "-m", "antsim", "run", str(ROOT / "scenarios" / "ghigo1990.toml"),
+               "--no-progress"]
+        runs = []
+        for i in range(args.repeats):
+            t0 = time.perf_counter()
+            subprocess.run([*cmd, "--out", f"{tmp}/run{i}"], check=True, capture_output=True)
+            runs.append(time.perf_counter() - t0)
+        whole = statistics.median(runs)
+        print(f"whole `antsim run scenarios/ghigo1990.toml` (Python start-up, fit, files): "
+              f"{whole:.2f} s; target < 3 s: {'met' if whole < 3.0 else 'NOT met'}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,206 @@
+"""The controller driving the simulated antenna: scans, reduction, scheduling, recordings."""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from antsim.atmosphere import AtmosphereConfig
+from antsim.runner import run_campaign, simulate
+from antsim.scenario import load_scenario
+from controller.model import PointingModel
+from controller.recordings import COLUMN_NAMES, read_pointing_data, read_recordings
+
+ROOT = Path(__file__).resolve().parents[1]
+GHIGO = ROOT / "scenarios" / "ghigo1990.toml"
+
+
+@pytest.fixture(scope="module")
+def ghigo():
+    return load_scenario(GHIGO)
+
+
+def quiet(scenario, hours: float, truth: PointingModel, estimator: str = "clark"):
+    """A noise-free, effect-free, transparent-sky version of ``scenario``."""
+    receiver = replace(scenario.receiver, gain_fluctuation=0.0, bandwidth_mhz=1e12)
+    scan = replace(scenario.controller.scan, estimator=estimator)
+    scheduler = replace(scenario.controller.scheduler, min_revisit_s=300.0)
+    controller = replace(scenario.controller, model=PointingModel(), scan=scan,
+                         scheduler=scheduler, duration_s=hours * 3600.0)
+    return replace(scenario, duration_s=hours * 3600.0, effects=(), receiver=receiver,
+                   atmosphere=AtmosphereConfig(zenith_opacity=0.0, temperature_k=270.0),
+                   truth_model=truth, controller=controller)
+
+
+@pytest.mark.parametrize("estimator", ["clark", "lsq"])
+def test_noise_free_scans_reduce_to_the_injected_offset(ghigo, estimator):
+    # injected errors constant on the sky: 2' of collimation (W2: dA = W2 sec E, so xel = 2')
+    # and 3' of elevation zero; point sources only, so the reduction must return them exactly
+    truth = PointingModel(["W2", "W6"], [120.0, 180.0], name="test")
+    sc = quiet(ghigo, 3.0, truth, estimator)
+    sources = [s for s in sc.sources if s.size_arcmin == 0.0]
+    sc = replace(sc, sources=tuple(sources),
+                 controller=replace(sc.controller, sources=tuple(
+                     c for c in sc.controller.sources if c.name in {s.name for s in sources})))
+    result = simulate(sc, seed=5)
+    avg = [r for r in result.rows if r["polarization"] == "AVG"]
+    assert len(avg) >= 20
+    for r in avg:
+        assert r["good"]
+        # 0.005' = 0.3": the world solves B + d(B) = encoder exactly and both estimators are
+        # exact for a point source on the nominal grid. What remains is second-order geometry
+        # of the 2-3' offsets, measured at up to 0.25": the az steps are divided by the
+        # commanded cos E while the beam sits 3' lower (grid scaled by 1 + tan E * 3'), a
+        # cross-elevation offset x moves the elevation by ~x^2/2 tan E (0.08" seen with the
+        # collimation alone), and the gain changes while the source rises during a scan
+        assert r["xel_arcmin"] == pytest.approx(2.0, abs=0.005)
+        assert r["el_arcmin"] == pytest.approx(3.0, abs=0.005)
+        # the amplitude is the source's peak antenna temperature: flux x gain x efficiency
+        flux = next(s.flux_jy for s in sc.sources if s.name == r["source"])
+        eff = float(np.interp(r["el_deg"], sc.beam.efficiency_el_deg, sc.beam.efficiency))
+        peak = flux * sc.beam.gain_k_per_jy * eff
+        # the az scan runs at the el offset of 3': the peak is attenuated by the beam there
+        attenuation = math.exp(-4 * math.log(2) * (3.0 / 11.0) ** 2)
+        assert r["xel_amp_k"] == pytest.approx(peak * attenuation, rel=2e-3)
+
+
+def test_ghigo1990_gives_about_300_scans_over_all_sources(ghigo):
+    result = simulate(ghigo)
+    avg = [r for r in result.rows if r["polarization"] == "AVG"]
+    assert 250 <= len(avg) <= 350
+    assert {r["source"] for r in avg} == {s.name for s in ghigo.sources}
+    # scans are spread over the sky: every quadrant of azimuth is visited, low and high
+    az = np.array([r["az_deg"] for r in avg])
+    el = np.array([r["el_deg"] for r in avg])
+    for lo in (0, 90, 180, 270):
+        assert np.any((az >= lo) & (az < lo + 90))
+    assert el.min() < 20 and el.max() > 60
+    # by day and by night
+    sun = np.array([r["sun_el_deg"] for r in avg])
+    assert (sun > 0).sum() > 60 and (sun < -12).sum() > 60
+    # three rows per scan: XR, XL and their average
+    pols = [r["polarization"] for r in result.rows]
+    assert pols.count("XR") == pols.count("XL") == pols.count("AVG")
+
+
+def test_night_window_keeps_the_sun_down(ghigo):
+    sched = replace(ghigo.controller.scheduler, window="night")
+    sc = replace(ghigo, controller=replace(ghigo.controller, scheduler=sched))
+    result = simulate(sc)
+    sun = np.array([r["sun_el_deg"] for r in result.rows])
+    assert len(sun) > 0
+    # the scan starts at night; it lasts about 4 minutes, in which the Sun rises < 1 deg
+    assert sun.max() < -11.0
+
+
+def test_recordings_round_trip(ghigo, tmp_path):
+    sc = replace(ghigo, duration_s=2 * 3600.0,
+                 controller=replace(ghigo.controller, duration_s=2 * 3600.0))
+    result = run_campaign(sc, tmp_path, show_progress=False)
+    table = read_recordings(tmp_path / "recordings.ecsv")
+    assert tuple(table.colnames) == COLUMN_NAMES
+    assert len(table) == len(result.rows)
+    for i, row in enumerate(result.rows):
+        for name in COLUMN_NAMES:
+            value = table[name][i]
+            if isinstance(row[name], float):
+                assert float(value) == row[name] or (math.isnan(row[name])
+                                                     and math.isnan(float(value)))
+            else:
+                assert value == row[name]
+    assert table["xel_arcmin"].unit == "arcmin"
+    meta = table.meta
+    assert meta["scenario"] == "ghigo1990" and meta["seed"] == sc.seed
+    assert meta["model"]["name"] == "ghigo10"
+    assert meta["model"]["terms_arcsec"]["W6"] == pytest.approx(720.0)
+    assert meta["step_arcmin"] == 7.0 and meta["beam_hpbw_arcmin"] == 11.0
+    # total pointing error = measured + model in use + applied correction
+    data = read_pointing_data(tmp_path / "recordings.ecsv")
+    avg = [r for r in result.rows if r["polarization"] == "AVG" and r["good"]]
+    expected_el = [60 * (r["el_arcmin"] + r["model_el_arcmin"] + r["applied_el_arcmin"])
+                   for r in avg]
+    assert np.allclose(data.el_arcsec, expected_el)
+
+
+def test_resume_after_a_torn_write_is_byte_identical(ghigo, tmp_path):
+    sc = replace(ghigo, duration_s=2 * 3600.0,
+                 controller=replace(ghigo.controller, duration_s=2 * 3600.0))
+    full = tmp_path / "full"
+    run_campaign(sc, full, show_progress=False)
+    reference = (full / "recordings.ecsv").read_bytes()
+    names_line = reference.index(b"\nscan ") + 1
+    header_end = reference.index(b"\n", names_line) + 1  # first byte of the first data row
+    body_lines = reference[header_end:].count(b"\n")
+    assert body_lines > 20
+    rng = np.random.default_rng(7)
+    # cut the file anywhere: inside the header, mid-line, exactly at a line end
+    cuts = [header_end - 5, header_end + 10, reference.index(b"\n", header_end + 2000) + 1,
+            *rng.integers(header_end, len(reference) - 1, size=3)]
+    for cut in cuts:
+        part = tmp_path / f"cut{cut}"
+        part.mkdir()
+        (part / "recordings.ecsv").write_bytes(reference[:cut])
+        if cut < header_end:
+            # a torn header is not this run's header: resuming refuses, it does not guess
+            from controller.errors import InputError
+
+            with pytest.raises(InputError):
+                run_campaign(sc, part, resume=True, show_progress=False)
+            continue
+        # what is on disk is readable up to the last complete row
+        table = read_recordings(part / "recordings.ecsv")
+        assert len(table) == reference[header_end:cut].count(b"\n")
+        run_campaign(sc, part, resume=True, show_progress=False)
+        assert (part / "recordings.ecsv").read_bytes() == reference
+
+
+def test_resume_refuses_another_runs_file(ghigo, tmp_path):
+    from controller.recordings import ResumeMismatchError
+
+    sc = replace(ghigo, duration_s=1 * 3600.0,
+                 controller=replace(ghigo.controller, duration_s=1 * 3600.0))
+    run_campaign(sc, tmp_path, seed=1, show_progress=False)
+    text = (tmp_path / "recordings.ecsv").read_text()
+    # same header (same seed), but a tampered data row
+    lines = text.splitlines(keepends=True)
+    lines[-1] = lines[-1].replace("AVG", "XR", 1)
+    (tmp_path / "recordings.ecsv").write_text("".join(lines))
+    with pytest.raises(ResumeMismatchError):
+        run_campaign(sc, tmp_path, seed=1, resume=True, show_progress=False)
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGKILL")
+def test_a_killed_run_leaves_a_readable_file_and_resumes(tmp_path):
+    """Kill ``antsim run`` for real while it writes, then resume it."""
+    out = tmp_path / "killed"
+    cmd = [sys.executable, "-m", "antsim", "run", str(GHIGO), "--out", str(out),
+           "--no-progress"]
+    env = dict(os.environ, PYTHONHASHSEED="0")
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env)
+    target = out / "recordings.ecsv"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and proc.poll() is None:
+        if target.exists() and target.stat().st_size > 30_000:
+            proc.send_signal(signal.SIGKILL)
+            break
+        time.sleep(0.002)
+    proc.wait()
+    if proc.returncode == 0:
+        pytest.skip("the run finished before it could be killed (machine too fast)")
+    table = read_recordings(target)
+    assert len(table) > 0
+    resumed = subprocess.run([*cmd, "--resume"], capture_output=True, env=env, check=False)
+    assert resumed.returncode == 0, resumed.stderr.decode()
+    fresh = tmp_path / "fresh"
+    subprocess.run([sys.executable, "-m", "antsim", "run", str(GHIGO), "--out", str(fresh),
+                    "--no-progress"], check=True, capture_output=True, env=env)
+    assert target.read_bytes() == (fresh / "recordings.ecsv").read_bytes()
