@@ -23,8 +23,11 @@ __all__ = ["ChannelConfig", "Receiver", "ReceiverConfig"]
 
 @dataclass(frozen=True)
 class ChannelConfig:
+    """One polarization channel; ``gain_fluctuation`` (dG/G) overrides the receiver's."""
+
     name: str
     tsys_k: float
+    gain_fluctuation: float | None = None
 
 
 @dataclass(frozen=True)
@@ -47,8 +50,9 @@ class Receiver:
         self.rng = rng
         self.names = tuple(c.name for c in config.channels)
         self.tsys_k = np.array([c.tsys_k for c in config.channels])
-        self._gain = OUProcess(rng, np.full(len(self.names), config.gain_fluctuation),
-                               config.gain_timescale_s)
+        rms = [config.gain_fluctuation if c.gain_fluctuation is None else c.gain_fluctuation
+               for c in config.channels]
+        self._gain = OUProcess(rng, np.array(rms), config.gain_timescale_s)
 
     def sample_times(self, t_start_s: float, seconds: float) -> np.ndarray:
         """Mid-times of the samples of an integration starting at ``t_start_s``."""

@@ -25,7 +25,7 @@ from ._version import __version__
 from .scenario import Scenario
 from .world import World
 
-__all__ = ["RunResult", "recording_meta", "run_campaign", "simulate"]
+__all__ = ["RunResult", "check_scenario", "recording_meta", "run_campaign", "simulate"]
 
 
 @dataclass
@@ -115,33 +115,36 @@ def simulate(scenario: Scenario, seed: int | None = None, model: PointingModel |
             sink(scan_rows)
 
     program = ControlProgram(scenario.controller, world.antenna, sink=collect, progress=progress)
-    _check_visibility(scenario, program)
+    check_scenario(scenario, program.observer, program.targets)
     env.run(until=env.process(program.run(env)))
     return RunResult(scenario=scenario, seed=seed, model=model, rows=rows, truth=world.truth(),
                      program=program, world=world, wall_s=time.perf_counter() - t0)
 
 
-def _check_visibility(scenario: Scenario, program: ControlProgram) -> None:
-    """Sources the plan cannot observe are input errors: a catalogue source that never rises
-    above the elevation limit at this site, or a source the scheduler is told to observe that
-    is never inside the elevation window during the campaign."""
+def check_scenario(scenario: Scenario, observer=None, targets=None) -> None:
+    """Checks that need the sky, made before anything runs or is written: a catalogue source
+    that never rises above the elevation limit at this site, or a source the scheduler is told
+    to observe that is never inside the elevation window during the campaign."""
     from controller.errors import InputError
+    from controller.program import plan_targets
     from controller.scheduler import never_rises, never_visible
 
+    if observer is None:
+        observer, targets = plan_targets(scenario.controller)
     sched = scenario.controller.scheduler
     names = [s.name for s in scenario.sources]
-    low = never_rises(program.observer, program.targets, scenario.site.latitude_deg,
-                      sched.elevation_min_deg)
+    low = never_rises(observer, targets, scenario.site.latitude_deg, sched.elevation_min_deg)
     if low:
         name = low[0].name
-        raise InputError(scenario.path, f"sources[{names.index(name)}].dec", name,
-                         f"never rises above controller.scheduler.elevation_min_deg = "
+        i = names.index(name)
+        raise InputError(scenario.path, f"sources[{i}].dec", scenario.sources[i].dec_deg,
+                         f"{name} never rises above controller.scheduler.elevation_min_deg = "
                          f"{sched.elevation_min_deg:g} deg at latitude "
                          f"{scenario.site.latitude_deg:g}",
                          "remove it, or list the observable ones in "
                          "controller.scheduler.sources")
     if sched.sources:
-        missing = never_visible(program.observer, program.targets, sched, scenario.duration_s)
+        missing = never_visible(observer, targets, sched, scenario.duration_s)
         if missing:
             raise InputError(scenario.path, "controller.scheduler.sources", missing[0].name,
                              f"never between {sched.elevation_min_deg:g} and "
@@ -158,6 +161,7 @@ def run_campaign(scenario: Scenario, out_dir: str | Path, seed: int | None = Non
     seed = scenario.seed if seed is None else int(seed)
     use_model = model if model is not None else scenario.controller.model
     meta = recording_meta(scenario, seed, use_model)
+    check_scenario(scenario)  # refuse before anything is written
     progress, close_bar = _progress(scenario.duration_s, show_progress)
     with RecordingWriter(out / "recordings.ecsv", meta, resume=resume) as writer:
         try:

@@ -199,7 +199,9 @@ def _receiver(t: Table) -> ReceiverConfig:
     d = ReceiverConfig()
     channels = []
     for ct in t.tables("channels", [{"name": c.name, "tsys_k": c.tsys_k} for c in d.channels]):
-        channels.append(ChannelConfig(ct.string("name"), ct.number("tsys_k", gt=0.0, max=1e5)))
+        channels.append(ChannelConfig(
+            ct.string("name"), ct.number("tsys_k", gt=0.0, max=1e5),
+            ct.number("gain_fluctuation", None, min=0.0, max=0.1, allow_none=True)))
         ct.finish()
     if not channels:
         raise t.error("channels", [], "the receiver needs at least one channel")

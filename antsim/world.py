@@ -217,8 +217,14 @@ class SimulatedAntenna:
         enc_az = enc_az_deg * RAD_PER_DEG
         enc_el = enc_el_deg * RAD_PER_DEG
         mid = t.size // 2
-        span = max(t[-1] - t[0], 1e-9)
-        rates = ((enc_az[-1] - enc_az[0]) / span, (enc_el[-1] - enc_el[0]) / span)
+        if t.size > 1:
+            span = t[-1] - t[0]
+            rates = ((enc_az[-1] - enc_az[0]) / span, (enc_el[-1] - enc_el[0]) / span)
+        else:  # one sample: the command's rate over that sample (not zero while tracking)
+            half = 0.5 * seconds
+            a_deg, e_deg = self.mount.commanded_deg(t_clock[0] + np.array([-half, half]))
+            rates = ((a_deg[1] - a_deg[0]) * RAD_PER_DEG / seconds,
+                     (e_deg[1] - e_deg[0]) * RAD_PER_DEG / seconds)
 
         # slowly varying errors at the middle: solve B + d(B) = encoder
         d_az, d_el = self._error_prev

@@ -27,7 +27,7 @@ from .scheduler import Observer, Target, make_scheduler
 from .tracking import RefractionCorrection, SourceTrajectory, standard_weather
 from .units import ARCMIN_PER_RAD
 
-__all__ = ["ControlProgram", "ScanOutcome"]
+__all__ = ["ControlProgram", "ScanOutcome", "plan_targets"]
 
 #: the controller's ephemeris reaches this far past the window (scans running at its end)
 EPHEMERIS_MARGIN_S = 3600.0
@@ -46,6 +46,21 @@ class ScanOutcome:
     searches: int
 
 
+def plan_targets(config: ControllerConfig,
+                 ephemeris: Ephemeris | None = None) -> tuple[Observer, list[Target]]:
+    """The controller's view of the sky for ``config``: its observer and its targets."""
+    if ephemeris is None:
+        site = Site(config.site_latitude_deg, config.site_longitude_deg, config.site_height_m,
+                    config.site_name)
+        sources = tuple(FixedSource(s.name, s.ra_deg, s.dec_deg, s.frame)
+                        for s in config.sources)
+        ephemeris = Ephemeris(site, config.epoch_utc, config.duration_s + EPHEMERIS_MARGIN_S,
+                              sources)
+    names = config.scheduler.sources or tuple(s.name for s in config.sources)
+    all_names = [s.name for s in config.sources]
+    return Observer(ephemeris), [Target(n, all_names.index(n)) for n in names]
+
+
 class ControlProgram:
     """The 1990-style pointing program, driving any :class:`~controller.protocol.Antenna`."""
 
@@ -57,16 +72,8 @@ class ControlProgram:
         self.antenna = antenna
         self.sink = sink
         self.progress = progress
-        site = Site(config.site_latitude_deg, config.site_longitude_deg, config.site_height_m,
-                    config.site_name)
-        sources = tuple(FixedSource(s.name, s.ra_deg, s.dec_deg, s.frame)
-                        for s in config.sources)
-        self.ephemeris = ephemeris or Ephemeris(site, config.epoch_utc,
-                                                config.duration_s + EPHEMERIS_MARGIN_S, sources)
-        self.observer = Observer(self.ephemeris)
-        names = config.scheduler.sources or tuple(s.name for s in config.sources)
-        all_names = [s.name for s in config.sources]
-        self.targets = [Target(n, all_names.index(n)) for n in names]
+        self.observer, self.targets = plan_targets(config, ephemeris)
+        self.ephemeris = self.observer.ephemeris
         scan = config.scan
         n_pos = len(scan.offsets_n)
         self.scan_duration_s = 2 * n_pos * (scan.integration_s + 6.0) + scan.overhead_s

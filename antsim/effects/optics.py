@@ -101,7 +101,8 @@ class ExactTiltCollimation(Effect):
     The azimuth axis is tilted by ``tilt_arcmin`` towards azimuth ``tilt_az_deg`` and the beam
     is off the plane perpendicular to the elevation axis by ``collimation_arcmin``. The error is
     computed with rotations, so it stays right near the zenith and near azimuth 90 deg where
-    the linear TPOINT terms (AN, AW, CA) fail for large angles.
+    the linear TPOINT terms (AN, AW, CA) fail for large angles. For small angles it equals
+    AN = -tilt cos(tilt_az), AW = tilt sin(tilt_az), CA = -collimation (tested).
     """
 
     name: ClassVar[str] = "exact_tilt_collimation"

@@ -87,6 +87,13 @@ class OUProcess:
             first = rho0 * self.state + math.sqrt(1.0 - rho0 * rho0) * draws[0]
         if n == 1:
             out = first[None, :]
+        elif n > 64:  # long integrations: a recursive filter, not an n x n kernel
+            from scipy.signal import lfilter
+
+            rho = math.exp(-float(t_s[1] - t_s[0]) / self.tau)
+            rest = lfilter([math.sqrt(1.0 - rho * rho)], [1.0, -rho], draws[1:], axis=0,
+                           zi=(rho * first)[None, :])[0]
+            out = np.vstack([first[None, :], rest])
         else:
             rho = math.exp(-float(t_s[1] - t_s[0]) / self.tau)
             powers, kernel = _ar1_kernel(n, rho)

@@ -1,0 +1,172 @@
+"""Shared fixtures: scenario files and texts, editing a scenario by string replacement, and a
+probe that finds, through the control protocol only, where a noise-free world's beam is.
+
+Scenario variants are made from a base text by explicit ``(old, new)`` replacements; each
+``old`` must occur exactly once, so a test shows precisely which edit it depends on and fails
+loudly (instead of silently testing something else) when the base scenario changes.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+TEST_SCENARIOS = Path(__file__).resolve().parent / "data" / "scenarios"
+
+#: the 1990 scenario cut to its first 3 hours (17:00-20:00 UTC, 8 Feb 1990). Orion A, 3C273
+#: and Virgo A do not rise above the 10 deg scheduling limit in that window (the runner
+#: refuses such a plan), so the scheduler is given the five sources that do.
+SHORT_EDITS = (
+    ("duration_h = 24.0", "duration_h = 3.0"),
+    ('policy = "spread"',
+     'policy = "spread"\nsources = ["3C84", "Taurus A", "W31", "Cygnus A", "Cassiopeia A"]'),
+)
+
+
+def edit_text(text: str, edits: Iterable[tuple[str, str]]) -> str:
+    """``text`` with each ``old`` (which must occur exactly once) replaced by ``new``."""
+    for old, new in edits:
+        count = text.count(old)
+        if count != 1:
+            raise AssertionError(f"scenario edit target {old!r} occurs {count} times "
+                                 "(expected once): has the base scenario changed?")
+        text = text.replace(old, new)
+    return text
+
+
+@pytest.fixture(scope="session")
+def repo_root() -> Path:
+    return REPO
+
+
+@pytest.fixture(scope="session")
+def ghigo_path() -> Path:
+    return REPO / "scenarios" / "ghigo1990.toml"
+
+
+@pytest.fixture(scope="session")
+def ghigo_text(ghigo_path) -> str:
+    return ghigo_path.read_text(encoding="utf-8")
+
+
+@pytest.fixture(scope="session")
+def short_ghigo_text(ghigo_text) -> str:
+    """The 1990 scenario text shortened to 3 hours (see ``SHORT_EDITS``)."""
+    return edit_text(ghigo_text, SHORT_EDITS)
+
+
+@pytest.fixture(scope="session")
+def quiet_path() -> Path:
+    """A noise-free, atmosphere-free one-hour test world (see the file's comments)."""
+    return TEST_SCENARIOS / "quiet.toml"
+
+
+@pytest.fixture
+def write_scenario(tmp_path):
+    """``write_scenario(text, edits=(), name="scenario.toml") -> Path`` in ``tmp_path``."""
+
+    def write(text: str, edits: Iterable[tuple[str, str]] = (),
+              name: str = "scenario.toml") -> Path:
+        path = tmp_path / name
+        path.write_text(edit_text(text, edits), encoding="utf-8")
+        return path
+
+    return write
+
+
+# ---------------------------------------------------------------------------------------------
+# probing a noise-free world through the protocol
+ARCSEC_PER_RAD = 648000.0 / math.pi
+
+
+def source_trajectory(world, index: int,
+                      offset_rad: Callable | None = None) -> Callable:
+    """Trajectory (antenna clock s -> encoder az, el deg) on source ``index``'s true observed
+    position, plus ``offset_rad(az_rad, el_rad) -> (d_az, d_el)`` evaluated there if given."""
+
+    def trajectory(t_s):
+        az, el = world.sky.observed_altaz_rad(index, np.asarray(t_s, dtype=float),
+                                              t_weather_s=0.0)
+        if offset_rad is not None:
+            d_az, d_el = offset_rad(az, el)
+            az, el = az + d_az, el + d_el
+        return np.degrees(az) % 360.0, np.degrees(el)
+
+    return trajectory
+
+
+def probe_beam(world, index: int, trajectory, *, t_track_s: float = 600.0,
+               step_arcmin: float = 3.0) -> dict[str, dict]:
+    """Where source ``index`` is, per channel, relative to ``trajectory``.
+
+    Drives the world's antenna only through the protocol: track at ``t_track_s``, then for
+    each axis 1-s integrations (one sample each) at offsets -step, 0, +step on the sky.
+    Azimuth steps are made in encoder azimuth; the sky offset actually obtained is computed
+    from the source's true elevation at the sample time (the world's cross-elevation is
+    d_az cos E_source). The baseline subtracted is Tsys + sky emission at the source's
+    elevation (exact in a world with zero opacity).
+
+    Returns per channel: ``center`` (xel, el) arcsec, the vertex of the parabola through the
+    three log powers (exact for a Gaussian of any width); ``nominal`` (xel, el) arcsec, the
+    two-point log-ratio offset assuming the scenario's nominal HPBW (what a five-point
+    reduction measures); ``peak`` (az, el) the power above baseline at zero offset (K);
+    ``powers`` and ``offsets`` (arcsec) per axis; ``times`` (az, el) the true time of the
+    zero-offset sample of each axis. Offsets are the encoder (sky) offset from the trajectory
+    at which the power peaks: indicated minus true when the trajectory is the true position.
+    """
+    env, antenna = world.env, world.antenna
+    tsys = {c.name: c.tsys_k for c in world.scenario.receiver.channels}
+    data: dict[str, list] = {"az": [], "el": []}
+
+    def run():
+        if env.now < t_track_s:
+            yield env.timeout(t_track_s - env.now)
+        yield antenna.track(trajectory)
+        for axis in ("az", "el"):
+            for n in (-1, 0, 1):
+                step_deg = n * step_arcmin / 60.0
+                _, el_now = world.sky.observed_altaz_rad(index, np.array([env.now]), 0.0)
+                if axis == "az":
+                    d_az_deg = step_deg / math.cos(el_now[0])
+                    yield antenna.set_offset(d_az_deg, 0.0)
+                else:
+                    yield antenna.set_offset(0.0, step_deg)
+                integ = yield antenna.integrate(1.0)
+                t_sample = env.now - 0.5
+                _, el_src = world.sky.observed_altaz_rad(index, np.array([t_sample]), 0.0)
+                sky_arcsec = (d_az_deg * math.cos(el_src[0]) if axis == "az"
+                              else step_deg) * 3600.0
+                baseline = float(world.atmosphere.emission_k(el_src[0]))
+                data[axis].append((sky_arcsec, {c: integ.power_k[c] - tsys[c] - baseline
+                                                for c in integ.power_k}, t_sample))
+
+    env.run(until=env.process(run()))
+    k = 4.0 * math.log(2.0) / (world.scenario.beam.hpbw_arcmin * 60.0) ** 2  # per arcsec^2
+    out = {}
+    for c in world.antenna.channels:
+        center, nominal, peak, powers, offsets, times = [], [], [], [], [], []
+        for axis in ("az", "el"):
+            u = np.array([row[0] for row in data[axis]])
+            p = np.array([row[1][c] for row in data[axis]])
+            quad, lin, _ = np.polyfit(u, np.log(p), 2)
+            center.append(-lin / (2.0 * quad))
+            nominal.append(0.5 * (u[2] + u[0])
+                           + math.log(p[2] / p[0]) / (2.0 * k * (u[2] - u[0])))
+            peak.append(p[1])
+            powers.append(p)
+            offsets.append(u)
+            times.append(data[axis][1][2])
+        out[c] = {"center": tuple(center), "nominal": tuple(nominal), "peak": tuple(peak),
+                  "powers": powers, "offsets": offsets, "times": tuple(times)}
+    return out
+
+
+@pytest.fixture(scope="session")
+def probe():
+    """``(probe_beam, source_trajectory)``: see :func:`probe_beam`."""
+    return probe_beam, source_trajectory
