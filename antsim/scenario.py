@@ -239,6 +239,8 @@ def _weather(t: Table) -> WeatherConfig:
         pressure_hpa=t.number("pressure_hpa", d.pressure_hpa, min=100.0, max=1100.0),
         relative_humidity=t.number("relative_humidity", d.relative_humidity, min=0.0, max=1.0),
         wind_speed_m_s=t.number("wind_speed_m_s", d.wind_speed_m_s, min=0.0, max=60.0),
+        wind_day_m_s=t.number("wind_day_m_s", d.wind_day_m_s, min=0.0, max=60.0,
+                              allow_none=True),
     )
     if w.air_max_c < w.air_min_c:
         raise t.error("air_max_c", w.air_max_c, f"is below air_min_c = {w.air_min_c:g}")

@@ -3,6 +3,8 @@
 The air temperature follows a daily cycle with its minimum near sunrise and its maximum in
 the early afternoon (local mean solar time), rising as a half cosine over the morning and
 falling as a half cosine over the rest of the day, plus a slow random wander drawn per run.
+The wind follows the same daily shape between a calm night and a breezier afternoon (surface
+wind typically peaks with the afternoon's convective mixing).
 For 8 Feb 1990 (DESIGN section 5: 0 to 15 C by day, -4 to 3 C at night) the scenario sets
 minimum -4 C, maximum 15 C.
 """
@@ -33,7 +35,9 @@ class WeatherConfig:
     wander_timescale_s: float = 7200.0
     pressure_hpa: float = 920.0
     relative_humidity: float = 0.5
+    #: wind at the coolest hour; ``wind_day_m_s`` at the warmest (None: constant wind)
     wind_speed_m_s: float = 3.0
+    wind_day_m_s: float | None = None
 
 
 class WeatherModel:
@@ -67,6 +71,18 @@ class WeatherModel:
         # phase 0 -> minimum, 1 -> maximum, 2 -> minimum again
         return c.air_min_c + (c.air_max_c - c.air_min_c) * 0.5 * (1.0 - np.cos(math.pi * phase))
 
+    def daily_shape(self, t_s) -> np.ndarray:
+        """0 at the daily temperature minimum, 1 at the maximum."""
+        c = self.config
+        return (self.daily_curve_c(t_s) - c.air_min_c) / max(c.air_max_c - c.air_min_c, 1e-9)
+
+    def wind_m_s(self, t_s) -> np.ndarray:
+        """Wind speed (m/s) at time(s) ``t_s``."""
+        c = self.config
+        if c.wind_day_m_s is None:
+            return np.full(np.shape(t_s), c.wind_speed_m_s)
+        return c.wind_speed_m_s + (c.wind_day_m_s - c.wind_speed_m_s) * self.daily_shape(t_s)
+
     def air_temperature_c(self, t_s) -> np.ndarray:
         """Air temperature (C): the daily curve plus this run's random wander."""
         return self.daily_curve_c(t_s) + np.interp(t_s, self._t, self._wander)
@@ -77,5 +93,5 @@ class WeatherModel:
             temperature_c=float(self.air_temperature_c(t_s)),
             pressure_hpa=self.pressure_hpa,
             relative_humidity=self.relative_humidity,
-            wind_speed_m_s=self.wind_speed_m_s,
+            wind_speed_m_s=float(self.wind_m_s(t_s)),
         )

@@ -100,6 +100,10 @@ class World:
 
     sun_el_rad_periodic = sun_el_rad
 
+    def sun_az_rad(self, t_s) -> np.ndarray:
+        """Azimuth of the Sun (radians, N = 0) at campaign time(s), valid from a day before."""
+        return self._sun.sun_altaz_rad(np.asarray(t_s, dtype=float) + 86400.0)[0]
+
     def air_temperature_c(self, t_s) -> np.ndarray:
         return self.weather.air_temperature_c(t_s)
 

@@ -110,10 +110,12 @@ def reduce_scan(raw: RawScan, scan: ScanConfig, estimator: str | None = None,
     est = estimator or scan.estimator
     step = raw.step_arcmin if step_arcmin is None else step_arcmin
     if est == "clark":
-        # the report's baseline: the mean of the two +-4D powers (DESIGN's efficiency
-        # figures for Clark's method hold for this reading)
+        # baseline: the straight line through the two +-4D powers. It removes the sky's
+        # emission slope across an elevation scan exactly to first order; a constant
+        # baseline (their mean) turns that slope into an elevation offset of ~8" at 20 deg
+        # for a 1 K source (docs/assumptions.md)
         result = reduce_clark(power, std, step_arcmin=step, hpbw_arcmin=scan.hpbw_arcmin,
-                              snr_min=scan.snr_min, baseline="mean")
+                              snr_min=scan.snr_min, baseline="line")
     elif est == "lsq":
         result = reduce_lsq(power, std, times, step_arcmin=step, hpbw_arcmin=scan.hpbw_arcmin,
                             snr_min=scan.snr_min)

@@ -31,7 +31,9 @@ def ghigo():
 
 def quiet(scenario, hours: float, truth: PointingModel, estimator: str = "clark"):
     """A noise-free, effect-free, transparent-sky version of ``scenario``."""
-    receiver = replace(scenario.receiver, gain_fluctuation=0.0, bandwidth_mhz=1e12)
+    channels = tuple(replace(c, gain_fluctuation=0.0) for c in scenario.receiver.channels)
+    receiver = replace(scenario.receiver, gain_fluctuation=0.0, bandwidth_mhz=1e12,
+                       channels=channels)
     scan = replace(scenario.controller.scan, estimator=estimator)
     scheduler = replace(scenario.controller.scheduler, min_revisit_s=300.0)
     controller = replace(scenario.controller, model=PointingModel(), scan=scan,

@@ -17,6 +17,20 @@ Model, on a one-minute grid over the campaign plus a day of spin-up:
   ``bulk_tau_s``;
 * error (indicated - true): ``el = el_arcsec_per_k * dT_fb + bulk_arcsec_per_k *
   (T_s - reference_c)``, ``xel = xel_arcsec_per_k * dT_lr``.
+
+Two parts depend on where the antenna points, so they change from scan to scan by day (off
+by default; the 1990 scenario uses them):
+
+* the dish: sunlight on its front or back face, or on one side, sets front-back and
+  left-right gradients that relax towards ``dish_gradient_k * I * (s . b)`` and
+  ``dish_gradient_k * I * (s . x)`` (s: unit vector to the Sun, b: boresight, x: the
+  direction of increasing azimuth) with the thin members' ``dish_tau_s`` (feed-support legs
+  respond in minutes); they add ``dish_arcsec_per_k`` per kelvin in elevation and
+  cross-elevation;
+* the pedestal: the Sun heats the side of the azimuth bearing's support that faces it; the
+  gradient relaxes with ``pedestal_tau_s`` towards ``pedestal_gradient_k * I`` along the
+  Sun's azimuth and tilts the azimuth axis away from the Sun by ``tilt_arcsec_per_k`` per
+  kelvin: an AN/AW tilt whose direction follows the Sun through the day.
 """
 
 from __future__ import annotations
@@ -140,6 +154,14 @@ class ThermalEffect(Effect):
         "bulk_tau_s": Param(7200.0, "time constant of the bulk structure temperature (s)",
                             min=60.0),
         "reference_c": Param(0.0, "bulk temperature of zero bulk error (C)"),
+        "dish_gradient_k": Param(0.0, "dish gradient with the Sun face-on, full sun (K)",
+                                 min=0.0),
+        "dish_tau_s": Param(600.0, "time constant of the dish gradients (s)", min=1.0),
+        "dish_arcsec_per_k": Param(6.5, "pointing error per kelvin of dish gradient"),
+        "pedestal_gradient_k": Param(0.0, "pedestal gradient under full sun (K)", min=0.0),
+        "pedestal_tau_s": Param(5400.0, "time constant of the pedestal gradient (s)",
+                                min=60.0),
+        "tilt_arcsec_per_k": Param(3.0, "azimuth-axis tilt per kelvin of pedestal gradient"),
     }
 
     def start(self, world, rng: np.random.Generator) -> None:
@@ -163,16 +185,66 @@ class ThermalEffect(Effect):
         self.xel_arcsec = p["xel_arcsec_per_k"] * dt_lr
         self.gradient_fb_k = dt_fb
         self.structure_c = t_struct
+        # pointing-dependent parts
+        sun_az = world.sun_az_rad(t)
+        cos_h = np.cos(sun_el)
+        self._sun_vec = np.stack([cos_h * np.cos(sun_az), cos_h * np.sin(sun_az),
+                                  np.sin(sun_el)])  # north, east, up
+        self._insolation = insolation_eff
+        forcing = p["pedestal_gradient_k"] * insolation_eff
+        # the heated side expands: the axis tilts away from the Sun
+        self._tilt_n_arcsec = -p["tilt_arcsec_per_k"] * relax(
+            forcing * np.cos(sun_az), step, p["pedestal_tau_s"], 0.0)
+        self._tilt_e_arcsec = -p["tilt_arcsec_per_k"] * relax(
+            forcing * np.sin(sun_az), step, p["pedestal_tau_s"], 0.0)
+        self._dish_k = None
+        self._dish_t = None
 
     def errors_arcsec(self, t_s) -> tuple[np.ndarray, np.ndarray]:
         """(xel, el) thermal error in arcsec at time(s) ``t_s`` (for tests and reports)."""
         return (np.interp(t_s, self.t_grid, self.xel_arcsec),
                 np.interp(t_s, self.t_grid, self.el_arcsec))
 
+    def dish_gradients_k(self, state: PointingState) -> tuple[float, float]:
+        """Front-back and left-right dish gradients (K) now, advancing their state from
+        the previous call as if the antenna had pointed here since then (the evaluations
+        come every integration; slews between them are short)."""
+        p = self.p
+        if p["dish_gradient_k"] == 0.0:
+            return 0.0, 0.0
+        t = state.t_s
+        sun = np.array([np.interp(t, self.t_grid, row) for row in self._sun_vec])
+        flux = p["dish_gradient_k"] * float(np.interp(t, self.t_grid, self._insolation))
+        cos_e, sin_e = math.cos(state.el_rad), math.sin(state.el_rad)
+        cos_a, sin_a = math.cos(state.az_rad), math.sin(state.az_rad)
+        boresight = (cos_e * cos_a, cos_e * sin_a, sin_e)
+        side = (-sin_a, cos_a, 0.0)
+        forcing = (flux * float(np.dot(sun, boresight)), flux * float(np.dot(sun, side)))
+        if self._dish_k is None:
+            self._dish_k = forcing
+        elif t > self._dish_t:
+            decay = math.exp(-(t - self._dish_t) / p["dish_tau_s"])
+            self._dish_k = tuple(f + (k - f) * decay
+                                 for f, k in zip(forcing, self._dish_k, strict=True))
+        self._dish_t = t
+        return self._dish_k
+
     def pointing_error(self, state: PointingState) -> tuple[float, float]:
+        p = self.p
         xel, el = self.errors_arcsec(state.t_s)
-        return (float(xel) * RAD_PER_ARCSEC / math.cos(state.el_rad),
-                float(el) * RAD_PER_ARCSEC)
+        xel, el = float(xel), float(el)
+        fb, lr = self.dish_gradients_k(state)
+        el += p["dish_arcsec_per_k"] * fb
+        xel += p["dish_arcsec_per_k"] * lr
+        # pedestal tilt as AN (north) / AW (east) terms, indicated - true
+        tilt_n = float(np.interp(state.t_s, self.t_grid, self._tilt_n_arcsec))
+        tilt_e = float(np.interp(state.t_s, self.t_grid, self._tilt_e_arcsec))
+        sin_a, cos_a = math.sin(state.az_rad), math.cos(state.az_rad)
+        tan_e = math.tan(state.el_rad)
+        d_az = -(tilt_n * sin_a + tilt_e * cos_a) * tan_e
+        el += -tilt_n * cos_a + tilt_e * sin_a
+        return ((xel / math.cos(state.el_rad) + d_az) * RAD_PER_ARCSEC,
+                el * RAD_PER_ARCSEC)
 
 
 class SunsetDrift(Effect):

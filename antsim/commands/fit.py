@@ -1,0 +1,124 @@
+"""`antsim fit RECORDINGS`: fit a pointing model to recordings or a TPOINT data file.
+
+The file's format is detected by content: ECSV recordings from ``antsim run`` (read through
+:func:`controller.recordings.read_pointing_data`) or TPOINT pointing data. Bad input (missing
+file, malformed line, unknown term) ends as one line on stderr and exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import sys
+from pathlib import Path
+
+from controller.errors import InputError
+from controller.model import NAMED_MODELS
+
+#: default model per input format: TPOINT users start from TPOINT's eight physical terms;
+#: antsim's own recordings come from the 45-ft, whose model is Ghigo's ten terms.
+DEFAULT_MODEL = {"tpoint": "tpoint8", "ecsv": "ghigo10"}
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("recordings", metavar="RECORDINGS",
+                        help="recordings.ecsv from 'antsim run', or a TPOINT pointing data file")
+    which = parser.add_mutually_exclusive_group()
+    which.add_argument("--model", metavar="NAME",
+                       help="named model (" + ", ".join(sorted(NAMED_MODELS)) + ") or a "
+                            "TPOINT .mod file whose terms are fitted (default: tpoint8 for "
+                            "TPOINT data, ghigo10 for recordings)")
+    which.add_argument("--terms", metavar="T1,T2,...",
+                       help="comma-separated term names, e.g. IA,IE,NPAE,CA,AN,AW,TF,TX")
+    parser.add_argument("--json", action="store_true",
+                        help="print the fit as JSON (the 'antsim fit --json' schema)")
+    parser.add_argument("--no-robust", action="store_true",
+                        help="plain least squares on every observation (no outlier rejection)")
+    parser.add_argument("--include-masked", action="store_true",
+                        help="also fit the observations a TPOINT file masks with ';'")
+    parser.epilog = (
+        "Robust by default: least-absolute-deviation fit, reject beyond 4x the mean absolute "
+        "deviation, least squares, reject beyond 3x the rms, final least squares (Ghigo 1990). "
+        "Statistics as TPOINT's: Sky RMS, Popn SD, sigmas scaled by the Sky RMS."
+    )
+
+
+def _terms_from_option(text: str) -> tuple[str, ...]:
+    from controller.terms import is_term_name
+
+    names = [t.strip().upper() for t in text.split(",")]
+    if not text.strip() or any(not n for n in names):
+        raise InputError("command line", "--terms", text,
+                         "must be comma-separated term names with none empty")
+    for name in names:
+        if not is_term_name(name):
+            raise InputError("command line", "--terms", name, "unknown pointing term",
+                             "use TPOINT names (IA IE CA NPAE AN AW TF TX ...), harmonics "
+                             "such as HESA2, W1..W10 or P1..P22")
+    duplicates = sorted({n for n in names if names.count(n) > 1})
+    if duplicates:
+        raise InputError("command line", "--terms", ",".join(duplicates), "listed twice")
+    return tuple(names)
+
+
+def _terms_from_model(spec: str) -> tuple[tuple[str, ...], str]:
+    if spec in NAMED_MODELS:
+        return NAMED_MODELS[spec], spec
+    path = Path(spec)
+    if not path.is_file():
+        raise InputError("command line", "--model", spec,
+                         "is neither a named model nor an existing .mod file",
+                         f"named models: {', '.join(sorted(NAMED_MODELS))}")
+    from controller.tpoint import read_mod, sniff_format
+
+    if sniff_format(path) != "mod":
+        raise InputError(str(path), "--model", spec, "is not a TPOINT .mod model file")
+    model = read_mod(path)
+    return model.names, path.stem
+
+
+def _read_data(path: Path, fmt: str, include_masked: bool):
+    if fmt == "tpoint":
+        from controller.tpoint import read_tpoint
+
+        return read_tpoint(path).pointing_data(include_masked=include_masked)
+    try:
+        recordings = importlib.import_module("controller.recordings")
+    except ModuleNotFoundError as err:
+        if err.name != "controller.recordings":
+            raise
+        raise InputError(str(path), "format", "ECSV",
+                         "ECSV support arrives with the recordings module "
+                         "(controller.recordings), which is not installed yet") from None
+    return recordings.read_pointing_data(path)
+
+
+def main(args: argparse.Namespace) -> int:
+    from controller.fitting import fit_model
+    from controller.tpoint import sniff_format
+
+    path = Path(args.recordings)
+    fmt = sniff_format(path)
+    if fmt == "mod":
+        raise InputError(str(path), "RECORDINGS", str(path),
+                         "is a TPOINT model (.mod) file, not pointing data",
+                         "pass a model file with --model")
+    if args.terms is not None:
+        terms, model_name = _terms_from_option(args.terms), "custom"
+    else:
+        terms, model_name = _terms_from_model(args.model or DEFAULT_MODEL[fmt])
+    data = _read_data(path, fmt, args.include_masked)
+    try:
+        result = fit_model(data, terms, robust=not args.no_robust, name=model_name)
+    except InputError:
+        raise
+    except ValueError as err:  # too few observations, a term infinite at the zenith, ...
+        raise InputError(str(path), "observations", len(data), str(err)) from None
+    if args.json:
+        json.dump(result.to_json(), sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        print(f"{path} ({'TPOINT data' if fmt == 'tpoint' else 'recordings'})")
+        print(result.summary())
+    return 0
