@@ -1,0 +1,214 @@
+"""The term vocabulary: equivalence tables, the harmonic generator, PointingModel round trips
+and the katpoint cross-check.
+
+Tolerances: basis functions are O(1) (tan E reaches 11 at 85 deg), so two formulas for the
+same function agree to a few ulps; 1e-12 leaves margin without hiding a wrong sign or factor.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from astropy import units as u
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from controller.model import NAMED_MODELS, PointingModel
+from controller.terms import (
+    GHIGO_EQUIVALENTS,
+    KATPOINT_EQUIVALENTS,
+    TermError,
+    get_term,
+    is_term_name,
+)
+from controller.units import ARCSEC_PER_RAD, RAD_PER_ARCSEC
+
+# A grid over the whole sky the terms are used on: every 15 deg of azimuth, elevation 5-85.
+_AZ, _EL = np.meshgrid(np.radians(np.arange(0.0, 360.0, 15.0)),
+                       np.radians(np.arange(5.0, 86.0, 10.0)))
+GRID_AZ, GRID_EL = _AZ.ravel(), _EL.ravel()
+
+
+def _basis(name: str) -> tuple[np.ndarray, np.ndarray]:
+    return get_term(name).basis(GRID_AZ, GRID_EL)
+
+
+@pytest.mark.parametrize(("ours", "twin"), sorted(GHIGO_EQUIVALENTS.items()))
+def test_ghigo_equivalents_hold_numerically(ours, twin):
+    name, sign = twin
+    w_az, w_el = _basis(ours)
+    t_az, t_el = _basis(name)
+    assert np.abs(w_az).max() + np.abs(w_el).max() > 0.5  # not a vacuous comparison of zeros
+    np.testing.assert_allclose(w_az, sign * t_az, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(w_el, sign * t_el, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize(("ours", "twin"), sorted(KATPOINT_EQUIVALENTS.items()))
+def test_katpoint_equivalents_hold_numerically(ours, twin):
+    name, sign = twin
+    p_az, p_el = _basis(ours)
+    t_az, t_el = _basis(name)
+    assert np.abs(p_az).max() + np.abs(p_el).max() > 0.5
+    np.testing.assert_allclose(p_az, sign * t_az, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(p_el, sign * t_el, rtol=0, atol=1e-12)
+
+
+def test_equivalent_coefficients_give_the_same_offsets():
+    """W = sign * TPOINT coefficient: the two models with mapped values point identically."""
+    rng = np.random.default_rng(11)
+    w_values = rng.normal(0.0, 60.0, len(GHIGO_EQUIVALENTS))
+    ghigo = PointingModel(list(GHIGO_EQUIVALENTS), w_values)
+    tpoint = PointingModel([GHIGO_EQUIVALENTS[w][0] for w in GHIGO_EQUIVALENTS],
+                           [v * GHIGO_EQUIVALENTS[w][1] for w, v in zip(GHIGO_EQUIVALENTS,
+                                                                          w_values, strict=True)])
+    a = ghigo.offset_rad(GRID_AZ, GRID_EL)
+    b = tpoint.offset_rad(GRID_AZ, GRID_EL)
+    np.testing.assert_allclose(a[0], b[0], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(a[1], b[1], rtol=0, atol=1e-15)
+
+
+# ---------------------------------------------------------------------------------------------
+# harmonic generator: TPOINT's azimuth argument counts from South (A_S = A_N - 180 deg)
+# ---------------------------------------------------------------------------------------------
+def _south(az):
+    return az - math.pi
+
+
+HARMONICS = {
+    # name: (dA, dE) as functions of North-based az and el
+    "HESA2": lambda a, e: (0 * a, np.sin(2 * _south(a))),
+    "HACA": lambda a, e: (np.cos(_south(a)) + 0 * e, 0 * a),
+    "HECE2": lambda a, e: (0 * a, np.cos(2 * e) + 0 * a),
+    "HSCA2CE": lambda a, e: (np.cos(2 * _south(a)) * np.cos(e) / np.cos(e), 0 * a),
+    "HSCA5CE8": lambda a, e: (np.cos(5 * _south(a)) * np.cos(8 * e) / np.cos(e), 0 * a),
+    "HZCZ": lambda a, e: (0 * a, -np.cos(math.pi / 2 - e) + 0 * a),  # dZ = cos Z; dE = -dZ
+}
+
+
+@pytest.mark.parametrize("name", sorted(HARMONICS))
+def test_harmonic_generator_formulas(name):
+    got_az, got_el = _basis(name)
+    want_az, want_el = HARMONICS[name](GRID_AZ, GRID_EL)
+    np.testing.assert_allclose(got_az, want_az, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(got_el, want_el, rtol=0, atol=1e-12)
+
+
+def test_harmonic_odd_and_even_multiples_of_south_azimuth():
+    """Odd harmonics of the South-based azimuth flip sign against North-based ones; even do not."""
+    _, e = _basis("HESA")
+    np.testing.assert_allclose(e, -np.sin(GRID_AZ), atol=1e-12)
+    _, e = _basis("HESA2")
+    np.testing.assert_allclose(e, np.sin(2 * GRID_AZ), atol=1e-12)
+
+
+def test_harmonic_names_are_case_insensitive():
+    assert get_term("hesa2") == get_term("HESA2")
+    assert get_term(" hesa2 ").name == "HESA2"
+    assert is_term_name("HSCA5CE8")
+
+
+@pytest.mark.parametrize("name", ["HESA0", "HXSA", "HESQ", "H", "HESA2CE3X", "HE", "IAX", "W11",
+                                  "P23", "P0", "", "TPOINT"])
+def test_unknown_names_raise_term_error(name):
+    assert not is_term_name(name)
+    with pytest.raises(TermError) as info:
+        get_term(name)
+    assert isinstance(info.value, KeyError)
+    message = str(info.value)
+    assert "unknown pointing term" in message and "\n" not in message
+    with pytest.raises(TermError):
+        PointingModel([name or "?"])
+
+
+# ---------------------------------------------------------------------------------------------
+# PointingModel: offset / apply / reverse
+# ---------------------------------------------------------------------------------------------
+def test_offset_is_minus_the_tpoint_correction():
+    """offset_rad ("indicated minus true") = -(basis @ coefficients)."""
+    model = PointingModel(["IA", "AN", "TX"], [30.0, -12.0, 4.0])
+    basis_az, basis_el = model.design_matrix(GRID_AZ, GRID_EL)
+    d_az, d_el = model.offset_rad(GRID_AZ, GRID_EL)
+    c = model.values_arcsec * RAD_PER_ARCSEC
+    np.testing.assert_allclose(d_az, -(basis_az @ c), rtol=1e-14, atol=0)
+    np.testing.assert_allclose(d_el, -(basis_el @ c), rtol=1e-14, atol=0)
+    # IA alone: TPOINT's correction is dA = -IA, so the indicated azimuth is IA ahead
+    ia = PointingModel(["IA"], [36.0])
+    assert ia.offset_rad(1.0, 0.5)[0] == pytest.approx(36.0 * RAD_PER_ARCSEC, rel=1e-14)
+
+
+GHIGO_TABLE3_ARCMIN = [-1.88, -0.17, -1.54, -2.16, 0.80, 12.24, 1.62, -0.35, -3.35, -1.79]
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    coeffs=st.lists(st.floats(-300.0, 300.0), min_size=10, max_size=10),
+    az=st.floats(0.0, 2 * math.pi, exclude_max=True),
+    el=st.floats(math.radians(5.0), math.radians(80.0)),
+)
+def test_apply_reverse_round_trip(coeffs, az, el):
+    """reverse(apply(x)) == x, with W6 = 12.24' (Ghigo's large elevation zero) on top.
+
+    Tolerance 1e-8 rad (2 mas): reverse iterates to 1e-4 arcsec on the sky.
+    """
+    values = np.array(coeffs)
+    values[5] += 12.24 * 60.0
+    model = PointingModel("ghigo10").with_values(values)
+    enc_az, enc_el = model.apply_rad(az, el)
+    back_az, back_el = model.reverse_rad(enc_az, enc_el)
+    assert abs(back_az - az) * math.cos(el) < 1e-8
+    assert abs(back_el - el) < 1e-8
+    d_az, d_el = model.offset_rad(az, el)
+    assert enc_az - az == pytest.approx(d_az, abs=1e-15)
+    assert enc_el - el == pytest.approx(d_el, abs=1e-15)
+
+
+def test_table3_model_round_trip_on_a_grid():
+    model = PointingModel("ghigo10").with_values(np.array(GHIGO_TABLE3_ARCMIN) * 60.0)
+    enc = model.apply_rad(GRID_AZ, GRID_EL)
+    back = model.reverse_rad(*enc)
+    np.testing.assert_allclose(back[1], GRID_EL, rtol=0, atol=1e-9)
+    np.testing.assert_allclose((back[0] - GRID_AZ) * np.cos(GRID_EL), 0.0, atol=1e-9)
+    # the elevation zero alone moves the indicated elevation by W6 = 12.24' (734.4")
+    w6 = PointingModel(["W6"], [12.24 * 60.0])
+    assert w6.offset_rad(0.3, 0.7)[1] * ARCSEC_PER_RAD == pytest.approx(734.4, rel=1e-12)
+
+
+def test_quantity_api_refuses_bare_floats():
+    model = PointingModel(["IA", "IE"], [10.0, -5.0])
+    with pytest.raises(TypeError, match="Quantity"):
+        model.offset(1.0, 0.5)
+    with pytest.raises(TypeError, match="Quantity"):
+        model.apply(30 * u.deg, 0.5)
+    with pytest.raises(TypeError, match="Quantity"):
+        model.reverse(30.0, 40.0 * u.deg)
+    d_az, d_el = model.offset(30 * u.deg, 40 * u.deg)
+    assert d_az.unit == u.arcsec
+    assert d_az.value == pytest.approx(10.0, rel=1e-12)
+    assert d_el.value == pytest.approx(5.0, rel=1e-12)  # IE: dE = +IE, offset = -dE
+
+
+# ---------------------------------------------------------------------------------------------
+# katpoint cross-check: katpoint's offset is "indicated minus true", as ours
+# ---------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_katpoint_offset_equals_ours(seed):
+    katpoint = pytest.importorskip("katpoint")
+    rng = np.random.default_rng(seed)
+    params_rad = rng.normal(0.0, 3e-3, 22)  # ~10 arcmin: large, to expose any mismatch
+    # katpoint ignores P2 and P10 for an alt-az mount; ours has them as zero columns
+    az = rng.uniform(0.0, 2 * math.pi, 400)
+    el = rng.uniform(math.radians(1.0), math.radians(88.0), 400)  # katpoint caps sec E at 89.9
+    kp_az, kp_el = katpoint.PointingModel(params_rad).offset(az, el)
+    ours = PointingModel("katpoint22").with_values(params_rad * ARCSEC_PER_RAD)
+    our_az, our_el = ours.offset_rad(az, el)
+    np.testing.assert_allclose(our_az, kp_az, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(our_el, kp_el, rtol=0, atol=1e-12)
+
+
+def test_named_models_resolve():
+    for name, terms in NAMED_MODELS.items():
+        model = PointingModel(name)
+        assert model.names == terms
+        assert model.name == name
