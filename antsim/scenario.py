@@ -398,6 +398,7 @@ def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, re
     )
     search_t.finish()
     refraction = t.string("refraction", "weather", choices=("weather", "standard", "none"))
+    fit_terms, fit_name = _fit_spec(t)
     t.finish()
     catalog = tuple(CatalogSource(s.name, s.ra_deg, s.dec_deg, s.frame, s.flux_jy)
                     for s in sources)
@@ -405,4 +406,21 @@ def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, re
         site_latitude_deg=site.latitude_deg, site_longitude_deg=site.longitude_deg,
         site_height_m=site.height_m, epoch_utc=epoch, duration_s=duration_s, sources=catalog,
         model=model, scan=scan, scheduler=sched, search=search, refraction=refraction,
-        frequency_ghz=receiver.frequency_ghz, scenario_name=scenario_name, site_name=site.name)
+        frequency_ghz=receiver.frequency_ghz, scenario_name=scenario_name, site_name=site.name,
+        fit_terms=fit_terms, fit_model_name=fit_name)
+
+
+def _fit_spec(t: Table) -> tuple[tuple[str, ...], str]:
+    """``fit_model``: a named model or a comma-separated list of terms (default: none)."""
+    spec = t.string("fit_model", "")
+    if not spec:
+        return (), ""
+    if spec in NAMED_MODELS:
+        return NAMED_MODELS[spec], spec
+    names = tuple(n.strip().upper() for n in spec.split(",") if n.strip())
+    for n in names:
+        try:
+            get_term(n)
+        except TermError as err:
+            raise t.error("fit_model", spec, f"{n} is not a pointing term", str(err)) from None
+    return names, "custom"

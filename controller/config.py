@@ -81,3 +81,17 @@ class ControllerConfig:
     frequency_ghz: float = 8.4
     scenario_name: str = ""
     site_name: str = ""
+    #: terms the observatory fits to the campaign (default: those of the model in use, or
+    #: TPOINT's eight when no model is in use)
+    fit_terms: tuple[str, ...] = ()
+    fit_model_name: str = ""
+
+    def fit_spec(self) -> tuple[tuple[str, ...], str]:
+        """(terms, model name) to fit."""
+        if self.fit_terms:
+            return self.fit_terms, self.fit_model_name or "custom"
+        if len(self.model):
+            return self.model.names, self.model.name
+        from .model import NAMED_MODELS
+
+        return NAMED_MODELS["tpoint8"], "tpoint8"

@@ -109,6 +109,8 @@ class PointingData:
     radians. ``xel_arcsec``, ``el_arcsec``: total pointing error, "indicated minus true",
     cross-elevation (dA cos E) and elevation, arcsec. ``weight_xel``, ``weight_el``: optional
     1/sigma^2 weights (1/arcsec^2), used only by ``fit_model(..., weighted=True)``.
+    ``t_s``: optional observation times (s); with them the honest error bars allow for
+    residuals correlated in time (see :func:`fit_model`).
 
     The arrays are validated on construction (1-D, same length, finite, |el| <= pi/2,
     positive weights) and stored as read-only copies.
@@ -120,6 +122,7 @@ class PointingData:
     el_arcsec: np.ndarray
     weight_xel: np.ndarray | None = None
     weight_el: np.ndarray | None = None
+    t_s: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         names = ("az_rad", "el_rad", "xel_arcsec", "el_arcsec")
@@ -135,6 +138,8 @@ class PointingData:
                         f"{n} must be positive (1/sigma^2); index {first} is {w[first]}"
                     )
                 arrays[n] = w
+        if self.t_s is not None:
+            arrays["t_s"] = _float_vector(self.t_s, "t_s")
         lengths = {n: a.size for n, a in arrays.items()}
         if len(set(lengths.values())) > 1:
             detail = ", ".join(f"{n} {k}" for n, k in lengths.items())
@@ -169,6 +174,7 @@ class PointingData:
             self.az_rad[keep], self.el_rad[keep], self.xel_arcsec[keep], self.el_arcsec[keep],
             None if self.weight_xel is None else self.weight_xel[keep],
             None if self.weight_el is None else self.weight_el[keep],
+            None if self.t_s is None else self.t_s[keep],
         )
 
 
@@ -196,6 +202,8 @@ class FitResult:
     rejected ones included. ``correlation``: M x M, NaN in rows/columns of unconstrained terms.
     ``condition_number``: 2-norm condition number of the final design matrix of the fitted
     (constrained) terms with columns scaled to unit length. ``warnings``: plain sentences.
+    ``sigma_honest_arcsec``: cluster-robust (sandwich) standard errors of the same
+    coefficients (see :func:`fit_model`); ``honest_clusters`` the number of clusters used.
     """
 
     model: PointingModel
@@ -219,6 +227,9 @@ class FitResult:
     n_fitted: int = 0
     #: the rms (arcsec, or dimensionless when weighted) that scales sqrt(diag((A^T W A)^-1))
     sigma_scale: float = field(default=float("nan"))
+    sigma_honest_arcsec: np.ndarray | None = None
+    honest_clusters: int = 0
+    honest_block_s: float | None = None
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -237,8 +248,10 @@ class FitResult:
             "n_rejected": int(self.n_rejected),
             "model": self.model.name,
             "terms": {
-                n: {"value_arcsec": _json_float(v), "sigma_arcsec": _json_float(s)}
-                for n, v, s in zip(names, self.model.values_arcsec, self.sigma_arcsec, strict=True)
+                n: {"value_arcsec": _json_float(v), "sigma_arcsec": _json_float(s),
+                    "sigma_honest_arcsec": _json_float(h)}
+                for n, v, s, h in zip(names, self.model.values_arcsec, self.sigma_arcsec,
+                                      self._honest(), strict=True)
             },
             "sky_rms_arcsec": _json_float(self.sky_rms_arcsec),
             "xel_rms_arcsec": _json_float(self.xel_rms_arcsec),
@@ -250,7 +263,19 @@ class FitResult:
                 "matrix": [[_json_float(x) for x in row] for row in self.correlation],
             },
             "unconstrained": list(self.unconstrained),
+            "honest_sigma": {
+                "method": "cluster-robust sandwich of the same least-squares coefficients, "
+                          "per-axis scatter, clusters = observations"
+                          + (f" within {self.honest_block_s:g} s time blocks"
+                             if self.honest_block_s else ""),
+                "clusters": int(self.honest_clusters),
+            },
         }
+
+    def _honest(self) -> np.ndarray:
+        if self.sigma_honest_arcsec is None:
+            return np.full(len(self.names), np.nan)
+        return self.sigma_honest_arcsec
 
     def table(self) -> str:
         """Fixed-width text table of term, value and sigma (arcsec) for humans."""
@@ -545,8 +570,19 @@ def fit_model(
     name: str = "custom",
     lad_factor: float = 4.0,
     rms_factor: float = 3.0,
+    block_s: float = 3600.0,
 ) -> FitResult:
     """Fit the linear pointing terms ``terms`` to ``data``; see the module docstring.
+
+    Besides TPOINT's sigma, the result carries honest error bars of the same coefficients: a
+    cluster-robust (sandwich) covariance ``B M B`` with ``B = (A^T A)^-1`` and
+    ``M = sum_g (A_g^T r_g)(A_g^T r_g)^T`` over clusters g, scaled by the usual small-sample
+    factor ``G/(G-1) (N-1)/(N-K)``. Each observation's xel and el rows form one cluster, so the
+    two axes' different scatter is respected (TPOINT scales every term by the Sky RMS, which
+    is sqrt(2) times the per-equation scatter for isotropic errors and ignores that xel and el
+    residuals differ); with ``data.t_s`` the observations are further grouped in time blocks
+    of ``block_s`` so that residuals correlated over minutes to an hour (thermal drifts,
+    slow wander) are allowed for.
 
     Raises ``ValueError`` (plain sentence) for no observations, fewer used observations than
     terms, invalid factors, ``weighted=True`` without weights, or a term that is infinite at
@@ -648,6 +684,8 @@ def fit_model(
         scale = sky
     popn = sky * math.sqrt(n_used / (n_used - n_fitted)) if n_used > n_fitted else float("nan")
     sigma = np.sqrt(np.diag(sol.cov_unscaled)) * scale
+    honest, clusters = _sandwich_sigma(a_w, y_w, coeffs, used, sol, n,
+                                       None if data.t_s is None else data.t_s, block_s)
     with np.errstate(invalid="ignore", divide="ignore"):
         sd = np.sqrt(np.diag(sol.cov_unscaled))
         corr = sol.cov_unscaled / np.outer(sd, sd)
@@ -687,4 +725,39 @@ def fit_model(
         weighted=weighted,
         n_fitted=n_fitted,
         sigma_scale=scale,
+        sigma_honest_arcsec=_readonly(honest),
+        honest_clusters=clusters,
+        honest_block_s=block_s if data.t_s is not None else None,
     )
+
+
+def _sandwich_sigma(a: np.ndarray, y: np.ndarray, coeffs: np.ndarray, used: np.ndarray,
+                    sol: _Solution, n: int, t_s: np.ndarray | None,
+                    block_s: float) -> tuple[np.ndarray, int]:
+    """Cluster-robust standard errors (see :func:`fit_model`); NaN where not fitted."""
+    m = a.shape[1]
+    out = np.full(m, np.nan)
+    kept = list(sol.rank.kept)
+    idx = np.flatnonzero(used)
+    if not kept or idx.size <= len(kept):
+        return out, 0
+    if t_s is None:
+        cluster = np.arange(idx.size)
+    else:
+        _, cluster = np.unique(np.floor(t_s[idx] / block_s), return_inverse=True)
+    g = int(cluster.max()) + 1
+    if g < 2:
+        return out, g
+    r = y - _matvec(a, coeffs)
+    a_k = a[:, kept]
+    # score of each observation: its xel row and its el row together
+    score = a_k[idx] * r[idx, None] + a_k[n + idx] * r[n + idx, None]
+    summed = np.zeros((g, len(kept)))
+    np.add.at(summed, cluster, score)
+    meat = summed.T @ summed
+    bread = sol.cov_unscaled[np.ix_(kept, kept)]
+    k = len(kept)
+    factor = g / (g - 1) * (idx.size - 1) / max(idx.size - k, 1)
+    cov = bread @ meat @ bread * factor
+    out[kept] = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    return out, g

@@ -308,7 +308,8 @@ def test_dependent_and_zero_columns_are_named_not_papered_over():
     assert result.n_fitted == 4
     doc = result.to_json()
     for name in result.unconstrained:
-        assert doc["terms"][name] == {"value_arcsec": 0.0, "sigma_arcsec": None}
+        assert doc["terms"][name] == {"value_arcsec": 0.0, "sigma_arcsec": None,
+                                      "sigma_honest_arcsec": None}
         assert any(w.startswith(f"{name} cannot be determined") for w in result.warnings)
     assert any("indistinguishable from W1" in w for w in result.warnings)
     assert any("P2 cannot be determined" in w and "zero" in w for w in result.warnings)
@@ -424,11 +425,12 @@ def test_result_is_immutable_json_clean_and_inputs_untouched():
         result.n_used = 3  # type: ignore[misc]
     doc = result.to_json()
     text = json.dumps(doc, allow_nan=False)
+    # DESIGN section 4's schema, extended (never changed) by the honest error bars
     assert set(doc) == {"n_input", "n_used", "n_rejected", "model", "terms", "sky_rms_arcsec",
                         "xel_rms_arcsec", "el_rms_arcsec", "popn_sd_arcsec", "condition_number",
-                        "correlations", "unconstrained"}
+                        "correlations", "unconstrained", "honest_sigma"}
     assert doc["model"] == "fitted" and list(doc["terms"]) == list(result.names)
-    assert set(doc["terms"]["W6"]) == {"value_arcsec", "sigma_arcsec"}
+    assert set(doc["terms"]["W6"]) == {"value_arcsec", "sigma_arcsec", "sigma_honest_arcsec"}
     assert doc["correlations"]["names"] == list(result.names)
     assert len(doc["correlations"]["matrix"]) == 10
     assert all(type(x) is float for x in doc["correlations"]["matrix"][0])
