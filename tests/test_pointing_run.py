@@ -1,0 +1,115 @@
+"""Issue 4 end to end: the 1990 tables, the run's fit files, and the closed loop."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from antsim.outputs import run_fits, write_outputs
+from antsim.runner import run_campaign, simulate
+from antsim.scenario import load_scenario
+from controller.model import PointingModel
+from controller.modelio import load_model
+
+ROOT = Path(__file__).resolve().parents[1]
+GHIGO = ROOT / "scenarios" / "ghigo1990.toml"
+
+
+@pytest.fixture(scope="module")
+def ghigo():
+    return load_scenario(GHIGO)
+
+
+@pytest.fixture(scope="module")
+def campaign(ghigo):
+    """The 1990 campaign at seed 1 and its fits A-F."""
+    result = simulate(ghigo, seed=1)
+    return result, run_fits(result)
+
+
+def test_table2_of_the_1990_report_is_reproduced(campaign):
+    _, fits = campaign
+    a, b, c, d, e, f = (fits[k] for k in "ABCDEF")
+    # Ghigo (1990) Table 2, fit A: 23" in cross-elevation, 38" in elevation; the scenario's
+    # physics was calibrated to land within 30% (issue 4), seed 1 is not tuned separately
+    assert a.xel_rms_arcsec == pytest.approx(23.0, rel=0.30)
+    assert a.el_rms_arcsec == pytest.approx(38.0, rel=0.30)
+    # the report's orderings: night elevation rms below day, XL worse than XR, the
+    # unfiltered fit F no better than A
+    assert e.el_rms_arcsec < d.el_rms_arcsec
+    assert c.sky_rms_arcsec > b.sky_rms_arcsec
+    assert f.sky_rms_arcsec >= a.sky_rms_arcsec
+    assert f.n_used > a.n_used
+    # the fitted model is the one the report fits, and the scan count is the run's
+    assert a.names == tuple(f"W{i}" for i in range(1, 11))
+    assert 250 <= a.n_input <= 350
+
+
+def test_run_writes_fit_files_that_round_trip(ghigo, tmp_path):
+    result = run_campaign(ghigo, tmp_path, show_progress=False)
+    write_outputs(result)
+    fit = json.loads((tmp_path / "fit.json").read_text())
+    variants = json.loads((tmp_path / "fit_variants.json").read_text())
+    assert set(variants) == set("ABCDEF")
+    assert variants["A"] == fit
+    for key in ("n_input", "n_used", "n_rejected", "model", "terms", "sky_rms_arcsec",
+                "xel_rms_arcsec", "el_rms_arcsec", "popn_sd_arcsec", "condition_number",
+                "correlations", "unconstrained"):
+        assert key in fit
+    assert fit["model"] == "ghigo10" and list(fit["terms"]) == [f"W{i}" for i in range(1, 11)]
+    text = (tmp_path / "fit.txt").read_text()
+    assert "Table 2" in text and "Table 3" in text
+    for name in "ABCDEF":
+        assert f"\n{name} " in text
+    # model.dat is fit A as a TPOINT .mod file that the controller can load back
+    model = load_model(tmp_path / "model.dat")
+    for name, entry in fit["terms"].items():
+        # the .mod format prints 4 decimals of an arcsec
+        assert model[name] == pytest.approx(entry["value_arcsec"], abs=6e-5)
+
+
+def sky_rms_of_pointing(rows) -> float:
+    """rms of the measured corrections (the pointing error left by the model in use)."""
+    good = [r for r in rows if r["polarization"] == "AVG" and r["good"]]
+    xel = np.array([r["xel_arcmin"] + r["applied_xel_arcmin"] for r in good]) * 60.0
+    el = np.array([r["el_arcmin"] + r["applied_el_arcmin"] for r in good]) * 60.0
+    return math.sqrt(float(np.mean(xel ** 2 + el ** 2)))
+
+
+def test_closed_loop_second_campaign_points_well(ghigo, campaign):
+    """The model fitted from one campaign, used in the next, leaves pointing errors close to
+    the first fit's residuals (issue 4: at most 1.3 times)."""
+    _, fits = campaign
+    first = fits["A"]
+    second = simulate(ghigo, seed=2, model=first.model)
+    ratio = sky_rms_of_pointing(second.rows) / first.sky_rms_arcsec
+    assert ratio <= 1.3, ratio
+    assert second.program.searches == 0
+
+
+def test_cold_start_converges_within_three_campaigns(ghigo):
+    """No model at all: W6 = 12.24' exceeds the 11' beam, so the first scans miss; the
+    controller searches, adopts a correction, and the fitted model closes the loop."""
+    model = PointingModel()
+    history = []
+    for campaign_number, seed in enumerate((11, 12, 13), start=1):
+        result = simulate(ghigo, seed=seed, model=model)
+        fit = run_fits(result)["A"]
+        pointing = sky_rms_of_pointing(result.rows)
+        history.append((campaign_number, result.program.searches, pointing,
+                        fit.sky_rms_arcsec))
+        if campaign_number == 1:
+            # it must have found its sources anyway: a full campaign over all 8 sources
+            assert result.program.searches > 0
+            assert {r["source"] for r in result.rows} == {s.name for s in ghigo.sources}
+        if campaign_number > 1 and pointing <= 1.3 * previous_fit_rms:
+            break
+        previous_fit_rms = fit.sky_rms_arcsec
+        model = fit.model
+    else:
+        pytest.fail(f"no convergence in 3 campaigns: {history}")
+    assert campaign_number <= 3
