@@ -61,8 +61,9 @@ def fit_tables(fits: dict[str, FitResult | None], title: str) -> str:
     return "\n".join(lines).rstrip() + "\n"
 
 
-def write_outputs(result: RunResult) -> str:
-    """Write the products of a run into its output directory; return a short summary."""
+def write_outputs(result: RunResult, report: bool = True) -> str:
+    """Write the products of a run into its output directory; return a short summary.
+    With ``report`` also the figures (``figures/``) and ``report.html`` (antsim.report)."""
     out = Path(result.out_dir)
     fits = run_fits(result)
     doc = {k: (v.to_json() if v is not None else None) for k, v in fits.items()}
@@ -82,5 +83,10 @@ def write_outputs(result: RunResult) -> str:
     if fit_a is not None:
         summary += (f"; fit A: {fit_a.n_used} points, xel rms {fit_a.xel_rms_arcsec:.1f}\", "
                     f"el rms {fit_a.el_rms_arcsec:.1f}\"")
-    return summary + f"\nwrote {out}/: recordings.ecsv truth.json fit.json fit_variants.json " \
-                     "fit.txt model.dat"
+    written = "recordings.ecsv truth.json fit.json fit_variants.json fit.txt model.dat"
+    if report:
+        from .report import write_run_report
+
+        _, figures = write_run_report(result, fits, out)
+        written += f" report.html figures/ ({len(figures)} figures)"
+    return summary + f"\nwrote {out}/: {written}"

@@ -98,7 +98,7 @@ BAD = {
         [('hpbw_arcmin = 11.0\n# Aperture', 'hpbw_arcmin = "11"\n# Aperture')],
         "beam.hpbw_arcmin", "'11'"),
     "unknown key": (
-        [("settle_s = 4.0", "settle_s = 4.0\nsettle_time_s = 2.0")],
+        [("settle_s = 2.5", "settle_s = 2.5\nsettle_time_s = 2.0")],
         "mount.settle_time_s", "2.0"),
     "unknown source in controller.scheduler.sources": (
         [('policy = "spread"', 'policy = "spread"\nsources = ["3C84", "3C286"]')],

@@ -22,6 +22,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="continue an interrupted run in DIR (byte-identical result)")
     parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                         help="progress bar (default: when stderr is a terminal)")
+    parser.add_argument("--no-report", action="store_true",
+                        help="skip the figures and report.html (faster)")
 
 
 def main(args: argparse.Namespace) -> int:
@@ -47,6 +49,6 @@ def main(args: argparse.Namespace) -> int:
                           show_progress=args.progress)
     from antsim.outputs import write_outputs
 
-    summary = write_outputs(result)
+    summary = write_outputs(result, report=not args.no_report)
     print(summary, file=sys.stdout)
     return 0
