@@ -95,8 +95,11 @@ def recording_meta(scenario: Scenario, seed: int, model: PointingModel) -> dict:
 
 def simulate(scenario: Scenario, seed: int | None = None, model: PointingModel | None = None,
              sink: Callable[[list[dict]], None] | None = None,
-             progress: Callable[[float], None] | None = None) -> RunResult:
-    """Run the campaign in memory; ``sink`` also receives each scan's rows as they complete."""
+             progress: Callable[[float], None] | None = None,
+             on_world: Callable[[World], None] | None = None) -> RunResult:
+    """Run the campaign in memory; ``sink`` also receives each scan's rows as they complete;
+    ``on_world`` is called with the world before the campaign starts (e.g. to attach the
+    antenna's recorder, as ``antsim.plan`` does)."""
     seed = scenario.seed if seed is None else int(seed)
     if model is not None:
         scenario = scenario.with_controller_model(model)
@@ -104,6 +107,8 @@ def simulate(scenario: Scenario, seed: int | None = None, model: PointingModel |
     t0 = time.perf_counter()
     env = simpy.Environment()
     world = World(scenario, env, seed)
+    if on_world is not None:
+        on_world(world)
     labeller = _TimeLabeller(scenario.epoch_utc, scenario.duration_s)
     rows: list[dict] = []
 

@@ -20,6 +20,9 @@ from __future__ import annotations
 
 import math
 import zlib
+from collections.abc import Callable
+from dataclasses import replace
+from functools import lru_cache
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -39,7 +42,7 @@ from .weather import WeatherModel
 if TYPE_CHECKING:
     from .scenario import Scenario
 
-__all__ = ["SimulatedAntenna", "World", "component_rng"]
+__all__ = ["SimulatedAntenna", "World", "component_rng", "weather_model"]
 
 #: the ephemeris extends this far beyond the campaign, for scans still running at its end (s)
 EPHEMERIS_MARGIN_S = 3600.0
@@ -53,6 +56,21 @@ def component_rng(seed: int, component: str) -> np.random.Generator:
     name, so adding a component never changes another's random numbers."""
     key = zlib.crc32(component.encode("utf-8"))
     return np.random.default_rng(np.random.SeedSequence(entropy=seed, spawn_key=(key,)))
+
+
+def weather_model(scenario: Scenario, rng: np.random.Generator) -> WeatherModel:
+    """The weather of a campaign of ``scenario`` with its random wander drawn from ``rng``."""
+    return WeatherModel(scenario.weather, _epoch_hours(scenario.epoch_utc),
+                        scenario.site.longitude_deg, scenario.duration_s + EPHEMERIS_MARGIN_S,
+                        rng)
+
+
+@lru_cache(maxsize=16)
+def _epoch_hours(epoch_utc: str) -> float:
+    """UTC hour of day of the epoch."""
+    from astropy.time import Time
+
+    return (Time(epoch_utc, scale="utc").mjd % 1.0) * 24.0
 
 
 class World:
@@ -72,10 +90,7 @@ class World:
         # the Sun from a day before the epoch: thermal lags need a day of spin-up
         self._sun = Ephemeris(site, epoch - 1.0 * _day(), self.duration_s + 86400.0
                               + EPHEMERIS_MARGIN_S, ())
-        epoch_hours = (epoch.mjd % 1.0) * 24.0
-        self.weather = WeatherModel(scenario.weather, epoch_hours, site.longitude_deg,
-                                    self.duration_s + EPHEMERIS_MARGIN_S,
-                                    component_rng(self.seed, "weather"))
+        self.weather = weather_model(scenario, component_rng(self.seed, "weather"))
         self.sky = Sky(self.ephemeris, scenario.sources, self.weather,
                        scenario.receiver.frequency_ghz)
         self.beam = Beam(scenario.beam)
@@ -132,6 +147,60 @@ class World:
             d_el += e
         return d_az, d_el
 
+    def solve_pointing(self, enc_az_rad, enc_el_rad, state: PointingState,
+                       error_prev) -> tuple:
+        """The slowly varying errors (d_az, d_el) at encoder position ``enc_*_rad``: solve
+        B + d(B) = encoder by two fixed-point steps from ``error_prev``; ``state``'s
+        ``az_rad``/``el_rad`` are left at the true beam direction B."""
+        d_az, d_el = error_prev
+        for _ in range(2):
+            state.az_rad = enc_az_rad - d_az
+            state.el_rad = enc_el_rad - d_el
+            d_az, d_el = self.pointing_error_rad(state)
+        state.az_rad = enc_az_rad - d_az
+        state.el_rad = enc_el_rad - d_el
+        return d_az, d_el
+
+    def sample_powers(self, t, enc_az, enc_el, state: PointingState, paths, error_prev,
+                      channels) -> tuple[np.ndarray, tuple]:
+        """Total-power samples (K) of one integration and the slow errors it solved.
+
+        Steps 2-5 of the module docstring: ``t`` (n,) sample times (s), ``enc_az``/``enc_el``
+        the encoder command per sample (rad), ``state`` the antenna's state at the middle
+        (its ``az_rad``/``el_rad`` are set here), ``paths`` ``(source index, az, el)`` true
+        paths per sample (rad), ``error_prev`` the previous integration's slow errors (the
+        fixed point's start). Returns samples (n, channels) and the slow errors (d_az, d_el).
+        Written to broadcast: ``antsim.plan`` passes per-sample arrays of shape (n, 1) and
+        effects whose realisation has a member axis, and gets samples (n, members, channels).
+        """
+        mid = t.size // 2
+        d_az, d_el = self.solve_pointing(enc_az[mid], enc_el[mid], state, error_prev)
+        beam_az = enc_az - d_az
+        beam_el = enc_el - d_el
+        for effect in self.fast_effects:
+            j_az, j_el = effect.sample_error(t, state.el_rad)
+            beam_az = beam_az - j_az
+            beam_el = beam_el - j_el
+
+        t_src = np.zeros((*np.shape(beam_el), len(channels)))
+        sky = self.sky
+        for i, src_az, src_el in paths:
+            d_xel = ((src_az - beam_az + math.pi) % (2 * math.pi) - math.pi) * np.cos(src_el)
+            d_el_src = src_el - beam_el
+            scale = (sky.flux_jy[i] * self.beam.config.gain_k_per_jy
+                     * self.beam.efficiency(src_el) * self.atmosphere.transmission(src_el))
+            for c, channel in enumerate(channels):
+                off_x = off_e = 0.0
+                for effect in self.slow_effects:
+                    ox, oe = effect.beam_offset(channel, state)
+                    off_x += ox
+                    off_e += oe
+                t_src[..., c] += scale * self.beam.response(
+                    (d_xel - off_x) * ARCMIN_PER_RAD, (d_el_src - off_e) * ARCMIN_PER_RAD,
+                    float(sky.size_arcmin[i]))
+        t_in = t_src + self.atmosphere.emission_k(beam_el)[..., None]
+        return self.receiver.sample(t, t_in), (d_az, d_el)
+
 
 def _day():
     from astropy import units as u
@@ -151,6 +220,8 @@ class SimulatedAntenna:
         self._tables: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._error_prev = (0.0, 0.0)
         self.slews = 0
+        #: called with each integration's deterministic inputs (see :meth:`_integrate`)
+        self.recorder: Callable[..., None] | None = None
 
     # ------------------------------------------------------------------ readings
     def clock_s(self) -> float:
@@ -230,47 +301,17 @@ class SimulatedAntenna:
             rates = ((a_deg[1] - a_deg[0]) * RAD_PER_DEG / seconds,
                      (e_deg[1] - e_deg[0]) * RAD_PER_DEG / seconds)
 
-        # slowly varying errors at the middle: solve B + d(B) = encoder
-        d_az, d_el = self._error_prev
         state = PointingState(t_s=float(t[mid]), az_rad=0.0, el_rad=0.0,
                               az_rate_rad_s=rates[0], el_rate_rad_s=rates[1],
                               approach_az=self.mount.approach[0],
                               approach_el=self.mount.approach[1])
-        for _ in range(2):
-            state.az_rad = float(enc_az[mid]) - d_az
-            state.el_rad = float(enc_el[mid]) - d_el
-            d_az, d_el = world.pointing_error_rad(state)
-        self._error_prev = (d_az, d_el)
-        state.az_rad = float(enc_az[mid]) - d_az
-        state.el_rad = float(enc_el[mid]) - d_el
-
-        beam_az = enc_az - d_az
-        beam_el = enc_el - d_el
-        for effect in world.fast_effects:
-            j_az, j_el = effect.sample_error(t, state.el_rad)
-            beam_az = beam_az - j_az
-            beam_el = beam_el - j_el
-
+        paths = [(i, *self._source_path(i, t)) for i in self._targets]
+        if self.recorder is not None:  # the shared schedule of antsim.plan's ensembles
+            self.recorder(t=t, enc_az=enc_az, enc_el=enc_el, state=replace(state),
+                          paths=paths, seconds=seconds)
+        samples, self._error_prev = world.sample_powers(t, enc_az, enc_el, state, paths,
+                                                        self._error_prev, self.channels)
         n_ch = len(self.channels)
-        t_src = np.zeros((t.size, n_ch))
-        sky = world.sky
-        for i in self._targets:
-            src_az, src_el = self._source_path(i, t)
-            d_xel = ((src_az - beam_az + math.pi) % (2 * math.pi) - math.pi) * np.cos(src_el)
-            d_el_src = src_el - beam_el
-            scale = (sky.flux_jy[i] * world.beam.config.gain_k_per_jy
-                     * world.beam.efficiency(src_el) * world.atmosphere.transmission(src_el))
-            for c, channel in enumerate(self.channels):
-                off_x = off_e = 0.0
-                for effect in world.slow_effects:
-                    ox, oe = effect.beam_offset(channel, state)
-                    off_x += ox
-                    off_e += oe
-                t_src[:, c] += scale * world.beam.response(
-                    (d_xel - off_x) * ARCMIN_PER_RAD, (d_el_src - off_e) * ARCMIN_PER_RAD,
-                    float(sky.size_arcmin[i]))
-        t_in = t_src + world.atmosphere.emission_k(beam_el)[:, None]
-        samples = world.receiver.sample(t, t_in)
         power = samples.mean(axis=0)
         std = samples.std(axis=0, ddof=1) if t.size > 1 else np.zeros(n_ch)
         return Integration(

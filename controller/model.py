@@ -130,7 +130,10 @@ class PointingModel:
         return -(basis_az @ coeff_rad).reshape(shape), -(basis_el @ coeff_rad).reshape(shape)
 
     def offset_scalar_rad(self, az_rad: float, el_rad: float) -> tuple[float, float]:
-        """:meth:`offset_rad` at one point with plain floats (a fast path for simulations)."""
+        """:meth:`offset_rad` at one point with plain floats (a fast path for simulations);
+        arrays (an ensemble's member axis) go through :meth:`offset_rad`."""
+        if np.ndim(az_rad) or np.ndim(el_rad):
+            return self.offset_rad(az_rad, el_rad)
         corr_az, corr_el = combine_scalar(self.terms, self._coeff_rad, az_rad, el_rad)
         return -corr_az, -corr_el
 

@@ -17,7 +17,8 @@ from .config import ScanConfig
 from .protocol import Antenna, Integration
 from .reduction import AxisReduction, reduce_clark, reduce_lsq
 
-__all__ = ["AXES", "RawScan", "ReducedScan", "cross_scan", "reduce_scan"]
+__all__ = ["AXES", "RawScan", "ReducedScan", "channel_average", "cross_scan", "reduce_powers",
+           "reduce_scan"]
 
 AXES = ("az", "el")
 
@@ -50,8 +51,7 @@ class RawScan:
                     power[a, c, k] = integ.power_k[ch]
                     std[a, c, k] = integ.std_k[ch]
                 times[a, :, k] = integ.t_mid_s
-        power[:, n_ch] = power[:, :n_ch].mean(axis=1)
-        std[:, n_ch] = np.sqrt((std[:, :n_ch] ** 2).mean(axis=1) / n_ch)
+        power[:, n_ch], std[:, n_ch] = channel_average(power[:, :n_ch], std[:, :n_ch], axis=1)
         return power, std, times
 
     @property
@@ -103,12 +103,31 @@ def cross_scan(env, antenna: Antenna, trajectory, scan: ScanConfig, label: str =
     return raw
 
 
+def channel_average(power: np.ndarray, std: np.ndarray,
+                    axis: int) -> tuple[np.ndarray, np.ndarray]:
+    """The AVG channel of independent receivers along ``axis``: mean power (K) and the rms
+    of the channels' std divided by sqrt(number of channels) (K)."""
+    n_ch = power.shape[axis]
+    return power.mean(axis=axis), np.sqrt((std ** 2).mean(axis=axis) / n_ch)
+
+
 def reduce_scan(raw: RawScan, scan: ScanConfig, estimator: str | None = None,
                 step_arcmin: float | None = None) -> ReducedScan:
     """Reduce both axes of all channels and their average with the chosen estimator."""
     power, std, times = raw.powers()
-    est = estimator or scan.estimator
     step = raw.step_arcmin if step_arcmin is None else step_arcmin
+    result = reduce_powers(power, std, times, scan, estimator, step)
+    axes = {axis: _take(result, a) for a, axis in enumerate(AXES)}
+    return ReducedScan(raw=raw, axes=axes, polarizations=(*raw.channels, "AVG"))
+
+
+def reduce_powers(power: np.ndarray, std: np.ndarray, times: np.ndarray, scan: ScanConfig,
+                  estimator: str | None = None,
+                  step_arcmin: float | None = None) -> AxisReduction:
+    """The reduction :func:`reduce_scan` makes, on arrays (..., 5) of powers and std (K)
+    and mid-times (s) with any leading (batch) axes."""
+    est = estimator or scan.estimator
+    step = scan.step_arcmin if step_arcmin is None else step_arcmin
     if est == "clark":
         # baseline: the straight line through the two +-4D powers. It removes the sky's
         # emission slope across an elevation scan exactly to first order; a constant
@@ -121,8 +140,7 @@ def reduce_scan(raw: RawScan, scan: ScanConfig, estimator: str | None = None,
                             snr_min=scan.snr_min)
     else:
         raise ValueError(f"unknown estimator {est!r}: use 'clark' or 'lsq'")
-    axes = {axis: _take(result, a) for a, axis in enumerate(AXES)}
-    return ReducedScan(raw=raw, axes=axes, polarizations=(*raw.channels, "AVG"))
+    return result
 
 
 def _take(result: AxisReduction, index: int) -> AxisReduction:

@@ -1,15 +1,81 @@
-"""`antsim plan`: not built yet (issue 6); the subcommand exists so the contract is visible."""
+"""`antsim plan PLAN.toml`: what-if questions about an observing plan, answered with numbers.
+
+For each variant of the plan: the predicted (Fisher) sigma of every fitted term from the
+schedule the controller would produce and a noise model of the physics, the Monte Carlo sigma
+and bias from N simulated campaigns fitted as the observatory fits them, Sky RMS predicted
+and simulated, telescope time; then the plan's questions (how long, which sources) and the
+pairs of terms the plan cannot separate. See :mod:`antsim.plan`.
+"""
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
+from pathlib import Path
+
+from controller.errors import InputError
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    parser.epilog = "Not implemented yet: arrives with issue 6."
+    parser.add_argument("plan", help="plan file (TOML), e.g. scenarios/plans/ghigo1990_whatif.toml")
+    parser.add_argument("--json", action="store_true",
+                        help="print the result as JSON ({\"plans\": [...], \"answers\": ...})")
+    parser.add_argument("--out", default=None,
+                        help="directory for plan.json, plan.txt and the comparison figures")
+    parser.add_argument("--workers", type=int, default=None,
+                        help="local worker processes (default: the machine's cores; 0: run "
+                             "in this process)")
+    parser.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                        help="run the members on a Dask distributed scheduler, e.g. "
+                             "tcp://127.0.0.1:8786 (pip install 'antsim[dask]')")
+    parser.add_argument("--members", type=int, default=None,
+                        help="Monte Carlo members per variant (default: the plan's)")
+    parser.add_argument("--no-answers", action="store_true",
+                        help="skip the plan's questions (duration, sources)")
+    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                        help="progress bar (default: when stderr is a terminal)")
+    parser.epilog = ("Results are the same for any --workers or --scheduler: member seeds "
+                     "derive from the plan seed and the member index.")
 
 
 def main(args: argparse.Namespace) -> int:
-    print("antsim plan: not implemented yet (issue 6)", file=sys.stderr)
-    return 1
+    from antsim.plan.planfile import MAX_MEMBERS, load_plan
+    from antsim.plan.study import run_plan
+
+    if args.members is not None and not 2 <= args.members <= MAX_MEMBERS:
+        raise InputError("command line", "--members", args.members,
+                         f"must be within 2..{MAX_MEMBERS}")
+    if args.workers is not None and args.workers < 0:
+        raise InputError("command line", "--workers", args.workers, "must be >= 0")
+    if args.scheduler is not None and args.workers is not None:
+        raise InputError("command line", "--workers", args.workers,
+                         "give --workers or --scheduler, not both",
+                         "the Dask cluster sets its own workers")
+    out = Path(args.out) if args.out else None
+    if out is not None and out.exists() and not out.is_dir():
+        raise InputError("command line", "--out", str(out), "exists and is not a directory")
+    plan = load_plan(args.plan)
+
+    def log(message: str) -> None:
+        if args.progress or (args.progress is None and sys.stderr.isatty()):
+            print(message, file=sys.stderr)
+
+    result = run_plan(plan, workers=args.workers, scheduler=args.scheduler,
+                      members=args.members, progress=args.progress,
+                      answers=not args.no_answers, log=log)
+    doc = result.to_json()
+    text = result.text()
+    if out is not None:
+        from antsim.plan.plots import plan_figures
+
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "plan.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+        (out / "plan.txt").write_text(result.text(timing=False), encoding="utf-8")
+        figures = plan_figures(doc, out)
+        text += f"wrote {out}/: plan.json plan.txt and {len(figures)} figures\n"
+    if args.json:
+        print(json.dumps(doc, indent=2))
+    else:
+        print(text, end="")
+    return 0

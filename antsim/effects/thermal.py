@@ -45,7 +45,7 @@ from controller.units import RAD_PER_ARCSEC
 
 from .base import Effect, Param, PointingState
 
-__all__ = ["OUProcess", "SunsetDrift", "ThermalEffect", "ou_series", "relax"]
+__all__ = ["OUProcess", "SunsetDrift", "ThermalEffect", "interp_rows", "ou_series", "relax"]
 
 GRID_STEP_S = 60.0
 SPINUP_S = 86400.0
@@ -59,6 +59,33 @@ def relax(forcing: np.ndarray, step_s: float, tau_s: float, initial: float) -> n
     alpha = math.exp(-step_s / tau_s)
     out, _ = lfilter([1.0 - alpha], [1.0, -alpha], forcing, zi=[alpha * initial])
     return out
+
+
+def _elementwise(math_func, numpy_func):
+    """``math_func`` on a scalar (the World's per-integration path, bit for bit as before),
+    ``numpy_func`` on an array (a member axis)."""
+    return lambda x: math_func(x) if np.ndim(x) == 0 else numpy_func(x)
+
+
+_sin = _elementwise(math.sin, np.sin)
+_cos = _elementwise(math.cos, np.cos)
+_tan = _elementwise(math.tan, np.tan)
+
+
+def interp_rows(t_s, t_grid: np.ndarray, values: np.ndarray):
+    """``np.interp(t_s, t_grid, values)``; ``values`` may carry leading axes (one row per
+    ensemble member of :mod:`antsim.plan`), all interpolated at the same time(s)."""
+    if np.ndim(values) == 1:
+        return np.interp(t_s, t_grid, values)
+    if np.ndim(t_s) == 0:  # the common case, one time: plain floats are faster
+        t = float(t_s)
+        i = min(max(int(np.searchsorted(t_grid, t, side="right")) - 1, 0), t_grid.size - 2)
+        w = min(max((t - t_grid[i]) / (t_grid[i + 1] - t_grid[i]), 0.0), 1.0)
+        return values[..., i] * (1.0 - w) + values[..., i + 1] * w
+    t = np.asarray(t_s, dtype=float)
+    i = np.clip(np.searchsorted(t_grid, t, side="right") - 1, 0, t_grid.size - 2)
+    w = np.clip((t - t_grid[i]) / (t_grid[i + 1] - t_grid[i]), 0.0, 1.0)
+    return values[..., i] * (1.0 - w) + values[..., i + 1] * w
 
 
 def ou_series(rng: np.random.Generator, n: int, step_s: float, tau_s: float,
@@ -78,9 +105,10 @@ def ou_series(rng: np.random.Generator, n: int, step_s: float, tau_s: float,
 class OUProcess:
     """Ornstein-Uhlenbeck process(es) sampled at increasing times, continuous across calls.
 
-    ``rms`` may be an array (one independent process per element). Within a call the samples
-    must be evenly spaced (an integration's samples are); the step from the previous call's
-    last sample may be anything (exact discretisation, stationary start).
+    ``rms`` may be an array of any shape (one independent process per element; samples then
+    have shape (n, *rms.shape), e.g. (n, members, channels) for :mod:`antsim.plan`). Within a
+    call the samples must be evenly spaced (an integration's samples are); the step from the
+    previous call's last sample may be anything (exact discretisation, stationary start).
     """
 
     def __init__(self, rng: np.random.Generator, rms, timescale_s: float):
@@ -91,28 +119,29 @@ class OUProcess:
         self.t_last: float | None = None
 
     def sample(self, t_s: np.ndarray) -> np.ndarray:
-        """Values at times ``t_s`` (evenly spaced), shape (n, len(rms))."""
+        """Values at times ``t_s`` (evenly spaced), shape (n, *rms.shape)."""
         n = t_s.size
-        draws = self.rng.standard_normal((n, self.rms.size)) * self.rms
+        draws = self.rng.standard_normal((n, *self.rms.shape)) * self.rms
         if self.t_last is None:
             first = draws[0]
         else:
             rho0 = math.exp(-max(float(t_s[0]) - self.t_last, 0.0) / self.tau)
             first = rho0 * self.state + math.sqrt(1.0 - rho0 * rho0) * draws[0]
         if n == 1:
-            out = first[None, :]
+            out = first[None, ...]
         elif n > 64:  # long integrations: a recursive filter, not an n x n kernel
             from scipy.signal import lfilter
 
             rho = math.exp(-float(t_s[1] - t_s[0]) / self.tau)
             rest = lfilter([math.sqrt(1.0 - rho * rho)], [1.0, -rho], draws[1:], axis=0,
-                           zi=(rho * first)[None, :])[0]
-            out = np.vstack([first[None, :], rest])
+                           zi=(rho * first)[None, ...])[0]
+            out = np.concatenate([first[None, ...], rest])
         else:
             rho = math.exp(-float(t_s[1] - t_s[0]) / self.tau)
             powers, kernel = _ar1_kernel(n, rho)
             draws[0] = 0.0
-            out = kernel @ draws + powers[:, None] * first[None, :]
+            out = ((kernel @ draws.reshape(n, -1)).reshape(draws.shape)
+                   + powers.reshape(n, *[1] * first.ndim) * first[None, ...])
         self.state = out[-1].copy()
         self.t_last = float(t_s[-1])
         return out
@@ -202,8 +231,8 @@ class ThermalEffect(Effect):
 
     def errors_arcsec(self, t_s) -> tuple[np.ndarray, np.ndarray]:
         """(xel, el) thermal error in arcsec at time(s) ``t_s`` (for tests and reports)."""
-        return (np.interp(t_s, self.t_grid, self.xel_arcsec),
-                np.interp(t_s, self.t_grid, self.el_arcsec))
+        return (interp_rows(t_s, self.t_grid, self.xel_arcsec),
+                interp_rows(t_s, self.t_grid, self.el_arcsec))
 
     def dish_gradients_k(self, state: PointingState) -> tuple[float, float]:
         """Front-back and left-right dish gradients (K) now, advancing their state from
@@ -214,12 +243,12 @@ class ThermalEffect(Effect):
             return 0.0, 0.0
         t = state.t_s
         sun = np.array([np.interp(t, self.t_grid, row) for row in self._sun_vec])
-        flux = p["dish_gradient_k"] * float(np.interp(t, self.t_grid, self._insolation))
-        cos_e, sin_e = math.cos(state.el_rad), math.sin(state.el_rad)
-        cos_a, sin_a = math.cos(state.az_rad), math.sin(state.az_rad)
-        boresight = (cos_e * cos_a, cos_e * sin_a, sin_e)
-        side = (-sin_a, cos_a, 0.0)
-        forcing = (flux * float(np.dot(sun, boresight)), flux * float(np.dot(sun, side)))
+        flux = p["dish_gradient_k"] * interp_rows(t, self.t_grid, self._insolation)
+        cos_e, sin_e = _cos(state.el_rad), _sin(state.el_rad)
+        cos_a, sin_a = _cos(state.az_rad), _sin(state.az_rad)
+        boresight = np.array((cos_e * cos_a, cos_e * sin_a, sin_e))
+        side = np.array((-sin_a, cos_a, np.zeros_like(sin_a)))
+        forcing = (flux * np.dot(sun, boresight), flux * np.dot(sun, side))
         if self._dish_k is None:
             self._dish_k = forcing
         elif t > self._dish_t:
@@ -231,19 +260,19 @@ class ThermalEffect(Effect):
 
     def pointing_error(self, state: PointingState) -> tuple[float, float]:
         p = self.p
+        # scalars in a World; arrays with a member axis in antsim.plan's ensembles
         xel, el = self.errors_arcsec(state.t_s)
-        xel, el = float(xel), float(el)
         fb, lr = self.dish_gradients_k(state)
-        el += p["dish_arcsec_per_k"] * fb
-        xel += p["dish_arcsec_per_k"] * lr
+        el = el + p["dish_arcsec_per_k"] * fb
+        xel = xel + p["dish_arcsec_per_k"] * lr
         # pedestal tilt as AN (north) / AW (east) terms, indicated - true
-        tilt_n = float(np.interp(state.t_s, self.t_grid, self._tilt_n_arcsec))
-        tilt_e = float(np.interp(state.t_s, self.t_grid, self._tilt_e_arcsec))
-        sin_a, cos_a = math.sin(state.az_rad), math.cos(state.az_rad)
-        tan_e = math.tan(state.el_rad)
+        tilt_n = interp_rows(state.t_s, self.t_grid, self._tilt_n_arcsec)
+        tilt_e = interp_rows(state.t_s, self.t_grid, self._tilt_e_arcsec)
+        sin_a, cos_a = _sin(state.az_rad), _cos(state.az_rad)
+        tan_e = _tan(state.el_rad)
         d_az = -(tilt_n * sin_a + tilt_e * cos_a) * tan_e
-        el += -tilt_n * cos_a + tilt_e * sin_a
-        return ((xel / math.cos(state.el_rad) + d_az) * RAD_PER_ARCSEC,
+        el = el + (-tilt_n * cos_a + tilt_e * sin_a)
+        return ((xel / _cos(state.el_rad) + d_az) * RAD_PER_ARCSEC,
                 el * RAD_PER_ARCSEC)
 
 

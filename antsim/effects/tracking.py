@@ -75,4 +75,5 @@ class TrackingJitter(Effect):
         out = self.process.sample(t_s) * (self.rms_rad * scale)
         if self.gust_start_s.size:
             out = out + self.gusts_rad(t_s)
-        return out[:, 0] / math.cos(el_rad), out[:, 1]
+        # out is (n, 2), or (n, members, 2) in antsim.plan's ensembles (el_rad then (members,))
+        return out[..., 0] / (np.cos(el_rad) if np.ndim(el_rad) else math.cos(el_rad)), out[..., 1]

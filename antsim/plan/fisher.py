@@ -1,0 +1,445 @@
+"""Predicted error of every fitted term, from the design and a noise model of the physics.
+
+The design is the schedule the controller produces (the deterministic run of
+:func:`antsim.plan.vectorized.record_schedule`): one row per scan its reduction accepts, at the
+scan's position. The fitter's final estimate is least squares, so the predicted covariance of
+the terms is the sandwich ``B A^T C A B`` with ``B = (A^T A)^-1`` and ``C`` the covariance of
+the measured offsets (arcsec^2); for independent offsets of equal variance s^2 it is the
+inverse Fisher information s^2 B (the JSON keeps the name ``sigma_fisher_arcsec``).
+
+``C`` is predicted, scan by scan, by propagating each source of noise through the linear
+response of the controller's own estimator (:func:`controller.scan.reduce_powers`, finite
+differences at the noise-free powers; for white noise this is the Cramer-Rao bound of
+:func:`controller.reduction.cramer_rao_offset_arcmin` where the estimator reaches it) and
+through the beam (the world's :meth:`~antsim.world.World.sample_powers`, nudged):
+
+* receiver: gain fluctuations (Ornstein-Uhlenbeck of each channel: the exact covariance of
+  the integration means, correlated between the five points of an axis and between scans)
+  and radiometer noise, T_sys + source + sky emission per integration;
+* tracking jitter: the OU wander averaged over each integration, its rms scaled by the wind
+  at the time (the effect's own formula), correlated between points and between scans;
+* gusts: their expected second moment (Poisson rate times the overlap of the effect's gust
+  profile with the integrations; gusts are rare and heavy-tailed, so this is an average);
+* thermal: the random part of the slow errors (cloud modulation, lateral forcing, weather
+  wander), correlated over hours: from independent draws of those effects alone, solved along
+  the schedule exactly as the world solves them (no receiver, reduction or fit involved).
+
+The fitter is robust: it rejects the observations whose residuals exceed 4x the mean
+absolute residual or 3x the rms. Which ones it rejects changes from campaign to campaign, and
+each rejection moves the estimate: that adds scatter (with the deterministic residuals of the
+day's thermal errors, about 10% in sigma for the 24-hour run), predicted from truncated-normal
+moments of each residual (:func:`_rejections`), and shifts the mean.
+
+Deterministic errors (the mean thermal and sunset drift, source structure, the controller's
+refraction) are the same in every member: they bias the terms, predicted by least squares on
+the noise-free run shifted by the expected rejections, and add no scatter. The estimator's
+non-linearity beyond first order, and the heavy tails of gusts (their variance is used, the
+rejections model assumes Gaussian residuals), are left to the Monte Carlo.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from controller.model import PointingModel
+
+from ..effects.tracking import TrackingJitter
+from .vectorized import MemberEngine, SharedSchedule
+
+__all__ = ["NoiseModel", "Prediction", "noise_model", "predict"]
+
+#: nudge of the pointing for the linear response of the powers (arcsec)
+NUDGE_ARCSEC = 1.0
+#: step in power for the estimator's gradient (K)
+POWER_STEP_K = 1e-3
+#: correlations beyond this many OU time constants are neglected
+WINDOW_TAUS = 8.0
+#: spawn key of the thermal draws (member keys are smaller)
+THERMAL_KEY = 1 << 40
+#: step of the gust start times integrated over (s)
+GUST_STEP_S = 1.0
+COMPONENTS = ("receiver", "jitter", "gusts", "thermal")
+
+
+@dataclass
+class NoiseModel:
+    """Per-scan offset noise of one variant's design (arcsec).
+
+    ``units`` are the (scan, axis) pairs of the design's scans (axis 0: cross-elevation,
+    1: elevation), ``pairs`` (i, j) unit pairs with their covariance per component
+    ``pair_cov[component]`` (white and short-range correlated components), ``thermal`` the
+    offsets of ``n_thermal`` draws of the random slow errors (draws, units), ``scans`` the
+    design's scan indices in time order.
+    """
+
+    scans: np.ndarray
+    pairs: np.ndarray
+    pair_cov: dict[str, np.ndarray]
+    thermal: np.ndarray
+    response: np.ndarray  # (scans, axes, 5 points, 2 displacement axes)
+    gradient: np.ndarray  # (scans, axes, 5) arcsec per K
+    quiet_offsets: np.ndarray  # (scans, axes) arcsec, the noise-free reduction
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def n_thermal(self) -> int:
+        return int(self.thermal.shape[0])
+
+    def unit_variance(self, component: str) -> np.ndarray:
+        """Variance of each unit's offset from one component (arcsec^2), (scans, axes)."""
+        n = self.scans.size
+        out = np.zeros(2 * n)
+        if component == "thermal":
+            if self.n_thermal > 1:
+                out = self.thermal.var(axis=0, ddof=1)
+        else:
+            same = self.pairs[:, 0] == self.pairs[:, 1]
+            np.add.at(out, self.pairs[same, 0], self.pair_cov[component][same])
+        return out.reshape(2, n).T
+
+    def budget(self) -> dict[str, dict[str, float]]:
+        """rms over the scans of each component's offset noise, xel and el (arcsec)."""
+        out = {}
+        for c in COMPONENTS:
+            var = self.unit_variance(c)
+            out[c] = {"xel_arcsec": float(np.sqrt(var[:, 0].mean())),
+                      "el_arcsec": float(np.sqrt(var[:, 1].mean()))}
+        return out
+
+
+@dataclass
+class Prediction:
+    """Predicted covariance of the fitted terms (arcsec^2) and what follows from it:
+    ``components`` per noise source and for the robust fit's rejections, the predicted
+    bias (the noise-free data's least-squares fit, shifted by the expected rejections, minus
+    the truth), and the Sky RMS of the used observations."""
+
+    names: tuple[str, ...]
+    covariance: np.ndarray
+    design_correlation: np.ndarray
+    sky_rms_arcsec: float
+    n_scans: int
+    components: dict[str, np.ndarray]  # per-component covariance of the terms
+    bias_arcsec: np.ndarray  # predicted mean of fitted minus true
+    n_rejected: float  # expected observations the robust fit rejects
+
+    @property
+    def sigma_arcsec(self) -> np.ndarray:
+        return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
+
+    def cannot_separate(self, level: float = 0.95) -> list[tuple[str, str, float]]:
+        """Pairs of terms whose predicted correlation exceeds ``level`` in magnitude."""
+        sd = self.sigma_arcsec
+        with np.errstate(invalid="ignore", divide="ignore"):
+            corr = self.covariance / np.outer(sd, sd)
+        out = []
+        m = len(self.names)
+        for i in range(m):
+            for j in range(i + 1, m):
+                r = float(corr[i, j])
+                if math.isfinite(r) and abs(r) > level:
+                    out.append((self.names[i], self.names[j], r))
+        return out
+
+
+# ---------------------------------------------------------------------------------------------
+def _design(columns: dict[str, np.ndarray], terms, rows: np.ndarray) -> np.ndarray:
+    """Design matrix of the fit (2n x m: xel rows then el rows), as the fitter builds it."""
+    az = np.radians(columns["az_deg"][rows].astype(float))
+    el = np.radians(columns["el_deg"][rows].astype(float))
+    basis_az, basis_el = PointingModel(list(terms)).design_matrix(az, el)
+    return np.vstack([basis_az * np.cos(el)[:, None], basis_el])
+
+
+def _ou_mean_cov(t1: np.ndarray, t2: np.ndarray, tau: float) -> np.ndarray:
+    """Covariance of the means of a unit-rms OU process over sample sets: t1 (P, 5, n),
+    t2 (P, 5, n) -> (P, 5, 5)."""
+    diff = np.abs(t1[:, :, None, :, None] - t2[:, None, :, None, :])
+    return np.exp(-diff / tau).mean(axis=(3, 4))
+
+
+def noise_model(engine: MemberEngine, plan_seed: int, n_thermal: int = 256) -> NoiseModel:
+    """The per-scan offset noise of ``engine``'s variant (see the module docstring)."""
+    sh = engine.shared
+    sc = engine.scenario
+    channels = sh.channels
+    n_ch = len(channels)
+    # ---- noise-free powers and their response to a pointing nudge (members: 0, +-x, +-e)
+    h = NUDGE_ARCSEC / 206264.80624709636
+    nx = np.array([0.0, h, -h, 0.0, 0.0])
+    ne = np.array([0.0, 0.0, 0.0, h, -h])
+    power, _ = engine.simulate(None, nudges=(nx, ne), quiet=True)
+    p0 = power[:, 0, :]  # (integrations, channels)
+    slope = np.stack([(power[:, 1] - power[:, 2]), (power[:, 3] - power[:, 4])],
+                     axis=-1) / (2 * NUDGE_ARCSEC)  # (integrations, channels, 2) K/arcsec
+    # ---- receiver and jitter statistics per integration
+    rec = sc.receiver
+    rms_g = np.array([rec.gain_fluctuation if c.gain_fluctuation is None else c.gain_fluctuation
+                      for c in rec.channels])
+    tau_g = rec.gain_timescale_s
+    rad_var = p0 ** 2 / (rec.bandwidth_mhz * 1e6 * rec.sample_interval_s)  # per sample
+    jit = [(i, spec) for kind, i, spec in engine._kinds if kind == "jitter"]
+    n_int = sh.n_integrations
+    jit_sd = np.zeros((n_int, 2))
+    tau_j = 1.0
+    gust = None
+    if jit:
+        _, spec = jit[0]
+        effect = TrackingJitter(**spec.params)
+        effect.start(engine._view(0), np.random.default_rng(0))
+        tau_j = float(spec.params["timescale_s"])
+
+        class _Ones:
+            def sample(self, t):
+                return np.ones((t.size, 2))
+
+        effect.process = _Ones()
+        effect.gust_start_s = np.zeros(0)
+        for k in range(n_int):
+            t = sh.t[k][:1]
+            el = float(sh.enc_el[k][0])
+            a, e = effect.sample_error(t, el)
+            jit_sd[k] = (float(a[0]) * math.cos(el) * 206264.80624709636,
+                         float(e[0]) * 206264.80624709636)
+        rate = float(spec.params["gust_rate_per_h"]) / 3600.0
+        if rate > 0 and spec.params["gust_arcsec"] > 0:
+            dur = float(spec.params["gust_duration_s"])
+            probe = TrackingJitter(**spec.params)
+            probe.start(engine._view(0), np.random.default_rng(0))
+            probe.gust_start_s = np.array([0.0])
+            probe.gust_rad = np.array([[1.0, 1.0]])
+            tau_grid = np.linspace(-1.0, dur + 1.0, 2000)
+            profile = probe.gusts_rad(tau_grid)[:, 0]
+            gust = (rate * float(spec.params["gust_arcsec"]) ** 2, dur, tau_grid, profile)
+    # ---- expected sample std per integration and channel (the estimator's std_k)
+    n_s = np.array([t.size for t in sh.t])
+    same_g = np.array([_ou_mean_cov(t[None, None], t[None, None], tau_g)[0, 0, 0]
+                       for t in sh.t])
+    same_j = np.array([_ou_mean_cov(t[None, None], t[None, None], tau_j)[0, 0, 0]
+                       for t in sh.t])
+    var_s = (p0 ** 2 * rms_g ** 2 + rad_var
+             + (slope ** 2 * jit_sd[:, None, :] ** 2).sum(axis=-1))
+    var_m = (p0 ** 2 * rms_g ** 2 * same_g[:, None] + rad_var / n_s[:, None]
+             + (slope ** 2 * jit_sd[:, None, :] ** 2).sum(axis=-1) * same_j[:, None])
+    exp_std = np.sqrt(np.clip(n_s[:, None] / np.maximum(n_s[:, None] - 1, 1)
+                              * (var_s - var_m), 1e-30, None))
+    # ---- the estimator's gradient at the noise-free powers, with the expected std
+    p_scan, s_scan, times = engine.scan_powers(p0[:, None, :], exp_std[:, None, :])
+    p_avg, s_avg, t_avg = p_scan[0, :, :, -1], s_scan[0, :, :, -1], times[0, :, :, -1]
+    n_scans = p_avg.shape[0]
+    steps = np.concatenate([np.zeros((1, 5)), POWER_STEP_K * np.eye(5),
+                            -POWER_STEP_K * np.eye(5)])  # (11, 5)
+    trial = p_avg[:, :, None, :] + steps[None, None]
+    reduced = engine_reduce(engine, trial, s_avg[:, :, None, :], t_avg[:, :, None, :])
+    off = np.asarray(reduced.offset_arcmin) * 60.0  # (scans, axes, 11) arcsec
+    flags = np.asarray(reduced.flags)[:, :, 0]
+    gradient = (off[:, :, 1:6] - off[:, :, 6:11]) / (2 * POWER_STEP_K)  # arcsec per K
+    good = (flags == 0).all(axis=1) & sh.columns["good"].astype(bool) \
+        & np.isfinite(gradient).all(axis=(1, 2))
+    scans = np.flatnonzero(good)
+    notes = []
+    if (~good).sum():
+        notes.append(f"{int((~good).sum())} of {n_scans} scans left out of the design (the "
+                     "reduction flags them at the predicted noise, e.g. S/N < snr_min)")
+    idx = sh.scan_int[scans]  # (n, 2, 5) integration indices
+    slope_avg = slope.mean(axis=1)  # (integrations, 2) dP_AVG per arcsec
+    response = gradient[scans][..., None] * slope_avg[idx]  # (n, 2, 5, 2)
+    # ---- unit pairs within the correlation window
+    n = scans.size
+    unit_t = np.concatenate([sh.scan_times[scans, 0].mean(axis=1),
+                             sh.scan_times[scans, 1].mean(axis=1)])
+    unit_scan = np.concatenate([np.arange(n), np.arange(n)])
+    unit_axis = np.concatenate([np.zeros(n, int), np.ones(n, int)])
+    window = WINDOW_TAUS * max(tau_g, tau_j) + 300.0
+    order = np.argsort(unit_t, kind="stable")
+    pairs = []
+    for a_pos, u in enumerate(order):
+        hi = np.searchsorted(unit_t[order], unit_t[u] + window, side="right")
+        for v in order[a_pos:hi]:
+            pairs.append((u, v))
+    pairs = np.array(pairs, dtype=np.int64).reshape(-1, 2)
+    cov = {c: np.zeros(len(pairs)) for c in ("receiver", "jitter", "gusts")}
+    samples = np.stack([sh.t[k] for k in idx.reshape(-1)]).reshape(n, 2, 5, -1)
+    chunk = 512
+    grad_u = gradient[scans]  # (n, 2, 5)
+    for start in range(0, len(pairs), chunk):
+        pp = pairs[start:start + chunk]
+        su, au = unit_scan[pp[:, 0]], unit_axis[pp[:, 0]]
+        sv, av = unit_scan[pp[:, 1]], unit_axis[pp[:, 1]]
+        tu, tv = samples[su, au], samples[sv, av]
+        ku, kv = idx[su, au], idx[sv, av]  # (P, 5)
+        gu, gv = grad_u[su, au], grad_u[sv, av]
+        # receiver: gain OU (per channel) + radiometer (same integration only)
+        kg = _ou_mean_cov(tu, tv, tau_g)
+        r = np.zeros_like(kg)
+        for c in range(n_ch):
+            r += (p0[ku, c][:, :, None] * p0[kv, c][:, None, :] * rms_g[c] ** 2 * kg)
+            same = ku[:, :, None] == kv[:, None, :]
+            r += same * (rad_var[ku, c] / n_s[ku])[:, :, None]
+        r /= n_ch ** 2
+        cov["receiver"][start:start + len(pp)] = np.einsum("pi,pij,pj->p", gu, r, gv)
+        wu, wv = response[su, au], response[sv, av]  # (P, 5, 2)
+        kj = _ou_mean_cov(tu, tv, tau_j)
+        for d in range(2):
+            sd_u, sd_v = jit_sd[ku, d], jit_sd[kv, d]
+            cov["jitter"][start:start + len(pp)] += np.einsum(
+                "pi,pij,pj->p", wu[..., d] * sd_u, kj, wv[..., d] * sd_v)
+        if gust is not None:
+            energy, dur, tau_grid, profile = gust
+            near = (np.minimum(tu.max(axis=(1, 2)), tv.max(axis=(1, 2)))
+                    - np.maximum(tu.min(axis=(1, 2)), tv.min(axis=(1, 2)))) > -dur
+            for q in np.flatnonzero(near):
+                grid = np.arange(max(tu[q].min(), tv[q].min()) - dur,
+                                 min(tu[q].max(), tv[q].max()) + GUST_STEP_S, GUST_STEP_S)
+                hu = np.interp(tu[q][..., None] - grid, tau_grid, profile, left=0.0,
+                               right=0.0).mean(axis=1)  # (5, G)
+                hv = np.interp(tv[q][..., None] - grid, tau_grid, profile, left=0.0,
+                               right=0.0).mean(axis=1)
+                ov = hu @ hv.T * (GUST_STEP_S * energy)
+                for d in range(2):
+                    cov["gusts"][start + q] += wu[q, :, d] @ ov @ wv[q, :, d]
+    # ---- thermal: random slow errors, drawn alone
+    random_slow = [1 for kind, _, _ in engine._kinds if kind == "member"]
+    thermal = np.zeros((0, 2 * n))
+    if random_slow and n_thermal > 1:
+        seeds = [int(np.random.SeedSequence(int(plan_seed), spawn_key=(THERMAL_KEY, j))
+                     .generate_state(1, dtype=np.uint64)[0]) for j in range(n_thermal)]
+        errs = engine.slow_errors(seeds)  # (draws, integrations, 2)
+        errs = errs - errs.mean(axis=0)
+        e_units = np.einsum("uaid,ruaid->rua", response, errs[:, idx, :])  # (draws, n, 2)
+        thermal = np.concatenate([e_units[:, :, 0], e_units[:, :, 1]], axis=1)
+    quiet = off[scans, :, 0]
+    return NoiseModel(scans=scans, pairs=pairs, pair_cov=cov, thermal=thermal,
+                      response=response, gradient=gradient[scans], quiet_offsets=quiet,
+                      notes=notes)
+
+
+def engine_reduce(engine: MemberEngine, power, std, times):
+    """The controller's reduction of arbitrary (..., 5) arrays of one variant."""
+    from controller.scan import reduce_powers
+
+    return reduce_powers(power, std, np.broadcast_to(times, power.shape),
+                         engine.scenario.controller.scan)
+
+
+def predict(shared: SharedSchedule, terms: Sequence[str], noise: NoiseModel,
+            n_scans: int | None = None, truth: np.ndarray | None = None) -> Prediction:
+    """Predicted covariance and bias of the fitted ``terms`` for the design's first
+    ``n_scans`` scans (default all) of the schedule ``shared``: the sandwich of the
+    least-squares fit with the predicted offset noise, plus the scatter the robust fit's
+    rejections add (see :func:`_rejections`)."""
+    sh = shared
+    scans = noise.scans
+    keep_scan = np.ones(scans.size, bool) if n_scans is None else scans < n_scans
+    n = int(keep_scan.sum())
+    unit_keep = np.concatenate([keep_scan, keep_scan])
+    a_full = _design(sh.columns, terms, scans)  # (2 n_all, m)
+    a = a_full[unit_keep]
+    m = len(terms)
+    ata = a.T @ a
+    b = np.linalg.pinv(ata)
+    comps: dict[str, np.ndarray] = {}
+    pk = unit_keep[noise.pairs[:, 0]] & unit_keep[noise.pairs[:, 1]]
+    pairs = noise.pairs[pk]
+    unit_var = np.zeros(2 * scans.size)
+    for c, values in noise.pair_cov.items():
+        v = values[pk]
+        au, av = a_full[pairs[:, 0]], a_full[pairs[:, 1]]
+        acc = np.einsum("p,pi,pj->ij", v, au, av)
+        off = pairs[:, 0] != pairs[:, 1]
+        acc = acc + np.einsum("p,pi,pj->ij", v[off], av[off], au[off])
+        comps[c] = b @ acc @ b
+        np.add.at(unit_var, pairs[~off, 0], v[~off])
+    if noise.n_thermal > 1:
+        e = noise.thermal[:, unit_keep]  # (draws, 2n)
+        comps["thermal"] = np.cov(e @ a @ b, rowvar=False).reshape(m, m)
+        unit_var += noise.thermal.var(axis=0, ddof=1)
+    else:
+        comps["thermal"] = np.zeros((m, m))
+    unit_var = unit_var[unit_keep]
+    # the deterministic (noise-free) data and their least-squares fit
+    rows = scans[keep_scan]
+    cols = sh.columns
+    model = 60.0 * np.stack([cols["model_xel_arcmin"][rows] + cols["applied_xel_arcmin"][rows],
+                             cols["model_el_arcmin"][rows] + cols["applied_el_arcmin"][rows]],
+                            axis=1).astype(float)
+    y = -(noise.quiet_offsets[keep_scan] + model).T.reshape(-1)
+    coef = b @ (a.T @ y)
+    r0 = y - a @ coef
+    hat = np.einsum("ij,jk,ik->i", a, b, a)
+    rej = _rejections(r0, unit_var * np.clip(1.0 - hat, 1e-6, None), n)
+    lever = 1.0 / np.clip(1.0 - hat, 1e-6, None)
+    comps["rejection"] = b @ (a.T * (rej.var_zr * lever ** 2)) @ a @ b
+    shift = b @ (a.T @ (rej.mean_zr * lever))
+    total = sum(comps.values())
+    sd = np.sqrt(np.diag(b))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = b / np.outer(sd, sd)
+    truth = np.zeros(m) if truth is None else truth
+    return Prediction(names=tuple(terms), covariance=total, design_correlation=corr,
+                      sky_rms_arcsec=rej.sky_rms, n_scans=n, components=comps,
+                      bias_arcsec=coef - shift - truth, n_rejected=rej.n_rejected)
+
+
+@dataclass
+class _Rejection:
+    mean_zr: np.ndarray
+    var_zr: np.ndarray
+    n_rejected: float
+    sky_rms: float
+
+
+def _rejections(r0: np.ndarray, s2: np.ndarray, n: int, lad_factor: float = 4.0,
+                rms_factor: float = 3.0) -> _Rejection:
+    """The robust fit's rejections, for residuals r ~ N(r0, s2) per row (xel rows, then el).
+
+    An observation is rejected when either axis' residual exceeds the smaller of the fitter's
+    two thresholds: ``lad_factor`` times the axis' mean absolute residual, and ``rms_factor``
+    times the rms of the observations that survive that. With z the rejection indicator the
+    used-point estimate is the all-point one minus sum_i z_i B a_i r_i / (1 - h_i); the
+    residuals of least squares are uncorrelated with its estimate, so each row adds
+    B a_i a_i^T B Var(z_i r_i) / (1 - h_i)^2 and shifts the mean by B a_i E[z_i r_i] /
+    (1 - h_i) (truncated-normal moments). Also the expected number of rejections and the Sky
+    RMS of the used observations."""
+    from scipy.stats import norm
+
+    s = np.sqrt(np.clip(s2, 1e-30, None))
+
+    def beyond(mu, sd, cut):
+        """P(|r| > cut), E[r; |r| > cut], E[r^2; |r| > cut] for r ~ N(mu, sd^2)."""
+        al, be = (cut - mu) / sd, (-cut - mu) / sd
+        p = norm.sf(al) + norm.cdf(be)
+        e1 = mu * p + sd * (norm.pdf(al) - norm.pdf(be))
+        e2 = (mu ** 2 + sd ** 2) * p + sd * ((mu + cut) * norm.pdf(al)
+                                             - (mu - cut) * norm.pdf(be))
+        return p, e1, e2
+
+    mom: list[tuple[np.ndarray, ...]] = []
+    for ax in range(2):
+        mu, sd = r0[ax * n:(ax + 1) * n], s[ax * n:(ax + 1) * n]
+        # LAD step: 4x the mean absolute residual (folded-normal mean) ...
+        mean_abs = float(np.mean(sd * math.sqrt(2.0 / math.pi) * np.exp(-0.5 * (mu / sd) ** 2)
+                                 + mu * (1.0 - 2.0 * norm.cdf(-mu / sd))))
+        cut = lad_factor * mean_abs
+        # ... then rms_factor x the rms of the observations that survived it
+        p, _, e2 = beyond(mu, sd, cut)
+        kept_r2 = float(np.sum(mu ** 2 + sd ** 2 - e2)) / max(float(np.sum(1.0 - p)), 1.0)
+        cut = min(cut, rms_factor * math.sqrt(kept_r2))
+        mom.append((mu, sd, *beyond(mu, sd, cut)))
+    mean_zr, var_zr, used_r2 = [], [], 0.0
+    for ax in range(2):
+        mu, sd, p, e1, e2 = mom[ax]
+        p_other = mom[1 - ax][2]
+        z1 = e1 + p_other * (mu - e1)  # E[z r] with z = this axis or the other rejects
+        z2 = e2 + p_other * (mu ** 2 + sd ** 2 - e2)
+        mean_zr.append(z1)
+        var_zr.append(z2 - z1 ** 2)
+        used_r2 += float(np.sum(mu ** 2 + sd ** 2 - z2))
+    p_obs = 1.0 - (1.0 - mom[0][2]) * (1.0 - mom[1][2])
+    n_used = max(float(n - p_obs.sum()), 1.0)
+    return _Rejection(np.concatenate(mean_zr), np.concatenate(var_zr), float(p_obs.sum()),
+                      math.sqrt(max(used_r2, 0.0) / n_used))

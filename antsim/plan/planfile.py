@@ -1,0 +1,393 @@
+"""Plan files: a base scenario, what-if variants of it, and the questions to answer.
+
+A plan is TOML (see ``scenarios/plans/ghigo1990_whatif.toml``)::
+
+    name = "ghigo1990_whatif"
+    scenario = "../ghigo1990.toml"     # relative to the plan file
+    seed = 1990                        # plan seed: member seeds derive from it
+    members = 200                      # Monte Carlo members per variant
+
+    [[variants]]
+    name = "night only"
+    window = "night"                   # all | day | night
+    # duration_h or duration_days, start_utc, sources = [...], elevation_min_deg,
+    # elevation_max_deg, step_arcmin, integration_s, estimator (clark | lsq),
+    # model (scenario | none | truth | a .mod/.json file), fit_model, members
+
+    [[answers.duration]]               # the smallest duration reaching a target sigma
+    based_on = "night only"
+    terms = ["W4"]
+    target_arcsec = 6.0
+    unit = "night"                     # hour | day | night
+    max_days = 20
+
+    [[answers.sources]]                # the best source list for a variant's duration
+    based_on = "8 hours"
+
+Every bad value is one :class:`~controller.errors.InputError` line naming the file, the key
+and the value (exit status 2 through the command line), as for scenarios.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from controller.errors import InputError
+from controller.model import NAMED_MODELS, PointingModel
+from controller.terms import TermError, get_term
+
+from ..scenario import ESTIMATORS, Scenario, load_scenario
+from ..tomlcheck import Table, load_toml
+
+__all__ = ["DurationQuestion", "Plan", "SourcesQuestion", "VariantSpec", "load_plan",
+           "make_variant"]
+
+WINDOWS = ("all", "day", "night")
+UNITS = ("hour", "day", "night")
+#: most members a plan may ask for per variant
+MAX_MEMBERS = 100_000
+
+
+@dataclass(frozen=True)
+class VariantSpec:
+    """One what-if, as written in the plan (None: the base scenario's value)."""
+
+    name: str
+    description: str = ""
+    window: str | None = None
+    duration_h: float | None = None
+    start_utc: str | None = None
+    sources: tuple[str, ...] | None = None
+    elevation_min_deg: float | None = None
+    elevation_max_deg: float | None = None
+    step_arcmin: float | None = None
+    integration_s: float | None = None
+    estimator: str | None = None
+    model: str | None = None
+    fit_model: str | None = None
+    members: int | None = None
+    key: str = ""  # where it sits in the plan file, e.g. variants[2]
+
+    def settings(self) -> dict[str, Any]:
+        """The settings this variant changes (for reports)."""
+        names = ("window", "duration_h", "start_utc", "sources", "elevation_min_deg",
+                 "elevation_max_deg", "step_arcmin", "integration_s", "estimator", "model",
+                 "fit_model")
+        return {n: (list(v) if isinstance(v, tuple) else v) for n in names
+                if (v := getattr(self, n)) is not None}
+
+
+@dataclass(frozen=True)
+class DurationQuestion:
+    """The smallest duration of ``based_on``'s plan giving ``terms`` sigma <= target."""
+
+    based_on: str
+    terms: tuple[str, ...]
+    target_arcsec: float
+    unit: str = "day"
+    max_days: float = 10.0
+    key: str = ""
+
+
+@dataclass(frozen=True)
+class SourcesQuestion:
+    """The best source list for ``based_on``'s duration (D-optimal, or the smallest sigma
+    of ``terms`` when given)."""
+
+    based_on: str
+    terms: tuple[str, ...] = ()
+    min_sources: int = 2
+    candidates: int = 3
+    key: str = ""
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A validated plan: base scenario, variants and questions."""
+
+    name: str
+    path: str
+    description: str
+    scenario: Scenario
+    seed: int
+    members: int
+    variants: tuple[VariantSpec, ...]
+    scenarios: tuple[Scenario, ...]
+    durations: tuple[DurationQuestion, ...] = ()
+    sources: tuple[SourcesQuestion, ...] = ()
+    separation_level: float = 0.95
+    block_members: int = 0
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def variant_index(self, name: str) -> int:
+        return [v.name for v in self.variants].index(name)
+
+
+# ---------------------------------------------------------------------------------------------
+def load_plan(path: str | Path) -> Plan:
+    """Read and validate a plan file; raises InputError on the first bad value."""
+    path = Path(path)
+    root = load_toml(path)
+    name = root.string("name")
+    description = root.string("description", "")
+    scenario_ref = root.string("scenario")
+    scenario_path = Path(scenario_ref)
+    if not scenario_path.is_absolute():
+        scenario_path = path.parent / scenario_path
+    if not scenario_path.exists():
+        raise root.error("scenario", scenario_ref, "no such scenario file",
+                         "paths are relative to the plan file")
+    base = load_scenario(scenario_path)
+    seed = root.integer("seed", base.seed, min=0)
+    members = root.integer("members", 200, min=2, max=MAX_MEMBERS)
+    block = root.integer("block_members", 0, min=0, max=4096)
+    level = root.number("separation_level", 0.95, gt=0.0, lt=1.0)
+    specs = []
+    for i, t in enumerate(root.tables("variants")):
+        specs.append(_variant(t, f"variants[{i}]"))
+    if not specs:
+        raise root.error("variants", [], "the plan lists no variants",
+                         "add [[variants]] tables, e.g. name = \"as run\"")
+    names = [v.name for v in specs]
+    for i, n in enumerate(names):
+        if names.index(n) != i:
+            raise InputError(str(path), f"variants[{i}].name", n, "duplicate variant name")
+    scenarios = tuple(make_variant(base, v, str(path)) for v in specs)
+    answers = root.table("answers", {})
+    durations = tuple(_duration(t, f"answers.duration[{i}]", names, scenarios)
+                      for i, t in enumerate(answers.tables("duration", [])))
+    sources = tuple(_sources(t, f"answers.sources[{i}]", names, scenarios)
+                    for i, t in enumerate(answers.tables("sources", [])))
+    answers.finish()
+    root.finish()
+    return Plan(name=name, path=str(path), description=description, scenario=base, seed=seed,
+                members=members, variants=tuple(specs), scenarios=scenarios,
+                durations=durations, sources=sources, separation_level=level,
+                block_members=block)
+
+
+def _terms(t: Table, key: str, default: Any = None) -> tuple[str, ...]:
+    raw = t.strings(key, default if default is not None else [])
+    out = []
+    for term in raw:
+        try:
+            out.append(get_term(term).name)
+        except TermError as err:
+            raise t.error(key, term, "not a pointing term", str(err)) from None
+    return tuple(out)
+
+
+def _variant(t: Table, key: str) -> VariantSpec:
+    name = t.string("name")
+    if not name.strip():
+        raise t.error("name", name, "must not be empty")
+    if "duration_h" in t and "duration_days" in t:
+        raise t.error("duration_days", t.raw("duration_days"),
+                      "give duration_h or duration_days, not both")
+    duration = None
+    if "duration_h" in t:
+        duration = t.number("duration_h", gt=0.0, max=24.0 * 366)
+    elif "duration_days" in t:
+        duration = 24.0 * t.number("duration_days", gt=0.0, max=366.0)
+    start = t.string("start_utc", None)
+    if start is not None:
+        _check_time(t, "start_utc", start)
+    sources = t.strings("sources", None) if "sources" in t else None
+    if sources is not None and not sources:
+        raise t.error("sources", sources, "lists no sources")
+    spec = VariantSpec(
+        name=name, description=t.string("description", ""),
+        window=t.string("window", None, choices=WINDOWS) if "window" in t else None,
+        duration_h=duration, start_utc=start,
+        sources=tuple(sources) if sources is not None else None,
+        elevation_min_deg=t.number("elevation_min_deg", None, min=0.0, max=89.0,
+                                   allow_none=True),
+        elevation_max_deg=t.number("elevation_max_deg", None, min=1.0, max=90.0,
+                                   allow_none=True),
+        step_arcmin=t.number("step_arcmin", None, gt=0.0, allow_none=True),
+        integration_s=t.number("integration_s", None, gt=0.0, max=3600.0, allow_none=True),
+        estimator=t.string("estimator", None, choices=ESTIMATORS) if "estimator" in t
+        else None,
+        model=t.string("model", None),
+        fit_model=t.string("fit_model", None),
+        members=t.integer("members", None, min=2, max=MAX_MEMBERS) if "members" in t
+        else None,
+        key=key,
+    )
+    t.finish()
+    return spec
+
+
+def _check_time(t: Table, key: str, text: str) -> None:
+    from astropy.time import Time
+
+    try:
+        year = Time(text, scale="utc").datetime.year
+    except (ValueError, TypeError):
+        raise t.error(key, text, "not an ISO UTC time", "write e.g. 1990-02-08T17:00:00") \
+            from None
+    if not 1900 <= year <= 2200:
+        raise t.error(key, text, "year outside 1900..2200")
+
+
+def _scenario_for(t: Table, key: str, names: list[str], scenarios) -> Scenario:
+    based_on = t.string(key)
+    if based_on not in names:
+        raise t.error(key, based_on, "not a variant of this plan",
+                      f"variants are {', '.join(names)}")
+    return scenarios[names.index(based_on)]
+
+
+def _duration(t: Table, key: str, names: list[str], scenarios) -> DurationQuestion:
+    scenario = _scenario_for(t, "based_on", names, scenarios)
+    terms = _terms(t, "terms")
+    if not terms:
+        raise t.error("terms", [], "name at least one term", "e.g. terms = [\"W4\"]")
+    fitted = scenario.controller.fit_spec()[0]
+    for term in terms:
+        if term not in fitted:
+            raise t.error("terms", term, "is not fitted by this plan",
+                          f"fitted terms are {' '.join(fitted)}")
+    q = DurationQuestion(based_on=t.string("based_on"), terms=terms,
+                         target_arcsec=t.number("target_arcsec", gt=0.0),
+                         unit=t.string("unit", "day", choices=UNITS),
+                         max_days=t.number("max_days", 10.0, gt=0.0, max=366.0), key=key)
+    t.finish()
+    return q
+
+
+def _sources(t: Table, key: str, names: list[str], scenarios) -> SourcesQuestion:
+    scenario = _scenario_for(t, "based_on", names, scenarios)
+    terms = _terms(t, "terms")
+    fitted = scenario.controller.fit_spec()[0]
+    for term in terms:
+        if term not in fitted:
+            raise t.error("terms", term, "is not fitted by this plan",
+                          f"fitted terms are {' '.join(fitted)}")
+    n_sources = len(scenario.sources)
+    q = SourcesQuestion(based_on=t.string("based_on"), terms=terms,
+                        min_sources=t.integer("min_sources", 2, min=1, max=n_sources),
+                        candidates=t.integer("candidates", 3, min=1, max=20), key=key)
+    t.finish()
+    return q
+
+
+# ---------------------------------------------------------------------------------------------
+def make_variant(base: Scenario, spec: VariantSpec, where: str = "plan") -> Scenario:
+    """The base scenario changed as ``spec`` says; InputError naming ``spec.key`` if the
+    result is not a runnable campaign."""
+    c = base.controller
+
+    def err(field: str, value: Any, problem: str, hint: str = "") -> InputError:
+        return InputError(where, f"{spec.key}.{field}" if spec.key else field, value, problem,
+                          hint)
+
+    scenario = base
+    if spec.duration_h is not None or spec.start_utc is not None:
+        duration = base.duration_s if spec.duration_h is None else spec.duration_h * 3600.0
+        epoch = base.epoch_utc if spec.start_utc is None else _iso(spec.start_utc)
+        scenario = replace(scenario, duration_s=duration, epoch_utc=epoch,
+                           controller=replace(scenario.controller, duration_s=duration,
+                                              epoch_utc=epoch))
+    sched = scenario.controller.scheduler
+    if spec.window is not None:
+        sched = replace(sched, window=spec.window)
+    if spec.sources is not None:
+        names = [s.name for s in base.sources]
+        for s in spec.sources:
+            if s not in names:
+                raise err("sources", s, "not a source of the scenario",
+                          f"sources are {', '.join(names)}")
+        sched = replace(sched, sources=tuple(spec.sources))
+    if spec.elevation_min_deg is not None:
+        sched = replace(sched, elevation_min_deg=spec.elevation_min_deg)
+    if spec.elevation_max_deg is not None:
+        sched = replace(sched, elevation_max_deg=spec.elevation_max_deg)
+    if sched.elevation_max_deg <= sched.elevation_min_deg:
+        raise err("elevation_max_deg", sched.elevation_max_deg,
+                  f"must exceed elevation_min_deg = {sched.elevation_min_deg:g}")
+    scan = c.scan
+    if spec.step_arcmin is not None:
+        if spec.step_arcmin > 1.2 * scan.hpbw_arcmin:
+            raise err("step_arcmin", spec.step_arcmin,
+                      f"the +-D points would lie outside the main beam (HPBW "
+                      f"{scan.hpbw_arcmin:g}')", f"use at most {1.2 * scan.hpbw_arcmin:.1f}'")
+        scan = replace(scan, step_arcmin=spec.step_arcmin)
+    if spec.integration_s is not None:
+        scan = replace(scan, integration_s=spec.integration_s)
+    if spec.estimator is not None:
+        scan = replace(scan, estimator=spec.estimator)
+    lowest = sched.elevation_min_deg - 4.0 * scan.step_arcmin / 60.0
+    if lowest < base.mount.el.min_deg:
+        raise err("elevation_min_deg", sched.elevation_min_deg,
+                  f"the -4D point at the lowest scheduled elevation falls below the mount's "
+                  f"limit ({base.mount.el.min_deg:g} deg)",
+                  "raise elevation_min_deg or use a smaller step")
+    controller = replace(scenario.controller, scheduler=sched, scan=scan)
+    if spec.model is not None:
+        controller = replace(controller, model=_model(spec, base, where, err))
+    if spec.fit_model is not None:
+        controller = replace(controller, fit_terms=_fit_terms(spec.fit_model, err),
+                             fit_model_name=spec.fit_model if spec.fit_model in NAMED_MODELS
+                             else "custom")
+    scenario = replace(scenario, controller=controller)
+    from ..runner import check_scenario
+
+    try:
+        check_scenario(scenario)
+    except InputError as e:
+        if e.field == "controller.scheduler.sources" or spec.elevation_min_deg is None:
+            field = "sources"
+        else:
+            field = "elevation_min_deg"
+        raise err(field, e.value, e.problem, e.hint) from None
+    if not math.isfinite(scenario.duration_s):
+        raise err("duration_h", spec.duration_h, "must be finite")
+    return scenario
+
+
+def _iso(text: str) -> str:
+    from astropy.time import Time
+
+    return Time(text, scale="utc").isot
+
+
+def _model(spec: VariantSpec, base: Scenario, where: str, err) -> PointingModel:
+    text = spec.model
+    if text == "scenario":
+        return base.controller.model
+    if text == "truth":
+        return base.truth_model
+    if text == "none":
+        return PointingModel()
+    if text in NAMED_MODELS:
+        return PointingModel(text)
+    path = Path(text)
+    if not path.is_absolute():
+        path = Path(where).parent / path
+    if not path.exists():
+        raise err("model", text, "neither scenario, none, truth, a named model nor a file",
+                  f"named models: {', '.join(sorted(NAMED_MODELS))}")
+    from controller.modelio import load_model
+
+    return load_model(path)
+
+
+def _fit_terms(text: str, err) -> tuple[str, ...]:
+    if text in NAMED_MODELS:
+        terms = NAMED_MODELS[text]
+        if not terms:
+            raise err("fit_model", text, "fits no terms")
+        return terms
+    names = tuple(n.strip().upper() for n in text.split(",") if n.strip())
+    if not names:
+        raise err("fit_model", text, "names no terms")
+    for n in names:
+        try:
+            get_term(n)
+        except TermError as e:
+            raise err("fit_model", text, f"{n} is not a pointing term", str(e)) from None
+    return names

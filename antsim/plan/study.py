@@ -1,0 +1,337 @@
+"""Running a plan: the deterministic run, the prediction and the Monte Carlo of every variant.
+
+:func:`run_plan` submits, per variant, the deterministic run; then its noise model and its
+members in blocks; members whose schedule cannot be shared are simulated in full as the
+blocks report them. It returns a :class:`PlanResult` whose :meth:`~PlanResult.to_json` is the
+``antsim plan --json`` document and :meth:`~PlanResult.text` the printed tables.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+import uuid
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..scenario import Scenario
+from .ensemble import (
+    Executor,
+    Job,
+    make_executor,
+    task_block,
+    task_full,
+    task_noise,
+    task_record,
+)
+from .fisher import NoiseModel, Prediction, predict
+from .planfile import Plan, VariantSpec
+from .vectorized import MemberResults, SharedSchedule, quiet_scenario
+
+__all__ = ["PlanResult", "VariantResult", "block_size", "run_plan"]
+
+#: draws of the random slow errors for the thermal part of the noise model
+N_THERMAL = 256
+#: members per block for a one-day campaign: the loop over integrations costs the same for
+#: any number of members, memory grows as members x duration (~3 MB per member-day)
+BLOCK_MEMBERS_PER_DAY = 128
+
+
+def block_size(duration_s: float, requested: int = 0) -> int:
+    """Members per block: fixed by the plan (never by the machine), so that the results do
+    not depend on the number of workers."""
+    if requested:
+        return requested
+    return int(min(128, max(4, BLOCK_MEMBERS_PER_DAY * 86400.0 / duration_s)))
+
+
+@dataclass
+class VariantResult:
+    """Prediction and Monte Carlo of one variant (arcsec)."""
+
+    spec: VariantSpec
+    scenario: Scenario
+    shared: SharedSchedule
+    noise: NoiseModel
+    prediction: Prediction
+    results: MemberResults
+    truth: np.ndarray
+    unshareable: list[str]
+    n_requested: int
+    level: float
+
+    @property
+    def terms(self) -> tuple[str, ...]:
+        return self.prediction.names
+
+    @property
+    def ok(self) -> np.ndarray:
+        return ~self.results.failed
+
+    def sigma_mc(self) -> np.ndarray:
+        v = self.results.values[self.ok]
+        return v.std(axis=0, ddof=1) if len(v) > 1 else np.full(len(self.terms), np.nan)
+
+    def bias_mc(self) -> np.ndarray:
+        return self.results.values[self.ok].mean(axis=0) - self.truth
+
+    def mc_correlation(self) -> np.ndarray:
+        v = self.results.values[self.ok]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.corrcoef(v, rowvar=False) if len(v) > 2 else np.full(
+                (len(self.terms),) * 2, np.nan)
+
+    def cannot_separate(self) -> list[dict[str, Any]]:
+        """Term pairs whose predicted correlation exceeds the plan's level."""
+        mc = self.mc_correlation()
+        names = list(self.terms)
+        out = []
+        for a, b, r in self.prediction.cannot_separate(self.level):
+            i, j = names.index(a), names.index(b)
+            out.append({"terms": [a, b], "r_predicted": _num(r),
+                        "r_design": _num(self.prediction.design_correlation[i, j]),
+                        "r_monte_carlo": _num(mc[i, j])})
+        return out
+
+    def to_json(self) -> dict[str, Any]:
+        n = int(self.ok.sum())
+        sigma_mc = self.sigma_mc()
+        bias = self.bias_mc()
+        pred = self.prediction
+        ok = self.ok
+        terms = {}
+        for j, name in enumerate(self.terms):
+            terms[name] = {
+                "sigma_fisher_arcsec": _num(pred.sigma_arcsec[j]),
+                "sigma_mc_arcsec": _num(sigma_mc[j]),
+                "bias_arcsec": _num(bias[j]),
+                "sigma_mc_error_arcsec": _num(sigma_mc[j] / math.sqrt(2.0 * max(n - 1, 1))),
+                "bias_error_arcsec": _num(sigma_mc[j] / math.sqrt(max(n, 1))),
+                "bias_predicted_arcsec": _num(pred.bias_arcsec[j]),
+                "truth_arcsec": _num(self.truth[j]),
+                "mean_arcsec": _num(self.results.values[ok, j].mean() if n else math.nan),
+                "sigma_tpoint_mean_arcsec": _num(np.mean(self.results.sigma_tpoint[ok, j])
+                                                 if n else math.nan),
+                "sigma_honest_mean_arcsec": _num(np.mean(self.results.sigma_honest[ok, j])
+                                                 if n else math.nan),
+                "sigma_fisher_components_arcsec": {
+                    c: _num(math.sqrt(max(float(m[j, j]), 0.0)))
+                    for c, m in pred.components.items()},
+            }
+        return {
+            "name": self.spec.name,
+            "description": self.spec.description,
+            "settings": self.spec.settings(),
+            "n_monte_carlo": n,
+            "n_shared_schedule": int((ok & ~self.results.full).sum()),
+            "n_full_simulation": int((ok & self.results.full).sum()),
+            "n_failed": int(self.results.failed.sum()),
+            "shared_schedule": not self.unshareable,
+            "why_not_shared": list(self.unshareable),
+            "duration_h": self.scenario.duration_s / 3600.0,
+            "scan_time_h": self.shared.scan_span_s / 3600.0,
+            "n_scans": int(self.shared.n_scans),
+            "n_scans_in_design": int(pred.n_scans),
+            "n_used_mean": _num(np.mean(self.results.n_used[ok]) if n else math.nan),
+            "n_used_predicted": _num(pred.n_scans - pred.n_rejected),
+            "terms": terms,
+            "sky_rms_fisher_arcsec": _num(pred.sky_rms_arcsec),
+            "sky_rms_mc_arcsec": _num(np.mean(self.results.sky_rms[ok]) if n else math.nan),
+            "noise_budget_arcsec": self.noise.budget(),
+            "cannot_separate": self.cannot_separate(),
+            "notes": list(self.noise.notes),
+        }
+
+    def text(self) -> str:
+        d = self.to_json()
+        lines = [f"{self.spec.name}: {d['duration_h']:.1f} h campaign, {d['n_scans']} scans "
+                 f"({d['scan_time_h']:.1f} h scanning), {d['n_monte_carlo']} members "
+                 f"({d['n_shared_schedule']} on the shared schedule, "
+                 f"{d['n_full_simulation']} simulated in full)"]
+        if self.spec.description:
+            lines.append(f"  {self.spec.description}")
+        head = (f"  {'term':<6}{'truth':>9}{'sig_F':>8}{'sig_MC':>8}{'+-':>7}{'MC/F':>6}"
+                f"{'bias_MC':>9}{'+-':>7}{'bias_F':>9}{'TPOINT':>8}{'honest':>8}")
+        lines += [head]
+        for name, t in d["terms"].items():
+            ratio = _ratio(t["sigma_mc_arcsec"], t["sigma_fisher_arcsec"])
+            lines.append(
+                f"  {name:<6}{_f(t['truth_arcsec'], '+9.1f')}"
+                f"{_f(t['sigma_fisher_arcsec'], '8.2f')}{_f(t['sigma_mc_arcsec'], '8.2f')}"
+                f"{_f(t['sigma_mc_error_arcsec'], '7.2f')}{_f(ratio, '6.2f')}"
+                f"{_f(t['bias_arcsec'], '+9.1f')}{_f(t['bias_error_arcsec'], '7.1f')}"
+                f"{_f(t['bias_predicted_arcsec'], '+9.1f')}"
+                f"{_f(t['sigma_tpoint_mean_arcsec'], '8.2f')}"
+                f"{_f(t['sigma_honest_mean_arcsec'], '8.2f')}")
+        lines.append(f"  Sky RMS: predicted {_f(d['sky_rms_fisher_arcsec'], '.1f')}\", Monte "
+                     f"Carlo {_f(d['sky_rms_mc_arcsec'], '.1f')}\"; observations used: "
+                     f"predicted {_f(d['n_used_predicted'], '.1f')}, Monte Carlo "
+                     f"{_f(d['n_used_mean'], '.1f')}")
+        budget = ", ".join(f"{c} {v['xel_arcsec']:.1f}/{v['el_arcsec']:.1f}"
+                           for c, v in d["noise_budget_arcsec"].items())
+        lines.append(f"  offset noise per scan (xel/el rms, arcsec): {budget}")
+        if d["cannot_separate"]:
+            pairs = ", ".join(f"{p['terms'][0]}-{p['terms'][1]} (r = "
+                              f"{_f(p['r_predicted'], '+.3f')})" for p in d["cannot_separate"])
+            lines.append(f"  cannot reliably be separated (|r| > {self.level:g}): {pairs}")
+        else:
+            lines.append(f"  every pair of terms separable (|r| <= {self.level:g})")
+        for why in d["why_not_shared"]:
+            lines.append(f"  members simulated in full: {why}")
+        for note in d["notes"]:
+            lines.append(f"  note: {note}")
+        return "\n".join(lines)
+
+
+@dataclass
+class PlanResult:
+    """All variants of a plan and the answers to its questions."""
+
+    plan: Plan
+    variants: list[VariantResult]
+    answers: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
+    engine: str = ""
+    wall_s: float = 0.0
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "plan": self.plan.name,
+            "description": self.plan.description,
+            "scenario": self.plan.scenario.name,
+            "seed": self.plan.seed,
+            "plans": [v.to_json() for v in self.variants],
+            "answers": self.answers,
+        }
+
+    def text(self, timing: bool = True) -> str:
+        """The printed tables and answers (``timing``: with the wall time and the engine,
+        which make the text differ from run to run)."""
+        p = self.plan
+        lines = [f"plan {p.name}: {len(self.variants)} variants of scenario "
+                 f"{p.scenario.name} (seed {p.seed})",
+                 "sig_F: predicted from the design and the noise model (Fisher); sig_MC: "
+                 "scatter of the Monte Carlo fits (+- its sampling error); bias_MC: mean fit "
+                 "minus truth (+- its error), bias_F: predicted; TPOINT/honest: mean of the "
+                 "fitter's own sigmas; all arcsec", ""]
+        for v in self.variants:
+            lines += [v.text(), ""]
+        from .answers import answers_text
+
+        lines += answers_text(self.answers)
+        if timing and self.engine:
+            lines.append(f"computed in {self.wall_s:.1f} s on {self.engine}")
+        return "\n".join(lines).rstrip() + "\n"
+
+
+def _num(x: Any) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def _ratio(a: float | None, b: float | None) -> float | None:
+    if a is None or b is None or b == 0:
+        return None
+    return a / b
+
+
+def _f(x: float | None, spec: str) -> str:
+    """``format(x, spec)``, or a dash as wide for a missing value."""
+    if x is None or not math.isfinite(x):
+        width = "".join(ch for ch in spec.split(".")[0] if ch.isdigit())
+        return f"{'-':>{int(width) if width else 1}}"
+    return format(x, spec)
+
+
+# ---------------------------------------------------------------------------------------------
+def truth_vector(scenario: Scenario, terms: tuple[str, ...]) -> np.ndarray:
+    """The injected geometric truth of the fitted terms (0 where not injected)."""
+    truth = scenario.truth_model.as_dict()
+    return np.array([truth.get(n, 0.0) for n in terms])
+
+
+def run_plan(plan: Plan, workers: int | None = None, scheduler: str | None = None,
+             members: int | None = None, progress: bool | None = None,
+             executor: Executor | None = None, answers: bool = True,
+             log: Callable[[str], None] | None = None) -> PlanResult:
+    """Predictions and Monte Carlo of every variant of ``plan`` (and its answers)."""
+    t0 = time.perf_counter()
+    own = executor is None
+    executor = executor or make_executor(workers, scheduler)
+    try:
+        variants = _run_variants(plan, executor, members, progress)
+        result = PlanResult(plan, variants, engine=executor.description)
+        if answers and (plan.durations or plan.sources):
+            from .answers import answer_questions
+
+            result.answers = answer_questions(plan, variants, executor, log=log)
+    finally:
+        if own:
+            executor.close()
+    result.wall_s = time.perf_counter() - t0
+    return result
+
+
+def _run_variants(plan: Plan, executor: Executor, members: int | None,
+                  progress: bool | None) -> list[VariantResult]:
+    n_var = len(plan.variants)
+    counts = [members or spec.members or plan.members for spec in plan.variants]
+    show = sys.stderr.isatty() if progress is None else progress
+    from tqdm import tqdm
+
+    bar = tqdm(total=sum(counts), unit="member", desc=f"plan {plan.name}", disable=not show,
+               leave=False)
+    token = uuid.uuid4().hex
+    quiet = [quiet_scenario(s) for s in plan.scenarios]
+    pending: dict[Any, tuple[str, int, Any]] = {}
+    for v in range(n_var):
+        pending[executor.submit(task_record, quiet[v])] = ("record", v, None)
+    jobs: list[Any] = [None] * n_var
+    shared: list[SharedSchedule | None] = [None] * n_var
+    noise: list[Any] = [None] * n_var
+    parts: list[list[MemberResults]] = [[] for _ in range(n_var)]
+    try:
+        while pending:
+            done = next(iter(executor.as_completed(list(pending))))
+            kind, v, extra = pending.pop(done)
+            value = done.result()
+            if kind == "record":
+                shared[v] = value
+                terms, fit_name = plan.scenarios[v].controller.fit_spec()
+                job = Job(f"{token}:{v}", plan.scenarios[v], quiet[v], value, tuple(terms),
+                          fit_name, plan.seed)
+                jobs[v] = executor.share(job)
+                pending[executor.submit(task_noise, jobs[v], N_THERMAL)] = ("noise", v, None)
+                size = block_size(plan.scenarios[v].duration_s, plan.block_members)
+                for start in range(0, counts[v], size):
+                    block = tuple(range(start, min(counts[v], start + size)))
+                    pending[executor.submit(task_block, jobs[v], block)] = ("block", v, block)
+            elif kind == "noise":
+                noise[v] = value
+            elif kind == "block":
+                results, diverged = value
+                parts[v].append(results)
+                bar.update(len(extra) - len(diverged))
+                for m in diverged:
+                    pending[executor.submit(task_full, jobs[v], m)] = ("full", v, m)
+            else:
+                parts[v].append(value)
+                bar.update(1)
+    finally:
+        bar.close()
+    out = []
+    for v, spec in enumerate(plan.variants):
+        nm, unshareable = noise[v]
+        terms, _ = plan.scenarios[v].controller.fit_spec()
+        truth = truth_vector(plan.scenarios[v], tuple(terms))
+        pred = predict(shared[v], terms, nm, truth=truth)
+        out.append(VariantResult(spec=spec, scenario=plan.scenarios[v], shared=shared[v],
+                                 noise=nm, prediction=pred,
+                                 results=MemberResults.concat(parts[v]), truth=truth,
+                                 unshareable=unshareable, n_requested=counts[v],
+                                 level=plan.separation_level))
+    return out
+

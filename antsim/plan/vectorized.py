@@ -1,0 +1,620 @@
+"""Monte Carlo members on a shared schedule, vectorized across members.
+
+When the pointing is good the controller's schedule does not depend on the noise: the
+scheduler is deterministic, every scan is detected, and which source is observed when, every
+slew, offset and integration, and the encoder commands are the same for every member of an
+ensemble. :func:`record_schedule` runs the deterministic ("quiet") simulation once with the
+antenna's recorder attached and keeps, per integration, the sample times, the encoder command
+per sample, the antenna's state at the middle and the true paths of the sources near the beam.
+
+:class:`MemberEngine` then re-simulates only what is random, for a block of members at once,
+through the world's own physics (:meth:`antsim.world.World.sample_powers` with a member axis):
+
+* shared (from the quiet run): schedule, encoder commands, source paths (ephemeris and
+  refraction), beam, atmosphere, and every effect whose realisation draws no random numbers
+  (geometry, sunset drift, squint, ...: an instance started once);
+* per member, drawn from the member's own seed exactly as a :class:`~antsim.world.World` would
+  draw them (same component generators, same order): the receiver's gain fluctuations and
+  radiometer noise, the tracking jitter and its gusts, the random parts of the thermal model
+  (cloud modulation, lateral forcing) and the weather's wander that drives it; each as one
+  array with a member axis (the OU processes and the thermal grids carry it);
+* vectorized across members: the pointing solve, the beam response, the sky emission, the
+  receiver, then :func:`controller.scan.reduce_powers` on every scan of every member at once;
+  each member is then fitted with :func:`controller.fitting.fit_model` as fit A.
+
+Where the physics does not allow a shared schedule the member is simulated in full
+(:func:`antsim.runner.simulate`) instead: a member one of whose scans the controller would not
+detect (a gust, a low S/N: with searching enabled it searches, which changes every later time
+and adopts a correction); whole variants when the deterministic run itself searched (a cold
+start: where the controller points then depends on the noise), when the running correction
+follows each scan (``search.update_gain`` > 0), or when an effect's random realisation has no
+member axis (see :attr:`MemberEngine.unshareable`). The weather's wander shifts a real
+member's refraction correction and its true refraction by the same arcseconds and its timing by
+milliseconds; the shared schedule keeps the quiet run's, which changes no pointing error.
+"""
+
+from __future__ import annotations
+
+import copy
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from itertools import pairwise
+from typing import Any
+
+import numpy as np
+
+from controller.fitting import fit_model
+from controller.scan import channel_average, reduce_powers
+from controller.units import ARCSEC_PER_RAD
+from controller.variants import VARIANTS, pointing_data, variant_mask
+
+from ..effects import EFFECTS, PointingState
+from ..effects.thermal import OUProcess
+from ..effects.tracking import TrackingJitter
+from ..receiver import ChannelConfig, Receiver
+from ..runner import RunResult, simulate
+from ..scenario import EffectSpec, Scenario
+from ..world import World, component_rng, weather_model
+
+__all__ = [
+    "MemberEngine",
+    "MemberResults",
+    "SharedSchedule",
+    "fit_rows",
+    "member_seed",
+    "quiet_scenario",
+    "record_schedule",
+]
+
+#: huge receiver bandwidth of the quiet run: radiometer noise ~1e-9 K (must stay > 0)
+QUIET_BANDWIDTH_MHZ = 1e15
+#: the observatory's fit: fit A (XR+XL averaged, filtered, robust)
+FIT_A = VARIANTS[0]
+
+
+def member_seed(plan_seed: int, member: int) -> int:
+    """The seed of ensemble member ``member``: numpy's SeedSequence of the plan seed with the
+    member index as spawn key (independent streams whatever the block, worker or engine)."""
+    seq = np.random.SeedSequence(int(plan_seed), spawn_key=(int(member),))
+    return int(seq.generate_state(1, dtype=np.uint64)[0])
+
+
+# ---------------------------------------------------------------------------------------------
+# the deterministic simulation
+# ---------------------------------------------------------------------------------------------
+#: parameters that switch an effect's random part off (its expected value stays)
+QUIET_PARAMS: dict[str, dict[str, float]] = {
+    "thermal": {"cloud_modulation": 0.0, "lateral_gradient_k": 0.0},
+    "tracking_jitter": {"xel_rms_arcsec": 0.0, "el_rms_arcsec": 0.0, "gust_rate_per_h": 0.0},
+}
+
+
+def quiet_scenario(scenario: Scenario) -> Scenario:
+    """``scenario`` with its noise switched off: no gain fluctuations, negligible radiometer
+    noise, no weather wander, no jitter or gusts, thermal forcing at its mean (no clouds,
+    no lateral forcing). Its campaign is the deterministic simulation of the plan."""
+    rec = scenario.receiver
+    receiver = replace(rec, gain_fluctuation=0.0, bandwidth_mhz=QUIET_BANDWIDTH_MHZ,
+                       channels=tuple(ChannelConfig(c.name, c.tsys_k, 0.0)
+                                      for c in rec.channels))
+    effects = tuple(EffectSpec(e.name, {**e.params, **QUIET_PARAMS.get(e.name, {})})
+                    for e in scenario.effects)
+    return replace(scenario, receiver=receiver, effects=effects,
+                   weather=replace(scenario.weather, wander_rms_c=0.0))
+
+
+@dataclass
+class SharedSchedule:
+    """What every member of a variant shares: the quiet run's integrations and scans.
+
+    Per integration k (lists, one entry per integration in time order): ``t[k]`` sample
+    times (s), ``enc_az[k]``/``enc_el[k]`` the encoder command per sample (rad), ``state[k]``
+    the antenna's state at the middle, ``paths[k]`` ``(source index, az, el)`` true paths
+    (rad). Per recorded scan s: ``scan_int[s, axis, point]`` the integration index of each of
+    the ten points and ``scan_times`` their mid-times (s); ``columns`` the recording columns
+    fit A uses (the AVG rows), ``quiet_xel``/``quiet_el`` the quiet run's measured offsets
+    (arcmin) and ``quiet_good`` its flags.
+    """
+
+    t: list[np.ndarray]
+    enc_az: list[np.ndarray]
+    enc_el: list[np.ndarray]
+    state: list[PointingState]
+    paths: list[list[tuple[int, np.ndarray, np.ndarray]]]
+    scan_int: np.ndarray
+    scan_times: np.ndarray
+    columns: dict[str, np.ndarray]
+    sources: list[str]
+    searches: int
+    duration_s: float
+    scan_spans_s: np.ndarray
+    wall_s: float
+    channels: tuple[str, ...] = ()
+
+    @property
+    def n_integrations(self) -> int:
+        return len(self.t)
+
+    @property
+    def scan_span_s(self) -> float:
+        """Time spent in the recorded scans, first integration to last (s)."""
+        return float(self.scan_spans_s.sum())
+
+    @property
+    def n_scans(self) -> int:
+        return int(self.scan_int.shape[0])
+
+
+class _Recorder:
+    def __init__(self):
+        self.items: list[dict] = []
+
+    def __call__(self, **item: Any) -> None:
+        self.items.append(item)
+
+
+def record_schedule(quiet: Scenario, seed: int = 0) -> tuple[SharedSchedule, RunResult]:
+    """Run the deterministic simulation of ``quiet`` (see :func:`quiet_scenario`) with the
+    antenna's recorder attached; returns the shared schedule and the run."""
+    recorder = _Recorder()
+
+    def attach(world: World) -> None:
+        world.antenna.recorder = recorder
+
+    t0 = time.perf_counter()
+    run = simulate(quiet, seed=seed, on_world=attach)
+    wall = time.perf_counter() - t0
+    program = run.program
+    starts = np.array([it["t"][0] for it in recorder.items])
+    n_scans = len(program.outcomes)
+    scan_int = np.zeros((n_scans, 2, 5), dtype=np.int64)
+    scan_times = np.zeros((n_scans, 2, 5))
+    spans = np.zeros(n_scans)
+    for s, outcome in enumerate(program.outcomes):
+        raw = outcome.reduced.raw
+        spans[s] = raw.t_end_s - raw.t_start_s
+        for a, axis in enumerate(("az", "el")):
+            for k, integ in enumerate(raw.integrations[axis]):
+                seconds = integ.t_end_s - integ.t_start_s
+                # the recorder's sample times start half a sample after the integration
+                j = int(np.argmin(np.abs(starts - integ.t_start_s)))
+                if abs(starts[j] - integ.t_start_s) > seconds:
+                    raise RuntimeError("recorded integrations do not match the scans")
+                scan_int[s, a, k] = j
+                scan_times[s, a, k] = integ.t_mid_s
+    avg = [r for r in run.rows if r["polarization"] == "AVG"]
+    names = ("az_deg", "el_deg", "model_xel_arcmin", "model_el_arcmin", "applied_xel_arcmin",
+             "applied_el_arcmin", "sun_el_deg", "t_s", "xel_arcmin", "el_arcmin", "good")
+    columns = {n: np.array([r[n] for r in avg]) for n in names}
+    columns["polarization"] = np.array(["AVG"] * len(avg))
+    shared = SharedSchedule(
+        t=[it["t"] for it in recorder.items], enc_az=[it["enc_az"] for it in recorder.items],
+        enc_el=[it["enc_el"] for it in recorder.items],
+        state=[it["state"] for it in recorder.items],
+        paths=[it["paths"] for it in recorder.items], scan_int=scan_int,
+        scan_times=scan_times, columns=columns, sources=[r["source"] for r in avg],
+        searches=int(program.searches), duration_s=quiet.duration_s, scan_spans_s=spans,
+        wall_s=wall, channels=tuple(run.world.antenna.channels))
+    return shared, run
+
+
+# ---------------------------------------------------------------------------------------------
+# members with a member axis
+# ---------------------------------------------------------------------------------------------
+class _Replay:
+    """Stands in for a numpy Generator: hands out pre-drawn standard normals, block by block,
+    in the order the world's components ask for them (``None`` blocks: zeros)."""
+
+    def __init__(self, blocks: Sequence[np.ndarray | None]):
+        self.blocks = blocks
+        self.i = 0
+
+    def standard_normal(self, shape) -> np.ndarray:
+        block = self.blocks[self.i]
+        self.i += 1
+        if block is None:
+            return np.zeros(shape)
+        if block.shape != tuple(shape):
+            raise RuntimeError(f"replayed draw of shape {block.shape}, asked for {shape}")
+        return block
+
+
+class _MemberView:
+    """What an effect's ``start`` may ask of a world, for one member: the reference world's
+    sky, beam and Sun; this member's weather; no clock changes (the schedule has them)."""
+
+    def __init__(self, reference: World, weather):
+        self._reference = reference
+        self.weather = weather
+
+    def __getattr__(self, name: str):
+        return getattr(self._reference, name)
+
+    def air_temperature_c(self, t_s) -> np.ndarray:
+        return self.weather.air_temperature_c(t_s)
+
+    def set_clock_error(self, error_s) -> None:
+        """The clock error is in the shared encoder commands already."""
+
+
+class _MemberJitter(TrackingJitter):
+    """Tracking jitter with a member axis: the OU process replays each member's own draws and
+    the gusts (drawn per member at its start) are looked up per integration."""
+
+    def set_members(self, process: OUProcess, gusts: list[np.ndarray]) -> None:
+        self.process = process
+        self._gusts = gusts
+        self.gust_start_s = np.zeros(1 if any(np.any(g) for g in gusts) else 0)
+        self.cursor = 0
+
+    def gusts_rad(self, t_s: np.ndarray) -> np.ndarray:
+        return self._gusts[self.cursor]
+
+
+class _MemberWorld(World):
+    """The parts of a :class:`World` that :meth:`World.sample_powers` uses, with a member
+    axis; deliberately not built by ``World.__init__``: sky, beam and atmosphere are the
+    reference world's."""
+
+    def __init__(self, reference: World, slow: list, fast: list, receiver: Receiver):
+        self.scenario = reference.scenario
+        self.sky = reference.sky
+        self.beam = reference.beam
+        self.atmosphere = reference.atmosphere
+        self.slow_effects = slow
+        self.fast_effects = fast
+        self.receiver = receiver
+
+
+class _Nudge:
+    """A per-sample pointing error, constant per member: ``xel_rad``/``el_rad`` (members,)
+    on the sky (for the linear response of the offsets)."""
+
+    per_sample = True
+
+    def __init__(self, xel_rad: np.ndarray, el_rad: np.ndarray):
+        self.xel_rad = xel_rad
+        self.el_rad = el_rad
+
+    def sample_error(self, t_s: np.ndarray, el_rad) -> tuple[np.ndarray, np.ndarray]:
+        """Azimuth and elevation errors (rad), shape (samples, members)."""
+        shape = (t_s.size, self.el_rad.size)
+        return (np.broadcast_to(self.xel_rad / np.cos(el_rad), shape),
+                np.broadcast_to(self.el_rad, shape))
+
+
+def _stack(instances: list) -> Any:
+    """One instance whose random arrays carry a leading member axis (others kept)."""
+    out = copy.copy(instances[0])
+    for key, value in vars(instances[0]).items():
+        if isinstance(value, np.ndarray) and value.ndim >= 1:
+            arrays = [vars(x)[key] for x in instances]
+            if any(a.shape != value.shape or not np.array_equal(a, value) for a in arrays[1:]):
+                setattr(out, key, np.stack(arrays))
+    return out
+
+
+def _differs(a, b) -> bool:
+    """Whether two started instances of an effect hold different realisations (arrays or
+    numbers drawn in ``start``)."""
+    for key, value in vars(a).items():
+        other = vars(b).get(key)
+        if isinstance(value, np.ndarray):
+            if not isinstance(other, np.ndarray) or other.shape != value.shape \
+                    or not np.array_equal(other, value, equal_nan=True):
+                return True
+        elif isinstance(value, int | float) and not isinstance(value, bool) \
+                and value != other and not (value != value and other != other):
+            return True
+    return False
+
+
+@dataclass
+class MemberResults:
+    """Fit A of each member (arrays over members, terms in fit order, arcsec)."""
+
+    members: np.ndarray
+    values: np.ndarray
+    sigma_tpoint: np.ndarray
+    sigma_honest: np.ndarray
+    sky_rms: np.ndarray
+    n_used: np.ndarray
+    full: np.ndarray  # simulated in full (not on the shared schedule)
+    failed: np.ndarray  # fit A impossible (too few observations)
+
+    @classmethod
+    def empty(cls, n_terms: int) -> MemberResults:
+        return cls(np.zeros(0, dtype=np.int64), np.zeros((0, n_terms)), np.zeros((0, n_terms)),
+                   np.zeros((0, n_terms)), np.zeros(0), np.zeros(0, dtype=np.int64),
+                   np.zeros(0, dtype=bool), np.zeros(0, dtype=bool))
+
+    @classmethod
+    def concat(cls, parts: Sequence[MemberResults]) -> MemberResults:
+        """Joined and sorted by member index."""
+        joined = {f: np.concatenate([getattr(p, f) for p in parts])
+                  for f in ("members", "values", "sigma_tpoint", "sigma_honest", "sky_rms",
+                            "n_used", "full", "failed")}
+        order = np.argsort(joined["members"], kind="stable")
+        return cls(**{k: v[order] for k, v in joined.items()})
+
+
+def fit_rows(columns: dict[str, np.ndarray], terms: Sequence[str], name: str):
+    """Fit A of recording columns (None when too few observations)."""
+    mask = variant_mask(columns, FIT_A)
+    n = int(mask.sum())
+    if n == 0 or 2 * n <= len(terms):
+        return None
+    try:
+        return fit_model(pointing_data(columns, mask), terms, robust=FIT_A.filtered, name=name)
+    except ValueError:
+        return None
+
+
+@dataclass
+class MemberEngine:
+    """Simulates members of one variant on its shared schedule.
+
+    ``scenario`` is the variant as observed (with its noise), ``shared`` the schedule of its
+    quiet run and ``reference`` a world of the quiet scenario (sky, beam, atmosphere, Sun).
+    ``unshareable`` explains why the members cannot share the schedule (empty if they can).
+    """
+
+    scenario: Scenario
+    shared: SharedSchedule
+    reference: World
+    terms: tuple[str, ...]
+    fit_name: str
+    unshareable: list[str] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self._kinds: list[tuple[str, int, EffectSpec]] = []
+        c = self.scenario.controller
+        if self.shared.searches:
+            self.unshareable.append(
+                f"the deterministic run searched {self.shared.searches} times for its sources "
+                "(cold start or large errors): where the controller points then depends on the "
+                "noise")
+        if c.search.update_gain > 0:
+            self.unshareable.append(
+                f"controller.search.update_gain = {c.search.update_gain:g}: the running "
+                "correction follows each measured offset, so where the controller points "
+                "depends on the noise")
+        lengths = {t.size for t in self.shared.t}
+        if len(lengths) > 1 and not self.unshareable:
+            self.unshareable.append("integrations of different lengths in the schedule")
+        self._classify()
+
+    # ------------------------------------------------------------------ effects
+    def _view(self, seed: int, quiet: bool = False) -> _MemberView:
+        """What member ``seed``'s effects see of the world (``quiet``: no weather wander)."""
+        if quiet:
+            return _MemberView(self.reference, self.reference.weather)
+        return _MemberView(self.reference, weather_model(self.scenario,
+                                                         component_rng(seed, "weather")))
+
+    def _started(self, index: int, spec: EffectSpec, seed: int, view: _MemberView):
+        effect = EFFECTS[spec.name](**spec.params)
+        effect.start(view, component_rng(seed, f"effect:{index}:{effect.name}"))
+        return effect
+
+    def _classify(self) -> None:
+        """Each effect: ``shared`` (no random realisation), ``member`` (a random realisation
+        stacked along a member axis), ``jitter``, or a reason the schedule cannot be shared."""
+        probes = (self._view(1), self._view(2))
+        state = PointingState(t_s=0.5 * self.shared.duration_s, az_rad=np.array([1.0, 1.1]),
+                              el_rad=np.array([0.5, 0.6]))
+        for i, spec in enumerate(self.scenario.effects, start=1):
+            cls = EFFECTS[spec.name]
+            if cls.per_sample:
+                if cls is TrackingJitter:
+                    self._kinds.append(("jitter", i, spec))
+                else:
+                    self.unshareable.append(f"effect {spec.name} varies per sample and has no "
+                                            "member axis")
+                continue
+            a, b = (self._started(i, spec, s, v) for s, v in zip((1, 2), probes, strict=True))
+            kind = "member" if _differs(a, b) else "shared"
+            effect = _stack([a, b]) if kind == "member" else a
+            try:
+                d_az, d_el = effect.pointing_error(replace(state))
+                for ch in self.shared.channels:
+                    effect.beam_offset(ch, replace(state))
+                np.broadcast_shapes(np.shape(d_az), np.shape(d_el), (2,))
+            except Exception as err:  # an effect written for scalars only
+                self.unshareable.append(f"effect {spec.name} does not accept a member axis "
+                                        f"({type(err).__name__})")
+                continue
+            self._kinds.append((kind, i, spec))
+
+    # ------------------------------------------------------------------ simulation
+    def _effects(self, seeds: Sequence[int], quiet: bool, slow_only: bool = False
+                 ) -> tuple[list, list, _MemberJitter | None]:
+        """Slow and fast effects of the members ``seeds`` with a member axis."""
+        sh = self.shared
+        views = [self._view(s, quiet) for s in seeds]
+        slow: list = [self.reference.geometry]
+        fast: list = []
+        jitter: _MemberJitter | None = None
+        offsets = np.concatenate([[0], np.cumsum([t.size for t in sh.t])])
+        for kind, i, spec in self._kinds:
+            params = {**spec.params, **(QUIET_PARAMS.get(spec.name, {}) if quiet else {})}
+            spec_m = EffectSpec(spec.name, params)
+            if kind == "shared":
+                slow.append(self._started(i, spec_m, seeds[0], views[0]))
+            elif kind == "member":
+                slow.append(_stack([self._started(i, spec_m, s, v)
+                                    for s, v in zip(seeds, views, strict=True)]))
+            elif not slow_only:  # tracking jitter
+                flat_t = np.concatenate(sh.t)
+                n_members = len(seeds)
+                stacked = np.zeros((offsets[-1], n_members, 2))
+                stacked_g = np.zeros((offsets[-1], n_members, 2))
+                for j, (s, v) in enumerate(zip(seeds, views, strict=True)):
+                    rng = component_rng(s, f"effect:{i}:{spec.name}")
+                    effect = TrackingJitter(**params)
+                    effect.start(v, rng)  # draws the member's gusts
+                    if not quiet:
+                        stacked[:, j] = rng.standard_normal((offsets[-1], 2))
+                    if effect.gust_start_s.size:
+                        stacked_g[:, j] = effect.gusts_rad(flat_t)
+                jitter = _MemberJitter(**params)
+                jitter.start(views[0], np.random.default_rng(0))
+                blocks: list = ([None] * (offsets.size - 1) if quiet
+                                else [stacked[a:b] for a, b in pairwise(offsets)])
+                jitter.set_members(
+                    OUProcess(_Replay(blocks), np.ones((n_members, 2)), jitter.p["timescale_s"]),
+                    [stacked_g[a:b] for a, b in pairwise(offsets)])
+                fast.append(jitter)
+        return slow, fast, jitter
+
+    def _receiver(self, seeds: Sequence[int], quiet: bool) -> Receiver:
+        """The receiver of the members ``seeds``, replaying their own draws."""
+        sh = self.shared
+        cfg = self.scenario.receiver
+        n_ch, n_members = len(cfg.channels), len(seeds)
+        offsets = np.concatenate([[0], np.cumsum([t.size for t in sh.t])])
+        if quiet:
+            blocks: list = [None] * (2 * (offsets.size - 1))
+        else:
+            z = np.empty((2 * offsets[-1] * n_ch, n_members))
+            for j, s in enumerate(seeds):
+                z[:, j] = component_rng(s, "receiver").standard_normal(2 * offsets[-1] * n_ch)
+            blocks = []
+            for a, b in pairwise(offsets):
+                chunk = z[2 * a * n_ch:2 * b * n_ch].reshape(2, b - a, n_ch, n_members)
+                blocks += [chunk[0].transpose(0, 2, 1), chunk[1].transpose(0, 2, 1)]
+        replay = _Replay(blocks)
+        receiver = Receiver(cfg, replay)
+        rms = np.array([cfg.gain_fluctuation if c.gain_fluctuation is None else
+                        c.gain_fluctuation for c in cfg.channels])
+        receiver._gain = OUProcess(replay, np.tile(0.0 * rms if quiet else rms, (n_members, 1)),
+                                   cfg.gain_timescale_s)
+        return receiver
+
+    def simulate(self, seeds: Sequence[int] | None, *, nudges: tuple | None = None,
+                 quiet: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Mean power and sample std (K) of every integration, shape (integrations, members,
+        channels), for members of the given seeds. ``quiet``: every random part off (the
+        deterministic simulation, with one member per ``nudges`` entry); ``nudges``:
+        (xel_rad, el_rad) arrays (members,) of constant extra pointing error."""
+        sh = self.shared
+        n_members = len(seeds) if seeds is not None else len(nudges[0])
+        if quiet:
+            seeds = [0] * n_members
+        slow, fast, jitter = self._effects(seeds, quiet)
+        if nudges is not None:
+            fast.append(_Nudge(*nudges))
+        world = _MemberWorld(self.reference, slow, fast, self._receiver(seeds, quiet))
+        n_int, n_ch = sh.n_integrations, len(sh.channels)
+        power = np.empty((n_int, n_members, n_ch))
+        std = np.empty((n_int, n_members, n_ch))
+        error = (np.zeros(n_members), np.zeros(n_members))
+        for k in range(n_int):
+            if jitter is not None:
+                jitter.cursor = k
+            t = sh.t[k]
+            paths = [(i, az[:, None], el[:, None]) for i, az, el in sh.paths[k]]
+            samples, error = world.sample_powers(t, sh.enc_az[k][:, None], sh.enc_el[k][:, None],
+                                                 replace(sh.state[k]), paths, error,
+                                                 sh.channels)
+            power[k] = samples.mean(axis=0)
+            std[k] = samples.std(axis=0, ddof=1) if t.size > 1 else 0.0
+        return power, std
+
+    def slow_errors(self, seeds: Sequence[int], quiet: bool = False) -> np.ndarray:
+        """The slowly varying pointing errors of members ``seeds`` at every integration, on
+        the sky: (members, integrations, 2) xel and el (arcsec), indicated - true."""
+        sh = self.shared
+        n_members = len(seeds)
+        slow, _, _ = self._effects(seeds, quiet, slow_only=True)
+        world = _MemberWorld(self.reference, slow, [], None)
+        out = np.empty((n_members, sh.n_integrations, 2))
+        error = (np.zeros(n_members), np.zeros(n_members))
+        for k in range(sh.n_integrations):
+            mid = sh.t[k].size // 2
+            state = replace(sh.state[k])
+            error = world.solve_pointing(sh.enc_az[k][mid], sh.enc_el[k][mid], state, error)
+            out[:, k, 0] = error[0] * np.cos(state.el_rad) * ARCSEC_PER_RAD
+            out[:, k, 1] = error[1] * ARCSEC_PER_RAD
+        return out
+
+    # ------------------------------------------------------------------ reduction and fits
+    def scan_powers(self, power: np.ndarray, std: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Powers, std and times arranged as (members, scans, axes, channels + AVG, 5)."""
+        idx = self.shared.scan_int
+        p = np.moveaxis(power[idx], (3, 4), (0, 3))  # (M, scans, axes, ch, 5)
+        s = np.moveaxis(std[idx], (3, 4), (0, 3))
+        p_avg, s_avg = channel_average(p, s, axis=3)
+        p = np.concatenate([p, p_avg[:, :, :, None]], axis=3)
+        s = np.concatenate([s, s_avg[:, :, :, None]], axis=3)
+        times = np.broadcast_to(self.shared.scan_times[None, :, :, None, :], p.shape)
+        return p, s, times
+
+    def reduce(self, power: np.ndarray, std: np.ndarray):
+        """The controller's reduction of every scan of every member (AxisReduction of shape
+        (members, scans, axes, channels + AVG))."""
+        p, s, times = self.scan_powers(power, std)
+        return reduce_powers(p, s, times, self.scenario.controller.scan)
+
+    def diverges(self, reduced) -> np.ndarray:
+        """Members the controller would search for a scan of (their schedule then differs)."""
+        flags = np.asarray(reduced.flags)[..., -1]  # AVG
+        missed = (flags != 0).any(axis=(1, 2))
+        search = self.scenario.controller.search
+        return missed if search.enabled else np.zeros_like(missed)
+
+    def member_columns(self, reduced, m: int) -> dict[str, np.ndarray]:
+        """Recording columns of member ``m`` for fit A (AVG rows)."""
+        cols = dict(self.shared.columns)
+        off = np.asarray(reduced.offset_arcmin)[m, :, :, -1]
+        flags = np.asarray(reduced.flags)[m, :, :, -1]
+        cols["xel_arcmin"] = off[:, 0]
+        cols["el_arcmin"] = off[:, 1]
+        cols["good"] = (flags == 0).all(axis=1)
+        return cols
+
+    def run_block(self, members: Sequence[int], seeds: Sequence[int]
+                  ) -> tuple[MemberResults, list[int]]:
+        """Fit A of the members on the shared schedule; also the members to simulate in full."""
+        power, std = self.simulate(seeds)
+        reduced = self.reduce(power, std)
+        diverged = self.diverges(reduced)
+        keep = [m for m in range(len(members)) if not diverged[m]]
+        results = _results([members[m] for m in keep],
+                           [fit_rows(self.member_columns(reduced, m), self.terms, self.fit_name)
+                            for m in keep], len(self.terms), full=False)
+        return results, [members[m] for m in range(len(members)) if diverged[m]]
+
+
+def _results(members: Sequence[int], fits: Sequence, n_terms: int, full: bool) -> MemberResults:
+    n = len(members)
+    out = MemberResults(np.asarray(members, dtype=np.int64), np.full((n, n_terms), np.nan),
+                        np.full((n, n_terms), np.nan), np.full((n, n_terms), np.nan),
+                        np.full(n, np.nan), np.zeros(n, dtype=np.int64),
+                        np.full(n, full, dtype=bool), np.zeros(n, dtype=bool))
+    for j, fit in enumerate(fits):
+        if fit is None:
+            out.failed[j] = True
+            continue
+        out.values[j] = fit.values_arcsec
+        out.sigma_tpoint[j] = fit.sigma_arcsec
+        out.sigma_honest[j] = fit.sigma_honest_arcsec
+        out.sky_rms[j] = fit.sky_rms_arcsec
+        out.n_used[j] = fit.n_used
+    return out
+
+
+def full_member(scenario: Scenario, member: int, seed: int, terms: Sequence[str],
+                fit_name: str) -> MemberResults:
+    """A member simulated in full (its own schedule) and fitted as fit A."""
+    run = simulate(scenario, seed=seed)
+    cols = {k: np.asarray(v) for k, v in _columns(run.rows).items()}
+    return _results([member], [fit_rows(cols, terms, fit_name)], len(terms), full=True)
+
+
+def _columns(rows: list[dict]) -> dict[str, np.ndarray]:
+    from controller.variants import columns
+
+    return columns(rows)

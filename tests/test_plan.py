@@ -1,0 +1,318 @@
+"""``antsim plan``: plan files, the shared-schedule ensemble, predictions against Monte Carlo,
+answers, and the same results on any engine.
+
+Everything runs on the 1990 scenario cut to 3 hours (``SHORT_EDITS``, about 30 scans) so that
+the whole module stays well under a minute.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from antsim.cli import main as cli_main
+from antsim.effects.thermal import OUProcess
+from antsim.plan.planfile import load_plan
+from antsim.plan.study import run_plan
+from antsim.plan.vectorized import (
+    MemberEngine,
+    _Replay,
+    member_seed,
+    quiet_scenario,
+    record_schedule,
+)
+from antsim.runner import simulate
+from antsim.scenario import load_scenario
+from controller.errors import InputError
+
+PLAN = """name = "short"
+scenario = "{scenario}"
+seed = 7
+members = {members}
+block_members = {block}
+{extra}
+[[variants]]
+name = "as run"
+{variant}
+"""
+
+
+@pytest.fixture
+def short_path(write_scenario, short_ghigo_text):
+    return write_scenario(short_ghigo_text, name="short.toml")
+
+
+@pytest.fixture
+def write_plan(tmp_path, short_path):
+    def write(members: int = 4, block: int = 2, variant: str = "", extra: str = "",
+              more: str = "", name: str = "plan.toml"):
+        text = PLAN.format(scenario=short_path.as_posix(), members=members, block=block,
+                           variant=variant, extra=extra) + more
+        path = tmp_path / name
+        path.write_text(text, encoding="utf-8")
+        return path
+
+    return write
+
+
+@pytest.fixture(scope="module")
+def short_engine(tmp_path_factory, short_ghigo_text):
+    """The shared schedule and member engine of the 3-hour scenario."""
+    import simpy
+
+    from antsim.world import World
+
+    path = tmp_path_factory.mktemp("short") / "short.toml"
+    path.write_text(short_ghigo_text, encoding="utf-8")
+    scenario = load_scenario(path)
+    quiet = quiet_scenario(scenario)
+    shared, _ = record_schedule(quiet)
+    terms, name = scenario.controller.fit_spec()
+    engine = MemberEngine(scenario, shared, World(quiet, simpy.Environment(), 0), terms, name)
+    return scenario, engine
+
+
+# ---------------------------------------------------------------------------------------------
+# plan files
+# ---------------------------------------------------------------------------------------------
+BAD_VARIANTS = [
+    ('windw = "night"', "variants[0].windw", "unknown key"),
+    ('window = "dusk"', "variants[0].window", "must be one of all, day, night"),
+    ('sources = ["3C84", "Sirius"]', "variants[0].sources", "not a source of the scenario"),
+    ("step_arcmin = 20.0", "variants[0].step_arcmin", "outside the main beam"),
+    ("duration_h = -3.0", "variants[0].duration_h", "must be > 0"),
+    ("elevation_min_deg = 40.0\nelevation_max_deg = 30.0", "variants[0].elevation_max_deg",
+     "must exceed elevation_min_deg"),
+    ('estimator = "gauss"', "variants[0].estimator", "must be one of clark, lsq"),
+    ("members = 1", "variants[0].members", "must be >= 2"),
+]
+
+
+@pytest.mark.parametrize(("variant", "key", "problem"), BAD_VARIANTS)
+def test_bad_plan_values_are_one_line_errors(write_plan, variant, key, problem):
+    path = write_plan(variant=variant)
+    with pytest.raises(InputError) as info:
+        load_plan(path)
+    line = str(info.value)
+    assert "\n" not in line
+    assert line.startswith(f"{path}: {key} = ")
+    assert problem in line
+
+
+def test_bad_questions_and_scenario_reference(write_plan, tmp_path):
+    path = write_plan(more='[[answers.duration]]\nbased_on = "as run"\nterms = ["IA"]\n'
+                           'target_arcsec = 5.0\n')
+    with pytest.raises(InputError, match=r"answers\.duration\[0\]\.terms = 'IA': is not fitted"):
+        load_plan(path)
+    path = write_plan(more='[[answers.sources]]\nbased_on = "by night"\n')
+    with pytest.raises(InputError, match=r"answers\.sources\[0\]\.based_on = 'by night': not "
+                                         "a variant"):
+        load_plan(path)
+    path = tmp_path / "lost.toml"
+    path.write_text('name = "x"\nscenario = "nowhere.toml"\n[[variants]]\nname = "a"\n',
+                    encoding="utf-8")
+    with pytest.raises(InputError, match=r"scenario = 'nowhere.toml': no such scenario file"):
+        load_plan(path)
+
+
+def test_cli_bad_input_exits_2_with_one_line(write_plan, capsys):
+    path = write_plan(variant='window = "dusk"')
+    assert cli_main(["plan", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "variants[0].window = 'dusk'" in err
+    assert cli_main(["plan", str(write_plan()), "--members", "1"]) == 2
+    assert "--members = 1" in capsys.readouterr().err
+
+
+def test_variants_change_what_they_say(write_plan):
+    path = write_plan(variant='window = "day"\nduration_h = 3.0\nstep_arcmin = 6.0\n'
+                              'integration_s = 10.0\nestimator = "lsq"\nmodel = "truth"\n'
+                              'elevation_min_deg = 10.5\nfit_model = "tpoint6"')
+    plan = load_plan(path)
+    s = plan.scenarios[0]
+    c = s.controller
+    assert (c.scheduler.window, s.duration_s, c.duration_s) == ("day", 10800.0, 10800.0)
+    assert (c.scan.step_arcmin, c.scan.integration_s, c.scan.estimator) == (6.0, 10.0, "lsq")
+    assert c.scheduler.elevation_min_deg == 10.5
+    assert c.model.as_dict() == s.truth_model.as_dict()
+    assert c.fit_spec() == (("IA", "IE", "NPAE", "CA", "AN", "AW"), "tpoint6")
+    # a source that never enters the window is refused, naming the variant's key
+    path = write_plan(variant="duration_h = 2.0\nelevation_min_deg = 15.0", name="p2.toml")
+    with pytest.raises(InputError, match=r"variants\[0\]\.sources = 'Taurus A': never between"):
+        load_plan(path)
+
+
+# ---------------------------------------------------------------------------------------------
+# the shared schedule
+# ---------------------------------------------------------------------------------------------
+def test_member_seeds_are_fixed_and_distinct():
+    seeds = [member_seed(7, i) for i in range(1000)]
+    assert len(set(seeds)) == 1000
+    assert seeds[:3] == [member_seed(7, 0), member_seed(7, 1), member_seed(7, 2)]
+    assert member_seed(8, 0) != seeds[0]
+
+
+def test_ou_process_with_a_member_axis_is_each_members_process():
+    """OUProcess(rms of shape (members, k)) replaying each member's draws equals the members'
+    own processes (the edit of antsim.effects.thermal that the ensembles rely on)."""
+    rms = np.array([3e-4, 2e-3])
+    times = [np.arange(15) + 0.5 + 21.0 * i for i in range(6)] + [np.arange(80) + 200.5]
+    seeds = [11, 12, 13]
+    own = []
+    for s in seeds:
+        p = OUProcess(np.random.default_rng(s), rms, 60.0)
+        own.append(np.concatenate([p.sample(t) for t in times]))
+    draws = [np.random.default_rng(s).standard_normal((sum(t.size for t in times), 2))
+             for s in seeds]
+    stacked = np.stack(draws, axis=1)
+    offsets = np.cumsum([0] + [t.size for t in times])
+    blocks = [stacked[a:b] for a, b in itertools.pairwise(offsets)]
+    batched = OUProcess(_Replay(blocks), np.tile(rms, (3, 1)), 60.0)
+    out = np.concatenate([batched.sample(t) for t in times])
+    np.testing.assert_allclose(out, np.stack(own, axis=1), rtol=1e-12, atol=1e-18)
+
+
+def test_vectorized_members_reproduce_their_full_simulation(short_engine):
+    """A member on the shared schedule measures what its full simulation measures; the
+    only difference is the weather's wander, which moves the refraction correction and the
+    true refraction together (arcseconds) and the timing (milliseconds)."""
+    scenario, engine = short_engine
+    seeds = [member_seed(7, m) for m in range(3)]
+    power, std = engine.simulate(seeds)
+    reduced = engine.reduce(power, std)
+    for m, seed in enumerate(seeds):
+        run = simulate(scenario, seed=seed)
+        assert run.program.searches == 0
+        avg = [r for r in run.rows if r["polarization"] == "AVG"]
+        off = np.asarray(reduced.offset_arcmin)[m, :, :, -1] * 60.0
+        full = np.array([[r["xel_arcmin"], r["el_arcmin"]] for r in avg]) * 60.0
+        assert off.shape == full.shape
+        assert np.max(np.abs(off - full)) < 0.5  # arcsec, against ~30" of noise per scan
+        xr = [r for r in run.rows if r["polarization"] == "XR"]
+        p = engine.scan_powers(power, std)[0][m, :, 0, 0]  # XR azimuth scan powers
+        p_full = np.array([[r[f"p_az_{k}"] for k in ("m4", "m1", "0", "p1", "p4")]
+                           for r in xr])
+        assert np.max(np.abs(p - p_full)) < 0.01  # K, against ~10 K of source
+
+
+def test_members_that_would_search_are_simulated_in_full(write_plan, short_engine):
+    """snr_min = 1000: the quiet run detects every scan (its noise is ~1e-9 K), every noisy
+    member misses its first scan and searches, so none can share the schedule."""
+    scenario, engine = short_engine
+    strict = replace(scenario, controller=replace(
+        scenario.controller, scan=replace(scenario.controller.scan, snr_min=1000.0)))
+    eng = MemberEngine(strict, engine.shared, engine.reference, engine.terms, engine.fit_name)
+    results, diverged = eng.run_block([0, 1], [member_seed(7, 0), member_seed(7, 1)])
+    assert diverged == [0, 1] and results.members.size == 0
+    cold = replace(scenario, controller=replace(
+        scenario.controller, search=replace(scenario.controller.search, update_gain=0.5)))
+    eng = MemberEngine(cold, engine.shared, engine.reference, engine.terms, engine.fit_name)
+    assert any("update_gain" in why for why in eng.unshareable)
+
+
+def test_cold_start_runs_members_in_full(write_plan):
+    plan = load_plan(write_plan(members=2, block=2, variant='model = "none"\nduration_h = 1.5\n'
+                                'sources = ["3C84", "Cygnus A", "Cassiopeia A"]'))
+    result = run_plan(plan, workers=0, answers=False, progress=False)
+    doc = result.to_json()["plans"][0]
+    assert doc["n_full_simulation"] == 2 and doc["n_shared_schedule"] == 0
+    assert not doc["shared_schedule"] and "searched" in doc["why_not_shared"][0]
+
+
+# ---------------------------------------------------------------------------------------------
+# prediction against Monte Carlo
+# ---------------------------------------------------------------------------------------------
+def test_predicted_sigma_agrees_with_monte_carlo(short_engine):
+    """The reduced version of benchmarks/plan_accuracy.py: 96 members of the 3-hour run.
+    Tolerance from the sampling error of a standard deviation, 1/sqrt(2(N-1)) = 7.3%: three
+    of it per term plus 5% for the prediction's own approximations (linear response, Gaussian
+    gusts, the rejection model); the mean ratio over the terms within 5% + 2 of it."""
+    from antsim.plan.fisher import noise_model, predict
+    from antsim.plan.vectorized import MemberResults
+
+    scenario, engine = short_engine
+    n = 96
+    noise = noise_model(engine, 7, n_thermal=128)
+    truth = np.array([scenario.truth_model.as_dict().get(t, 0.0) for t in engine.terms])
+    pred = predict(engine.shared, engine.terms, noise, truth=truth)
+    parts = []
+    for start in range(0, n, 48):
+        members = list(range(start, start + 48))
+        res, _ = engine.run_block(members, [member_seed(7, m) for m in members])
+        parts.append(res)
+    res = MemberResults.concat(parts)
+    values = res.values[~res.failed]
+    assert len(values) >= n - 3
+    ratio = values.std(axis=0, ddof=1) / pred.sigma_arcsec
+    err = 1.0 / math.sqrt(2 * (len(values) - 1))
+    assert np.all(np.abs(ratio - 1.0) <= 0.05 + 3 * err), ratio
+    assert abs(np.exp(np.mean(np.log(ratio))) - 1.0) <= 0.05 + 2 * err
+    # the Sky RMS of the used observations, predicted and simulated, within 10%
+    assert abs(np.mean(res.sky_rms) / pred.sky_rms_arcsec - 1.0) < 0.10
+
+
+# ---------------------------------------------------------------------------------------------
+# engines, command line, answers
+# ---------------------------------------------------------------------------------------------
+def test_same_results_with_1_and_2_workers_and_dask(write_plan, tmp_path, capsys):
+    """Member i has seed (plan seed, i) and block i // block_members whatever runs it: the
+    same JSON from a pool of 1 and of 2 workers, a Dask LocalCluster of 2, and this process."""
+    path = write_plan(members=6, block=2)
+    out = tmp_path / "out"
+    assert cli_main(["plan", str(path), "--json", "--workers", "1", "--no-answers",
+                     "--out", str(out)]) == 0
+    doc1 = json.loads(capsys.readouterr().out)
+    plan = load_plan(path)
+    doc2 = run_plan(plan, workers=2, answers=False, progress=False).to_json()
+    doc0 = run_plan(plan, workers=0, answers=False, progress=False).to_json()  # this process
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        doc3 = run_plan(plan, scheduler=cluster.scheduler_address, answers=False,
+                        progress=False).to_json()
+    assert doc1 == doc2 == doc3 == doc0
+    p = doc1["plans"][0]
+    assert p["name"] == "as run" and p["n_monte_carlo"] == 6
+    for term in ("W1", "W4", "W10"):
+        entry = p["terms"][term]
+        assert {"sigma_fisher_arcsec", "sigma_mc_arcsec", "bias_arcsec"} <= set(entry)
+        assert entry["sigma_fisher_arcsec"] > 0 and entry["sigma_mc_arcsec"] > 0
+    assert {"sky_rms_fisher_arcsec", "sky_rms_mc_arcsec", "duration_h", "n_scans"} <= set(p)
+    assert json.loads((out / "plan.json").read_text()) == doc1
+    assert (out / "sigma_predicted.png").stat().st_size > 1000
+
+
+def test_answers_duration_sources_and_separation(write_plan):
+    more = ('[[answers.duration]]\nbased_on = "as run"\nterms = ["W6"]\n'
+            'target_arcsec = 60.0\nunit = "hour"\nmax_days = 0.125\n'
+            '[[answers.duration]]\nbased_on = "as run"\nterms = ["W6"]\n'
+            'target_arcsec = 0.5\nunit = "hour"\nmax_days = 0.125\n'
+            '[[answers.sources]]\nbased_on = "as run"\nmin_sources = 3\ncandidates = 1\n')
+    variant = 'duration_h = 2.0\nsources = ["3C84", "W31", "Cygnus A", "Cassiopeia A"]'
+    plan = load_plan(write_plan(members=2, block=2, variant=variant, more=more))
+    result = run_plan(plan, workers=0, progress=False)
+    reached, missed = result.answers["duration"]
+    assert reached["reached"] and reached["answer"]["sigma_arcsec"]["W6"] <= 60.0
+    sig = [c["sigma_arcsec"]["W6"] for c in reached["curve"]]
+    assert sig == sorted(sig, reverse=True)  # more hours, smaller sigma
+    earlier = [c for c in reached["curve"] if c["count"] < reached["answer"]["count"]]
+    assert all(c["sigma_arcsec"]["W6"] > 60.0 for c in earlier)
+    assert not missed["reached"] and missed["extrapolated"]["count"] > 3
+    src = result.answers["sources"][0]
+    best = src["best"]
+    assert best is not None and len(best["sources"]) >= 3
+    assert all(best["score"] >= c["score"] for c in src["checked"] if c["feasible"])
+    separation = result.answers["separation"][0]
+    v = result.variants[0]
+    sd = v.prediction.sigma_arcsec
+    corr = v.prediction.covariance / np.outer(sd, sd)
+    names = list(v.terms)
+    expected = {(names[i], names[j]) for i in range(len(names)) for j in range(i + 1, len(names))
+                if abs(corr[i, j]) > 0.95}
+    assert {tuple(p["terms"]) for p in separation["pairs"]} == expected
+    assert "duration:" in result.text() and "sources:" in result.text()
