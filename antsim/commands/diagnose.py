@@ -1,15 +1,126 @@
-"""`antsim diagnose`: not built yet (issue 5); the subcommand exists so the contract is visible."""
+"""`antsim diagnose RECORDINGS [--scenario S] [--model M] [--json] [--out DIR]`.
+
+Finds what a pointing model misses: locates where the residuals exceed the noise the baseline
+predicts, tests a library of physical effects, selects honestly, and reports the findings best
+first (see :mod:`antsim.diagnose`). With ``--out DIR`` it also writes the report, an updated
+pointing model, an updated scenario (with ``--scenario``), before/after residual plots and,
+unless ``--resimulate 0``, a re-simulation showing that the simulated residuals now match the
+recorded ones.
+"""
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
+from pathlib import Path
+
+from controller.errors import InputError
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    parser.epilog = "Not implemented yet: arrives with issue 5."
+    parser.add_argument("recordings", metavar="RECORDINGS",
+                        help="recordings.ecsv from 'antsim run', or a TPOINT pointing data file")
+    parser.add_argument("--scenario", metavar="SCENARIO.toml",
+                        help="the scenario that should explain the recordings: its simulation "
+                             "predicts the noise and the residual distribution")
+    parser.add_argument("--model", metavar="MODEL",
+                        help="baseline terms: a named model (ghigo10, tpoint8, ...), a model "
+                             "file, or T1,T2,... (default: the scenario's fit model, else the "
+                             "recordings' model in use, else IA IE NPAE CA AN AW TF TX)")
+    parser.add_argument("--json", action="store_true",
+                        help="print the result as JSON (DESIGN section 4)")
+    parser.add_argument("--out", metavar="DIR",
+                        help="write diagnose.json/.txt, model_updated.dat/.json, "
+                             "scenario_updated.toml and before/after plots into DIR")
+    parser.add_argument("--resimulate", type=int, default=None, metavar="K",
+                        help="with --out and --scenario: re-simulate the updated scenario K "
+                             "times and compare (default 4; 0 skips it)")
+    parser.add_argument("--sims", type=int, default=8, metavar="K",
+                        help="simulations of the scenario that predict the noise (default 8)")
+    parser.add_argument("--jobs", type=int, default=1, metavar="J",
+                        help="processes for the simulations (default 1)")
+    parser.add_argument("--cache", metavar="DIR",
+                        help="cache of the baseline simulations (default $ANTSIM_CACHE or "
+                             "~/.cache/antsim)")
+    parser.add_argument("--no-cache", action="store_true",
+                        help="neither read nor write the cache")
+    parser.add_argument("--list", action="store_true",
+                        help="print the candidate library (effects, terms, signatures) and exit")
+    parser.epilog = (
+        "Selection: forward addition by a family-corrected chi^2 or F test (sin/cos pairs "
+        "jointly), refusing effects correlated above 0.95 with the model, confirmed on held-out "
+        "data, stopping when the residuals match the predicted noise.")
+
+
+def _library_text() -> str:
+    from antsim.diagnose.candidates import CANDIDATES
+
+    lines = []
+    for c in CANDIDATES:
+        d = c.describe()
+        terms = f" [{' '.join(d['terms'])}]" if d["terms"] else ""
+        lines.append(f"{d['candidate']}{terms}: {d['title']}")
+        lines.append(f"    signature: {d['signature']}")
+        params = ", ".join(f"{k} ({v})" for k, v in d["parameters"].items())
+        lines.append(f"    parameters: {params}")
+        lines.append(f"    cause: {d['explanation']}")
+    return "\n".join(lines)
 
 
 def main(args: argparse.Namespace) -> int:
-    print("antsim diagnose: not implemented yet (issue 5)", file=sys.stderr)
-    return 1
+    from antsim.diagnose import diagnose, load_observations
+
+    if args.list:
+        print(_library_text())
+        return 0
+    for name in ("sims", "jobs"):
+        if getattr(args, name) < 1:
+            raise InputError("command line", f"--{name}", getattr(args, name),
+                             "must be at least 1")
+    if args.sims < 2:
+        raise InputError("command line", "--sims", args.sims, "must be at least 2")
+    if args.resimulate is not None and args.resimulate < 0:
+        raise InputError("command line", "--resimulate", args.resimulate, "must be >= 0")
+    obs = load_observations(args.recordings)
+    scenario = None
+    if args.scenario:
+        from antsim.scenario import load_scenario
+
+        path = Path(args.scenario)
+        if not path.exists():
+            raise InputError(str(path), "--scenario", str(path), "no such file")
+        scenario = load_scenario(path)
+        if obs.kind == "tpoint":
+            raise InputError(args.recordings, "--scenario", args.scenario,
+                             "a TPOINT data file has no times or sources to simulate against",
+                             "diagnose it without --scenario")
+    try:
+        diag = diagnose(obs, scenario, args.model, n_sims=args.sims, cache_dir=args.cache,
+                        use_cache=not args.no_cache, jobs=args.jobs)
+    except ValueError as err:
+        if isinstance(err, InputError):
+            raise
+        raise InputError(args.recordings, "observations", obs.n, str(err)) from None
+    written = None
+    if args.out:
+        from antsim.diagnose.modelit import resimulation_words, write_outputs
+
+        resim = 4 if args.resimulate is None else args.resimulate
+        written = write_outputs(diag, args.out, scenario, resim if scenario else 0,
+                                cache_dir=args.cache, use_cache=not args.no_cache,
+                                jobs=args.jobs)
+    if args.json:
+        doc = diag.to_json()
+        if written is not None:
+            doc["outputs"] = written
+        json.dump(doc, sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        print(diag.text())
+        if written and "resimulation" in written:
+            print(resimulation_words(written["resimulation"]))
+        if args.out:
+            names = " ".join(sorted(p.name for p in Path(args.out).iterdir()))
+            print(f"wrote {args.out}/: {names}")
+    return 0

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 from .base import Effect, Param, PointingState
+from .drifts import TemperatureDrift
 from .dynamics import Backlash, ClockError, ServoLag
 from .geometric import GeometricEffect, TermsEffect
+from .harmonics import HARMONIC_EFFECTS, FeedOffset
 from .optics import (
     BeamWidthError,
     ExactTiltCollimation,
@@ -33,5 +35,8 @@ EFFECTS: dict[str, type[Effect]] = {
         SourceStructure,
         RefractionAnomaly,
         ExactTiltCollimation,
+        *HARMONIC_EFFECTS,
+        FeedOffset,
+        TemperatureDrift,
     )
 }

@@ -1,0 +1,16 @@
+"""Diagnosis: from a mismatch between a pointing model and recordings to the missing physics.
+
+``diagnose(observations, baseline)`` locates where the residuals exceed the noise the baseline
+predicts, tests a library of physical effects (:mod:`.candidates`) against them with an
+honest forward selection (:mod:`.select`), and reports findings best first
+(:class:`~.core.Diagnosis`); :mod:`.modelit` turns findings into an updated scenario and
+pointing model and re-simulates; :mod:`.blind` proves the whole chain on recordings with a
+hidden effect.
+"""
+
+from __future__ import annotations
+
+from .core import Diagnosis, diagnose
+from .data import Observations, load_observations
+
+__all__ = ["Diagnosis", "Observations", "diagnose", "load_observations"]

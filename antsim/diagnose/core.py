@@ -1,0 +1,424 @@
+"""``diagnose``: baseline -> locate -> explain -> select, and the report (JSON and words)."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from controller.model import PointingModel
+
+from .baseline import (
+    BaselineSpec,
+    SimulatedBaseline,
+    offset_scale,
+    resolve_baseline,
+    white_prediction,
+)
+from .candidates import TermsCandidate
+from .data import Observations
+from .locate import Location, locate, where_signal
+from .problem import Prediction, Problem, _lstsq, folds_for
+from .select import Selection, Step, select
+
+__all__ = ["Diagnosis", "Finding", "diagnose"]
+
+
+@dataclass
+class Finding:
+    """One finding, as the JSON of DESIGN section 4 reports it (plus the selection step)."""
+
+    step: Step
+    where: str
+
+    @property
+    def result(self):
+        return self.step.result
+
+    @property
+    def effect(self) -> str:
+        c = self.result.candidate
+        return c.effect if c.effect and c.effect != "terms" else c.name
+
+    @property
+    def terms(self) -> list[str]:
+        c = self.result.candidate
+        if isinstance(c, TermsCandidate):
+            return list(self.result.comp_names)
+        return list(c.terms)
+
+    @property
+    def params(self) -> dict[str, Any]:
+        return _plain(self.result.params)
+
+    def explanation(self) -> str:
+        c = self.result.candidate
+        text = f"{c.title}: {c.explanation}."
+        if self.result.absorbed:
+            text += (f" Its component(s) {', '.join(self.result.absorbed)} are absorbed by the "
+                     "baseline model.")
+        return text
+
+    def to_json(self) -> dict[str, Any]:
+        s = self.step
+        return {
+            "effect": self.effect,
+            "terms": self.terms,
+            "explanation": self.explanation(),
+            "where": self.where,
+            "params": self.params,
+            "significance": round(float(s.significance), 3),
+            "sky_rms_before_arcsec": round(float(s.sky_rms_before), 4),
+            "sky_rms_after_arcsec": round(float(s.sky_rms_after), 4),
+        }
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float):
+        return round(value, 6) if math.isfinite(value) else None
+    return value
+
+
+@dataclass
+class Diagnosis:
+    """Everything diagnosis found, with the report in JSON and in words."""
+
+    obs: Observations
+    baseline: BaselineSpec
+    prediction: Prediction
+    problem: Problem
+    location: Location
+    selection: Selection
+    findings: list[Finding]
+    summary: dict[str, Any]
+    variants: dict[str, Any] = field(default_factory=dict)
+    runtime_s: float = 0.0
+    sim_baseline: SimulatedBaseline | None = None
+
+    @property
+    def mismatch(self) -> bool:
+        return bool(self.findings)
+
+    def updated_model(self) -> PointingModel:
+        """The baseline terms refitted together with the findings, plus the findings' TPOINT
+        terms (an unweighted least-squares fit of the raw total errors, as TPOINT does)."""
+        p = self.problem
+        cols = p.current_columns()
+        rows = p.rows()
+        coef, _ = _lstsq(cols[rows], p.y_raw[rows])
+        names = list(p.base_terms)
+        values = list(coef[: len(names)])
+        k = len(names)
+        for f in self.findings:
+            r = f.result
+            if r.candidate.kind != "offsets":
+                continue
+            q = r.columns.shape[1]
+            if isinstance(r.candidate, TermsCandidate):
+                for name, v in zip(r.comp_names, coef[k:k + q], strict=True):
+                    if name not in names:
+                        names.append(name)
+                        values.append(float(v))
+            k += q
+        return PointingModel(names, values, name=f"{self.baseline_name()}+diagnose")
+
+    def baseline_name(self) -> str:
+        return "baseline"
+
+    def degeneracies(self) -> list[str]:
+        """TPOINT-style warnings for the final model (coefficient correlations over 0.95:
+        "cannot reliably be distinguished"; 0.85-0.95: "strongly correlated"), and the
+        candidates refused because the model mimics them."""
+        p = self.problem
+        cols = p.current_columns()
+        names = list(p.current_names)
+        f = p.fit(cols)
+        sd = np.sqrt(np.clip(np.diag(f.cov), 0.0, None))
+        out = []
+        with np.errstate(invalid="ignore", divide="ignore"):
+            corr = f.cov / np.outer(sd, sd)
+        for i in range(len(names)):
+            for j in range(i + 1, len(names)):
+                r = corr[i, j]
+                if not np.isfinite(r):
+                    continue
+                if abs(r) > 0.95:
+                    out.append(f"{names[i]} and {names[j]} cannot reliably be distinguished "
+                               f"(r = {r:+.2f})")
+                elif abs(r) > 0.85:
+                    out.append(f"{names[i]} and {names[j]} are strongly correlated "
+                               f"(r = {r:+.2f})")
+        out += [r.reason for r in self.selection.refused]
+        return out
+
+    def to_json(self) -> dict[str, Any]:
+        """``antsim diagnose --json`` (DESIGN section 4), extended with the baseline, the
+        located mismatch, the refusals and the summary statistics."""
+        sel = self.selection
+        return {
+            "mismatch": self.mismatch,
+            "findings": [f.to_json() for f in self.findings],
+            "baseline": {"terms": list(self.baseline.terms), "origin": self.baseline.origin,
+                         "noise": self.prediction.description},
+            "located": {"words": self.location.words,
+                        "ratio_to_noise": _plain(self.location.ratio),
+                        "p": _plain(self.location.p)},
+            "alternatives": [{"finding": f.effect, "alternative": a.result.name,
+                              "correlation": round(a.correlation, 3), "words": a.reason}
+                             for f in self.findings for a in f.step.alternatives],
+            "refused": [{"effect": r.result.name, "words": r.reason} for r in sel.refused],
+            "degeneracies": self.degeneracies(),
+            "absorbed": [{"effect": r.name, "components": list(r.absorbed)}
+                         for r in sel.absorbed],
+            "summary": _plain(self.summary),
+            "variants": _plain(self.variants),
+            "stop": sel.stop_reason,
+        }
+
+    def text(self) -> str:
+        """The report in words."""
+        s = self.summary
+        lines = [f"{self.obs.path}: {s['n_used']} of {self.obs.n} scans used; baseline "
+                 f"{' '.join(self.baseline.terms)} ({self.baseline.origin})",
+                 f"noise: {self.prediction.description}",
+                 f"located: {self.location.words}"]
+        if not self.findings:
+            lines.append("no mismatch: the model explains the data to the noise"
+                         if self.prediction.known_noise else
+                         "nothing beyond the baseline terms is warranted by these data")
+        for i, f in enumerate(self.findings, 1):
+            j = f.to_json()
+            params = ", ".join(f"{k} = {_fmt(v)}" for k, v in j["params"].items()
+                               if not isinstance(v, dict))
+            terms = f" [{' '.join(j['terms'])}]" if j["terms"] else ""
+            lines.append(f"{i}. {f.effect}{terms}: {params} "
+                         f"({j['significance']:.1f} sigma; Sky RMS {j['sky_rms_before_arcsec']:.2f}"
+                         f"\" -> {j['sky_rms_after_arcsec']:.2f}\")")
+            lines.append(f"   where: {j['where']}")
+            lines.append(f"   why: {j['explanation']}")
+            for a in f.step.alternatives:
+                lines.append(f"   alternative: {a.reason}")
+        for r in self.selection.refused:
+            lines.append(f"refused: {r.reason}")
+        for w in self.degeneracies():
+            if not any(w == r.reason for r in self.selection.refused):
+                lines.append(f"model: {w}")
+        lines.append(
+            f"Sky RMS in-sample {s['sky_rms_before_arcsec']:.2f}\" -> "
+            f"{s['sky_rms_after_arcsec']:.2f}\"; held out {s['cv_sky_rms_before_arcsec']:.2f}\" "
+            f"-> {s['cv_sky_rms_after_arcsec']:.2f}\" ({s['held_out']})")
+        for name, v in self.variants.items():
+            if name == "E-D":
+                b, a = v["before"], v["after"]
+                lines.append(f"Fit E - Fit D ({v['window']}): {b['difference']:+.1f} +- "
+                             f"{b['sigma']:.1f}\" -> {a['difference']:+.1f} +- {a['sigma']:.1f}\"")
+                continue
+            lines.append(f"Fit {name} ({v['window']}): N {v['n']}, xel/el rms "
+                         f"{v['before']['xel']:.1f}/{v['before']['el']:.1f}\" -> "
+                         f"{v['after']['xel']:.1f}/{v['after']['el']:.1f}\"")
+        lines.append(f"stopped: {self.selection.stop_reason}")
+        return "\n".join(lines)
+
+
+def _fmt(v: Any) -> str:
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return str(v)
+
+
+def diagnose(obs: Observations, scenario=None, model: str | None = None,
+             n_sims: int = 8, cache_dir=None, use_cache: bool = True, jobs: int = 1,
+             sim_baseline: SimulatedBaseline | None = None,
+             prediction: Prediction | None = None) -> Diagnosis:
+    """Diagnose ``obs`` against the baseline (see :mod:`.baseline` for the rules)."""
+    t0 = time.perf_counter()
+    if scenario is not None and obs.air_daily_c is None:
+        obs = replace(obs, air_daily_c=daily_air_curve(scenario))
+    spec = resolve_baseline(obs, scenario, model)
+    if prediction is None:
+        if scenario is not None:
+            if sim_baseline is None:
+                seed = obs.meta.get("seed")
+                sim_baseline = SimulatedBaseline(scenario, spec.terms, n_sims,
+                                                 avoid_seeds=[] if seed is None else [int(seed)],
+                                                 cache_dir=cache_dir, use_cache=use_cache,
+                                                 jobs=jobs)
+            prediction = sim_baseline.predict(obs)
+        else:
+            prediction = white_prediction(obs)
+    problem = Problem(obs, prediction, spec.terms, offset_scale=offset_scale(obs, scenario))
+    problem.update_outliers()
+    location = locate(problem)
+    base_cols = problem.base
+    selection = select(problem)
+    findings = []
+    for step in selection.steps:
+        if step.signal is not None:
+            where = where_signal(obs, step.signal, problem.used)
+            special = _special_where(step)
+            if special:
+                where = f"{special}; {where}"
+        else:
+            where = _channel_where(step)
+        findings.append(Finding(step, where))
+    folds = folds_for(obs)
+    final = problem.current_columns()
+    summary = {
+        "n_used": int(problem.used.sum()),
+        "sky_rms_before_arcsec": problem.sky_rms(base_cols),
+        "sky_rms_after_arcsec": problem.sky_rms(final),
+        "cv_sky_rms_before_arcsec": problem.cv_sky_rms(base_cols, folds),
+        "cv_sky_rms_after_arcsec": problem.cv_sky_rms(final, folds),
+        "held_out": "nights held out in turn" if np.unique(folds).size < 5
+        else f"{np.unique(folds).size}-fold cross-validation interleaved in time",
+        "gof_before": selection.gof_before, "gof_after": selection.gof_after,
+        "n_candidates_tested": selection.n_family,
+    }
+    diag = Diagnosis(obs, spec, prediction, problem, location, selection, findings, summary,
+                     sim_baseline=sim_baseline)
+    diag.variants = fit_variants_before_after(diag)
+    diag.runtime_s = time.perf_counter() - t0
+    return diag
+
+
+def daily_air_curve(scenario):
+    """The scenario's deterministic daily air-temperature curve (C) at campaign times (s)."""
+    from astropy.time import Time
+
+    from ..weather import WeatherModel
+
+    hours = (Time(scenario.epoch_utc, scale="utc").mjd % 1.0) * 24.0
+    model = WeatherModel(scenario.weather, hours, scenario.site.longitude_deg,
+                         scenario.duration_s, np.random.default_rng(0))
+    return model.daily_curve_c
+
+
+def _special_where(step: Step) -> str:
+    """Words for the time-like effects, whose signature is best said in time."""
+    r = step.result
+    p = r.params
+    if r.name == "sunset_drift":
+        tau_h = p["tau_s"] / 3600.0
+        return (f"elevation changes by {p['amplitude_arcsec']:+.0f}\" after sunset, "
+                f"{100 * (1 - math.exp(-4.0 / tau_h)):.0f}% of it in the first 4 hours "
+                f"(time constant {tau_h:.1f} h), and relaxes back after sunrise")
+    if r.name == "temperature_drift":
+        return (f"elevation follows the air temperature, {p['arcsec_per_k']:+.2f}\"/K, "
+                f"lagging it by {p['tau_s'] / 3600.0:.1f} h")
+    if r.name == "clock_error":
+        return (f"along each source's apparent motion, growing as the clock drifts "
+                f"({p['drift_s_per_day']:+.2f} s/day)")
+    if r.name == "source_structure":
+        return f"on {p['source']} only"
+    return ""
+
+
+def _channel_where(step: Step) -> str:
+    r = step.result
+    if r.name == "polarization_squint":
+        p = r.params
+        return (f"XR minus XL offsets: {p['xr_minus_xl_xel_arcsec']:+.1f}\" cross-elevation, "
+                f"{p['xr_minus_xl_el_arcsec']:+.1f}\" elevation, on every scan; the "
+                "polarization average is unaffected")
+    if r.name == "beam_width":
+        return (f"measured beam widths on every scan, {100 * (r.params['scale'] - 1):+.1f}% "
+                "from the predicted ones")
+    return "recorded quantities other than the offsets"
+
+
+def fit_variants_before_after(diag: Diagnosis) -> dict[str, Any]:
+    """Fit D (day, Sun above 0 deg) and E (night, Sun below -12 deg) of the 1990 report on
+    the baseline terms, before and after removing the findings' fitted signatures."""
+    from controller.fitting import PointingData, fit_model
+    from controller.scheduler import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
+
+    obs = diag.obs
+    if obs.sun_el_deg is None:
+        return {}
+    p = diag.problem
+    cols = p.current_columns()
+    rows = p.rows()
+    coef, _ = _lstsq(cols[rows], p.y_raw[rows])
+    k = len(p.base_terms)
+    signal = cols[:, k:] @ coef[k:] if cols.shape[1] > k else np.zeros(2 * obs.n)
+    n = obs.n
+    zero = _el_zero_term(p)
+    out = {}
+    for name, window, mask in (
+            ("D", "day, Sun above 0 deg", obs.sun_el_deg > DAY_SUN_MIN_DEG),
+            ("E", "night, Sun below -12 deg", obs.sun_el_deg < NIGHT_SUN_MAX_DEG),
+            ("A", "all", np.ones(n, dtype=bool))):
+        m = mask & obs.good
+        if m.sum() < 2 * len(p.base_terms):
+            continue
+        res = {}
+        for label, sx, se in (("before", 0.0, 0.0), ("after", signal[:n], signal[n:])):
+            data = PointingData(obs.az_rad[m], obs.el_rad[m],
+                                (obs.xel_arcsec - sx)[m], (obs.el_arcsec - se)[m])
+            try:
+                f = fit_model(data, list(p.base_terms), robust=True)
+            except ValueError:
+                break
+            res[label] = {"xel": f.xel_rms_arcsec, "el": f.el_rms_arcsec,
+                          "sky": f.sky_rms_arcsec, "n_used": f.n_used}
+            if zero is not None:
+                j = f.names.index(zero)
+                res[label]["el_zero"] = float(f.values_arcsec[j])
+                res[label]["el_zero_sigma"] = float(f.sigma_arcsec[j])
+        if len(res) == 2:
+            out[name] = {"window": window, "n": int(m.sum()), **res}
+    # the common fit (Fit A) seen in the day and night windows: a drift the separate fits
+    # absorb into their zero points shows here
+    m = obs.good
+    split = {}
+    for label, sx, se in (("before", 0.0, 0.0), ("after", signal[:n], signal[n:])):
+        data = PointingData(obs.az_rad[m], obs.el_rad[m], (obs.xel_arcsec - sx)[m],
+                            (obs.el_arcsec - se)[m])
+        try:
+            f = fit_model(data, list(p.base_terms), robust=True)
+        except ValueError:
+            split = {}
+            break
+        used = np.asarray(f.used)
+        sun = obs.sun_el_deg[m]
+        rx = np.asarray(f.residual_xel_arcsec)
+        re_ = np.asarray(f.residual_el_arcsec)
+        for key, win in (("D", sun > DAY_SUN_MIN_DEG), ("E", sun < NIGHT_SUN_MAX_DEG)):
+            sel = used & win
+            if sel.sum() < 3:
+                continue
+            split.setdefault(key, {})[label] = {
+                "xel": float(np.sqrt(np.mean(rx[sel] ** 2))),
+                "el": float(np.sqrt(np.mean(re_[sel] ** 2))), "n_used": int(sel.sum())}
+    for key, v in split.items():
+        if len(v) == 2:
+            out[f"A:{key}"] = {"window": ("day" if key == "D" else "night")
+                               + " scans of the common fit (Fit A)", "n": v["before"]["n_used"],
+                               **v}
+    if zero is not None and "D" in out and "E" in out:
+        for label in ("before", "after"):
+            d, e = out["D"][label], out["E"][label]
+            out.setdefault("E-D", {"window": f"night minus day {zero}", "term": zero})[label] = {
+                "difference": e["el_zero"] - d["el_zero"],
+                "sigma": math.hypot(e["el_zero_sigma"], d["el_zero_sigma"])}
+    return out
+
+
+def _el_zero_term(p: Problem) -> str | None:
+    """The baseline term that is a constant elevation offset (IE, W6), if any."""
+    cols = p.base
+    n = p.n
+    for j, name in enumerate(p.base_terms):
+        x, e = cols[:n, j], cols[n:, j]
+        if np.allclose(x, 0.0) and np.ptp(e) < 1e-9 * max(1.0, float(np.abs(e).max())):
+            return name
+    return None

@@ -1,0 +1,317 @@
+"""Model it: findings -> updated scenario and pointing model; re-simulate; before/after.
+
+* The updated scenario is the scenario's own text with one ``[[truth.effects]]`` table
+  appended per finding (the simulator effect with its fitted parameters); it loads with
+  :func:`antsim.scenario.load_scenario` like any scenario.
+* The updated pointing model is the baseline terms refitted together with the findings plus
+  the findings' own TPOINT terms (effects that are not pointing terms, such as a drift in
+  time, stay out of it: the report says so).
+* Re-simulation runs the updated scenario with fresh seeds and compares, scan by scan, the
+  recorded residuals of the baseline fit with the simulated ones (a paired two-sample chi^2
+  test with the simulations' own scatter and time correlation), before (the original
+  scenario) and after (the updated one), and also the two residual distributions
+  (two-sample Kolmogorov-Smirnov per axis).
+* Plots: residuals before and after (``antsim.figures.before_after_figures`` when present,
+  else a minimal figure of our own).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+from controller.fitting import PointingData, fit_model
+
+from .candidates import TermsCandidate
+from .core import Diagnosis, Finding, _plain
+from .problem import Problem, _lstsq
+
+__all__ = ["effect_specs", "resimulate", "updated_scenario_text", "write_outputs"]
+
+
+def _effect_params(finding: Finding, scenario=None) -> tuple[str, dict[str, Any]] | None:
+    """The simulator effect name and parameters of a finding (None if it has none)."""
+    r = finding.result
+    c = r.candidate
+    p = r.params
+    if isinstance(c, TermsCandidate):
+        terms = dict(p.get("terms_arcsec", {}))
+        if c.effect != "terms" and c.pair:
+            from antsim.effects import EFFECTS
+
+            cls = EFFECTS[c.effect]
+            s = terms.get(cls.sin_term, 0.0)
+            co = terms.get(cls.cos_term, 0.0)
+            amp, phase = cls.amplitude_phase(s, co)
+            return c.effect, {"amplitude_arcsec": amp, "phase_deg": phase}
+        return "terms", {"terms_arcsec": terms}
+    if c.name == "source_structure" and scenario is not None:
+        out = c.effect_from_params(p)
+        sizes = {s.name: s.size_arcmin for s in scenario.sources}
+        out["size_arcmin"] = float(sizes.get(p["source"], p.get("size_arcmin", 0.0)))
+        return c.effect, out
+    if hasattr(c, "effect_from_params"):
+        return c.effect, c.effect_from_params(p)
+    if c.name == "feed_offset":
+        return c.effect, {"offset_arcsec": p["offset_arcsec"], "angle_deg": p["angle_deg"]}
+    if c.name == "servo_lag":
+        return c.effect, {"lag_s": p["lag_s"]}
+    if c.name == "backlash":
+        return c.effect, {"az_arcsec": abs(p.get("az_arcsec", 0.0)),
+                          "el_arcsec": abs(p.get("el_arcsec", 0.0))}
+    return None
+
+
+def effect_specs(diag: Diagnosis, scenario=None):
+    """EffectSpec of every finding that has a simulator effect."""
+    from antsim.effects import EFFECTS
+    from antsim.scenario import EffectSpec
+
+    specs = []
+    for f in diag.findings:
+        got = _effect_params(f, scenario)
+        if got is None:
+            continue
+        name, params = got
+        if name == "terms":
+            specs.append(EffectSpec("terms", {"terms_arcsec": params["terms_arcsec"]}))
+            continue
+        effect = EFFECTS[name](**params)  # validates names and values
+        specs.append(EffectSpec(name, effect.params()))
+    return specs
+
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    return repr(float(v))
+
+
+def updated_scenario_text(scenario, diag: Diagnosis) -> str:
+    """The scenario's text with the findings appended as ``[[truth.effects]]`` tables."""
+    lines = [scenario.text.rstrip("\n"), "",
+             "# ---- added by antsim diagnose: the physics the scenario left out, with the "
+             "fitted parameters ----"]
+    for f, spec in zip([f for f in diag.findings if _effect_params(f, scenario)],
+                       effect_specs(diag, scenario), strict=True):
+        lines.append(f"# {f.result.candidate.title}: {f.step.significance:.1f} sigma")
+        lines.append("[[truth.effects]]")
+        lines.append(f"effect = {json.dumps(spec.name)}")
+        if spec.name == "terms":
+            for term, value in spec.params["terms_arcsec"].items():
+                lines.append(f"{term} = {_toml_value(value)}")
+        else:
+            for key, value in spec.params.items():
+                lines.append(f"{key} = {_toml_value(value)}")
+        lines.append("")
+    return "\n".join(lines).rstrip("\n") + "\n"
+
+
+def _paired_test(diag: Diagnosis, pred) -> dict[str, Any]:
+    """Recorded baseline-fit residuals against a prediction, scan by scan (chi^2 per axis of
+    the GLS-whitened differences) — the two samples are the recordings and the simulations."""
+    obs = diag.obs
+    prob = Problem(obs, pred, diag.problem.base_terms, offset_scale=diag.problem.f)
+    prob.update_outliers()
+    gof = prob.gof()
+    return {axis: {"chi2": v["chi2"], "dof": v["dof"], "ratio": v["ratio"], "p": v["p"]}
+            for axis, v in gof.items()}
+
+
+def _ks(diag: Diagnosis, baseline) -> dict[str, Any]:
+    """Two-sample Kolmogorov-Smirnov test per axis: the recorded residuals of the baseline
+    fit against all the simulations' residuals."""
+    obs = diag.obs
+    good = obs.good
+    data = PointingData(obs.az_rad[good], obs.el_rad[good], obs.xel_arcsec[good],
+                        obs.el_arcsec[good])
+    fit = fit_model(data, list(diag.problem.base_terms), robust=True)
+    used = np.asarray(fit.used)
+    rec = (np.asarray(fit.residual_xel_arcsec)[used], np.asarray(fit.residual_el_arcsec)[used])
+    out = {}
+    for axis, name in ((0, "xel"), (1, "el")):
+        sims = np.concatenate([p.res[:, axis] for p in baseline.products])
+        sims = sims[np.isfinite(sims)]
+        ks = stats.ks_2samp(rec[axis], sims)
+        out[name] = {"statistic": float(ks.statistic), "p": float(ks.pvalue)}
+    return out
+
+
+def resimulate(diag: Diagnosis, scenario, n_sims: int = 4, cache_dir=None,
+               use_cache: bool = True, jobs: int = 1) -> dict[str, Any]:
+    """Simulate the updated scenario and test recorded against simulated residuals, before
+    (the scenario as given) and after (with the findings)."""
+    from .baseline import SimulatedBaseline
+
+    specs = effect_specs(diag, scenario)
+    updated = scenario.with_effects(tuple(scenario.effects) + tuple(specs))
+    model = diag.obs.model_in_use if diag.obs.model_in_use is not None else None
+    seed = diag.obs.meta.get("seed")
+    avoid = [] if seed is None else [int(seed)]
+    after = SimulatedBaseline(updated, diag.problem.base_terms, n_sims, avoid_seeds=avoid,
+                              cache_dir=cache_dir, use_cache=use_cache, jobs=jobs, model=model)
+    before = diag.sim_baseline
+    out: dict[str, Any] = {"n_sims": n_sims, "effects": [s.name for s in specs]}
+    if before is not None:
+        out["before"] = {"paired": _paired_test(diag, before.predict(diag.obs)),
+                         "ks": _ks(diag, before)}
+    out["after"] = {"paired": _paired_test(diag, after.predict(diag.obs)),
+                    "ks": _ks(diag, after)}
+    out["_baseline"] = after
+    return out
+
+
+def _before_after_fits(diag: Diagnosis):
+    """Fits of the baseline terms to the data (before) and of baseline + finding terms to
+    the data corrected for the findings' non-term signatures (after)."""
+    p = diag.problem
+    obs = diag.obs
+    good = obs.good
+    cols = p.current_columns()
+    rows = p.rows()
+    coef, _ = _lstsq(cols[rows], p.y_raw[rows])
+    k = len(p.base_terms)
+    n = obs.n
+    term_names: list[str] = []
+    nonterm = np.zeros(2 * n)
+    j = k
+    for f in diag.findings:
+        r = f.result
+        if r.candidate.kind != "offsets":
+            continue
+        q = r.columns.shape[1]
+        if isinstance(r.candidate, TermsCandidate):
+            term_names += [t for t in r.comp_names if t not in term_names]
+        else:
+            nonterm += r.columns @ coef[j:j + q]
+        j += q
+    data = PointingData(obs.az_rad[good], obs.el_rad[good], obs.xel_arcsec[good],
+                        obs.el_arcsec[good], t_s=obs.t_s[good])
+    after_data = PointingData(obs.az_rad[good], obs.el_rad[good],
+                              (obs.xel_arcsec - nonterm[:n])[good],
+                              (obs.el_arcsec - nonterm[n:])[good], t_s=obs.t_s[good])
+    before = fit_model(data, list(p.base_terms), robust=True, name="baseline")
+    after = fit_model(after_data, [*p.base_terms, *term_names], robust=True,
+                      name="baseline+findings")
+    return before, after, data, after_data
+
+
+def _minimal_plot(before, after, data, after_data, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 3, figsize=(13, 7), constrained_layout=True)
+    for row, (axis, r_b, r_a) in enumerate((
+            ("cross-elevation", before.residual_xel_arcsec, after.residual_xel_arcsec),
+            ("elevation", before.residual_el_arcsec, after.residual_el_arcsec))):
+        for col, (xlab, x) in enumerate((("azimuth (deg)", np.degrees(data.az_rad)),
+                                         ("elevation (deg)", np.degrees(data.el_rad)),
+                                         ("time (h)", np.asarray(data.t_s) / 3600.0))):
+            ax = axes[row, col]
+            ax.plot(x, r_b, ".", ms=4, alpha=0.6, label=f"before ({before.sky_rms_arcsec:.1f}\")")
+            ax.plot(x, r_a, ".", ms=4, alpha=0.6, label=f"after ({after.sky_rms_arcsec:.1f}\")")
+            ax.axhline(0.0, color="k", lw=0.5)
+            ax.set_xlabel(xlab)
+            ax.set_ylabel(f"{axis} residual (arcsec)")
+        axes[row, 0].legend(fontsize=8)
+    fig.suptitle("antsim diagnose: residuals before and after modelling the findings")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plots(diag: Diagnosis, out_dir: Path) -> list[str]:
+    """Before/after residual plots into ``out_dir``; returns the file names written."""
+    before, after, data, after_data = _before_after_fits(diag)
+    try:
+        from antsim.figures import before_after_figures
+    except ImportError:
+        before_after_figures = None
+    if before_after_figures is not None:
+        try:
+            files = before_after_figures(before, after, data, out_dir, label="diagnose",
+                                         after_data=after_data, before_name="baseline",
+                                         after_name="with findings")
+            return [str(Path(getattr(f, "path", f)).name) for f in files]
+        except (TypeError, ValueError, AttributeError):
+            pass  # the shared figures API changed: fall back on our own
+    path = out_dir / "diagnose_residuals.png"
+    _minimal_plot(before, after, data, after_data, path)
+    return [path.name]
+
+
+def write_outputs(diag: Diagnosis, out_dir: str | Path, scenario=None, resim: int = 0,
+                  cache_dir=None, use_cache: bool = True, jobs: int = 1) -> dict[str, Any]:
+    """Write the report, the updated model and scenario, plots; optionally re-simulate."""
+    from controller.modelio import model_to_json
+    from controller.tpoint import TPointModel, write_mod
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    written: dict[str, Any] = {}
+    model = diag.updated_model()
+    write_mod(TPointModel.from_model(model, caption=f"{model.name} (antsim diagnose)",
+                                     n_obs=int(diag.problem.used.sum()),
+                                     sky_rms_arcsec=diag.summary["sky_rms_after_arcsec"]),
+              out / "model_updated.dat")
+    (out / "model_updated.json").write_text(json.dumps(model_to_json(model), indent=2) + "\n",
+                                            encoding="utf-8")
+    written["model"] = ["model_updated.dat", "model_updated.json"]
+    nonterm = [f.effect for f in diag.findings
+               if not isinstance(f.result.candidate, TermsCandidate)]
+    if nonterm:
+        written["not_in_model"] = (f"{', '.join(nonterm)} cannot be written as pointing-model "
+                                   "terms (they depend on time, source, polarization or the "
+                                   "beam); they are in the updated scenario")
+    if scenario is not None:
+        text = updated_scenario_text(scenario, diag)
+        path = out / "scenario_updated.toml"
+        path.write_text(text, encoding="utf-8")
+        from antsim.scenario import load_scenario
+
+        load_scenario(path)  # it must load like any scenario
+        written["scenario"] = path.name
+        if resim > 0 and diag.findings:
+            res = resimulate(diag, scenario, resim, cache_dir, use_cache, jobs)
+            res.pop("_baseline", None)
+            written["resimulation"] = _plain(res)
+    if diag.findings:
+        written["plots"] = plots(diag, out)
+    doc = diag.to_json()
+    doc["outputs"] = _plain(written)
+    (out / "diagnose.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+    text = diag.text()
+    if "resimulation" in written:
+        text += "\n" + resimulation_words(written["resimulation"])
+    (out / "diagnose.txt").write_text(text + "\n", encoding="utf-8")
+    return written
+
+
+def resimulation_words(res: dict[str, Any]) -> str:
+    lines = [f"re-simulation with the findings ({res['n_sims']} seeds): recorded against "
+             "simulated residuals, scan by scan (chi2/dof, p) and as distributions (KS p)"]
+    for when in ("before", "after"):
+        if when not in res:
+            continue
+        parts = []
+        for axis in ("xel", "el"):
+            pr = res[when]["paired"][axis]
+            ks = res[when]["ks"][axis]
+            parts.append(f"{axis} {pr['chi2'] / pr['dof']:.2f} (p = {_p(pr['p'])}), KS p = "
+                         f"{_p(ks['p'])}")
+        lines.append(f"  {when}: " + "; ".join(parts))
+    return "\n".join(lines)
+
+
+def _p(p: float | None) -> str:
+    if p is None or not math.isfinite(p):
+        return "n/a"
+    return f"{p:.2g}" if p >= 1e-4 else "<1e-4"

@@ -1,0 +1,375 @@
+"""The whitened least-squares problem every test in diagnosis is posed on.
+
+Data: the total pointing errors (indicated minus true, arcsec) of the used scans, stacked as
+``[xel; el]`` (2n rows), minus the systematic residual the baseline predicts, divided by the
+noise it predicts per scan and axis. Regressors are stacked and whitened the same way. With
+the right noise model the residual of a correct model is white with unit variance, so adding
+q columns that describe nothing changes chi^2 by a chi^2_q variable: every test below is a
+chi^2 (known noise, from simulation) or F (noise estimated from the data) test on that.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+from scipy import stats
+
+from controller.model import PointingModel
+
+from .data import Observations
+
+__all__ = ["Prediction", "Problem", "term_columns"]
+
+#: a scan whose whitened residual on either axis exceeds this is an outlier (gusts)
+OUTLIER_Z = 4.0
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """What the baseline predicts per observation: systematic residual and noise (arcsec).
+
+    ``kind`` is ``"simulated"`` (from simulations of the scenario: mean residual and scatter
+    per scan) or ``"white"`` (no simulation: zero systematic, one noise level per axis
+    estimated from the data, so tests become F tests). ``pol_*`` and ``width_*`` predict the
+    XR - XL offset difference and the measured beam width (arcmin) in the same way.
+    """
+
+    kind: str
+    sys_xel: np.ndarray
+    sys_el: np.ndarray
+    sig_xel: np.ndarray
+    sig_el: np.ndarray
+    pol_mean: np.ndarray | None = None  # (n, 2)
+    pol_sig: np.ndarray | None = None  # (n, 2)
+    width_mean: np.ndarray | None = None  # (n, 2)
+    width_sig: np.ndarray | None = None  # (n, 2)
+    matched: np.ndarray | None = None
+    n_sims: int = 0
+    description: str = ""
+    #: noise correlation in time per axis: ((weight, tau_s), ...) (empty: none)
+    corr_xel: tuple[tuple[float, float], ...] = ()
+    corr_el: tuple[tuple[float, float], ...] = ()
+
+    @property
+    def known_noise(self) -> bool:
+        return self.kind == "simulated"
+
+
+def term_columns(terms: Sequence[str], obs: Observations) -> np.ndarray:
+    """Error-convention columns (2n, m) of TPOINT/W terms: the error (indicated - true,
+    arcsec) each term makes per arcsec of coefficient, xel rows then el rows."""
+    if not terms:
+        return np.zeros((2 * obs.n, 0))
+    model = PointingModel(list(terms))
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        ba, be = model.design_matrix(obs.az_rad, obs.el_rad)
+    return -np.vstack([ba * np.cos(obs.el_rad)[:, None], be])
+
+
+@dataclass
+class LinearFit:
+    coef: np.ndarray
+    chi2: float
+    resid: np.ndarray  # standardized residual (r / sigma) over all 2n rows, unused included
+    cov: np.ndarray  # covariance of coef in units of the whitened noise (sigma^2 = 1)
+    wres: np.ndarray | None = None  # decorrelated residual over the used rows [xel; el]
+    n_used: int = 0
+
+
+def correlation_matrix(t_s: np.ndarray, model: tuple[tuple[float, float], ...]) -> np.ndarray:
+    """Correlation of the noise between scans at times ``t_s`` (s): 1 on the diagonal and
+    sum_m w_m exp(-|dt| / tau_m) off it (``model`` = ((w_m, tau_m), ...), sum w_m < 1)."""
+    n = t_s.size
+    r = np.zeros((n, n))
+    if model:
+        dt = np.abs(t_s[:, None] - t_s[None, :])
+        for wgt, tau in model:
+            r += wgt * np.exp(-dt / tau)
+    r[np.diag_indices(n)] = 1.0
+    return r
+
+
+class Problem:
+    """Whitened data and base design; fits models of base + extra columns on the used scans.
+
+    Whitening is generalized least squares: per axis, the residuals of the used scans divided
+    by their predicted noise have the correlation :func:`correlation_matrix` of the
+    prediction's model (identity when the noise is white), and ``T(v)`` maps raw (2n, k)
+    columns to ``L^-1 (v / sigma)`` over the used scans (L the Cholesky factor), so that
+    every chi^2 below is a sum of independent unit-variance terms.
+    """
+
+    def __init__(self, obs: Observations, pred: Prediction, base_terms: Sequence[str],
+                 base_columns: np.ndarray | None = None, offset_scale: np.ndarray | None = None):
+        self.obs = obs
+        #: how much of a pointing error each scan's measured offset shows (a partly
+        #: resolved source shows theta_b^2 / (theta_b^2 + theta_s^2) of it, Clark 1968)
+        self.f = np.ones(obs.n) if offset_scale is None else np.asarray(offset_scale, float)
+        self._perps: dict[bytes, tuple] = {}
+        self._chol: dict[bytes, tuple] = {}
+        self.pred = pred
+        self.base_terms = tuple(base_terms)
+        n = obs.n
+        self.n = n
+        self.y = np.concatenate([obs.xel_arcsec - pred.sys_xel, obs.el_arcsec - pred.sys_el])
+        self.y_raw = np.concatenate([obs.xel_arcsec, obs.el_arcsec])
+        self.base = term_columns(self.base_terms, obs) if base_columns is None else base_columns
+        finite = np.isfinite(self.base).all(axis=1)
+        ok = obs.good & finite[:n] & finite[n:] & np.isfinite(self.y[:n]) \
+            & np.isfinite(self.y[n:])
+        self.valid = ok
+        self.sigma = np.concatenate([pred.sig_xel, pred.sig_el]).astype(float)
+        self.scale = np.ones(2)  # per-axis noise scale (estimated when the noise is unknown)
+        self.used = ok.copy()
+        self.extra: list[np.ndarray] = []  # accepted columns (raw, error convention)
+        self.extra_names: list[str] = []
+
+    # ------------------------------------------------------------------ candidates
+    def cand(self, columns: np.ndarray) -> np.ndarray:
+        """Candidate columns as the recordings show them (scaled by the offset scale)."""
+        f2 = np.concatenate([self.f, self.f])
+        return columns * f2[:, None] if columns.ndim == 2 else columns * f2
+
+    # ------------------------------------------------------------------ whitening
+    @property
+    def w(self) -> np.ndarray:
+        """1 / (predicted noise) per row (2n), arcsec^-1."""
+        s = self.sigma * np.repeat(self.scale, self.n)
+        with np.errstate(divide="ignore"):
+            return np.where(s > 0, 1.0 / s, 0.0)
+
+    def rows(self, used: np.ndarray | None = None) -> np.ndarray:
+        used = self.used if used is None else used
+        return np.concatenate([used, used])
+
+    def _factors(self, used: np.ndarray):
+        key = used.tobytes()
+        hit = self._chol.get(key)
+        if hit is None:
+            out = []
+            models = (self.pred.corr_xel, self.pred.corr_el)
+            t = self.obs.t_s[used]
+            for model in models:
+                if model:
+                    c = scipy.linalg.cholesky(correlation_matrix(t, model), lower=True)
+                    # the inverse factor once per set of scans: whitening is then one
+                    # matrix product (many small triangular solves cost more in overhead)
+                    out.append(scipy.linalg.solve_triangular(c, np.eye(c.shape[0]),
+                                                             lower=True))
+                else:
+                    out.append(None)
+            hit = tuple(out)
+            if len(self._chol) > 256:
+                self._chol.clear()
+            self._chol[key] = hit
+        return hit
+
+    def T(self, v: np.ndarray, used: np.ndarray | None = None) -> np.ndarray:
+        """Whiten raw rows ``v`` (2n,) or (2n, k) over the used scans: (2 n_used[, k])."""
+        used = self.used if used is None else used
+        flat = v.ndim == 1
+        vv = v[:, None] if flat else v
+        w = self.w
+        n = self.n
+        parts = []
+        for axis, factor in enumerate(self._factors(used)):
+            sl = slice(axis * n, (axis + 1) * n)
+            x = vv[sl][used] * w[sl][used][:, None]
+            if factor is not None:
+                x = factor @ x
+            parts.append(x)
+        out = np.vstack(parts)
+        return out[:, 0] if flat else out
+
+    def current_columns(self) -> np.ndarray:
+        return np.column_stack([self.base, *self.extra]) if self.extra else self.base
+
+    @property
+    def current_names(self) -> list[str]:
+        return [*self.base_terms, *self.extra_names]
+
+    # ------------------------------------------------------------------ fitting
+    def fit(self, columns: np.ndarray, used: np.ndarray | None = None) -> LinearFit:
+        """Generalized least squares of the data on ``columns`` over the used scans."""
+        used = self.used if used is None else used
+        a = self.T(columns, used)
+        z = self.T(self.y, used)
+        coef, cov = _lstsq(a, z)
+        wres = z - a @ coef
+        resid = (self.y - columns @ coef) * self.w
+        return LinearFit(coef=coef, chi2=float(wres @ wres), resid=resid, cov=cov, wres=wres,
+                         n_used=int(used.sum()))
+
+    def fit_current(self, used: np.ndarray | None = None) -> LinearFit:
+        return self.fit(self.current_columns(), used)
+
+    def mask_for(self, columns: np.ndarray, iterations: int = 2) -> np.ndarray:
+        """The scans a model of ``columns`` keeps (standardized residual <= OUTLIER_Z on both
+        axes), starting from every valid scan: a candidate that explains scans the current
+        model rejects gets them back."""
+        used = self.valid.copy()
+        for _ in range(iterations):
+            f = self.fit(columns, used)
+            r = np.abs(f.resid)
+            keep = self.valid & (r[: self.n] <= OUTLIER_Z) & (r[self.n:] <= OUTLIER_Z)
+            if keep.sum() < max(columns.shape[1], 3) or np.array_equal(keep, used):
+                break
+            used = keep
+        return used
+
+    def update_outliers(self, iterations: int = 2) -> None:
+        """Reject scans whose standardized residual exceeds OUTLIER_Z on either axis (and,
+        with unknown noise, re-estimate each axis' noise scale from the kept scans)."""
+        for _ in range(iterations):
+            f = self.fit_current()
+            if not self.pred.known_noise:
+                self._rescale(f)
+                f = self.fit_current()
+            r = np.abs(f.resid)
+            keep = self.valid & (r[: self.n] <= OUTLIER_Z) & (r[self.n:] <= OUTLIER_Z)
+            if keep.sum() < max(self.current_columns().shape[1], 3):
+                break
+            if np.array_equal(keep, self.used):
+                break
+            self.used = keep
+        if not self.pred.known_noise:
+            self._rescale(self.fit_current())
+        self._perps.clear()
+
+    def _rescale(self, f: LinearFit) -> None:
+        """Per-axis noise scale from the residual rms, corrected for the fitted columns."""
+        n_used = f.n_used
+        m = self.current_columns().shape[1]
+        dof = max(2 * n_used - m, 1)
+        factor = 2 * n_used / dof
+        for axis in range(2):
+            part = f.wres[axis * n_used:(axis + 1) * n_used]
+            ms = float(np.mean(part**2)) * factor if part.size else 1.0
+            if ms > 0:
+                self.scale[axis] *= math.sqrt(ms)
+        self._perps.clear()
+
+    # ------------------------------------------------------------------ tests
+    def projector(self, used: np.ndarray | None = None):
+        """A function raw v (2n, k) -> P_perp T(v): whitened over the used scans, with the
+        current model projected out."""
+        used = self.used if used is None else used
+        a = self.T(self.current_columns(), used)
+        q, r = np.linalg.qr(a)
+        d = np.abs(np.diag(r))
+        keep = d > 1e-10 * max(float(d.max()) if d.size else 0.0, 1e-300)
+        q = q[:, keep]
+
+        def perp(v: np.ndarray) -> np.ndarray:
+            vr = self.T(v, used)
+            return vr - q @ (q.T @ vr)
+
+        return perp
+
+    def perp_for(self, used: np.ndarray):
+        """Cached projector of the current model over the scans ``used`` and the projected
+        data: (perp, z_perp)."""
+        key = used.tobytes() + bytes([len(self.extra)])
+        hit = self._perps.get(key)
+        if hit is None:
+            perp = self.projector(used)
+            hit = (perp, perp(self.y[:, None])[:, 0])
+            if len(self._perps) > 64:
+                self._perps.clear()
+            self._perps[key] = hit
+        return hit
+
+    def gof(self) -> dict[str, dict[str, float]]:
+        """Per-axis goodness of fit of the current model against the predicted noise:
+        rms of the decorrelated residual (1 when the noise is as predicted), chi^2, dof, p."""
+        f = self.fit_current()
+        n_used = f.n_used
+        m = self.current_columns().shape[1]
+        out = {}
+        for axis, name in ((0, "xel"), (1, "el")):
+            part = f.wres[axis * n_used:(axis + 1) * n_used]
+            dof = max(n_used - m / 2.0, 1.0)
+            chi2 = float(part @ part)
+            p = float(stats.chi2.sf(chi2, dof)) if self.pred.known_noise else float("nan")
+            out[name] = {"ratio": math.sqrt(chi2 / dof), "chi2": chi2, "dof": dof, "p": p,
+                         "n": n_used}
+        return out
+
+    def matches_noise(self, level: float = 0.05) -> bool:
+        """Whether both axes' residuals are consistent with the predicted noise."""
+        if not self.pred.known_noise:
+            return False
+        return all(v["p"] > level for v in self.gof().values())
+
+    def sky_rms(self, columns: np.ndarray | None = None, used: np.ndarray | None = None) -> float:
+        """TPOINT Sky RMS (arcsec) of the raw total errors after an unweighted fit of
+        ``columns`` (default: the current model) over the used scans."""
+        columns = self.current_columns() if columns is None else columns
+        used = self.used if used is None else used
+        rows = self.rows(used)
+        coef, _ = _lstsq(columns[rows], self.y_raw[rows])
+        r = (self.y_raw - columns @ coef).reshape(2, -1)[:, used]
+        return math.sqrt(float(np.mean(r[0] ** 2 + r[1] ** 2)))
+
+    def cv_chi2(self, columns: np.ndarray, folds: np.ndarray,
+                refit=None, used: np.ndarray | None = None) -> float:
+        """Held-out chi^2: each fold predicted from a fit to the others (whitened units).
+        ``refit(train_mask) -> columns`` re-derives nonlinear shapes on the training data."""
+        total = 0.0
+        used = self.used if used is None else used
+        for k in np.unique(folds[used]):
+            test = used & (folds == k)
+            train = used & (folds != k)
+            cols = columns if refit is None else refit(train)
+            f = self.fit(cols, train)
+            r = self.T(self.y - cols @ f.coef, test)
+            total += float(r @ r)
+        return total
+
+    def cv_sky_rms(self, columns: np.ndarray, folds: np.ndarray) -> float:
+        """Held-out Sky RMS (arcsec): raw residuals of each fold predicted from an
+        unweighted fit to the others."""
+        sq = 0.0
+        count = 0
+        for k in np.unique(folds[self.used]):
+            test = self.used & (folds == k)
+            train = self.used & (folds != k)
+            rows = self.rows(train)
+            coef, _ = _lstsq(columns[rows], self.y_raw[rows])
+            r = (self.y_raw - columns @ coef).reshape(2, -1)[:, test]
+            sq += float(np.sum(r**2))
+            count += int(test.sum())
+        return math.sqrt(sq / max(count, 1))
+
+
+def _lstsq(a: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Least squares with a pseudo-inverse covariance (rank-deficient columns get 0)."""
+    if a.shape[1] == 0:
+        return np.zeros(0), np.zeros((0, 0))
+    u, s, vt = scipy.linalg.svd(a, full_matrices=False, lapack_driver="gesdd")
+    keep = s > 1e-10 * s[0] if s.size and s[0] > 0 else np.zeros_like(s, dtype=bool)
+    inv = np.where(keep, 1.0 / np.where(keep, s, 1.0), 0.0)
+    uz = u.T @ z
+    coef = vt.T @ ((inv[:, None] if uz.ndim == 2 else inv) * uz)
+    cov = (vt.T * inv**2) @ vt
+    return coef, cov
+
+
+def folds_for(obs: Observations, k: int = 5) -> np.ndarray:
+    """Held-out folds: whole nights when the data span more than a day and a half, else k
+    folds interleaved in time order (deterministic)."""
+    n = obs.n
+    if obs.has_time and np.ptp(obs.t_s) > 1.5 * 86400.0:
+        lon = float(obs.meta.get("longitude_deg", 0.0))
+        local_day = np.floor((obs.t_s / 3600.0 + lon / 15.0 - 12.0) / 24.0)
+        _, folds = np.unique(local_day, return_inverse=True)
+        if folds.max() >= 1:
+            return folds
+    order = np.argsort(obs.t_s, kind="stable")
+    folds = np.empty(n, dtype=int)
+    folds[order] = np.arange(n) % k
+    return folds

@@ -1,0 +1,220 @@
+"""antsim diagnose without simulation: the library, the new effects, the statistics on
+synthetic data of known noise, the JSON contract, the command line and the real TPOINT data.
+
+Synthetic data: random positions over the sky, the eight TPOINT terms, white noise of known
+rms, fixed seeds. Real data tests read ../shared/data/real and skip when it is absent.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from antsim.cli import main as cli
+from antsim.diagnose import diagnose, load_observations
+from antsim.diagnose.candidates import CANDIDATES, candidate, source_rates_arcsec_s
+from antsim.diagnose.data import Observations
+from antsim.diagnose.problem import term_columns
+from antsim.effects import EFFECTS
+from antsim.effects.harmonics import AzimuthTrack2A, HarmonicEffect
+
+REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
+FINDING_KEYS = {"effect", "terms", "explanation", "where", "params", "significance",
+                "sky_rms_before_arcsec", "sky_rms_after_arcsec"}
+
+
+def synthetic(n: int = 160, seed: int = 3, noise_arcsec: float = 1.0,
+              extra: dict[str, float] | None = None, lat_deg: float = 38.43) -> Observations:
+    """TPOINT-like observations: random (az, el), eight terms, white noise (arcsec)."""
+    rng = np.random.default_rng(seed)
+    az = rng.uniform(0.0, 2 * math.pi, n)
+    el = np.radians(rng.uniform(15.0, 85.0, n))
+    geo = Observations(t_s=np.arange(n, dtype=float), az_rad=az, el_rad=el,
+                       xel_arcsec=np.zeros(n), el_arcsec=np.zeros(n), good=np.ones(n, bool),
+                       meta={"latitude_deg": lat_deg}, kind="tpoint")
+    truth = {"IA": 30.0, "IE": -12.0, "NPAE": 5.0, "CA": -8.0, "AN": 4.0, "AW": -6.0,
+             "TF": 10.0, "TX": 2.0, **(extra or {})}
+    err = term_columns(list(truth), geo) @ np.array(list(truth.values()))
+    err += rng.normal(0.0, noise_arcsec, 2 * n)
+    return Observations(t_s=geo.t_s, az_rad=az, el_rad=el, xel_arcsec=err[:n],
+                        el_arcsec=err[n:], good=geo.good, meta=geo.meta, kind="tpoint")
+
+
+# ------------------------------------------------------------------------------ the library
+def test_library_covers_the_signature_table_and_the_non_harmonic_effects():
+    names = {c.name for c in CANDIDATES}
+    required = {"az_track_2a", "az_track_3a", "az_runout_1a", "az_runout_2a", "el_nod_1a",
+                "el_eccentricity", "el_eccentricity_2e", "refraction", "gravity",
+                "feed_offset", "sunset_drift", "temperature_drift", "clock_error",
+                "servo_lag", "backlash", "polarization_squint", "source_structure",
+                "beam_width", "exact_tilt_collimation"}
+    assert required <= names
+    for c in CANDIDATES:
+        d = c.describe()
+        assert d["signature"] and d["explanation"] and d["parameters"], c.name
+        if c.effect not in (None, "terms"):
+            assert c.effect in EFFECTS, c.name  # the simulator can reproduce it
+    assert candidate("az_track_2a").terms == ("HESA2", "HECA2")
+
+
+def test_harmonic_effect_amplitude_and_phase_round_trip():
+    e = AzimuthTrack2A(amplitude_arcsec=6.0, phase_deg=30.0)
+    coeff = e.coefficients()
+    assert coeff["HESA2"] == pytest.approx(6.0 * math.cos(math.radians(30.0)))
+    assert coeff["HECA2"] == pytest.approx(6.0 * math.sin(math.radians(30.0)))
+    amp, phase = HarmonicEffect.amplitude_phase(coeff["HESA2"], coeff["HECA2"])
+    assert (amp, phase) == pytest.approx((6.0, 30.0))
+    # the effect's error is minus its TPOINT correction (indicated - true)
+    from antsim.effects.base import PointingState
+
+    st = PointingState(t_s=0.0, az_rad=0.4, el_rad=0.7)
+    d_az, d_el = e.pointing_error(st)
+    expected = -(coeff["HESA2"] * math.sin(0.8) + coeff["HECA2"] * math.cos(0.8))
+    assert d_az == 0.0
+    assert d_el == pytest.approx(math.radians(expected / 3600.0), rel=1e-9)
+
+
+def test_new_effects_load_from_a_scenario(ghigo_text, write_scenario):
+    from antsim.scenario import load_scenario
+    from controller.errors import InputError
+
+    blocks = ('\n[[truth.effects]]\neffect = "az_track_3a"\namplitude_arcsec = 5.0\n'
+              'phase_deg = 10.0\n\n[[truth.effects]]\neffect = "temperature_drift"\n'
+              'arcsec_per_k = 1.5\ntau_s = 3600.0\nreference_c = 4.0\n')
+    sc = load_scenario(write_scenario(ghigo_text + blocks))
+    names = [e.name for e in sc.effects]
+    assert names[-2:] == ["az_track_3a", "temperature_drift"]
+    bad = ghigo_text + '\n[[truth.effects]]\neffect = "temperature_drift"\ntau_s = -5.0\n'
+    with pytest.raises(InputError, match="tau_s"):
+        load_scenario(write_scenario(bad, name="bad.toml"))
+
+
+def test_temperature_drift_lags_the_air():
+    from antsim.effects.drifts import structure_temperature_c
+
+    t = np.arange(0.0, 2 * 86400.0, 60.0)
+    air = 5.0 + 5.0 * np.sin(2 * math.pi * t / 86400.0)
+    lagged = structure_temperature_c(t, air, 3600.0)
+    # on the second day a first-order lag of a daily sinusoid peaks atan(w tau)/w later:
+    # 3465 s for tau = 1 h
+    day2 = t >= 86400.0
+    late = t[day2][np.argmax(lagged[day2])] - t[day2][np.argmax(air[day2])]
+    assert late == pytest.approx(86400.0 / (2 * math.pi) * math.atan(2 * math.pi * 3600.0
+                                                                     / 86400.0), abs=120.0)
+    assert np.array_equal(structure_temperature_c(t, air, 0.0), air)
+
+
+def test_clock_regressor_is_the_apparent_motion_of_the_source():
+    """dA/dt and dE/dt from (A, E, latitude) agree with the ephemeris to 0.1%."""
+    from controller.astro import Ephemeris, FixedSource, Site
+
+    site = Site(38.43, -79.84, 800.0)
+    src = FixedSource("x", 80.0, 30.0, "icrs")
+    eph = Ephemeris(site, "1990-02-08T17:00:00", 7200.0, (src,))
+    t = np.linspace(600.0, 6600.0, 7)
+    az, el = eph.altaz_rad(0, t)
+    h = 1.0
+    az1, el1 = eph.altaz_rad(0, t + h)
+    az0, el0 = eph.altaz_rad(0, t - h)
+    num_x = ((az1 - az0 + math.pi) % (2 * math.pi) - math.pi) / (2 * h) * np.cos(el)
+    num_e = (el1 - el0) / (2 * h)
+    obs = Observations(t_s=t, az_rad=az, el_rad=el, xel_arcsec=t * 0, el_arcsec=t * 0,
+                       good=np.ones(t.size, bool), meta={"latitude_deg": 38.43})
+    rx, re_ = source_rates_arcsec_s(obs)
+    assert np.allclose(rx, np.degrees(num_x) * 3600.0, rtol=2e-3, atol=0.02)
+    assert np.allclose(re_, np.degrees(num_e) * 3600.0, rtol=2e-3, atol=0.02)
+
+
+# ------------------------------------------------------------------------------ statistics
+def test_data_explained_to_the_noise_give_no_finding():
+    for seed in (3, 4, 5):
+        d = diagnose(synthetic(seed=seed))
+        doc = d.to_json()
+        assert doc["mismatch"] is False and doc["findings"] == [], seed
+
+
+def test_a_hidden_harmonic_is_named_with_its_terms_and_amplitude():
+    """HESA2/HECA2 of 1.2" amplitude in 1" noise on 160 stars: about 8 sigma."""
+    a, phase = 1.2, math.radians(40.0)
+    obs = synthetic(extra={"HESA2": a * math.cos(phase), "HECA2": a * math.sin(phase)})
+    d = diagnose(obs)
+    doc = d.to_json()
+    assert doc["mismatch"] is True
+    first = doc["findings"][0]
+    assert set(first) == FINDING_KEYS
+    assert first["effect"] == "az_track_2a"
+    assert first["terms"] == ["HESA2", "HECA2"]
+    r = d.findings[0].result
+    assert abs(r.amplitude - a) < 3 * r.amplitude_sigma
+    assert first["sky_rms_after_arcsec"] < first["sky_rms_before_arcsec"]
+    assert first["significance"] > 3.0
+    model = d.updated_model()
+    assert {"HESA2", "HECA2"} <= set(model.names)
+
+
+def test_a_term_the_model_mimics_is_refused_in_tpoints_words():
+    """sin E on top of IE, TF (cos E) and TX (cot E) over 15-85 deg: r > 0.95."""
+    d = diagnose(synthetic(extra={"HESE": 40.0}, noise_arcsec=0.5))
+    words = [r.reason for r in d.selection.refused]
+    assert any("el_eccentricity" in w and "cannot reliably be distinguished" in w
+               for w in words), words
+    assert "el_eccentricity" not in [f.effect for f in d.findings]
+
+
+# ------------------------------------------------------------------------------ command line
+def test_diagnose_command_on_tpoint_data_json(tmp_path, capsys):
+    from controller.tpoint import RunParameters, TPointData, write_tpoint
+
+    obs = synthetic(extra={"HASA2": 1.5}, seed=7)
+    az_raw = np.degrees(obs.az_rad + np.radians(obs.xel_arcsec / 3600.0) / np.cos(obs.el_rad))
+    el_raw = np.degrees(obs.el_rad) + obs.el_arcsec / 3600.0
+    data = TPointData.from_azel("synthetic", RunParameters(38.43), np.degrees(obs.az_rad),
+                                np.degrees(obs.el_rad), az_raw, el_raw)
+    path = tmp_path / "syn.dat"
+    write_tpoint(data, path)
+    assert cli(["diagnose", str(path), "--json", "--out", str(tmp_path / "out")]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["findings"][0]["effect"] == "az_runout_2a"
+    assert (tmp_path / "out" / "model_updated.dat").exists()
+    assert (tmp_path / "out" / "diagnose.json").exists()
+
+
+def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
+    assert cli(["diagnose", str(tmp_path / "missing.ecsv")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no such file" in err[0]
+    assert cli(["diagnose", str(tmp_path / "missing.ecsv"), "--sims", "1"]) == 2
+    assert cli(["blindtest", "--n", "0"]) == 2
+    assert "--n" in capsys.readouterr().err
+
+
+def test_list_prints_the_library(capsys):
+    assert cli(["diagnose", "x", "--list"]) == 0
+    out = capsys.readouterr().out
+    assert "az_track_2a [HESA2 HECA2]" in out and "sunset_drift" in out
+
+
+# ------------------------------------------------------------------------------ real data
+@pytest.mark.skipif(not (REAL / "auxtel_20200315.dat").exists(), reason="no ../shared/data")
+def test_auxtel_stays_parsimonious_and_reports_the_degeneracy():
+    d = diagnose(load_observations(REAL / "auxtel_20200315.dat"))
+    assert d.baseline.terms == ("IA", "IE", "NPAE", "CA", "AN", "AW", "TF", "TX")
+    assert len(d.findings) <= 4
+    text = d.text()
+    assert "cannot reliably be distinguished" in text
+    assert any("TF" in w and "TX" in w for w in d.degeneracies()), d.degeneracies()
+    s = d.summary
+    assert s["cv_sky_rms_after_arcsec"] < s["cv_sky_rms_before_arcsec"]
+
+
+@pytest.mark.skipif(not (REAL / "mmt_20210821_k_and_e.dat").exists(), reason="no ../shared/data")
+def test_mmt_needs_at_most_a_small_addition():
+    d = diagnose(load_observations(REAL / "mmt_20210821_k_and_e.dat"))
+    assert len(d.findings) <= 1
+    s = d.summary
+    assert s["sky_rms_before_arcsec"] == pytest.approx(0.9318, abs=0.002)
+    assert s["cv_sky_rms_after_arcsec"] <= s["cv_sky_rms_before_arcsec"] + 1e-9
