@@ -389,10 +389,13 @@ def _gain_curve(el_deg: np.ndarray, curve: Sequence[tuple[float, float]]) -> np.
 def amplitude_figure(el_deg, amp_k, source, path: str | Path, *, good=None,
                      sources: Sequence[str] = STRONG_SOURCES,
                      gain_curve: Sequence[tuple[float, float]] = REPORT_GAIN_CURVE,
-                     title: str = "", formats: Sequence[str] = ("png",)) -> FigureFile:
+                     title: str = "", formats: Sequence[str] = ("png",),
+                     fitted=None) -> FigureFile:
     """Fig. 4: amplitude (K, mean of the two scan axes) of the strong ``sources`` against
     elevation (deg), and the same normalised by each source's median above 30 deg, with the
-    report's relative gain curve (section V: flat above 30 deg, 95% at 20, 90% at 10)."""
+    report's relative gain curve (section V: flat above 30 deg, 95% at 20, 90% at 10).
+    ``fitted``: a gain curve fitted to this run (``controller.gaincurve.ElevationGainFit``),
+    drawn dashed with its knots and their errors."""
     el_deg = np.asarray(el_deg, float)
     amp_k = np.asarray(amp_k, float)
     source = np.asarray(source).astype(str)
@@ -414,6 +417,11 @@ def amplitude_figure(el_deg, amp_k, source, path: str | Path, *, good=None,
                            label=f"{name} / {ref:.2f} K")
         ax_rel.plot(grid, _gain_curve(grid, gain_curve), "k-", lw=1.5,
                     label="1990 report, section V")
+        if fitted is not None:
+            ax_rel.plot(grid, fitted.gain(grid), "r--", lw=1.3,
+                        label="fitted, opacity-corrected amplitudes")
+            ax_rel.errorbar(fitted.knots_deg[:-1], fitted.gains, yerr=fitted.sigma, fmt="rs",
+                            ms=4, capsize=2)
         if not present:
             for ax in (ax_abs, ax_rel):
                 ax.text(0.5, 0.5, "no good scans of " + " or ".join(sources), ha="center",
@@ -432,6 +440,11 @@ def amplitude_figure(el_deg, amp_k, source, path: str | Path, *, good=None,
                    "and 90% at 10\N{DEGREE SIGN} (1990 report, section V; black line). The "
                    "measured amplitudes also include atmospheric extinction, exp(-tau / sin E), "
                    "and scatter from pointing errors during the scan.")
+        if fitted is not None:
+            caption += (" The red dashed line and squares (with 1-sigma errors) are the gain "
+                        "curve fitted to this run: amplitudes corrected for the cross-axis "
+                        "pointing offset and for extinction with the measured zenith opacity, "
+                        "each source scaled by its own fitted peak (controller.gaincurve).")
         return _figure_file(fig, Path(path), title, caption, formats)
 
 
@@ -800,7 +813,7 @@ def run_figures(rows, fits: Mapping[str, FitResult | None], out_dir: str | Path,
                 start_label: str = "", el_limit_deg: float | None = None,
                 reference_rms: Mapping[str, tuple[float, float]] | None = None,
                 gain_curve: Sequence[tuple[float, float]] = REPORT_GAIN_CURVE,
-                formats: Sequence[str] = ("png",)) -> list[FigureFile]:
+                formats: Sequence[str] = ("png",), gain_fit=None) -> list[FigureFile]:
     """The figures of one run into ``out_dir``: see the module docstring.
 
     ``rows``: the recordings (row dicts or an astropy Table); ``fits``: fits A-F as from
@@ -833,7 +846,7 @@ def run_figures(rows, fits: Mapping[str, FitResult | None], out_dir: str | Path,
         amplitude_figure(obs.el_deg, obs.amp_k, obs.source, out / "fig4_amplitude.png",
                          good=obs.good, gain_curve=gain_curve,
                          title=f"Fig. 4  {prefix}amplitude against elevation, strong sources",
-                         formats=formats),
+                         formats=formats, fitted=gain_fit),
     ]
     fit_a = fits.get("A")
     if fit_a is not None:

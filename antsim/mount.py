@@ -8,6 +8,10 @@ that is quickest to reach while leaving ``wrap_margin_s`` of tracking before a l
 
 The 45-ft's own slew figures were not found (DESIGN section 5); the scenario states the
 values used and their analogues (VLBA: 90 deg/min in azimuth, 30 deg/min in elevation).
+
+An equatorial mount uses the same logic with hour angle as the first axis (its limits around
+0; the "wrap" then only maps the trajectory's [0, 360) hour angle onto them) and declination
+as the second.
 """
 
 from __future__ import annotations
@@ -32,11 +36,17 @@ class AxisConfig:
 
 @dataclass(frozen=True)
 class MountConfig:
+    """The mount. ``kind`` "altaz": axes ``az`` (on a cable wrap) and ``el``; "equatorial":
+    ``az`` is the hour-angle axis (limits around 0, no wrap needed) and ``el`` the
+    declination axis: the motion logic is the same for both. ``feed_speed_deg_s``: how fast
+    a turnable feed box rotates (assumption: 2 deg/s)."""
+
     kind: str = "altaz"
     az: AxisConfig = AxisConfig(1.5, 0.5, -90.0, 450.0)
     el: AxisConfig = AxisConfig(0.5, 0.5, 5.0, 90.0)
     settle_s: float = 4.0
     wrap_margin_s: float = 3600.0
+    feed_speed_deg_s: float = 2.0
 
 
 def move_time_s(distance_deg, speed_deg_s: float, accel_deg_s2: float):

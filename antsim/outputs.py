@@ -2,7 +2,9 @@
 
 ``fit.json`` (fit A, in the ``antsim fit --json`` schema), ``fit_variants.json`` (fits A-F),
 ``fit.txt`` (tables in the style of the 1990 report's Tables 2 and 3) and ``model.dat`` (fit
-A as a TPOINT ``.mod`` file, usable as ``antsim run --model DIR/model.dat``).
+A as a TPOINT ``.mod`` file, usable as ``antsim run --model DIR/model.dat``). Where there are
+calibrators (:func:`controller.gaincurve.calibrate`), ``gaincurve.json``: the zenith opacity
+(tipping scans or the scans' own off-source powers) and the fitted gain curve.
 """
 
 from __future__ import annotations
@@ -74,16 +76,27 @@ def write_outputs(result: RunResult, report: bool = True) -> str:
                                       encoding="utf-8")
         caption = f"{result.scenario.name} seed {result.seed}: fit A"
         write_mod(TPointModel.from_fit(fit_a, caption=caption), out / "model.dat")
-    title = (f"{result.scenario.name}, seed {result.seed}: {result.n_scans} cross scans, "
+    from controller.gaincurve import calibrate
+
+    program = result.program
+    result.calibration = calibrate(result.rows, result.scenario.controller,
+                                   getattr(program, "tippings", ()))
+    if result.calibration is not None:
+        (out / "gaincurve.json").write_text(
+            json.dumps(result.calibration.to_json(), indent=2) + "\n", encoding="utf-8")
+    what = "star offsets" if result.scenario.controller.method == "optical" else "cross scans"
+    title = (f"{result.scenario.name}, seed {result.seed}: {result.n_scans} {what}, "
              f"model in use {result.model.name}")
     (out / "fit.txt").write_text(fit_tables(fits, title), encoding="utf-8")
     good = sum(1 for r in result.rows if r["polarization"] == "AVG" and r["good"])
-    summary = (f"{result.scenario.name}: {result.n_scans} cross scans ({good} good) in "
+    summary = (f"{result.scenario.name}: {result.n_scans} {what} ({good} good) in "
                f"{result.scenario.duration_s / 3600:.1f} h, seed {result.seed}")
     if fit_a is not None:
         summary += (f"; fit A: {fit_a.n_used} points, xel rms {fit_a.xel_rms_arcsec:.1f}\", "
                     f"el rms {fit_a.el_rms_arcsec:.1f}\"")
     written = "recordings.ecsv truth.json fit.json fit_variants.json fit.txt model.dat"
+    if result.calibration is not None:
+        written += " gaincurve.json"
     if report:
         from .report import write_run_report
 

@@ -362,7 +362,8 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
     el_limit = scenario.controller.scheduler.elevation_min_deg
     figures = run_figures(result.rows, fits, out / "figures", truth_arcsec=truth or None,
                           name=scenario.name, start_label=f"UTC {scenario.epoch_utc}",
-                          el_limit_deg=el_limit, reference_rms=reference)
+                          el_limit_deg=el_limit, reference_rms=reference,
+                          gain_fit=_elevation_gain_fit(result))
     good = sum(1 for r in result.rows if r["polarization"] == "AVG" and r["good"])
     fit_a = fits.get("A")
     summary = (f"{scenario.description or scenario.name}. Campaign of "
@@ -414,3 +415,10 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
     path = write_report(out / "report.html", f"antsim run: {scenario.name}, seed {result.seed}",
                         sections, subtitle=scenario.description)
     return path, figures
+
+
+def _elevation_gain_fit(result: RunResult):
+    """The run's fitted elevation gain curve (controller.gaincurve), if one was fitted."""
+    calibration = getattr(result, "calibration", None)
+    fit = getattr(calibration, "fit", None)
+    return fit if hasattr(fit, "knots_deg") else None

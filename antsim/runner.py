@@ -19,7 +19,7 @@ import simpy
 
 from controller.model import PointingModel
 from controller.program import ControlProgram
-from controller.recordings import RecordingWriter
+from controller.recordings import RecordingWriter, recording_columns
 
 from ._version import __version__
 from .scenario import Scenario
@@ -41,6 +41,8 @@ class RunResult:
     world: World | None = None
     wall_s: float = 0.0
     out_dir: Path | None = None
+    #: the gain curve and opacity (controller.gaincurve.Calibration), set by write_outputs
+    calibration: object = None
 
     @property
     def n_scans(self) -> int:
@@ -90,6 +92,9 @@ def recording_meta(scenario: Scenario, seed: int, model: PointingModel) -> dict:
         "model": {"name": model.name, "terms_arcsec": model.as_dict()},
         "sign_convention": "xel/el: correction to apply (indicated minus true); total "
                            "pointing error = measured + model + applied",
+        **({"mount": c.mount} if c.mount != "altaz" else {}),
+        **({"method": c.method} if c.method != "five_point" else {}),
+        **({"feed_angles_deg": list(c.feed_angles_deg)} if c.feed_angles_deg else {}),
     }
 
 
@@ -119,7 +124,12 @@ def simulate(scenario: Scenario, seed: int | None = None, model: PointingModel |
         if sink:
             sink(scan_rows)
 
-    program = ControlProgram(scenario.controller, world.antenna, sink=collect, progress=progress)
+    program_class: type[ControlProgram] = ControlProgram
+    if scenario.controller.method == "optical":
+        from controller.optical import OpticalPointingProgram
+
+        program_class = OpticalPointingProgram
+    program = program_class(scenario.controller, world.antenna, sink=collect, progress=progress)
     check_scenario(scenario, program.observer, program.targets)
     env.run(until=env.process(program.run(env)))
     return RunResult(scenario=scenario, seed=seed, model=model, rows=rows, truth=world.truth(),
@@ -168,7 +178,10 @@ def run_campaign(scenario: Scenario, out_dir: str | Path, seed: int | None = Non
     meta = recording_meta(scenario, seed, use_model)
     check_scenario(scenario)  # refuse before anything is written
     progress, close_bar = _progress(scenario.duration_s, show_progress)
-    with RecordingWriter(out / "recordings.ecsv", meta, resume=resume) as writer:
+    columns = recording_columns(scenario.controller.mount,
+                                bool(scenario.controller.feed_angles_deg))
+    with RecordingWriter(out / "recordings.ecsv", meta, resume=resume,
+                         columns=columns) as writer:
         try:
             result = simulate(scenario, seed, model, sink=writer.write_scan, progress=progress)
         finally:

@@ -5,6 +5,12 @@ truth (a pointing model plus a list of physical effects), the receiver, beam, at
 weather, and the control program's own settings (the pointing model in use, the scan, the
 scheduler). Every bad value becomes one :class:`~controller.errors.InputError` line naming the
 file, the key and the value; unknown keys are errors too. See ``scenarios/ghigo1990.toml``.
+
+Beyond the 45-ft (``docs/telescopes.md``): ``mount.kind = "equatorial"`` (axes hour angle and
+declination; models in TPOINT's equatorial terms, e.g. ``crane11``), ``beam.gain_harmonics``,
+``[camera]`` and ``[stars]`` for optical pointing (``controller.method = "optical"``), and
+``controller.feed_angles_deg``, ``[controller.tipping]``, ``[controller.gain_curve]``,
+``[controller.optical]``.
 """
 
 from __future__ import annotations
@@ -18,16 +24,21 @@ from controller.astro import Site
 from controller.config import (
     CatalogSource,
     ControllerConfig,
+    GainCurveConfig,
+    OpticalConfig,
     ScanConfig,
     SchedulerConfig,
     SearchConfig,
+    TippingConfig,
 )
 from controller.errors import InputError
+from controller.gaincurve import HARMONIC_NAMES
 from controller.model import NAMED_MODELS, PointingModel
 from controller.terms import TermError, get_term
 
 from .atmosphere import AtmosphereConfig
 from .beam import BeamConfig
+from .camera import CameraConfig, synthetic_stars
 from .effects import EFFECTS
 from .mount import AxisConfig, MountConfig
 from .receiver import ChannelConfig, ReceiverConfig
@@ -39,6 +50,10 @@ __all__ = ["EffectSpec", "Scenario", "load_scenario"]
 
 UNIT_ARCSEC = {"arcsec": 1.0, "arcmin": 60.0, "deg": 3600.0}
 ESTIMATORS = ("clark", "lsq")
+#: effects that an equatorial mount accepts: the others model an alt-az mount's geometry,
+#: its elevation-dependent structure or its azimuth track
+EQUATORIAL_EFFECTS = ("tracking_jitter", "clock_error", "polarization_squint", "beam_width",
+                      "source_structure", "refraction_anomaly")
 
 
 @dataclass(frozen=True)
@@ -70,9 +85,17 @@ class Scenario:
     effects: tuple[EffectSpec, ...]
     controller: ControllerConfig
     text: str = field(default="", repr=False)
+    #: the TV camera of optical pointing (None: radio five-point scans only)
+    camera: CameraConfig | None = None
 
     def with_controller_model(self, model: PointingModel) -> Scenario:
-        """The same scenario with another pointing model in use by the controller."""
+        """The same scenario with another pointing model in use by the controller (on an
+        equatorial mount the model's term names are re-bound to equatorial terms)."""
+        if self.mount.kind == "equatorial":
+            from controller.equatorial import equatorial_model
+
+            model = equatorial_model(model.names, self.site.latitude_deg,
+                                     list(model.values_arcsec), model.name)
         return replace(self, controller=replace(self.controller, model=model))
 
     def with_effects(self, effects: tuple[EffectSpec, ...]) -> Scenario:
@@ -98,7 +121,10 @@ def load_scenario(path: str | Path) -> Scenario:
     receiver = _receiver(root.table("receiver", {}))
     atmosphere = _atmosphere(root.table("atmosphere", {}))
     weather = _weather(root.table("weather", {}))
-    sources = tuple(_source(t) for t in root.tables("sources"))
+    camera = _camera(root.table("camera")) if "camera" in root else None
+    sources = tuple(_source(t) for t in root.tables("sources", []))
+    if "stars" in root:
+        sources += _stars(root.table("stars"))
     if not sources:
         raise root.error("sources", [], "the scenario lists no sources")
     names = [s.name for s in sources]
@@ -106,17 +132,18 @@ def load_scenario(path: str | Path) -> Scenario:
         if names.index(s) != i:
             raise root.error(f"sources[{i}].name", s, "duplicate source name")
     truth = root.table("truth", {})
-    truth_model = _model(truth, default="none", base=path.parent)
-    effects = tuple(_effect(t) for t in truth.tables("effects", []))
+    truth_model = _model(truth, default="none", base=path.parent, mount=mount, site=site)
+    effects = tuple(_effect(t, mount) for t in truth.tables("effects", []))
     _check_effect_sources(effects, names, truth)
     truth.finish()
     controller = _controller(root.table("controller", {}), site, epoch, duration_s, sources,
-                             receiver, mount, name, path.parent)
+                             receiver, mount, name, path.parent, camera)
     root.finish()
     return Scenario(name=name, path=str(path), description=description, seed=seed, site=site,
                     epoch_utc=epoch, duration_s=duration_s, mount=mount, beam=beam,
                     receiver=receiver, atmosphere=atmosphere, weather=weather, sources=sources,
-                    truth_model=truth_model, effects=effects, controller=controller, text=text)
+                    truth_model=truth_model, effects=effects, controller=controller, text=text,
+                    camera=camera)
 
 
 def _site(t: Table) -> Site:
@@ -160,18 +187,30 @@ def _axis(t: Table, default: AxisConfig) -> AxisConfig:
 
 def _mount(t: Table) -> MountConfig:
     d = MountConfig()
-    kind = t.string("kind", d.kind, choices=("altaz",))
-    az = _axis(t.table("az", {}), d.az)
-    el = _axis(t.table("el", {}), d.el)
-    if az.max_deg - az.min_deg < 360.0:
-        raise t.error("az.max_deg", az.max_deg, "the azimuth range must span at least 360 deg")
-    if not (0.0 <= el.min_deg < 90.0):
-        raise t.error("el.min_deg", el.min_deg, "must be in 0..90 deg")
-    if el.max_deg > 90.0:
-        raise t.error("el.max_deg", el.max_deg, "must be <= 90 deg")
+    kind = t.string("kind", d.kind, choices=("altaz", "equatorial"))
+    if kind == "equatorial":  # [mount.ha] and [mount.dec] name the axes
+        az = _axis(t.table("ha"), d.az)
+        el = _axis(t.table("dec"), d.el)
+        if not (-180.0 <= az.min_deg < 0.0 < az.max_deg <= 180.0):
+            raise t.error("ha", [az.min_deg, az.max_deg],
+                          "the hour-angle limits must lie within -180..180 deg around 0")
+        if not (-90.0 <= el.min_deg < el.max_deg <= 90.0):
+            raise t.error("dec", [el.min_deg, el.max_deg], "must lie within -90..90 deg")
+    else:
+        az = _axis(t.table("az", {}), d.az)
+        el = _axis(t.table("el", {}), d.el)
+        if az.max_deg - az.min_deg < 360.0:
+            raise t.error("az.max_deg", az.max_deg,
+                          "the azimuth range must span at least 360 deg")
+        if not (0.0 <= el.min_deg < 90.0):
+            raise t.error("el.min_deg", el.min_deg, "must be in 0..90 deg")
+        if el.max_deg > 90.0:
+            raise t.error("el.max_deg", el.max_deg, "must be <= 90 deg")
     mount = MountConfig(kind=kind, az=az, el=el,
                         settle_s=t.number("settle_s", d.settle_s, min=0.0, max=600.0),
-                        wrap_margin_s=t.number("wrap_margin_s", d.wrap_margin_s, min=0.0))
+                        wrap_margin_s=t.number("wrap_margin_s", d.wrap_margin_s, min=0.0),
+                        feed_speed_deg_s=t.number("feed_speed_deg_s", d.feed_speed_deg_s,
+                                                  gt=0.0, max=90.0))
     t.finish()
     return mount
 
@@ -186,10 +225,16 @@ def _beam(t: Table) -> BeamConfig:
         raise t.error("efficiency_el_deg", list(el), "must increase")
     if any(not 0.0 < e <= 1.5 for e in eff):
         raise t.error("efficiency", list(eff), "values must be in (0, 1.5]")
+    harmonics = None
+    if "gain_harmonics" in t:  # Crane 1981: relative gain = Y00 + Y10 + Y11e + Y11o terms
+        h = t.table("gain_harmonics")
+        harmonics = tuple(h.number(n, 0.0, min=-2.0, max=2.0) for n in HARMONIC_NAMES)
+        h.finish()
     beam = BeamConfig(
         hpbw_arcmin=t.number("hpbw_arcmin", d.hpbw_arcmin, gt=0.0, max=600.0),
         efficiency_el_deg=el, efficiency=eff,
         gain_k_per_jy=t.number("gain_k_per_jy", d.gain_k_per_jy, gt=0.0, max=100.0),
+        gain_harmonics=harmonics,
     )
     t.finish()
     return beam
@@ -283,21 +328,32 @@ def _source(t: Table) -> SourceConfig:
     return src
 
 
-def _model(t: Table, default: str, base: Path) -> PointingModel:
-    """A pointing model from ``model`` (named, or a .mod/.json file) and ``terms``."""
+def _model(t: Table, default: str, base: Path, mount: MountConfig | None = None,
+           site: Site | None = None) -> PointingModel:
+    """A pointing model from ``model`` (named, or a .mod/.json file) and ``terms``; on an
+    equatorial mount from TPOINT's equatorial terms (:mod:`controller.equatorial`)."""
     spec = t.string("model", default)
     unit = t.string("units", "arcsec", choices=tuple(UNIT_ARCSEC))
     scale = UNIT_ARCSEC[unit]
     values_table = t.table("terms", {})
     values: dict[str, float] = {}
+    equatorial = mount is not None and mount.kind == "equatorial"
+    if equatorial:
+        from controller.equatorial import EQUATORIAL_MODELS, equatorial_model, equatorial_term
     for key in values_table:
         try:
-            values[get_term(key).name] = values_table.number(key) * scale
+            term = (equatorial_term(key, site.latitude_deg) if equatorial else get_term(key))
+            values[term.name] = values_table.number(key) * scale
         except TermError as err:
             raise values_table.error(key, values_table.raw(key), "not a pointing term",
                                      str(err)) from None
     values_table.finish()
-    if spec in NAMED_MODELS:
+    if equatorial:
+        if spec not in EQUATORIAL_MODELS:
+            raise t.error("model", spec, "not a named equatorial model",
+                          f"equatorial models: {', '.join(sorted(EQUATORIAL_MODELS))}")
+        model = equatorial_model(spec, site.latitude_deg)
+    elif spec in NAMED_MODELS:
         model = PointingModel(spec)
     else:
         model = _model_file(t, spec, base)
@@ -322,12 +378,15 @@ def _model_file(t: Table, spec: str, base: Path) -> PointingModel:
     return load_model(path)
 
 
-def _effect(t: Table) -> EffectSpec:
+def _effect(t: Table, mount: MountConfig | None = None) -> EffectSpec:
     name = t.string("effect")
     cls = EFFECTS.get(name)
     if cls is None:
         raise t.error("effect", name, "unknown effect",
                       f"known effects: {', '.join(sorted(EFFECTS))}")
+    if mount is not None and mount.kind == "equatorial" and name not in EQUATORIAL_EFFECTS:
+        raise t.error("effect", name, "models an alt-az mount; not available on an "
+                      "equatorial mount", f"use truth.terms or: {', '.join(EQUATORIAL_EFFECTS)}")
     effect = cls.from_table(t)
     params = effect.params() if name != "terms" else {"terms_arcsec": effect.model.as_dict()}
     return EffectSpec(name, params)
@@ -342,8 +401,9 @@ def _check_effect_sources(effects, names, truth: Table) -> None:
 
 
 def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, receiver,
-                mount: MountConfig, scenario_name: str, base: Path) -> ControllerConfig:
-    model = _model(t, default="none", base=base)
+                mount: MountConfig, scenario_name: str, base: Path,
+                camera: CameraConfig | None = None) -> ControllerConfig:
+    model = _model(t, default="none", base=base, mount=mount, site=site)
     names = [s.name for s in sources]
     scan_t = t.table("scan", {})
     ds = ScanConfig()
@@ -377,6 +437,10 @@ def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, re
         slew_weight=sched_t.number("slew_weight", dsch.slew_weight, min=0.0),
         window=sched_t.string("window", dsch.window, choices=("all", "day", "night")),
         sources=chosen,
+        hour_angle_limit_deg=(
+            sched_t.number("hour_angle_limit_deg",
+                           min(-mount.az.min_deg, mount.az.max_deg) - 2.0, gt=0.0, max=180.0)
+            if mount.kind == "equatorial" else None),
     )
     if sched.elevation_max_deg <= sched.elevation_min_deg:
         raise sched_t.error("elevation_max_deg", sched.elevation_max_deg,
@@ -398,7 +462,20 @@ def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, re
     )
     search_t.finish()
     refraction = t.string("refraction", "weather", choices=("weather", "standard", "none"))
-    fit_terms, fit_name = _fit_spec(t)
+    fit_terms, fit_name = _fit_spec(t, mount, site)
+    method = t.string("method", "five_point", choices=("five_point", "optical"))
+    if method == "optical" and camera is None:
+        raise t.error("method", method, "optical pointing needs a [camera] table")
+    if camera is not None and method != "optical":
+        raise t.error("method", method, "a scenario with a [camera] points optically",
+                      'set controller.method = "optical"')
+    feed_angles = tuple(t.numbers("feed_angles_deg", []))
+    if any(not -360.0 <= f <= 360.0 for f in feed_angles):
+        raise t.error("feed_angles_deg", list(feed_angles), "angles must lie in -360..360 deg")
+    tipping = _tipping(t.table("tipping")) if "tipping" in t else None
+    optical = _optical(t.table("optical")) if "optical" in t else (
+        OpticalConfig() if method == "optical" else None)
+    gain_curve = _gain_curve(t.table("gain_curve"), names) if "gain_curve" in t else None
     t.finish()
     catalog = tuple(CatalogSource(s.name, s.ra_deg, s.dec_deg, s.frame, s.flux_jy)
                     for s in sources)
@@ -406,21 +483,99 @@ def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, re
         site_latitude_deg=site.latitude_deg, site_longitude_deg=site.longitude_deg,
         site_height_m=site.height_m, epoch_utc=epoch, duration_s=duration_s, sources=catalog,
         model=model, scan=scan, scheduler=sched, search=search, refraction=refraction,
-        frequency_ghz=receiver.frequency_ghz, scenario_name=scenario_name, site_name=site.name,
-        fit_terms=fit_terms, fit_model_name=fit_name)
+        frequency_ghz=(camera.frequency_ghz if camera is not None and method == "optical"
+                       else receiver.frequency_ghz),
+        scenario_name=scenario_name, site_name=site.name,
+        fit_terms=fit_terms, fit_model_name=fit_name, mount=mount.kind, method=method,
+        feed_angles_deg=feed_angles, tipping=tipping, optical=optical, gain_curve=gain_curve)
 
 
-def _fit_spec(t: Table) -> tuple[tuple[str, ...], str]:
+def _fit_spec(t: Table, mount: MountConfig | None = None,
+              site: Site | None = None) -> tuple[tuple[str, ...], str]:
     """``fit_model``: a named model or a comma-separated list of terms (default: none)."""
     spec = t.string("fit_model", "")
     if not spec:
         return (), ""
-    if spec in NAMED_MODELS:
-        return NAMED_MODELS[spec], spec
+    lookup = get_term
+    named = NAMED_MODELS
+    if mount is not None and mount.kind == "equatorial":
+        from controller.equatorial import EQUATORIAL_MODELS, equatorial_term
+
+        named = EQUATORIAL_MODELS
+
+        def lookup(n: str):
+            return equatorial_term(n, site.latitude_deg)
+    if spec in named:
+        return named[spec], spec
     names = tuple(n.strip().upper() for n in spec.split(",") if n.strip())
     for n in names:
         try:
-            get_term(n)
+            lookup(n)
         except TermError as err:
             raise t.error("fit_model", spec, f"{n} is not a pointing term", str(err)) from None
     return names, "custom"
+
+
+def _camera(t: Table) -> CameraConfig:
+    d = CameraConfig()
+    cam = CameraConfig(
+        wavelength_um=t.number("wavelength_um", d.wavelength_um, min=0.2, max=30.0),
+        noise_arcsec=t.number("noise_arcsec", d.noise_arcsec, min=0.0, max=600.0),
+        field_arcmin=t.number("field_arcmin", d.field_arcmin, gt=0.0, max=600.0),
+    )
+    t.finish()
+    return cam
+
+
+def _stars(t: Table) -> tuple[SourceConfig, ...]:
+    """``[stars]``: ``count`` synthetic bright stars above ``dec_min_deg`` (antsim.camera)."""
+    count = t.integer("count", min=1, max=5000)
+    dec_min = t.number("dec_min_deg", -30.0, min=-90.0, lt=90.0)
+    t.finish()
+    return tuple(SourceConfig(name, ra, dec, "icrs", 1.0, 0.0, "synthetic bright star")
+                 for name, ra, dec in synthetic_stars(count, dec_min))
+
+
+def _tipping(t: Table) -> TippingConfig:
+    d = TippingConfig()
+    els = tuple(t.numbers("elevations_deg", list(d.elevations_deg), min_length=3))
+    if any(not 5.0 <= e <= 90.0 for e in els):
+        raise t.error("elevations_deg", list(els), "elevations must lie in 5..90 deg")
+    if len(set(els)) < 3:
+        raise t.error("elevations_deg", list(els), "needs at least three different elevations")
+    tip = TippingConfig(
+        elevations_deg=els,
+        azimuth_deg=t.number("azimuth_deg", d.azimuth_deg, min=0.0, lt=360.0),
+        integration_s=t.number("integration_s", d.integration_s, gt=0.0, max=600.0),
+        interval_s=t.number("interval_h", d.interval_s / 3600.0, gt=0.0, max=1000.0) * 3600.0,
+        t_atm_k=t.number("t_atm_k", d.t_atm_k, gt=100.0, max=350.0),
+    )
+    t.finish()
+    return tip
+
+
+def _optical(t: Table) -> OpticalConfig:
+    d = OpticalConfig()
+    opt = OpticalConfig(exposure_s=t.number("exposure_s", d.exposure_s, gt=0.0, max=600.0),
+                        overhead_s=t.number("overhead_s", d.overhead_s, min=0.0, max=3600.0))
+    t.finish()
+    return opt
+
+
+def _gain_curve(t: Table, names: list[str]) -> GainCurveConfig:
+    d = GainCurveConfig()
+    sources = tuple(t.strings("sources", list(d.sources)))
+    for s in sources:
+        if s not in names:
+            raise t.error("sources", s, "unknown source", f"sources are {', '.join(names)}")
+    knots = tuple(t.numbers("knots_deg", list(d.knots_deg), min_length=2))
+    if any(b <= a for a, b in pairwise(knots)):
+        raise t.error("knots_deg", list(knots), "must increase")
+    gc = GainCurveConfig(
+        kind=t.string("kind", d.kind, choices=("elevation", "harmonics")),
+        sources=sources, knots_deg=knots,
+        zenith_opacity=t.number("zenith_opacity", None, min=0.0, max=5.0, allow_none=True),
+        t_atm_k=t.number("t_atm_k", d.t_atm_k, gt=100.0, max=350.0),
+    )
+    t.finish()
+    return gc

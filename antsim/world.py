@@ -14,6 +14,14 @@ How an integration is computed (all vectorized over the samples of the integrati
 4. each source near the beam at its true, refracted position; the beam's response per
    channel (squint included) times flux, gain, elevation efficiency and transmission;
 5. the receiver adds system and sky temperature, gain fluctuations and radiometer noise.
+
+Other mounts and instruments: on an equatorial mount (``scenario.mount.kind``) the encoders,
+the pointing errors and the per-sample jitter live in (hour angle, declination); the beam's
+true direction is converted to azimuth and elevation before step 4 (sources, atmosphere and
+the sky are always alt-az). ``beam.gain_harmonics`` makes the gain a function of hour angle
+and declination (Crane 1981's Y00, Y10, Y11e, Y11o). A feed box turned by the controller
+(:meth:`SimulatedAntenna.set_feed_angle`) sets :class:`PointingState` ``feed_angle_rad``. A
+camera (:mod:`antsim.camera`) answers :meth:`SimulatedAntenna.measure_offset`.
 """
 
 from __future__ import annotations
@@ -28,7 +36,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from controller.astro import Ephemeris, FixedSource
-from controller.protocol import AntennaError, Integration, Trajectory, WeatherReading
+from controller.frames import ALTAZ, MountFrame, altaz_to_hadec
+from controller.protocol import (
+    AntennaError,
+    Integration,
+    OffsetReading,
+    Trajectory,
+    WeatherReading,
+)
 from controller.units import ARCMIN_PER_RAD, RAD_PER_DEG
 
 from .atmosphere import Atmosphere
@@ -76,6 +91,11 @@ def _epoch_hours(epoch_utc: str) -> float:
 class World:
     """Everything that is true in a simulation, built from a :class:`Scenario`."""
 
+    #: the frame of the mount's axes (class default: alt-az, for partial worlds such as
+    #: antsim.plan's member worlds, which are not built by ``__init__``)
+    frame: MountFrame = ALTAZ
+    camera = None
+
     def __init__(self, scenario: Scenario, env, seed: int | None = None):
         self.scenario = scenario
         self.env = env
@@ -91,12 +111,23 @@ class World:
         self._sun = Ephemeris(site, epoch - 1.0 * _day(), self.duration_s + 86400.0
                               + EPHEMERIS_MARGIN_S, ())
         self.weather = weather_model(scenario, component_rng(self.seed, "weather"))
+        self.frame = MountFrame(scenario.mount.kind, site.latitude_deg)
+        camera = getattr(scenario, "camera", None)
         self.sky = Sky(self.ephemeris, scenario.sources, self.weather,
-                       scenario.receiver.frequency_ghz)
+                       camera.frequency_ghz if camera is not None
+                       else scenario.receiver.frequency_ghz)
         self.beam = Beam(scenario.beam)
         self.atmosphere = Atmosphere(scenario.atmosphere)
         self.receiver = Receiver(scenario.receiver, component_rng(self.seed, "receiver"))
-        self.mount = Mount(env, scenario.mount)
+        if self.frame.is_altaz:
+            self.mount = Mount(env, scenario.mount)
+        else:  # an equatorial mount parks at the zenith: hour angle 0, dec = latitude
+            self.mount = Mount(env, scenario.mount, 0.0, site.latitude_deg)
+        self.camera = None
+        if camera is not None:
+            from .camera import Camera
+
+            self.camera = Camera(camera, component_rng(self.seed, "camera"))
         self._clock_error = None
         self.geometry = GeometricEffect(scenario.truth_model)
         self.effects = [self.geometry]
@@ -131,12 +162,24 @@ class World:
     def truth(self) -> dict:
         """The injected truth in the ``truth.json`` schema of DESIGN section 4."""
         model = self.scenario.truth_model
-        return {
+        truth = {
             "seed": int(self.seed),
             "model": model.name,
             "terms": {n: {"value_arcsec": float(v)} for n, v in model.as_dict().items()},
             "effects": [e.truth() for e in self.effects[1:]],
         }
+        if self.scenario.mount.kind != "altaz":
+            truth["mount"] = self.scenario.mount.kind
+        harmonics = getattr(self.beam.config, "gain_harmonics", None)
+        if harmonics is not None:  # the gain curve in K/Jy (controller.gaincurve's form)
+            from controller.gaincurve import HARMONIC_NAMES
+
+            gain = self.beam.config.gain_k_per_jy
+            truth["gain_curve"] = {"form": "harmonics", "coefficients_k_per_jy": {
+                n: gain * float(c) for n, c in zip(HARMONIC_NAMES, harmonics, strict=True)}}
+        if self.scenario.controller.tipping is not None:
+            truth["zenith_opacity"] = float(self.atmosphere.tau0)
+        return truth
 
     def pointing_error_rad(self, state: PointingState) -> tuple[float, float]:
         """Sum of the slowly varying effects' errors (indicated - true) at ``state``."""
@@ -181,14 +224,19 @@ class World:
             j_az, j_el = effect.sample_error(t, state.el_rad)
             beam_az = beam_az - j_az
             beam_el = beam_el - j_el
+        if not self.frame.is_altaz:  # (HA, Dec) of the beam -> azimuth and elevation
+            beam_az, beam_el = self.frame.to_altaz(beam_az, beam_el)
 
         t_src = np.zeros((*np.shape(beam_el), len(channels)))
         sky = self.sky
         for i, src_az, src_el in paths:
-            d_xel = ((src_az - beam_az + math.pi) % (2 * math.pi) - math.pi) * np.cos(src_el)
-            d_el_src = src_el - beam_el
+            if self.frame.is_altaz:
+                d_xel = ((src_az - beam_az + math.pi) % (2 * math.pi) - math.pi) * np.cos(src_el)
+                d_el_src = src_el - beam_el
+            else:  # both scans cross azimuth and elevation: exact offsets (tangent_offsets)
+                d_xel, d_el_src = tangent_offsets(src_az, src_el, beam_az, beam_el)
             scale = (sky.flux_jy[i] * self.beam.config.gain_k_per_jy
-                     * self.beam.efficiency(src_el) * self.atmosphere.transmission(src_el))
+                     * self.efficiency(src_az, src_el) * self.atmosphere.transmission(src_el))
             for c, channel in enumerate(channels):
                 off_x = off_e = 0.0
                 for effect in self.slow_effects:
@@ -200,6 +248,29 @@ class World:
                     float(sky.size_arcmin[i]))
         t_in = t_src + self.atmosphere.emission_k(beam_el)[..., None]
         return self.receiver.sample(t, t_in), (d_az, d_el)
+
+    def efficiency(self, az_rad, el_rad) -> np.ndarray:
+        """Relative gain towards (az, el) (rad): the beam's elevation curve, or with
+        ``beam.gain_harmonics`` the harmonic gain of hour angle and declination."""
+        harmonics = getattr(self.beam.config, "gain_harmonics", None)
+        if harmonics is None:
+            return self.beam.efficiency(el_rad)
+        from controller.gaincurve import harmonic_basis
+
+        ha, dec = altaz_to_hadec(az_rad, el_rad, self.frame.latitude_rad)
+        return harmonic_basis(ha, dec) @ np.asarray(harmonics, dtype=float)
+
+
+def tangent_offsets(src_lon, src_lat, beam_lon, beam_lat) -> tuple[np.ndarray, np.ndarray]:
+    """Offsets (rad) of a source from the beam in the beam's own frame (orthographic
+    projection: cross-axis and along the latitude-like axis), exact on the sphere. The
+    alt-az scans use ``d_az cos(src_el)`` and ``d_el`` instead, which is exact only along one
+    axis at a time (the error is ~ x^2 tan(el) for an offset x in both axes): fine for scans
+    along azimuth or elevation, not for an equatorial mount's scans, which cross both."""
+    d_lon = src_lon - beam_lon
+    cos_s = np.cos(src_lat)
+    return (cos_s * np.sin(d_lon),
+            np.sin(src_lat) * np.cos(beam_lat) - cos_s * np.sin(beam_lat) * np.cos(d_lon))
 
 
 def _day():
@@ -219,6 +290,7 @@ class SimulatedAntenna:
         self._targets: list[int] = []
         self._tables: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._error_prev = (0.0, 0.0)
+        self._feed_angle_deg = 0.0
         self.slews = 0
         #: called with each integration's deterministic inputs (see :meth:`_integrate`)
         self.recorder: Callable[..., None] | None = None
@@ -240,7 +312,7 @@ class SimulatedAntenna:
     def _track(self, trajectory: Trajectory):
         duration = yield self.env.process(self.mount.track(trajectory))
         self.slews += 1
-        az_deg, el_deg = self.mount.current_deg()
+        az_deg, el_deg = self.world.frame.to_altaz_deg(*self.mount.current_deg())
         self._targets = self.world.sky.nearby(az_deg * RAD_PER_DEG, el_deg * RAD_PER_DEG,
                                               self.env.now)
         self._tables = {}
@@ -274,6 +346,60 @@ class SimulatedAntenna:
     def wait(self, seconds: float):
         return self.env.timeout(seconds)
 
+    def set_feed_angle(self, angle_deg: float):
+        """Turn the feed box to ``angle_deg`` (the mount's ``feed_speed_deg_s``, then its
+        settle time); the pointing effects see it as ``PointingState.feed_angle_rad``."""
+        angle = float(angle_deg)
+        if not math.isfinite(angle):
+            raise AntennaError(f"feed angle must be a finite number of degrees, not {angle_deg!r}")
+        return self.env.process(self._turn_feed(angle))
+
+    def _turn_feed(self, angle_deg: float):
+        cfg = self.world.scenario.mount
+        speed = getattr(cfg, "feed_speed_deg_s", 2.0)
+        duration = abs(angle_deg - self._feed_angle_deg) / speed + cfg.settle_s
+        yield self.env.timeout(duration)
+        self._feed_angle_deg = angle_deg
+        return duration
+
+    def feed_angle_deg(self) -> float:
+        return self._feed_angle_deg
+
+    def measure_offset(self, seconds: float):
+        """Expose the camera for ``seconds`` while tracking: an :class:`OffsetReading`."""
+        if self.world.camera is None:
+            raise AntennaError("this antenna has no camera (scenario has no [camera] table)")
+        if not seconds > 0:
+            raise AntennaError(f"exposure time must be positive, got {seconds!r} s")
+        if not self.mount.on_track:
+            raise AntennaError("measure_offset needs a trajectory: call track() first")
+        return self.env.process(self._measure(float(seconds)))
+
+    def _measure(self, seconds: float):
+        world = self.world
+        t_start = self.env.now
+        yield self.env.timeout(seconds)
+        t = world.receiver.sample_times(t_start, seconds)
+        t_clock = t + world._clock_error(t) if world._clock_error else t
+        enc_lon_deg, enc_lat_deg = self.mount.commanded_deg(t_clock)
+        enc_lon = enc_lon_deg * RAD_PER_DEG
+        enc_lat = enc_lat_deg * RAD_PER_DEG
+        mid = t.size // 2
+        state = PointingState(t_s=float(t[mid]), az_rad=0.0, el_rad=0.0,
+                              approach_az=self.mount.approach[0],
+                              approach_el=self.mount.approach[1],
+                              feed_angle_rad=math.radians(self._feed_angle_deg))
+        paths = [(i, *self._source_path(i, t)) for i in self._targets]
+        (xel, el, found), self._error_prev = world.camera.measure(
+            world, t, enc_lon, enc_lat, state, paths, self._error_prev)
+        return OffsetReading(
+            t_start_s=float(t_start + (t_clock[0] - t[0])),
+            t_end_s=float(t_start + seconds + (t_clock[-1] - t[-1])),
+            xel_arcsec=xel, el_arcsec=el, found=found,
+            enc_az_deg=float(np.mean(enc_lon_deg)), enc_el_deg=float(np.mean(enc_lat_deg)),
+            weather=world.weather.reading(float(t[mid])),
+        )
+
     def integrate(self, seconds: float):
         if not seconds > 0:
             raise AntennaError(f"integration time must be positive, got {seconds!r} s")
@@ -304,7 +430,8 @@ class SimulatedAntenna:
         state = PointingState(t_s=float(t[mid]), az_rad=0.0, el_rad=0.0,
                               az_rate_rad_s=rates[0], el_rate_rad_s=rates[1],
                               approach_az=self.mount.approach[0],
-                              approach_el=self.mount.approach[1])
+                              approach_el=self.mount.approach[1],
+                              feed_angle_rad=math.radians(self._feed_angle_deg))
         paths = [(i, *self._source_path(i, t)) for i in self._targets]
         if self.recorder is not None:  # the shared schedule of antsim.plan's ensembles
             self.recorder(t=t, enc_az=enc_az, enc_el=enc_el, state=replace(state),

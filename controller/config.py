@@ -6,7 +6,8 @@ from dataclasses import dataclass, field
 
 from .model import PointingModel
 
-__all__ = ["CatalogSource", "ControllerConfig", "ScanConfig", "SchedulerConfig", "SearchConfig"]
+__all__ = ["CatalogSource", "ControllerConfig", "GainCurveConfig", "OpticalConfig", "ScanConfig",
+           "SchedulerConfig", "SearchConfig", "TippingConfig"]
 
 
 @dataclass(frozen=True)
@@ -48,6 +49,8 @@ class SchedulerConfig:
     #: windows to observe in: "all", "day" (Sun above 0 deg) or "night" (Sun below -12 deg)
     window: str = "all"
     sources: tuple[str, ...] = ()
+    #: equatorial mounts: observe only within +-this hour angle for the whole scan (deg)
+    hour_angle_limit_deg: float | None = None
 
 
 @dataclass(frozen=True)
@@ -59,6 +62,47 @@ class SearchConfig:
     step_factor: float = 2.0
     #: smoothing of the running pointing correction (0: none, 1: last scan only)
     update_gain: float = 0.5
+
+
+@dataclass(frozen=True)
+class TippingConfig:
+    """Tipping scans (sky brightness at several elevations) to measure the zenith opacity
+    (Crane 1981, section IV): one every ``interval_s``, first at the campaign's start."""
+
+    elevations_deg: tuple[float, ...] = (88.0, 60.0, 40.0, 30.0, 23.0, 18.0, 14.0, 11.5)
+    #: preferred azimuth of the blank sky (deg, N = 0); moved if a source is near
+    azimuth_deg: float = 180.0
+    integration_s: float = 10.0
+    interval_s: float = 4.0 * 3600.0
+    #: the observer's assumed mean radiating temperature of the atmosphere (K)
+    t_atm_k: float = 260.0
+
+
+@dataclass(frozen=True)
+class OpticalConfig:
+    """Optical pointing with a TV camera: exposure per star and time per star outside it."""
+
+    exposure_s: float = 5.0
+    overhead_s: float = 10.0
+
+
+@dataclass(frozen=True)
+class GainCurveConfig:
+    """Which gain curve the observatory fits to the amplitudes of which sources.
+
+    ``kind`` ``"elevation"``: relative gain against elevation, flat above the last knot
+    (1990 report, section V); ``"harmonics"``: gain in K/Jy as spherical harmonics Y00, Y10,
+    Y11e, Y11o of hour angle and declination (Crane 1981, section I). ``sources``: the
+    calibrators used (empty: every source with a catalogue flux). ``zenith_opacity``: the
+    opacity used to correct the amplitudes when no tipping measured it (None: from the sky
+    emission in the scans' own off-source points, see :mod:`controller.tipping`).
+    """
+
+    kind: str = "elevation"
+    sources: tuple[str, ...] = ()
+    knots_deg: tuple[float, ...] = (10.0, 20.0, 30.0)
+    zenith_opacity: float | None = None
+    t_atm_k: float = 260.0
 
 
 @dataclass(frozen=True)
@@ -85,9 +129,26 @@ class ControllerConfig:
     #: TPOINT's eight when no model is in use)
     fit_terms: tuple[str, ...] = ()
     fit_model_name: str = ""
+    #: the mount's axes: "altaz" (azimuth, elevation) or "equatorial" (hour angle, dec)
+    mount: str = "altaz"
+    #: how offsets are measured: "five_point" cross scans or "optical" (a TV camera on stars)
+    method: str = "five_point"
+    #: feed (rotator) angles to cycle through, one per scan (deg); empty: no feed command
+    feed_angles_deg: tuple[float, ...] = ()
+    tipping: TippingConfig | None = None
+    optical: OpticalConfig | None = None
+    gain_curve: GainCurveConfig | None = None
 
     def fit_spec(self) -> tuple[tuple[str, ...], str]:
-        """(terms, model name) to fit."""
+        """(terms, model name) to fit. For an equatorial mount the terms are
+        :class:`~controller.terms.Term` objects bound to the site's latitude."""
+        if self.mount == "equatorial":
+            from .equatorial import equatorial_terms
+
+            if self.fit_terms:
+                return (equatorial_terms(self.fit_terms, self.site_latitude_deg),
+                        self.fit_model_name or "custom")
+            return self.model.terms, self.model.name or "custom"
         if self.fit_terms:
             return self.fit_terms, self.fit_model_name or "custom"
         if len(self.model):

@@ -110,7 +110,10 @@ class PointingData:
     cross-elevation (dA cos E) and elevation, arcsec. ``weight_xel``, ``weight_el``: optional
     1/sigma^2 weights (1/arcsec^2), used only by ``fit_model(..., weighted=True)``.
     ``t_s``: optional observation times (s); with them the honest error bars allow for
-    residuals correlated in time (see :func:`fit_model`).
+    residuals correlated in time (see :func:`fit_model`). ``feed_rad``: optional feed
+    (rotator) angle of each observation (rad), the regressor of feed terms such as ``HSCF``.
+    For an equatorial mount ``az_rad``/``el_rad`` hold hour angle and declination and
+    ``xel_arcsec`` the cross-declination error dH cos(dec) (see :mod:`controller.equatorial`).
 
     The arrays are validated on construction (1-D, same length, finite, |el| <= pi/2,
     positive weights) and stored as read-only copies.
@@ -123,6 +126,7 @@ class PointingData:
     weight_xel: np.ndarray | None = None
     weight_el: np.ndarray | None = None
     t_s: np.ndarray | None = None
+    feed_rad: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         names = ("az_rad", "el_rad", "xel_arcsec", "el_arcsec")
@@ -140,6 +144,8 @@ class PointingData:
                 arrays[n] = w
         if self.t_s is not None:
             arrays["t_s"] = _float_vector(self.t_s, "t_s")
+        if self.feed_rad is not None:
+            arrays["feed_rad"] = _float_vector(self.feed_rad, "feed_rad")
         lengths = {n: a.size for n, a in arrays.items()}
         if len(set(lengths.values())) > 1:
             detail = ", ".join(f"{n} {k}" for n, k in lengths.items())
@@ -175,6 +181,7 @@ class PointingData:
             None if self.weight_xel is None else self.weight_xel[keep],
             None if self.weight_el is None else self.weight_el[keep],
             None if self.t_s is None else self.t_s[keep],
+            None if self.feed_rad is None else self.feed_rad[keep],
         )
 
 
@@ -609,7 +616,7 @@ def fit_model(
 
     cos_el = np.cos(data.el_rad)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # checked just below
-        basis_az, basis_el = start.design_matrix(data.az_rad, data.el_rad)
+        basis_az, basis_el = start.design_matrix(data.az_rad, data.el_rad, data.feed_rad)
     design = np.empty((2 * n, m), order="F")  # column-major, as LAPACK works on it
     np.multiply(basis_az, cos_el[:, None], out=design[:n])
     design[n:] = basis_el

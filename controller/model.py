@@ -30,6 +30,12 @@ NAMED_MODELS: dict[str, tuple[str, ...]] = {
     "tpoint8": ("IA", "IE", "NPAE", "CA", "AN", "AW", "TF", "TX"),
     "tpoint6": ("IA", "IE", "NPAE", "CA", "AN", "AW"),
     "katpoint22": tuple(f"P{i}" for i in range(1, 23)),
+    #: BIMA memo 23 (Wright 1992), equations (1) and (2): 7 azimuth and 7 elevation terms
+    "bima14": ("IA", "HSSASE", "HSCASE", "CA", "NPAE", "HASA2", "HACA2",
+               "IE", "HESA", "HECA", "HESE", "HECE", "HESA2", "HECA2"),
+    #: Fomalont 1973 (1990 report, Appendix A): the 45-ft's ten terms and the feed terms
+    #: C6 cos(f - C7) (cross-elevation) and D6 cos(f - D7) (elevation), linear in cos f, sin f
+    "fomalont14": (*(f"W{i}" for i in range(1, 11)), "HSCF", "HSSF", "HECF", "HESF"),
 }
 
 
@@ -114,27 +120,42 @@ class PointingModel:
         return f"PointingModel({self.name!r}: {body})"
 
     # ------------------------------------------------------------------ evaluation (floats)
-    def design_matrix(self, az_rad, el_rad) -> tuple[np.ndarray, np.ndarray]:
-        """TPOINT-sign correction basis, each of shape ``(N, M)``: dA and dE per radian."""
+    @property
+    def needs_feed(self) -> bool:
+        """Whether a term has a feed-angle factor (``F``): evaluation needs ``feed_rad``."""
+        cached = self.__dict__.get("_needs_feed")
+        if cached is None:
+            cached = any(f[1] == "F" for t in self.terms for _, _, fs in t.components
+                         for f in fs)
+            object.__setattr__(self, "_needs_feed", cached)
+        return cached
+
+    def design_matrix(self, az_rad, el_rad, feed_rad=None) -> tuple[np.ndarray, np.ndarray]:
+        """TPOINT-sign correction basis, each of shape ``(N, M)``: dA and dE per radian.
+        ``feed_rad``: feed angle(s), needed only by feed terms (see :attr:`needs_feed`)."""
         az, el = np.broadcast_arrays(np.atleast_1d(np.asarray(az_rad, dtype=float)),
                                      np.atleast_1d(np.asarray(el_rad, dtype=float)))
-        return evaluate_basis(self.terms, az.reshape(-1), el.reshape(-1))
+        if feed_rad is not None:
+            feed_rad = np.broadcast_to(np.asarray(feed_rad, dtype=float), az.shape).reshape(-1)
+        return evaluate_basis(self.terms, az.reshape(-1), el.reshape(-1), feed_rad)
 
-    def offset_rad(self, az_rad, el_rad) -> tuple[np.ndarray, np.ndarray]:
+    def offset_rad(self, az_rad, el_rad, feed_rad=None) -> tuple[np.ndarray, np.ndarray]:
         """Indicated minus true (daz, del) in radians at true position(s), plain floats."""
         shape = np.broadcast(np.asarray(az_rad), np.asarray(el_rad)).shape
         if not self.terms:
             return np.zeros(shape), np.zeros(shape)
-        basis_az, basis_el = self.design_matrix(az_rad, el_rad)
+        basis_az, basis_el = self.design_matrix(az_rad, el_rad, feed_rad)
         coeff_rad = self.values_arcsec * RAD_PER_ARCSEC
         return -(basis_az @ coeff_rad).reshape(shape), -(basis_el @ coeff_rad).reshape(shape)
 
-    def offset_scalar_rad(self, az_rad: float, el_rad: float) -> tuple[float, float]:
+    def offset_scalar_rad(self, az_rad: float, el_rad: float,
+                          feed_rad: float | None = None) -> tuple[float, float]:
         """:meth:`offset_rad` at one point with plain floats (a fast path for simulations);
         arrays (an ensemble's member axis) go through :meth:`offset_rad`."""
         if np.ndim(az_rad) or np.ndim(el_rad):
-            return self.offset_rad(az_rad, el_rad)
-        corr_az, corr_el = combine_scalar(self.terms, self._coeff_rad, az_rad, el_rad)
+            return self.offset_rad(az_rad, el_rad, feed_rad)
+        corr_az, corr_el = combine_scalar(self.terms, self._coeff_rad, az_rad, el_rad,
+                                          feed_rad)
         return -corr_az, -corr_el
 
     @property

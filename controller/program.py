@@ -8,6 +8,16 @@ the 45-ft's elevation zero offset alone, 12', exceeds the beam) the controller s
 a wider cross, adopts what it finds as a running correction, and scans again.
 
 It uses only the protocol (:mod:`controller.protocol`) and its own configuration.
+
+Beyond the 45-ft of 1990: on an equatorial mount (``config.mount``) trajectories, scan axes,
+model and running correction are in hour angle and declination and each row also records
+``ha_deg``/``dec_deg``; with ``config.feed_angles_deg`` the feed box is turned to the next
+angle before each scan and the row records ``feed_angle_deg``; with ``config.tipping`` tipping
+scans (:mod:`controller.tipping`) measure the zenith opacity at intervals, and each scan is
+reduced after removing the sky emission they predict, T_atm (1 - exp(-tau / sin E)), from
+every integration (its recorded raw powers are kept as measured): neither five-point baseline
+can carry both the emission's slope across an elevation scan and its drift in time as the
+source rises, and on an equatorial mount both scans cross the slope.
 """
 
 from __future__ import annotations
@@ -20,6 +30,7 @@ import numpy as np
 
 from .astro import Ephemeris, FixedSource, Site, Weather
 from .config import ControllerConfig
+from .frames import MountFrame
 from .protocol import Antenna, AntennaError
 from .reduction import Flag
 from .scan import AXES, RawScan, ReducedScan, cross_scan, reduce_scan
@@ -74,9 +85,8 @@ class ControlProgram:
         self.progress = progress
         self.observer, self.targets = plan_targets(config, ephemeris)
         self.ephemeris = self.observer.ephemeris
-        scan = config.scan
-        n_pos = len(scan.offsets_n)
-        self.scan_duration_s = 2 * n_pos * (scan.integration_s + 6.0) + scan.overhead_s
+        self.frame = MountFrame(config.mount, config.site_latitude_deg)
+        self.scan_duration_s = self._scan_duration_s()
         self.scheduler = make_scheduler(config.scheduler, self.observer, self.targets,
                                         self.scan_duration_s)
         self.correction_arcmin = (0.0, 0.0)
@@ -85,6 +95,17 @@ class ControlProgram:
         self.searches = 0
         self.misses = 0
         self._standard = standard_weather(config.site_height_m)
+        #: tipping scans made (controller.tipping.Tipping), and when the next is due (s)
+        self.tippings: list = []
+        self._next_tipping_s = 0.0 if config.tipping is not None else math.inf
+        #: the feed angle last commanded (deg), None before the first
+        self.feed_angle_deg: float | None = None
+
+    def _scan_duration_s(self) -> float:
+        """Time one observation takes, for the scheduler's look-ahead (s)."""
+        scan = self.config.scan
+        n_pos = len(scan.offsets_n)
+        return 2 * n_pos * (scan.integration_s + 6.0) + scan.overhead_s
 
     # ------------------------------------------------------------------ helpers
     def refraction(self) -> RefractionCorrection:
@@ -99,8 +120,15 @@ class ControlProgram:
         return RefractionCorrection(mode, weather, self.config.frequency_ghz)
 
     def trajectory(self, target: Target, t_s: float) -> SourceTrajectory:
+        feed = None if self.feed_angle_deg is None else math.radians(self.feed_angle_deg)
         return SourceTrajectory(self.ephemeris, target.index, self.config.model,
-                                self.refraction(), t_s, self.correction_arcmin)
+                                self.refraction(), t_s, self.correction_arcmin,
+                                frame=self.frame, feed_rad=feed)
+
+    def position_altaz_deg(self) -> tuple[float, float]:
+        """The encoder position as azimuth and elevation (deg), for the scheduler."""
+        lon, lat = self.antenna.encoder_deg()
+        return self.frame.to_altaz_deg(lon, lat)
 
     # ------------------------------------------------------------------ the campaign
     def run(self, env):
@@ -112,7 +140,17 @@ class ControlProgram:
                 self.progress(now)
             if now + self.scan_duration_s > end:
                 break
-            target = self.scheduler.next_target(now + 30.0, self.antenna.encoder_deg())
+            if now >= self._next_tipping_s:
+                from .tipping import tipping_scan
+
+                self._next_tipping_s = now + self.config.tipping.interval_s
+                tip = yield env.process(tipping_scan(env, self.antenna, self.config.tipping,
+                                                     self.frame, self.observer, self.targets,
+                                                     self.config.scheduler))
+                if tip is not None:
+                    self.tippings.append(tip)
+                continue
+            target = self.scheduler.next_target(now + 30.0, self.position_altaz_deg())
             if target is None:
                 yield self.antenna.wait(60.0)
                 continue
@@ -129,13 +167,20 @@ class ControlProgram:
 
     def observe(self, env, target: Target):
         """simpy process: scan ``target`` (searching if it is missed) and record it."""
+        if self.config.feed_angles_deg:
+            angles = self.config.feed_angles_deg
+            angle = float(angles[self.scan_number % len(angles)])
+            if angle != self.feed_angle_deg:
+                yield self.antenna.set_feed_angle(angle)
+                self.feed_angle_deg = angle
         before = self.antenna.encoder_deg()
         searches = 0
         while True:
             traj = self.trajectory(target, self.antenna.clock_s())
             raw = yield env.process(cross_scan(env, self.antenna, traj, self.config.scan,
                                                label=target.name))
-            reduced = reduce_scan(raw, self.config.scan)
+            reduced = reduce_scan(self.sky_corrected(raw), self.config.scan)
+            reduced.raw = raw
             if self._detected(reduced, tolerated=Flag(0)) or searches >= 2 \
                     or not self.config.search.enabled:
                 break
@@ -183,6 +228,29 @@ class ControlProgram:
         self.correction_arcmin = (xel, el)
         return found
 
+    def sky_corrected(self, raw: RawScan) -> RawScan:
+        """``raw`` with the sky emission of the latest tipping scan's fit removed from every
+        integration (see the module); ``raw`` itself when there is no tipping fit."""
+        fits = [t.fits for t in self.tippings if t.fits]
+        if not fits:
+            return raw
+        from dataclasses import replace
+
+        latest = fits[-1]
+        out = replace(raw, integrations={})
+        for axis, readings in raw.integrations.items():
+            corrected = []
+            for integ in readings:
+                _, el_deg = self.frame.to_altaz_deg(integ.enc_az_deg, integ.enc_el_deg)
+                airmass = 1.0 / math.sin(math.radians(max(el_deg, 1.0)))
+                power = {}
+                for ch, p in integ.power_k.items():
+                    fit = latest.get(ch, latest.get("AVG"))
+                    power[ch] = p - fit.t_atm_k * (1.0 - math.exp(-fit.tau * airmass))
+                corrected.append(replace(integ, power_k=power))
+            out.integrations[axis] = corrected
+        return out
+
     @staticmethod
     def _detected(reduced: ReducedScan, tolerated: Flag) -> bool:
         return all((int(reduced.axes[a].flags[-1]) & ~int(tolerated)) == 0 for a in AXES)
@@ -195,8 +263,12 @@ class ControlProgram:
         az, el = traj.observed_rad(np.array([t_mid]))
         az, el = float(az[0]), float(el[0])
         cmd_az, cmd_el = traj(np.array([t_mid]))
-        d_az, d_el = self.config.model.offset_rad(az, el)
-        model_xel = float(d_az) * math.cos(el) * ARCMIN_PER_RAD
+        lon, lat = self.frame.from_altaz(az, el)
+        if self.frame.is_altaz and traj.feed_rad is None:
+            d_az, d_el = self.config.model.offset_rad(az, el)
+        else:
+            d_az, d_el = self.config.model.offset_rad(lon, lat, traj.feed_rad)
+        model_xel = float(d_az) * math.cos(lat) * ARCMIN_PER_RAD
         model_el = float(d_el) * ARCMIN_PER_RAD
         mid = raw.integrations["el"][0]
         weather = mid.weather
@@ -249,5 +321,17 @@ class ControlProgram:
             for a, axis in enumerate(AXES):
                 for k, name in enumerate(("m4", "m1", "0", "p1", "p4")):
                     row[f"p_{axis}_{name}"] = float(power[a, p, k])
+            row.update(self.extra_columns(lon, lat))
             rows.append(row)
         return rows
+
+    def extra_columns(self, lon_rad: float, lat_rad: float) -> dict:
+        """Columns beyond the 1990 set: hour angle and declination on an equatorial mount,
+        the feed angle when the feed is turned (see :func:`recording_columns`)."""
+        extra: dict = {}
+        if not self.frame.is_altaz:
+            extra["ha_deg"] = math.degrees(float(lon_rad))
+            extra["dec_deg"] = math.degrees(float(lat_rad))
+        if self.config.feed_angles_deg:
+            extra["feed_angle_deg"] = float(self.feed_angle_deg)
+        return extra

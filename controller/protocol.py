@@ -8,7 +8,14 @@ exposes the truth of a simulation: a real antenna could implement this interface
 
 All commands return simpy events; the control program is a simpy process that yields them.
 Angles are degrees (encoder frame: azimuth North-based, possibly beyond 0..360 on the cable
-wrap); times are seconds on the antenna's clock since the campaign epoch.
+wrap); times are seconds on the antenna's clock since the campaign epoch. On an equatorial
+mount the encoder frame is (hour angle, declination): "azimuth" and "elevation" below then
+read hour angle (positive West) and declination, and cross-axis steps are cross-declination.
+
+Optional capabilities, each its own protocol: :class:`CameraAntenna` (a TV camera boresighted
+on the optical axis measures a star's offset directly, as BIMA's optical pointing did) and
+:class:`FeedAntenna` (a feed box that the controller turns to a feed angle, as the 45-ft's in
+Fomalont 1973).
 """
 
 from __future__ import annotations
@@ -22,7 +29,10 @@ import numpy as np
 __all__ = [
     "Antenna",
     "AntennaError",
+    "CameraAntenna",
+    "FeedAntenna",
     "Integration",
+    "OffsetReading",
     "Trajectory",
     "WeatherReading",
 ]
@@ -103,3 +113,44 @@ class Antenna(Protocol):
 
     def encoder_deg(self) -> tuple[float, float]:
         """Current encoder azimuth and elevation (degrees)."""
+
+
+@dataclass(frozen=True)
+class OffsetReading:
+    """A camera measurement: the star's offset from the optical axis, averaged over the
+    exposure (arcsec; ``xel`` cross-axis, ``el`` along the second axis; positive: the star
+    lies at larger azimuth/elevation than the axis, i.e. the correction to apply).
+    ``found`` is false when no star was in the field (the offsets are then NaN)."""
+
+    t_start_s: float
+    t_end_s: float
+    xel_arcsec: float
+    el_arcsec: float
+    found: bool
+    enc_az_deg: float
+    enc_el_deg: float
+    weather: WeatherReading
+
+    @property
+    def t_mid_s(self) -> float:
+        return 0.5 * (self.t_start_s + self.t_end_s)
+
+
+@runtime_checkable
+class CameraAntenna(Antenna, Protocol):
+    """An antenna with a TV camera on its optical axis (optical pointing)."""
+
+    def measure_offset(self, seconds: float):
+        """Expose for ``seconds`` while tracking; the event's value is an
+        :class:`OffsetReading` of the brightest star in the field."""
+
+
+@runtime_checkable
+class FeedAntenna(Antenna, Protocol):
+    """An antenna whose feed box the controller turns (feed angle, degrees)."""
+
+    def set_feed_angle(self, angle_deg: float):
+        """Turn the feed box to ``angle_deg``; the event fires once it is settled."""
+
+    def feed_angle_deg(self) -> float:
+        """The feed angle now (degrees)."""

@@ -11,6 +11,11 @@ byte-identical to an uninterrupted run.
 Sign convention: ``xel_arcmin``/``el_arcmin`` are the measured corrections to apply (source
 minus beam), "indicated minus true" like the model's offset; the total pointing error is
 measured + model in use + applied correction (columns ``model_*`` and ``applied_*``).
+
+Columns beyond the 1990 set are added only where they apply (:func:`recording_columns`):
+``ha_deg``/``dec_deg`` for an equatorial mount, whose ``xel_*``/``el_*`` offsets are then
+cross-declination (dH cos Dec) and declination; ``feed_angle_deg`` when the feed is turned.
+Optical pointing rows (a TV camera on stars) fill the radio-only columns with NaN.
 """
 
 from __future__ import annotations
@@ -29,10 +34,12 @@ from .errors import InputError
 
 __all__ = [
     "COLUMNS",
+    "EXTRA_COLUMNS",
     "RecordingWriter",
     "ResumeMismatchError",
     "read_pointing_data",
     "read_recordings",
+    "recording_columns",
 ]
 
 
@@ -89,6 +96,24 @@ COLUMNS: tuple[Column, ...] = (
 )
 COLUMN_NAMES = tuple(c.name for c in COLUMNS)
 
+#: columns written only where they apply (see :func:`recording_columns`)
+EXTRA_COLUMNS: dict[str, Column] = {c.name: c for c in (
+    Column("ha_deg", "float64", "deg", "observed hour angle (equatorial mount; West positive)"),
+    Column("dec_deg", "float64", "deg", "observed declination (equatorial mount)"),
+    Column("feed_angle_deg", "float64", "deg", "feed (feed-box rotation) angle of the scan"),
+)}
+
+
+def recording_columns(mount: str = "altaz", feed: bool = False) -> tuple[Column, ...]:
+    """The columns of a campaign's recordings: the 1990 set, plus hour angle and declination
+    on an equatorial mount and the feed angle when the feed is turned."""
+    extra: list[str] = []
+    if mount == "equatorial":
+        extra += ["ha_deg", "dec_deg"]
+    if feed:
+        extra.append("feed_angle_deg")
+    return COLUMNS + tuple(EXTRA_COLUMNS[n] for n in extra)
+
 
 class ResumeMismatchError(RuntimeError):
     """The regenerated rows differ from those on disk: the file is not this run's."""
@@ -110,12 +135,12 @@ def _format(value: Any, dtype: str) -> str:
     return repr(value)
 
 
-def header_text(meta: dict[str, Any]) -> str:
+def header_text(meta: dict[str, Any], columns: Sequence[Column] = COLUMNS) -> str:
     """The ECSV header (with the column-name line) for the given metadata."""
     from astropy.table import Table
 
     table = Table(meta=meta)
-    for col in COLUMNS:
+    for col in columns:
         dtype = "U1" if col.dtype == "str" else col.dtype
         table.add_column(np.zeros(0, dtype=dtype), name=col.name)
         table[col.name].unit = col.unit
@@ -130,9 +155,11 @@ def header_text(meta: dict[str, Any]) -> str:
 class RecordingWriter:
     """Appends rows to ``recordings.ecsv``; with ``resume`` verifies and skips existing rows."""
 
-    def __init__(self, path: str | Path, meta: dict[str, Any], resume: bool = False):
+    def __init__(self, path: str | Path, meta: dict[str, Any], resume: bool = False,
+                 columns: Sequence[Column] = COLUMNS):
         self.path = Path(path)
-        self.header = header_text(meta)
+        self.columns = tuple(columns)
+        self.header = header_text(meta, self.columns)
         self._existing: list[str] = []
         self._cursor = 0
         self.rows_written = 0
@@ -160,10 +187,10 @@ class RecordingWriter:
     def format_rows(self, rows: Sequence[dict[str, Any]]) -> list[str]:
         lines = []
         for row in rows:
-            missing = [c.name for c in COLUMNS if c.name not in row]
+            missing = [c.name for c in self.columns if c.name not in row]
             if missing:
                 raise KeyError(f"recording row lacks column(s) {missing}")
-            lines.append(" ".join(_format(row[c.name], c.dtype) for c in COLUMNS) + "\n")
+            lines.append(" ".join(_format(row[c.name], c.dtype) for c in self.columns) + "\n")
         return lines
 
     def write_scan(self, rows: Sequence[dict[str, Any]]) -> None:
@@ -244,9 +271,12 @@ def read_pointing_data(path: str | Path, polarization: str = "AVG", good_only: b
         raise InputError(str(path), "polarization", polarization,
                          "no usable rows for this polarization")
     xel, el = total_errors_arcsec(sel)
+    lon, lat = ("ha_deg", "dec_deg") if "ha_deg" in sel.colnames else ("az_deg", "el_deg")
     return PointingData(
-        az_rad=np.radians(np.asarray(sel["az_deg"], dtype=float)),
-        el_rad=np.radians(np.asarray(sel["el_deg"], dtype=float)),
+        az_rad=np.radians(np.asarray(sel[lon], dtype=float)),
+        el_rad=np.radians(np.asarray(sel[lat], dtype=float)),
         xel_arcsec=xel,
         el_arcsec=el,
+        feed_rad=(np.radians(np.asarray(sel["feed_angle_deg"], dtype=float))
+                  if "feed_angle_deg" in sel.colnames else None),
     )

@@ -22,6 +22,7 @@ from .config import SchedulerConfig
 __all__ = [
     "Constraint",
     "ElevationConstraint",
+    "HourAngleConstraint",
     "Observer",
     "RevisitConstraint",
     "RoundRobinScheduler",
@@ -115,6 +116,22 @@ class ElevationConstraint(Constraint):
         for t in (t_s, t_s + self.duration_s):
             _, el = observer.altaz_all_deg(targets, t)
             ok &= (el >= self.min_deg) & (el <= self.max_deg)
+        return ok
+
+
+@dataclass(frozen=True)
+class HourAngleConstraint(Constraint):
+    """An equatorial mount's hour-angle range: |HA| <= ``limit_deg`` now and a scan later."""
+
+    limit_deg: float
+    duration_s: float = 0.0
+
+    def mask(self, observer, targets, t_s, history) -> np.ndarray:
+        index = np.array([tg.index for tg in targets])
+        ok = np.ones(len(targets), dtype=bool)
+        for t in (t_s, t_s + self.duration_s):
+            ha, _ = observer.ephemeris.hadec_rad(index, np.full(index.size, float(t)))
+            ok &= np.abs(np.degrees(ha)) <= self.limit_deg
         return ok
 
 
@@ -261,6 +278,8 @@ def make_scheduler(config: SchedulerConfig, observer: Observer, targets: Sequenc
         WindowConstraint(config.window),
         RevisitConstraint(config.min_revisit_s),
     ]
+    if config.hour_angle_limit_deg is not None:
+        constraints.append(HourAngleConstraint(config.hour_angle_limit_deg, scan_duration_s))
     if config.policy == "round_robin":
         return RoundRobinScheduler(observer, targets, constraints)
     return SpreadScheduler(observer, targets, constraints, slew_weight=config.slew_weight)

@@ -29,7 +29,15 @@ gravitational sag (cos E in elevation) and W6, 12.24', is the elevation zero off
 The harmonic generator follows TPOINT: ``H`` + result letter (A: azimuth, E: elevation,
 S: left-right on the sky = dA cos E, Z: zenith distance = -dE) + one or two factors, each
 ``S`` or ``C`` (sine, cosine) of ``A``, ``E`` or ``Z`` with an optional integer multiplier:
-``HESA2`` is dE = c sin 2A, ``HSCA5CE8`` is dA cos E = c cos 5A cos 8E.
+``HESA2`` is dE = c sin 2A, ``HSCA5CE8`` is dA cos E = c cos 5A cos 8E. Beyond TPOINT, the
+argument ``F`` is the feed (rotator) angle of a feed box turned during a campaign (Fomalont
+1973's feed terms): ``HSCF`` is dA cos E = c cos F; terms with an ``F`` factor need the feed
+angle (``feed_rad``) wherever they are evaluated.
+
+Extension for other mounts (:mod:`controller.equatorial`): a factor's argument may also be a
+hashable callable ``(lon_rad, lat_rad) -> array`` of the two coordinates the terms are
+evaluated at (for an equatorial model: hour angle and declination, passed in place of azimuth
+and elevation), e.g. the elevation that TPOINT's equatorial TX needs.
 """
 
 from __future__ import annotations
@@ -91,7 +99,11 @@ class Term:
         return basis_az[:, 0].reshape(az.shape), basis_el[:, 0].reshape(az.shape)
 
 
-def _argument(arg: str, az: np.ndarray, el: np.ndarray) -> np.ndarray:
+def _argument(arg, az: np.ndarray, el: np.ndarray, feed=None) -> np.ndarray:
+    if callable(arg):
+        return arg(az, el)
+    if arg == "F":
+        return _feed(feed)
     if arg == "AS":
         return az - math.pi
     if arg == "AN":
@@ -108,12 +120,21 @@ _FUNCTIONS = {
     "sec": lambda x: 1.0 / np.cos(x),
     "cot": lambda x: 1.0 / np.tan(x),
     "lin": lambda x: x,
+    "csc": lambda x: 1.0 / np.sin(x),
 }
 
 
+def _feed(feed):
+    if feed is None:
+        raise ValueError("a term with a feed-angle factor (F) needs the feed angle: give "
+                         "feed_rad (the recordings' feed_angle_deg column)")
+    return feed
+
+
 def evaluate_basis(terms: Sequence[Term], az_rad: np.ndarray,
-                   el_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """TPOINT-sign correction basis of ``terms`` at 1-D arrays of points: two (N, M) arrays."""
+                   el_rad: np.ndarray, feed_rad=None) -> tuple[np.ndarray, np.ndarray]:
+    """TPOINT-sign correction basis of ``terms`` at 1-D arrays of points: two (N, M) arrays.
+    ``feed_rad``: feed angle(s) (rad), needed only by terms with an ``F`` factor."""
     n = az_rad.shape[0]
     basis_az = np.zeros((n, len(terms)))
     basis_el = np.zeros((n, len(terms)))
@@ -126,7 +147,7 @@ def evaluate_basis(terms: Sequence[Term], az_rad: np.ndarray,
                 arr = cache.get(factor)
                 if arr is None:
                     func, arg, mult = factor
-                    x = _argument(arg, az_rad, el_rad)
+                    x = _argument(arg, az_rad, el_rad, feed_rad)
                     arr = _FUNCTIONS[func](x if mult == 1 else mult * x)
                     cache[factor] = arr
                 value = arr if value is None else value * arr
@@ -145,10 +166,14 @@ def evaluate_basis(terms: Sequence[Term], az_rad: np.ndarray,
 
 _MATH = {"sin": math.sin, "cos": math.cos, "tan": math.tan,
          "sec": lambda x: 1.0 / math.cos(x), "cot": lambda x: 1.0 / math.tan(x),
-         "lin": lambda x: x}
+         "lin": lambda x: x, "csc": lambda x: 1.0 / math.sin(x)}
 
 
-def _argument_scalar(arg: str, az: float, el: float) -> float:
+def _argument_scalar(arg, az: float, el: float, feed=None) -> float:
+    if callable(arg):
+        return float(arg(az, el))
+    if arg == "F":
+        return _feed(feed)
     if arg == "AS":
         return az - math.pi
     if arg == "AN":
@@ -159,7 +184,7 @@ def _argument_scalar(arg: str, az: float, el: float) -> float:
 
 
 def combine_scalar(terms: Sequence[Term], coeffs: Sequence[float], az_rad: float,
-                   el_rad: float) -> tuple[float, float]:
+                   el_rad: float, feed_rad: float | None = None) -> tuple[float, float]:
     """``sum_j coeffs[j] * basis_j`` at one point, with plain floats (fast for scalars)."""
     cache: dict[Factor, float] = {}
     total_az = total_el = 0.0
@@ -172,7 +197,7 @@ def combine_scalar(terms: Sequence[Term], coeffs: Sequence[float], az_rad: float
                 f = cache.get(factor)
                 if f is None:
                     func, arg, mult = factor
-                    f = _MATH[func](mult * _argument_scalar(arg, az_rad, el_rad))
+                    f = _MATH[func](mult * _argument_scalar(arg, az_rad, el_rad, feed_rad))
                     cache[factor] = f
                 value *= f
             if axis == "A":
@@ -226,7 +251,7 @@ def _tpoint_terms() -> dict[str, Term]:
 # ---------------------------------------------------------------------------------------------
 # TPOINT harmonic generator
 # ---------------------------------------------------------------------------------------------
-_HARMONIC = re.compile(r"^H([AESZ])([SC])([AEZ])(\d*)(?:([SC])([AEZ])(\d*))?$")
+_HARMONIC = re.compile(r"^H([AESZ])([SC])([AEZF])(\d*)(?:([SC])([AEZF])(\d*))?$")
 
 
 def _harmonic(name: str) -> Term | None:

@@ -9,6 +9,11 @@ below 0.01"). The commanded path itself is tabulated every ``TABLE_STEP_S`` over
 ``NODE_SPAN_S`` and interpolated linearly: with a 2 s step the error is below 0.01" up to
 85 deg elevation, and a call costs a few microseconds. Outside the table (slew planning
 looks an hour ahead for the cable wrap) positions are computed exactly.
+
+On an equatorial mount (``frame``) the encoder coordinates are hour angle and declination of
+the observed (refracted) place, the model offset is evaluated there, and the running
+correction is cross-declination and declination. ``feed_rad``: the feed angle the model's
+feed terms (if any) are evaluated at.
 """
 
 from __future__ import annotations
@@ -19,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .astro import Ephemeris, Weather, refraction_rad
+from .frames import MountFrame
 from .model import PointingModel
 from .units import DEG_PER_RAD, RAD_PER_ARCMIN
 
@@ -54,7 +60,10 @@ class SourceTrajectory:
 
     def __init__(self, ephemeris: Ephemeris, index: int, model: PointingModel,
                  refraction: RefractionCorrection, t_start_s: float,
-                 correction_arcmin: tuple[float, float] = (0.0, 0.0)):
+                 correction_arcmin: tuple[float, float] = (0.0, 0.0),
+                 frame: MountFrame | None = None, feed_rad: float | None = None):
+        self._frame = frame if frame is not None and not frame.is_altaz else None
+        self.feed_rad = feed_rad
         self.ephemeris = ephemeris
         self.index = index
         self.model = model
@@ -75,6 +84,12 @@ class SourceTrajectory:
         t_table = t_table[t_table <= t_nodes[-1]]
         az, el = self.ephemeris.altaz_rad(self.index, t_table)
         self._t_table = t_table
+        if self._frame is not None:  # equatorial: (HA, Dec) of the observed place
+            lon, lat = self._frame.from_altaz(az, el + np.interp(t_table, t_nodes,
+                                                                 self._refraction))
+            self._table_az = np.unwrap(lon) + np.interp(t_table, t_nodes, self._offset_az)
+            self._table_el = lat + np.interp(t_table, t_nodes, self._offset_el)
+            return
         self._table_az = np.unwrap(az) + np.interp(t_table, t_nodes, self._offset_az)
         self._table_el = el + np.interp(t_table, t_nodes, self._refraction + self._offset_el)
 
@@ -83,8 +98,14 @@ class SourceTrajectory:
         az, el = self.ephemeris.altaz_rad(self.index, t)
         refraction = self.refraction.rad(el)
         el_obs = el + refraction
-        d_az, d_el = self.model.offset_rad(az, el_obs)
         xel_c, el_c = self.correction_arcmin
+        if self._frame is not None:  # model and correction in (HA, Dec): el_obs is Dec
+            ha, el_obs = self._frame.from_altaz(az, el_obs)
+            d_az, d_el = self.model.offset_rad(ha, el_obs, self.feed_rad)
+        elif self.feed_rad is not None:
+            d_az, d_el = self.model.offset_rad(az, el_obs, self.feed_rad)
+        else:
+            d_az, d_el = self.model.offset_rad(az, el_obs)
         return (az, el, refraction, d_az + xel_c * RAD_PER_ARCMIN / np.cos(el_obs),
                 d_el + el_c * RAD_PER_ARCMIN)
 
@@ -108,11 +129,15 @@ class SourceTrajectory:
             el = np.interp(t, self._t_table, self._table_el)
         else:  # rare: slew planning looks an hour ahead for the cable wrap
             az, el, refraction, d_az, d_el = self._exact(t)
+            if self._frame is not None:
+                az, el = self._frame.from_altaz(az, el + refraction)
+                refraction = 0.0
             az, el = az + d_az, el + refraction + d_el
         return (az * DEG_PER_RAD) % 360.0, el * DEG_PER_RAD
 
     def elevation_deg(self, t_s: float) -> float:
-        """Commanded elevation at one instant (degrees)."""
+        """Commanded elevation at one instant (degrees); the declination on an equatorial
+        mount (the latitude-like axis whose cosine scales cross-axis steps)."""
         return float(self(np.array([t_s]))[1][0])
 
     @staticmethod

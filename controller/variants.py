@@ -13,6 +13,8 @@
 ratio, ...) are dropped, then the robust fit (LAD, 4x mean absolute deviation, least
 squares, 3x rms, least squares) rejects outliers. The total pointing error fitted is the
 measured offset plus the model in use plus any correction the controller applied.
+Recordings of an equatorial mount (columns ``ha_deg``, ``dec_deg``) are fitted in hour angle
+and declination; a ``feed_angle_deg`` column feeds the feed terms (``HSCF``...).
 """
 
 from __future__ import annotations
@@ -49,14 +51,21 @@ VARIANTS: tuple[Variant, ...] = (
 _NEEDED = ("polarization", "az_deg", "el_deg", "xel_arcmin", "el_arcmin", "model_xel_arcmin",
            "model_el_arcmin", "applied_xel_arcmin", "applied_el_arcmin", "good", "sun_el_deg",
            "t_s")
+#: taken when present: equatorial coordinates and the feed angle
+_OPTIONAL = ("ha_deg", "dec_deg", "feed_angle_deg")
 
 
 def columns(recordings) -> dict[str, np.ndarray]:
     """Column arrays from an astropy Table of recordings or a list of row dicts."""
     if isinstance(recordings, Sequence) and (not recordings or isinstance(recordings[0],
                                                                            Mapping)):
-        return {c: np.array([r[c] for r in recordings]) for c in _NEEDED}
-    return {c: np.asarray(recordings[c]) for c in _NEEDED}
+        cols = {c: np.array([r[c] for r in recordings]) for c in _NEEDED}
+        present = [c for c in _OPTIONAL if recordings and c in recordings[0]]
+        cols.update({c: np.array([r[c] for r in recordings]) for c in present})
+        return cols
+    cols = {c: np.asarray(recordings[c]) for c in _NEEDED}
+    cols.update({c: np.asarray(recordings[c]) for c in _OPTIONAL if c in recordings.colnames})
+    return cols
 
 
 def variant_mask(cols: Mapping[str, np.ndarray], variant: Variant) -> np.ndarray:
@@ -79,12 +88,14 @@ def pointing_data(cols: Mapping[str, np.ndarray], mask: np.ndarray) -> PointingD
     """Total pointing errors (measured + model in use + applied) of the selected rows."""
     f = {k: np.asarray(v)[mask].astype(float) for k, v in cols.items()
          if k not in ("polarization", "good")}
+    lon, lat = ("ha_deg", "dec_deg") if "ha_deg" in f else ("az_deg", "el_deg")
     return PointingData(
-        az_rad=np.radians(f["az_deg"]),
-        el_rad=np.radians(f["el_deg"]),
+        az_rad=np.radians(f[lon]),
+        el_rad=np.radians(f[lat]),
         xel_arcsec=60.0 * (f["xel_arcmin"] + f["model_xel_arcmin"] + f["applied_xel_arcmin"]),
         el_arcsec=60.0 * (f["el_arcmin"] + f["model_el_arcmin"] + f["applied_el_arcmin"]),
         t_s=f["t_s"],
+        feed_rad=np.radians(f["feed_angle_deg"]) if "feed_angle_deg" in f else None,
     )
 
 

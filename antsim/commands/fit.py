@@ -2,7 +2,9 @@
 
 The file's format is detected by content: ECSV recordings from ``antsim run`` (read through
 :func:`controller.recordings.read_pointing_data`) or TPOINT pointing data. Bad input (missing
-file, malformed line, unknown term) ends as one line on stderr and exit status 2.
+file, malformed line, unknown term) ends as one line on stderr and exit status 2. Recordings
+of an equatorial mount (metadata ``mount: equatorial``) are fitted in hour angle and
+declination with TPOINT's equatorial terms (default model ``crane11``).
 """
 
 from __future__ import annotations
@@ -104,7 +106,10 @@ def main(args: argparse.Namespace) -> int:
         raise InputError(str(path), "RECORDINGS", str(path),
                          "is a TPOINT model (.mod) file, not pointing data",
                          "pass a model file with --model")
-    if args.terms is not None:
+    equatorial = _equatorial_site(path) if fmt == "ecsv" else None
+    if equatorial is not None:
+        terms, model_name = _equatorial_terms(args, equatorial)
+    elif args.terms is not None:
         terms, model_name = _terms_from_option(args.terms), "custom"
     else:
         terms, model_name = _terms_from_model(args.model or DEFAULT_MODEL[fmt])
@@ -122,3 +127,34 @@ def main(args: argparse.Namespace) -> int:
         print(f"{path} ({'TPOINT data' if fmt == 'tpoint' else 'recordings'})")
         print(result.summary())
     return 0
+
+
+def _equatorial_site(path: Path) -> float | None:
+    """The site latitude (deg) of recordings made on an equatorial mount, else None."""
+    try:
+        recordings = importlib.import_module("controller.recordings")
+    except ModuleNotFoundError:
+        return None  # _read_data says what is missing
+    meta = recordings.read_recordings(path).meta
+    if meta.get("mount") != "equatorial":
+        return None
+    return float(meta["site"]["latitude_deg"])
+
+
+def _equatorial_terms(args: argparse.Namespace, latitude_deg: float):
+    """Equatorial terms from ``--terms`` or a named equatorial ``--model`` (crane11)."""
+    from controller.equatorial import EQUATORIAL_MODELS, equatorial_terms
+    from controller.terms import TermError
+
+    if args.terms is not None:
+        names = [t.strip().upper() for t in args.terms.split(",")]
+        try:
+            return equatorial_terms(names, latitude_deg), "custom"
+        except TermError as err:
+            raise InputError("command line", "--terms", args.terms, str(err)) from None
+    spec = args.model or "crane11"
+    if spec not in EQUATORIAL_MODELS:
+        raise InputError("command line", "--model", spec,
+                         "these recordings are from an equatorial mount",
+                         f"equatorial models: {', '.join(sorted(EQUATORIAL_MODELS))}")
+    return equatorial_terms(EQUATORIAL_MODELS[spec], latitude_deg), spec

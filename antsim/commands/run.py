@@ -34,7 +34,11 @@ def main(args: argparse.Namespace) -> int:
         raise InputError("command line", "--seed", args.seed, "must be >= 0")
     scenario = load_scenario(args.scenario)
     model = None
-    if args.model is not None:
+    if args.model is not None and scenario.mount.kind == "equatorial":
+        from controller.equatorial import load_equatorial_model
+
+        model = load_equatorial_model(args.model, scenario.site.latitude_deg)
+    elif args.model is not None:
         from controller.modelio import load_model
 
         model = load_model(args.model)

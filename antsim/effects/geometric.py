@@ -34,6 +34,9 @@ class GeometricEffect(Effect):
         return self.model.names
 
     def pointing_error(self, state: PointingState) -> tuple[float, float]:
+        if self.model.needs_feed:  # feed terms (HSCF...) turn with the feed angle
+            return self.model.offset_scalar_rad(state.az_rad, state.el_rad,
+                                                state.feed_angle_rad)
         return self.model.offset_scalar_rad(state.az_rad, state.el_rad)
 
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -116,6 +116,21 @@ class ExactTiltCollimation(Effect):
         "tilt_az_deg": Param(0.0, "azimuth towards which the axis tilts (deg, N = 0)"),
         "collimation_arcmin": Param(0.0, "collimation error (arcmin)"),
     }
+
+    def coefficients(self) -> dict[str, float]:
+        """Small-angle equivalents (arcsec, TPOINT's sign) in TPOINT's terms (AN, AW, CA) and
+        in the BIMA memo's separate azimuth and elevation tilt terms (HSSASE, HECA, HSCASE,
+        HESA): what a linear fit of either model should recover."""
+        from controller.optical import tilt_collimation_equivalents
+
+        tilt_arcsec = self.p["tilt_arcmin"] * 60.0
+        phi = math.radians(self.p["tilt_az_deg"])
+        linear = {"AN": -tilt_arcsec * math.cos(phi), "AW": tilt_arcsec * math.sin(phi),
+                  "CA": -self.p["collimation_arcmin"] * 60.0}
+        return {**linear, **tilt_collimation_equivalents(**self.params())}
+
+    def truth(self) -> dict[str, Any]:
+        return {**super().truth(), "coefficients_arcsec": self.coefficients()}
 
     def encoder_from_true(self, az_rad, el_rad):
         """Encoder (indicated) azimuth and elevation that put the beam on the true direction."""
