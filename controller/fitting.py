@@ -209,7 +209,7 @@ class FitResult:
     rejected ones included. ``correlation``: M x M, NaN in rows/columns of unconstrained terms.
     ``condition_number``: 2-norm condition number of the final design matrix of the fitted
     (constrained) terms with columns scaled to unit length. ``warnings``: plain sentences.
-    ``sigma_honest_arcsec``: cluster-robust (sandwich) standard errors of the same
+    ``sigma_honest_arcsec``: cluster jackknife (CV3) standard errors of the same
     coefficients (see :func:`fit_model`); ``honest_clusters`` the number of clusters used.
     """
 
@@ -271,7 +271,7 @@ class FitResult:
             },
             "unconstrained": list(self.unconstrained),
             "honest_sigma": {
-                "method": "cluster-robust sandwich of the same least-squares coefficients, "
+                "method": "cluster jackknife (CV3) of the same least-squares coefficients, "
                           "per-axis scatter, clusters = observations"
                           + (f" within {self.honest_block_s:g} s time blocks"
                              if self.honest_block_s else ""),
@@ -581,14 +581,16 @@ def fit_model(
 ) -> FitResult:
     """Fit the linear pointing terms ``terms`` to ``data``; see the module docstring.
 
-    Besides TPOINT's sigma, the result carries honest error bars of the same coefficients: a
-    cluster-robust (sandwich) covariance ``B M B`` with ``B = (A^T A)^-1`` and
-    ``M = sum_g (A_g^T r_g)(A_g^T r_g)^T`` over clusters g, scaled by the usual small-sample
-    factor ``G/(G-1) (N-1)/(N-K)``. Each observation's xel and el rows form one cluster, so the
-    two axes' different scatter is respected (TPOINT scales every term by the Sky RMS, which
-    is sqrt(2) times the per-equation scatter for isotropic errors and ignores that xel and el
-    residuals differ); with ``data.t_s`` the observations are further grouped in time blocks
-    of ``block_s`` so that residuals correlated over minutes to an hour (thermal drifts,
+    Besides TPOINT's sigma, the result carries honest error bars of the same coefficients: the
+    cluster jackknife covariance (CV3, MacKinnon, Nielsen and Webb 2023) ``(G-1)/G sum_g d_g
+    d_g^T`` of the exact leave-one-cluster-out changes ``d_g = -(A^T A - A_g^T A_g)^-1 A_g^T
+    r_g``. With few clusters (the ~24 one-hour blocks of a day) the plain sandwich (CV1) is
+    optimistic, because each cluster's own residuals are pulled towards the fit (by its
+    leverage); the jackknife removes that. Each observation's xel and el rows form one cluster,
+    so the two axes' different scatter is respected (TPOINT scales every term by the Sky RMS,
+    which is sqrt(2) times the per-equation scatter for isotropic errors and ignores that xel
+    and el residuals differ); with ``data.t_s`` the observations are further grouped in time
+    blocks of ``block_s`` so that residuals correlated over minutes to an hour (thermal drifts,
     slow wander) are allowed for.
 
     Raises ``ValueError`` (plain sentence) for no observations, fewer used observations than
@@ -691,7 +693,7 @@ def fit_model(
         scale = sky
     popn = sky * math.sqrt(n_used / (n_used - n_fitted)) if n_used > n_fitted else float("nan")
     sigma = np.sqrt(np.diag(sol.cov_unscaled)) * scale
-    honest, clusters = _sandwich_sigma(a_w, y_w, coeffs, used, sol, n,
+    honest, clusters = _jackknife_sigma(a_w, y_w, coeffs, used, sol, n,
                                        None if data.t_s is None else data.t_s, block_s)
     with np.errstate(invalid="ignore", divide="ignore"):
         sd = np.sqrt(np.diag(sol.cov_unscaled))
@@ -738,10 +740,10 @@ def fit_model(
     )
 
 
-def _sandwich_sigma(a: np.ndarray, y: np.ndarray, coeffs: np.ndarray, used: np.ndarray,
+def _jackknife_sigma(a: np.ndarray, y: np.ndarray, coeffs: np.ndarray, used: np.ndarray,
                     sol: _Solution, n: int, t_s: np.ndarray | None,
                     block_s: float) -> tuple[np.ndarray, int]:
-    """Cluster-robust standard errors (see :func:`fit_model`); NaN where not fitted."""
+    """Cluster jackknife (CV3) standard errors (see :func:`fit_model`); NaN where not fitted."""
     m = a.shape[1]
     out = np.full(m, np.nan)
     kept = list(sol.rank.kept)
@@ -756,15 +758,66 @@ def _sandwich_sigma(a: np.ndarray, y: np.ndarray, coeffs: np.ndarray, used: np.n
     if g < 2:
         return out, g
     r = y - _matvec(a, coeffs)
-    a_k = a[:, kept]
-    # score of each observation: its xel row and its el row together
-    score = a_k[idx] * r[idx, None] + a_k[n + idx] * r[n + idx, None]
-    summed = np.zeros((g, len(kept)))
-    np.add.at(summed, cluster, score)
-    meat = summed.T @ summed
-    bread = sol.cov_unscaled[np.ix_(kept, kept)]
+    rows_x, rows_e = a[:, kept][idx], a[:, kept][n + idx]
+    # each observation's xel and el rows belong to its cluster: per-cluster score A_g^T r_g
+    # and information A_g^T A_g
+    score = rows_x * r[idx, None] + rows_e * r[n + idx, None]
     k = len(kept)
-    factor = g / (g - 1) * (idx.size - 1) / max(idx.size - k, 1)
-    cov = bread @ meat @ bread * factor
+    score_g = np.zeros((g, k))
+    np.add.at(score_g, cluster, score)
+    total_info = rows_x.T @ rows_x + rows_e.T @ rows_e
+    if t_s is None:
+        delta = _single_observation_deltas(rows_x, rows_e, score, total_info)
+        if delta is not None:
+            cov = (g - 1) / g * (delta.T @ delta)
+            out[kept] = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+            return out, g
+    cov = np.zeros((k, k))
+    for lo in range(0, g, _JACKKNIFE_CHUNK):
+        hi = min(g, lo + _JACKKNIFE_CHUNK)
+        info_g = np.zeros((hi - lo, k, k))
+        mine = (cluster >= lo) & (cluster < hi)
+        c = cluster[mine] - lo
+        np.add.at(info_g, c, rows_x[mine, :, None] * rows_x[mine, None, :]
+                  + rows_e[mine, :, None] * rows_e[mine, None, :])
+        # leave-one-cluster-out change of the coefficients, exactly:
+        # beta_(-g) - beta = -(A^T A - A_g^T A_g)^-1 A_g^T r_g
+        delta = _solve_stack(total_info[None] - info_g, score_g[lo:hi])
+        cov += delta.T @ delta
+    cov *= (g - 1) / g
     out[kept] = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     return out, g
+
+
+#: clusters per batch of the jackknife's k x k solves (bounds memory at ~k*k*8 kB per 1000)
+_JACKKNIFE_CHUNK = 4096
+
+
+def _single_observation_deltas(rows_x: np.ndarray, rows_e: np.ndarray, score: np.ndarray,
+                               info: np.ndarray) -> np.ndarray | None:
+    """Leave-one-observation-out coefficient changes for clusters of one observation (its
+    two rows), by the Woodbury identity: O(N k^2) instead of N k x k solves. ``None`` when an
+    observation alone constrains a term (the general path then handles it)."""
+    bread = np.linalg.inv(info)
+    u = score @ bread
+    bx, be = rows_x @ bread, rows_e @ bread
+    hxx = np.einsum("ij,ij->i", rows_x, bx)
+    hxe = np.einsum("ij,ij->i", rows_x, be)
+    hee = np.einsum("ij,ij->i", rows_e, be)
+    det = (1.0 - hxx) * (1.0 - hee) - hxe**2
+    if np.any(det < 1e-12):
+        return None
+    qx = np.einsum("ij,ij->i", rows_x, u)
+    qe = np.einsum("ij,ij->i", rows_e, u)
+    wx = ((1.0 - hee) * qx + hxe * qe) / det
+    we = (hxe * qx + (1.0 - hxx) * qe) / det
+    return -(u + bx * wx[:, None] + be * we[:, None])
+
+
+def _solve_stack(matrices: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """Solve a stack of small systems; a cluster without which the fit is singular (it alone
+    constrains a term) gets the minimum-norm solution (its term then has no finite error)."""
+    try:
+        return np.linalg.solve(matrices, rhs[..., None])[..., 0]
+    except np.linalg.LinAlgError:
+        return np.einsum("gij,gj->gi", np.linalg.pinv(matrices), rhs)
