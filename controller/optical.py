@@ -23,8 +23,10 @@ The memo's fitting equations (1) and (2) are all in the TPOINT vocabulary (``bim
 | 2Az | cos E sin 2A | HASA2 | 2Az | sin 2A | HESA2 |
 | 2Az | cos E cos 2A | HACA2 | 2Az | cos 2A | HECA2 |
 
-(TPOINT's azimuth is South-based: its odd harmonics of A are minus the memo's North-based
-ones, so those coefficients change sign between the two; the fitted space is the same.)
+(TPOINT's harmonic generator evaluates azimuth at ``A_H = -A_N`` and negates dA and dA cos E
+results (:mod:`controller.terms`), so some coefficients are minus the memo's North-based ones:
+for a correction written with North-based azimuth, HSSASE, HASA2, HECA and HECA2 keep the
+memo's sign and HSCASE, HACA2, HESA and HESA2 change it; the fitted space is the same.)
 """
 
 from __future__ import annotations
@@ -51,12 +53,13 @@ def tilt_collimation_equivalents(tilt_arcmin: float, tilt_az_deg: float,
     azimuth-axis tilt ``tilt_arcmin`` towards azimuth ``tilt_az_deg`` (N = 0) and a
     collimation error ``collimation_arcmin`` (the simulator's ``exact_tilt_collimation``):
     with AN = -tilt cos(az_t), AW = tilt sin(az_t), CA = -collimation, the memo's separate
-    azimuth and elevation tilt terms are HSSASE = HECA = -AN, HSCASE = -AW, HESA = AW."""
+    azimuth and elevation tilt terms are HSSASE = HECA = AN, HSCASE = -AW, HESA = AW (TPOINT's
+    harmonic signs, :mod:`controller.terms`; tested against AN and AW)."""
     tilt = tilt_arcmin * 60.0
     phi = math.radians(tilt_az_deg)
     an = -tilt * math.cos(phi)
     aw = tilt * math.sin(phi)
-    return {"HSSASE": -an, "HECA": -an, "HSCASE": -aw, "HESA": aw,
+    return {"HSSASE": an, "HECA": an, "HSCASE": -aw, "HESA": aw,
             "CA": -collimation_arcmin * 60.0}
 
 

@@ -10,10 +10,10 @@ position. Azimuth arguments are North-based (N = 0, E = 90 deg) everywhere in th
 
 Two facts fix the signs (both are tested):
 
-* TPOINT evaluates its terms with its own South-based azimuth ``A_S = A_N - 180 deg``.
+* TPOINT evaluates its basic terms with its own South-based azimuth ``A_S = A_N - 180 deg``.
   Only then does a fit of ``../shared/data/real/mmt_20210821_k_and_e.dat`` reproduce
   TPOINT's published AN = +2.495" and AW = -10.335" (with North-based azimuth both flip).
-  Even harmonics of azimuth are unaffected; odd ones change sign.
+  The harmonic generator has its own azimuth and result signs (below).
 * Ghigo (1990) and katpoint write the opposite quantity, "indicated minus true", which is
   minus the TPOINT correction. Their basis functions are therefore negated here, so that a
   fitted coefficient equals the number those sources print.
@@ -27,17 +27,42 @@ gravitational sag (cos E in elevation) and W6, 12.24', is the elevation zero off
     dE = W4 cos E + W5 cot E + W6 + W7 cos A + W8 sin A      (indicated - true)
 
 The harmonic generator follows TPOINT: ``H`` + result letter (A: azimuth, E: elevation,
-S: left-right on the sky = dA cos E, Z: zenith distance = -dE) + one or two factors, each
-``S`` or ``C`` (sine, cosine) of ``A``, ``E`` or ``Z`` with an optional integer multiplier:
-``HESA2`` is dE = c sin 2A, ``HSCA5CE8`` is dA cos E = c cos 5A cos 8E. Beyond TPOINT, the
-argument ``F`` is the feed (rotator) angle of a feed box turned during a campaign (Fomalont
-1973's feed terms): ``HSCF`` is dA cos E = c cos F; terms with an ``F`` factor need the feed
-angle (``feed_rad``) wherever they are evaluated.
+S: left-right on the sky = dA cos E, Z: zenith distance) + one or two factors, each ``S`` or
+``C`` (sine, cosine) of ``A``, ``E`` or ``Z`` with an optional integer multiplier. Its signs
+are TPOINT's own, fixed by TPOINT's FAUTO fit of ``../shared/data/real/auxtel_20200315.dat``
+(22 terms, ten of them harmonics with results A, E and S and arguments up to 7A; tested):
+
+* the azimuth of a harmonic is ``A_H = 180 deg - A_S = -A_N`` (mod 360 deg), not ``A_S``;
+* an ``A`` or ``S`` result is minus the harmonic, as TPOINT's IA and CA are: ``HACA2`` is
+  dA = -c cos 2A_H, ``HSCA5CE8`` is dA cos E = -c cos 5A_H cos 8E;
+* an ``E`` result is plus it (``HESA2`` is dE = +c sin 2A_H = -c sin 2A_N) and a ``Z`` result
+  is dZ = +c f, i.e. dE = -c f.
+
+Within the conventions "argument +-A_S + k 180 deg, one sign per result letter" this is the
+only one that reproduces the signs of all ten of TPOINT's harmonic coefficients on that file
+(HACA2, HASA7, HESACE, HESA2, HESA3, HSCA5CE8, HSSA6CE6, HSCE3, HSSE8, HSCE8); the earlier
+``A_S`` with every result ``+c f`` flipped six of them (HACA2, HASA7, HESA2, HSCE3, HSSE8,
+HSCE8). Written with the South-based azimuth of AN and AW, the once-per-turn terms are
+dE = +HESA sin A_S, dE = -HECA cos A_S, dA = -HASA sin A_S, dA = +HACA cos A_S; with the
+North-based one, sin kA_H = -sin kA_N and cos kA_H = +cos kA_N. No ``Z`` harmonic was in
+that fit: its sign (dE = -c f) is the natural reading of a zenith-distance result, not
+evidence.
+
+Beyond TPOINT, the argument ``F`` is the feed (rotator) angle of a feed box turned during a
+campaign (Fomalont 1973's feed terms). TPOINT has no such argument; for consistency the
+result signs follow the same rule, so ``HSCF`` is dA cos E = -c cos F and ``HECF`` is
+dE = +c cos F (the feed angle itself is used as it is, not negated). Terms with an ``F``
+factor need the feed angle (``feed_rad``) wherever they are evaluated.
 
 Extension for other mounts (:mod:`controller.equatorial`): a factor's argument may also be a
 hashable callable ``(lon_rad, lat_rad) -> array`` of the two coordinates the terms are
 evaluated at (for an equatorial model: hour angle and declination, passed in place of azimuth
-and elevation), e.g. the elevation that TPOINT's equatorial TX needs.
+and elevation), e.g. the elevation that TPOINT's equatorial TX needs. Names never produce
+such factors: terms with them are built by hand and state their own signs; were one built
+as a harmonic, the same result rule would apply (A and S results minus, E plus). The
+equatorial harmonic generator (``HHSH``, ``HDCD``... in :mod:`controller.equatorial`) is a
+separate one, with every result ``+c f``: no TPOINT fit with equatorial harmonics was
+available to test it against.
 """
 
 from __future__ import annotations
@@ -63,9 +88,11 @@ __all__ = [
 
 # A term is a sum of components; each component is sign * product of factors, landing in
 # dA (axis "A"), dE (axis "E") or left-right on the sky (axis "S": dA cos E). A factor is
-# (function, argument, multiplier): functions sin cos tan sec cot lin one; arguments
-# "AS" (TPOINT's South-based azimuth), "AN" (North-based azimuth), "E" (elevation) and
-# "Z" (zenith distance). Models evaluate each distinct factor once (see ``evaluate_basis``).
+# (function, argument, multiplier): functions sin cos tan sec cot lin csc; arguments
+# "AS" (TPOINT's South-based azimuth A_N - pi, of its basic terms AN, AW...), "AH" (the
+# azimuth of TPOINT's harmonic generator, pi - A_S = -A_N), "AN" (North-based azimuth), "E"
+# (elevation), "Z" (zenith distance), "F" (feed angle) or a hashable callable (see the module
+# docstring). Models evaluate each distinct factor once (see ``evaluate_basis``).
 Factor = tuple[str, str, int]
 Component = tuple[str, float, tuple[Factor, ...]]
 
@@ -106,6 +133,8 @@ def _argument(arg, az: np.ndarray, el: np.ndarray, feed=None) -> np.ndarray:
         return _feed(feed)
     if arg == "AS":
         return az - math.pi
+    if arg == "AH":
+        return -az
     if arg == "AN":
         return az
     if arg == "E":
@@ -176,6 +205,8 @@ def _argument_scalar(arg, az: float, el: float, feed=None) -> float:
         return _feed(feed)
     if arg == "AS":
         return az - math.pi
+    if arg == "AH":
+        return -az
     if arg == "AN":
         return az
     if arg == "E":
@@ -253,6 +284,10 @@ def _tpoint_terms() -> dict[str, Term]:
 # ---------------------------------------------------------------------------------------------
 _HARMONIC = re.compile(r"^H([AESZ])([SC])([AEZF])(\d*)(?:([SC])([AEZF])(\d*))?$")
 
+#: result letter -> (axis, sign): TPOINT's dA and dA cos E results are minus the harmonic
+#: (as its IA and CA are), dE is plus it and dZ = -dE (see the module docstring)
+_HARMONIC_RESULT = {"A": ("A", -1), "E": ("E", 1), "S": ("S", -1), "Z": ("E", -1)}
+
 
 def _harmonic(name: str) -> Term | None:
     m = _HARMONIC.match(name)
@@ -265,13 +300,15 @@ def _harmonic(name: str) -> Term | None:
     if any(n == 0 for _, _, n in raw):
         return None
     factors = tuple(
-        ("sin" if f == "S" else "cos", "AS" if a == "A" else a, n) for f, a, n in raw
+        ("sin" if f == "S" else "cos", "AH" if a == "A" else a, n) for f, a, n in raw
     )
-    axis, sign = {"A": ("A", 1), "E": ("E", 1), "S": ("S", 1), "Z": ("E", -1)}[result]
-    words = {"A": "dA", "E": "dE", "S": "dA cos E", "Z": "dZ"}
-    desc = " * ".join(f"{'sin' if f == 'S' else 'cos'}({'' if n == 1 else n}{a})"
-                      for f, a, n in raw)
-    return _t(name, f"harmonic: {words[result]} = {name} {desc}", (axis, sign, factors))
+    axis, sign = _HARMONIC_RESULT[result]
+    words = {"A": "dA = -", "E": "dE = ", "S": "dA cos E = -", "Z": "dZ = "}
+    desc = " * ".join(f"{'sin' if f == 'S' else 'cos'}({'' if n == 1 else n}"
+                      f"{'A_H' if a == 'A' else a})" for f, a, n in raw)
+    if any(a == "A" for _, a, _ in raw):
+        desc += ", A_H = -A_N"
+    return _t(name, f"harmonic: {words[result]}{name} {desc}", (axis, sign, factors))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -344,9 +381,9 @@ GHIGO_EQUIVALENTS: dict[str, tuple[str, float]] = {
     "W4": ("TF", 1.0),
     "W5": ("TX", 1.0),
     "W6": ("IE", -1.0),
-    "W7": ("HECA", 1.0),
+    "W7": ("HECA", -1.0),
     "W8": ("HESA", 1.0),
-    "W9": ("HSSASE", 1.0),
+    "W9": ("HSSASE", -1.0),
     "W10": ("HSCASE", 1.0),
 }
 
@@ -363,14 +400,14 @@ KATPOINT_EQUIVALENTS: dict[str, tuple[str, float]] = {
     "P8": ("TF", 1.0),
     "P11": ("HESE", -1.0),
     "P13": ("HACA", 1.0),
-    "P14": ("HASA", 1.0),
+    "P14": ("HASA", -1.0),
     "P15": ("HECA2", -1.0),
-    "P16": ("HESA2", -1.0),
-    "P17": ("HACA2", -1.0),
+    "P16": ("HESA2", 1.0),
+    "P17": ("HACA2", 1.0),
     "P18": ("HASA2", -1.0),
     "P19": ("HECE8", -1.0),
     "P20": ("HESE8", -1.0),
-    "P21": ("HECA", 1.0),
+    "P21": ("HECA", -1.0),
     "P22": ("HESA", 1.0),
 }
 

@@ -20,7 +20,8 @@ from antsim.diagnose.candidates import CANDIDATES, candidate, source_rates_arcse
 from antsim.diagnose.data import Observations
 from antsim.diagnose.problem import term_columns
 from antsim.effects import EFFECTS
-from antsim.effects.harmonics import AzimuthTrack2A, HarmonicEffect
+from antsim.effects.harmonics import HARMONIC_EFFECTS, AzimuthTrack2A
+from controller.units import RAD_PER_ARCSEC
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 FINDING_KEYS = {"effect", "terms", "explanation", "where", "params", "significance",
@@ -64,18 +65,71 @@ def test_library_covers_the_signature_table_and_the_non_harmonic_effects():
 def test_harmonic_effect_amplitude_and_phase_round_trip():
     e = AzimuthTrack2A(amplitude_arcsec=6.0, phase_deg=30.0)
     coeff = e.coefficients()
-    assert coeff["HESA2"] == pytest.approx(6.0 * math.cos(math.radians(30.0)))
+    # TPOINT's HESA2 is dE = c sin 2A_H with A_H = 180 deg - A_S: minus sin 2A_S
+    assert coeff["HESA2"] == pytest.approx(-6.0 * math.cos(math.radians(30.0)))
     assert coeff["HECA2"] == pytest.approx(6.0 * math.sin(math.radians(30.0)))
-    amp, phase = HarmonicEffect.amplitude_phase(coeff["HESA2"], coeff["HECA2"])
+    amp, phase = AzimuthTrack2A.amplitude_phase(coeff["HESA2"], coeff["HECA2"])
     assert (amp, phase) == pytest.approx((6.0, 30.0))
-    # the effect's error is minus its TPOINT correction (indicated - true)
+    # the effect's error is minus its correction a sin(2 A_S + phase) (indicated - true)
     from antsim.effects.base import PointingState
 
     st = PointingState(t_s=0.0, az_rad=0.4, el_rad=0.7)
     d_az, d_el = e.pointing_error(st)
-    expected = -(coeff["HESA2"] * math.sin(0.8) + coeff["HECA2"] * math.cos(0.8))
+    expected = -6.0 * math.sin(2 * (0.4 - math.pi) + math.radians(30.0))
     assert d_az == 0.0
     assert d_el == pytest.approx(math.radians(expected / 3600.0), rel=1e-9)
+
+
+#: each harmonic effect's correction: (axis, cycles, argument) of a sin(n X + phase)
+HARMONIC_PHYSICS = {
+    "az_track_2a": ("E", 2, "A"), "az_track_3a": ("E", 3, "A"), "az_runout_1a": ("A", 1, "A"),
+    "az_runout_2a": ("A", 2, "A"), "el_nod_1a": ("E", 1, "A"), "el_eccentricity": ("E", 1, "E"),
+    "el_eccentricity_2e": ("E", 2, "E"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(HARMONIC_PHYSICS))
+@pytest.mark.parametrize("phase_deg", [0.0, 30.0, 135.0, 250.0])
+def test_harmonic_effects_are_the_documented_sinusoid(name, phase_deg):
+    """The error of every harmonic effect is minus a sin(nX + phase), X the South-based
+    azimuth A_S = A_N - 180 deg or the elevation, in dA or dE: whatever the term library's
+    sign convention, and the inverse amplitude_phase gives the parameters back."""
+    from antsim.effects.base import PointingState
+
+    axis, n, arg = HARMONIC_PHYSICS[name]
+    cls = EFFECTS[name]
+    assert cls in HARMONIC_EFFECTS
+    e = cls(amplitude_arcsec=7.0, phase_deg=phase_deg)
+    coeff = e.coefficients()
+    amp, phase = cls.amplitude_phase(coeff[cls.sin_term], coeff[cls.cos_term])
+    assert amp == pytest.approx(7.0, rel=1e-12)
+    assert (phase - phase_deg + 180.0) % 360.0 - 180.0 == pytest.approx(0.0, abs=1e-9)
+    for az, el in ((0.4, 0.7), (2.0, 0.3), (3.9, 1.1), (5.5, 0.9)):
+        x = az - math.pi if arg == "A" else el
+        want = -7.0 * math.sin(n * x + math.radians(phase_deg)) * RAD_PER_ARCSEC
+        d_az, d_el = e.pointing_error(PointingState(t_s=0.0, az_rad=az, el_rad=el))
+        got, other = (d_az, d_el) if axis == "A" else (d_el, d_az)
+        assert got == pytest.approx(want, abs=1e-15)
+        assert other == 0.0
+
+
+@pytest.mark.parametrize("name", sorted(HARMONIC_PHYSICS))
+def test_harmonic_candidates_share_the_effects_phase(name):
+    """A library candidate's phase is its simulator effect's: the unit signal at a phase is
+    the effect's coefficients through the term columns, and a fit's coefficients give the
+    effect's amplitude and phase back (the blind test and modelit rely on it)."""
+    obs = synthetic(n=40, noise_arcsec=0.0)
+    c = candidate(name)
+    e = EFFECTS[name](amplitude_arcsec=5.0, phase_deg=200.0)
+    coeff = e.coefficients()
+    cols = term_columns(c.terms, obs)
+    want = cols @ np.array([coeff[t] for t in c.terms])
+    np.testing.assert_allclose(5.0 * c.unit_signal(obs, {"phase_deg": 200.0}), want,
+                               rtol=0, atol=1e-12)
+    params, amp, _ = c.params_from(obs, None, np.array([coeff[t] for t in c.terms]),
+                                   np.eye(2), c.terms)
+    assert amp == pytest.approx(5.0, rel=1e-12)
+    assert params["phase_deg"] == pytest.approx(200.0, abs=1e-9)
 
 
 def test_new_effects_load_from_a_scenario(ghigo_text, write_scenario):

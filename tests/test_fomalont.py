@@ -30,9 +30,11 @@ def test_feed_terms_need_and_use_the_feed_angle():
     az, el, f = np.array([0.3, 2.0]), np.array([0.5, 1.0]), np.array([0.4, -1.2])
     model = PointingModel(["HSCF", "HSSF", "HECF", "HESF"], [1.0, 2.0, 3.0, 4.0])
     assert model.needs_feed and not PointingModel("ghigo10").needs_feed
-    d_az, d_el = model.offset_rad(az, el, f)  # indicated - true = minus the correction
+    # indicated - true = minus the correction; the correction is dA cos E = -(HSCF cos f +
+    # HSSF sin f) (the harmonic generator's sign for dA cos E) and dE = +(HECF cos f + ...)
+    d_az, d_el = model.offset_rad(az, el, f)
     np.testing.assert_allclose(d_az * np.cos(el) * ARCSEC_PER_RAD,
-                               -(np.cos(f) + 2.0 * np.sin(f)), atol=1e-12)
+                               np.cos(f) + 2.0 * np.sin(f), atol=1e-12)
     np.testing.assert_allclose(d_el * ARCSEC_PER_RAD, -(3.0 * np.cos(f) + 4.0 * np.sin(f)),
                                atol=1e-12)
     assert model.offset_scalar_rad(0.3, 0.5, 0.4)[1] == pytest.approx(d_el[0], abs=1e-18)
@@ -73,7 +75,7 @@ def test_pointing_data_carries_the_feed_angle_through_selection():
     az, el = rng.uniform(0, 2 * math.pi, n), rng.uniform(0.2, 1.4, n)
     f = np.radians(rng.choice([0.0, 60.0, 120.0, 180.0, 240.0, 300.0], n))
     truth = PointingModel(["IA", "IE", "CA", "HSCF", "HSSF", "HECF", "HESF"],
-                          [20.0, -30.0, 10.0, -24.6, -17.2, 12.0, -20.8])
+                          [20.0, -30.0, 10.0, 24.6, 17.2, 12.0, -20.8])
     d_az, d_el = truth.offset_rad(az, el, f)
     data = PointingData(az, el, d_az * np.cos(el) * ARCSEC_PER_RAD, d_el * ARCSEC_PER_RAD,
                         feed_rad=f)
@@ -125,7 +127,7 @@ def test_fomalont_run_recovers_every_injected_term(fomalont_run):
     # Fomalont's own parameters back from the linear coefficients
     t = fit["terms"]
     c6 = math.hypot(t["HSCF"]["value_arcsec"], t["HSSF"]["value_arcsec"])
-    c7 = math.degrees(math.atan2(-t["HSSF"]["value_arcsec"], -t["HSCF"]["value_arcsec"]))
+    c7 = math.degrees(math.atan2(t["HSSF"]["value_arcsec"], t["HSCF"]["value_arcsec"]))
     d6 = math.hypot(t["HECF"]["value_arcsec"], t["HESF"]["value_arcsec"])
     d7 = math.degrees(math.atan2(-t["HESF"]["value_arcsec"], -t["HECF"]["value_arcsec"]))
     p = feed["params"]

@@ -67,7 +67,8 @@ def _expected(name: str, c: float, az: np.ndarray, el: np.ndarray):
         "AN": (-c * np.sin(a_s) * tan, -c * np.cos(a_s)),
         "AW": (-c * np.cos(a_s) * tan, c * np.sin(a_s)),
         "TF": (zero, -c * np.cos(el)), "TX": (zero, -c * cot),
-        "HESA2": (zero, c * np.sin(2 * a_s)),
+        # the harmonic generator's azimuth is A_H = 180 deg - A_S = -A_N (controller/terms.py)
+        "HESA2": (zero, c * np.sin(2 * (math.pi - a_s))),
     }
     d_a, d_e = tpoint_correction[name]
     return -d_a, -d_e

@@ -370,7 +370,7 @@ class TermsCandidate(Candidate):
 
     def __init__(self, name: str, terms: Sequence[str], title: str, signature: str,
                  explanation: str, effect: str | None = None, pair: bool = True,
-                 blind_exclusion: str | None = None):
+                 blind_exclusion: str | None = None, signs: tuple[float, float] = (1.0, 1.0)):
         self.name = name
         self.terms = tuple(terms)
         self.title = title
@@ -380,11 +380,15 @@ class TermsCandidate(Candidate):
         self.pair = pair and len(self.terms) == 2
         self.blind_exclusion = blind_exclusion
         self.amplitude_param = "amplitude_arcsec"
+        #: a pair's coefficients per unit of a cos(phase), a sin(phase): the simulator
+        #: effect's ``HarmonicEffect.signs`` (its phase is of the physical correction)
+        self.signs = (float(signs[0]), float(signs[1]))
         if self.pair:
+            sign = ["" if x > 0 else "-" for x in self.signs]
             self.params_doc = {
                 "amplitude_arcsec": "amplitude of the harmonic (arcsec)",
-                "phase_deg": f"phase: {self.terms[0]} = a cos(phase), {self.terms[1]} = "
-                             "a sin(phase)"}
+                "phase_deg": f"phase: {self.terms[0]} = {sign[0]}a cos(phase), "
+                             f"{self.terms[1]} = {sign[1]}a sin(phase)"}
         else:
             self.params_doc = {t: f"TPOINT coefficient of {t} (arcsec)" for t in self.terms}
 
@@ -398,7 +402,7 @@ class TermsCandidate(Candidate):
             amp = math.hypot(s, c)
             grad = np.array([s, c]) / amp if amp > 0 else np.zeros(2)
             amp_sig = float(np.sqrt(grad @ cov @ grad)) if amp > 0 else float("nan")
-            phase = math.degrees(math.atan2(c, s)) % 360.0
+            phase = math.degrees(math.atan2(self.signs[1] * c, self.signs[0] * s)) % 360.0
             return ({"amplitude_arcsec": amp, "phase_deg": phase, "terms_arcsec": values},
                     amp, amp_sig)
         if len(names) == 1:
@@ -413,7 +417,7 @@ class TermsCandidate(Candidate):
         cols = term_columns(self.terms, obs)
         if self.pair:
             phi = math.radians(shape["phase_deg"])
-            return cols @ np.array([math.cos(phi), math.sin(phi)])
+            return cols @ np.array([self.signs[0] * math.cos(phi), self.signs[1] * math.sin(phi)])
         return cols[:, 0]
 
     def effect_params(self, shape, amplitude):
@@ -1244,7 +1248,7 @@ def _harmonic(name: str, title: str, signature: str) -> TermsCandidate:
 
     cls = EFFECTS[name]
     return TermsCandidate(name, (cls.sin_term, cls.cos_term), title, signature,
-                          cls.explanation, effect=name)
+                          cls.explanation, effect=name, signs=cls.signs)
 
 
 def _library() -> list[Candidate]:

@@ -2,12 +2,18 @@
 
 Each harmonic effect is a pair of TPOINT harmonic terms (``H`` + result letter + ``S``/``C``
 factor, see :mod:`controller.terms`) that share an argument, parametrised by an amplitude
-``a`` (arcsec) and a phase ``phi`` (deg): in TPOINT's sign (the correction true = indicated +
-correction) the pair is ``a sin(nX + phi) = a cos(phi) sin nX + a sin(phi) cos nX``, i.e. the
-sine term's coefficient is ``a cos(phi)`` and the cosine term's ``a sin(phi)``. The azimuth
-argument is TPOINT's own (South-based, as everywhere in the term library), so the terms an
-observatory fits come out with exactly these coefficients. The error the antenna makes
-(indicated minus true) is minus the correction, as for every geometric effect.
+``a`` (arcsec) and a phase ``phi`` (deg). The effect is the correction (TPOINT's sign: true =
+indicated + correction), in the axis of the result letter (dA for ``A``, dE for ``E``),
+
+    a sin(nX + phi) = a cos(phi) sin nX + a sin(phi) cos nX,
+
+with ``X`` the elevation or the South-based azimuth ``A_S = A_N - 180 deg`` of TPOINT's basic
+terms. TPOINT's harmonic generator uses its own azimuth ``A_H = 180 deg - A_S`` and negates
+``A`` results (:mod:`controller.terms`), so the pair's coefficients are ``s_sin a cos(phi)``
+and ``s_cos a sin(phi)`` with a sign per term, ``signs`` below: for HESA2, sin 2A_H =
+-sin 2A_S (s_sin = -1); for HACA, dA = -c cos A_H = +c cos A_S (s_cos = +1); elevation
+harmonics have both signs +1. The error the antenna makes (indicated minus true) is minus
+the correction, as for every geometric effect.
 
 | effect | terms | physical cause |
 |---|---|---|
@@ -27,7 +33,8 @@ more general form (``form = "fomalont"``) gives each axis its own amplitude and 
 ``xel = C6 cos(f - C7)``, ``el = D6 cos(f - D7)`` (``offset_arcsec`` = C6, ``angle_deg`` = C7,
 ``el_offset_arcsec`` = D6, ``el_angle_deg`` = D7); the rigid displacement is D6 = C6,
 D7 = C7 + 90 deg. Either is linear in cos f and sin f: the feed terms HSCF, HSSF, HECF, HESF
-of the term library (:meth:`FeedOffset.coefficients`).
+of the term library (:meth:`FeedOffset.coefficients`; HSCF and HSSF are dA cos E = -c cos f,
+-c sin f, HECF and HESF are dE = +c cos f, +c sin f).
 """
 
 from __future__ import annotations
@@ -59,9 +66,12 @@ class HarmonicEffect(Effect):
 
     sin_term: ClassVar[str] = ""
     cos_term: ClassVar[str] = ""
+    #: TPOINT coefficient of (sin_term, cos_term) per unit of the correction's sine and cosine
+    #: parts, a cos(phi) and a sin(phi) (see the module docstring; tested against the terms)
+    signs: ClassVar[tuple[float, float]] = (1.0, 1.0)
     PARAMS: ClassVar[dict[str, Param]] = {
         "amplitude_arcsec": Param(0.0, "amplitude of the harmonic (arcsec)"),
-        "phase_deg": Param(0.0, "phase: sine coefficient a cos(phase), cosine a sin(phase)"),
+        "phase_deg": Param(0.0, "phase: the correction is a sin(nX + phase), X = A_S or E"),
     }
 
     def __init__(self, **params: Any):
@@ -77,13 +87,16 @@ class HarmonicEffect(Effect):
         """TPOINT coefficients (arcsec) of the sine and cosine terms."""
         a = float(self.p["amplitude_arcsec"])
         phi = math.radians(float(self.p["phase_deg"]))
-        return {self.sin_term: a * math.cos(phi), self.cos_term: a * math.sin(phi)}
+        s_sin, s_cos = self.signs
+        return {self.sin_term: s_sin * a * math.cos(phi),
+                self.cos_term: s_cos * a * math.sin(phi)}
 
-    @staticmethod
-    def amplitude_phase(sin_coeff: float, cos_coeff: float) -> tuple[float, float]:
+    @classmethod
+    def amplitude_phase(cls, sin_coeff: float, cos_coeff: float) -> tuple[float, float]:
         """Inverse of :meth:`coefficients`: (amplitude arcsec >= 0, phase deg in [0, 360))."""
+        s_sin, s_cos = cls.signs
         return math.hypot(sin_coeff, cos_coeff), math.degrees(
-            math.atan2(cos_coeff, sin_coeff)) % 360.0
+            math.atan2(s_cos * cos_coeff, s_sin * sin_coeff)) % 360.0
 
     def pointing_error(self, state: PointingState) -> tuple[float, float]:
         return self.model.offset_scalar_rad(state.az_rad, state.el_rad)
@@ -93,6 +106,7 @@ class AzimuthTrack2A(HarmonicEffect):
     name: ClassVar[str] = "az_track_2a"
     sin_term: ClassVar[str] = "HESA2"
     cos_term: ClassVar[str] = "HECA2"
+    signs: ClassVar[tuple[float, float]] = (-1.0, 1.0)
     explanation: ClassVar[str] = (
         "the azimuth track (the rail the wheels run on) is uneven: as the antenna turns, the "
         "elevation axis rocks, twice per turn, so elevation errors vary as sin 2A and cos 2A"
@@ -103,6 +117,7 @@ class AzimuthTrack3A(HarmonicEffect):
     name: ClassVar[str] = "az_track_3a"
     sin_term: ClassVar[str] = "HESA3"
     cos_term: ClassVar[str] = "HECA3"
+    signs: ClassVar[tuple[float, float]] = (1.0, -1.0)
     explanation: ClassVar[str] = (
         "the azimuth track is uneven with three high points per turn: elevation errors vary "
         "as sin 3A and cos 3A"
@@ -113,6 +128,7 @@ class AzimuthRunout1A(HarmonicEffect):
     name: ClassVar[str] = "az_runout_1a"
     sin_term: ClassVar[str] = "HASA"
     cos_term: ClassVar[str] = "HACA"
+    signs: ClassVar[tuple[float, float]] = (-1.0, 1.0)
     explanation: ClassVar[str] = (
         "the azimuth encoder is not centred on the axis (runout): the azimuth reading is off "
         "by an amount that varies once per turn, sin A and cos A"
@@ -123,6 +139,7 @@ class AzimuthRunout2A(HarmonicEffect):
     name: ClassVar[str] = "az_runout_2a"
     sin_term: ClassVar[str] = "HASA2"
     cos_term: ClassVar[str] = "HACA2"
+    signs: ClassVar[tuple[float, float]] = (1.0, -1.0)
     explanation: ClassVar[str] = (
         "the azimuth encoder (or its gear) is elliptical: the azimuth reading is off by an "
         "amount that varies twice per turn, sin 2A and cos 2A"
@@ -133,6 +150,7 @@ class ElevationNod1A(HarmonicEffect):
     name: ClassVar[str] = "el_nod_1a"
     sin_term: ClassVar[str] = "HESA"
     cos_term: ClassVar[str] = "HECA"
+    signs: ClassVar[tuple[float, float]] = (1.0, -1.0)
     explanation: ClassVar[str] = (
         "the elevation axis nods once per azimuth turn (a bent track or a tilted bearing "
         "race): elevation errors vary as sin A and cos A without the azimuth part of a tilt"
@@ -196,11 +214,12 @@ class FeedOffset(Effect):
         return c6, c7, c6, c7 + 0.5 * math.pi
 
     def coefficients(self) -> dict[str, float]:
-        """The feed terms' TPOINT-sign coefficients (arcsec): minus the error's cos f and
-        sin f parts, HSCF = -C6 cos C7, HSSF = -C6 sin C7, HECF = -D6 cos D7,
+        """The feed terms' TPOINT-sign coefficients (arcsec). The correction is minus the
+        error; HSCF and HSSF are dA cos E = -c cos f, -c sin f and HECF and HESF are
+        dE = +c cos f, +c sin f, so HSCF = C6 cos C7, HSSF = C6 sin C7, HECF = -D6 cos D7,
         HESF = -D6 sin D7."""
         c6, c7, d6, d7 = self._fomalont()
-        return {"HSCF": -c6 * math.cos(c7), "HSSF": -c6 * math.sin(c7),
+        return {"HSCF": c6 * math.cos(c7), "HSSF": c6 * math.sin(c7),
                 "HECF": -d6 * math.cos(d7), "HESF": -d6 * math.sin(d7)}
 
     def truth(self) -> dict[str, Any]:
