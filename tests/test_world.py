@@ -224,3 +224,18 @@ def test_simulated_antenna_is_a_protocol_antenna(quiet):
     assert isinstance(world.antenna, SimulatedAntenna)
     assert isinstance(world.antenna, Antenna)
     assert world.antenna.channels == ("XR", "XL")
+
+
+def test_first_order_filter_is_lfilter_bit_for_bit():
+    from scipy.signal import lfilter
+
+    from antsim.effects.thermal import first_order_filter
+
+    rng = np.random.default_rng(4)
+    x = rng.standard_normal(500)
+    expected = lfilter([0.3], [1.0, -0.97], x, zi=[0.25])[0]
+    assert np.array_equal(first_order_filter(x, 0.3, 0.97, 0.25), expected)
+    cube = rng.standard_normal((200, 3, 2))
+    state = rng.standard_normal((3, 2))
+    expected = lfilter([0.3], [1.0, -0.97], cube, axis=0, zi=state[None])[0]
+    assert np.array_equal(first_order_filter(cube, 0.3, 0.97, state), expected)

@@ -54,10 +54,28 @@ SPINUP_S = 86400.0
 def relax(forcing: np.ndarray, step_s: float, tau_s: float, initial: float) -> np.ndarray:
     """First-order lag of ``forcing`` sampled every ``step_s`` (exact for piecewise-linear
     forcing is not needed here: exponential smoothing with the exact decay per step)."""
-    from scipy.signal import lfilter
-
     alpha = math.exp(-step_s / tau_s)
-    out, _ = lfilter([1.0 - alpha], [1.0, -alpha], forcing, zi=[alpha * initial])
+    return first_order_filter(np.asarray(forcing, dtype=float), 1.0 - alpha, alpha,
+                              alpha * initial)
+
+
+def first_order_filter(x: np.ndarray, gain: float, rho: float, state=0.0) -> np.ndarray:
+    """``y[n] = gain x[n] + rho y[n-1]`` along axis 0, with ``rho y[-1] = state``: the
+    arithmetic of ``scipy.signal.lfilter([gain], [1, -rho], x, zi=[state])``, bit for bit,
+    without importing scipy.signal (0.6 s of start-up for one recursion)."""
+    out = np.empty_like(x)
+    if x.ndim == 1:
+        z = float(state)
+        values = x.tolist()
+        for i, v in enumerate(values):
+            values[i] = z = gain * v + z
+            z = rho * z
+        out[:] = values
+        return out
+    z = np.asarray(state, dtype=float) * np.ones(x.shape[1:])
+    for i in range(x.shape[0]):
+        out[i] = gain * x[i] + z
+        z = rho * out[i]
     return out
 
 
@@ -91,15 +109,12 @@ def interp_rows(t_s, t_grid: np.ndarray, values: np.ndarray):
 def ou_series(rng: np.random.Generator, n: int, step_s: float, tau_s: float,
               rms: float) -> np.ndarray:
     """Stationary Ornstein-Uhlenbeck series of ``n`` points (exact discretisation)."""
-    from scipy.signal import lfilter
-
     if rms == 0.0 or n == 0:
         return np.zeros(n)
     rho = math.exp(-step_s / tau_s)
     draws = rng.standard_normal(n)
     draws[0] /= math.sqrt(1.0 - rho * rho)  # stationary start
-    out = lfilter([math.sqrt(1.0 - rho * rho) * rms], [1.0, -rho], draws)
-    return out
+    return first_order_filter(draws, math.sqrt(1.0 - rho * rho) * rms, rho)
 
 
 class OUProcess:
@@ -130,11 +145,9 @@ class OUProcess:
         if n == 1:
             out = first[None, ...]
         elif n > 64:  # long integrations: a recursive filter, not an n x n kernel
-            from scipy.signal import lfilter
-
             rho = math.exp(-float(t_s[1] - t_s[0]) / self.tau)
-            rest = lfilter([math.sqrt(1.0 - rho * rho)], [1.0, -rho], draws[1:], axis=0,
-                           zi=(rho * first)[None, ...])[0]
+            rest = first_order_filter(draws[1:], math.sqrt(1.0 - rho * rho), rho,
+                                      rho * first)
             out = np.concatenate([first[None, ...], rest])
         else:
             rho = math.exp(-float(t_s[1] - t_s[0]) / self.tau)
