@@ -272,3 +272,33 @@ def test_mmt_needs_at_most_a_small_addition():
     s = d.summary
     assert s["sky_rms_before_arcsec"] == pytest.approx(0.9318, abs=0.002)
     assert s["cv_sky_rms_after_arcsec"] <= s["cv_sky_rms_before_arcsec"] + 1e-9
+
+
+def _short_run(tmp_path: Path, scenario: str) -> tuple[Path, Path]:
+    """A 3-hour run of one of the repository's scenarios: (scenario file, recordings)."""
+    root = Path(__file__).resolve().parents[1]
+    text = (root / "scenarios" / scenario).read_text().replace("duration_h = 24.0",
+                                                                 "duration_h = 3.0")
+    path = tmp_path / scenario
+    path.write_text(text)
+    out = tmp_path / "run"
+    assert cli(["run", str(path), "--out", str(out), "--no-report"]) == 0
+    return path, out / "recordings.ecsv"
+
+
+def test_equatorial_recordings_are_refused_in_one_line(tmp_path, capsys):
+    _, recordings = _short_run(tmp_path, "crane1981_140ft_3245.toml")
+    capsys.readouterr()
+    assert cli(["diagnose", str(recordings)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "mount = 'equatorial'" in err and "alt-az recordings only" in err
+
+
+def test_feed_angle_terms_in_the_baseline_are_refused_in_one_line(tmp_path, capsys):
+    scenario, recordings = _short_run(tmp_path, "fomalont1973.toml")
+    capsys.readouterr()
+    assert cli(["diagnose", str(recordings), "--scenario", str(scenario), "--sims", "2"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "HSCF HSSF HECF HESF" in err and "--model ghigo10" in err

@@ -111,7 +111,25 @@ def resolve_baseline(obs: Observations, scenario=None, model: str | None = None)
     else:
         terms = NAMED_MODELS["tpoint8"]
         origin = "TPOINT's eight terms IA IE NPAE CA AN AW TF TX"
+    feed_terms = [t for t in terms if _needs_feed_angle(t)]
+    if feed_terms:
+        from controller.errors import InputError
+
+        raise InputError(obs.path, "baseline terms", " ".join(feed_terms),
+                         "diagnose does not use feed-angle terms in its baseline yet",
+                         "give --model with the terms without them (e.g. --model ghigo10): "
+                         "its feed_offset candidate then looks for the feed terms")
     return BaselineSpec(tuple(terms), origin, scenario, in_use)
+
+
+def _needs_feed_angle(name: str) -> bool:
+    from controller.terms import TermError, get_term
+
+    try:
+        term = get_term(name)
+    except TermError:
+        return False  # reported where the terms are fitted
+    return any(arg == "F" for _, _, factors in term.components for _, arg, _ in factors)
 
 
 # ---------------------------------------------------------------------------------------------

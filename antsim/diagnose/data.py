@@ -242,6 +242,12 @@ def load_observations(path: str | Path) -> Observations:
     from controller.recordings import read_recordings
 
     table = read_recordings(path)
+    mount = table.meta.get("mount", "altaz")
+    if mount != "altaz":
+        raise InputError(str(path), "mount", mount,
+                         "diagnose knows alt-az recordings only (its signatures and candidate "
+                         "effects are in azimuth and elevation)",
+                         "fit these recordings with 'antsim fit'")
     cols = {name: np.asarray(table[name]) for name in table.colnames if name != "time"}
     for need in ("t_s",):
         if need not in cols:
