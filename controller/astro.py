@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from . import _offline  # noqa: F401  (IERS auto-download off before any astropy use)
+from . import _offline
 
 if TYPE_CHECKING:
     from astropy.coordinates import EarthLocation
@@ -862,6 +862,7 @@ def _ut1(times: Time) -> tuple[np.ndarray, np.ndarray]:
     """UT1 as two-part Julian dates, exactly as astropy's transforms obtain it."""
     from astropy.utils import iers
 
+    _offline.use_cached_eop_table()
     try:
         ut1 = times.ut1
     except iers.IERSRangeError as err:  # astropy's own transforms fall back the same way
@@ -876,6 +877,7 @@ def _polar_motion_rad(times: Time) -> tuple[np.ndarray, np.ndarray]:
     from astropy import units as u
     from astropy.utils import iers
 
+    _offline.use_cached_eop_table()
     xp, yp, status = iers.earth_orientation_table.get().pm_xy(times, return_status=True)
     xp = np.array(xp.to_value(u.rad), dtype=float, ndmin=1)
     yp = np.array(yp.to_value(u.rad), dtype=float, ndmin=1)
