@@ -32,7 +32,7 @@ from controller.errors import InputError
 from controller.model import NAMED_MODELS, PointingModel
 
 from .._version import __version__
-from .data import Observations, from_rows
+from .data import Observations, from_columns, from_rows
 from .problem import Prediction
 
 __all__ = ["BaselineSpec", "SimulatedBaseline", "resolve_baseline", "white_prediction"]
@@ -278,6 +278,15 @@ class SimulatedBaseline:
                 except (OSError, KeyError, ValueError):
                     pass
             todo.append(seed)
+        if todo and self.scenario.controller.method == "five_point":
+            from .fastsim import shared_schedule_columns
+
+            for seed, cols in shared_schedule_columns(self.scenario, todo).items():
+                prod = _products(from_columns(cols), self.terms)
+                out[seed] = prod
+                if self.use_cache:
+                    self._save(seed, prod)
+            todo = [s for s in todo if s not in out]
         if todo:
             args = [(self.scenario, s) for s in todo]
             if self.jobs > 1 and len(todo) > 1:

@@ -1,0 +1,68 @@
+"""The baseline's simulations on one shared schedule, vectorized across seeds.
+
+The scheduler is deterministic, so every baseline simulation of a well-pointed scenario
+observes the same sources at the same times; only the noise differs. :mod:`antsim.plan`'s
+:class:`~antsim.plan.vectorized.MemberEngine` re-simulates just the random parts for all seeds
+at once through the world's own physics (see that module for what is shared and what is
+drawn per seed). Here its reduced scans become recording columns, one block of rows per
+polarization, for :func:`antsim.diagnose.data.from_columns`. A seed whose scan the controller
+would miss (it would then search and change its schedule) is left out and simulated in full
+by the caller, as is every seed of a scenario whose schedule cannot be shared (the engine
+says why).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from controller.program import FWHM_PER_SIGMA
+
+__all__ = ["shared_schedule_columns"]
+
+
+def shared_schedule_columns(scenario, seeds: Sequence[int]) -> dict[int, dict[str, np.ndarray]]:
+    """Recording columns (XR, XL and AVG rows of every scan) of each seed that keeps the
+    shared schedule; seeds missing from the result need a full simulation."""
+    import simpy
+
+    from ..plan.ensemble import REFERENCE_SEED
+    from ..plan.vectorized import MemberEngine, quiet_scenario, record_schedule
+    from ..world import World
+
+    quiet = quiet_scenario(scenario)
+    shared, _ = record_schedule(quiet, seed=REFERENCE_SEED)
+    reference = World(quiet, simpy.Environment(), REFERENCE_SEED)
+    engine = MemberEngine(scenario, shared, reference, (), "baseline")
+    if engine.unshareable or not seeds:
+        return {}
+    power, std = engine.simulate(list(seeds))
+    reduced = engine.reduce(power, std)
+    diverged = engine.diverges(reduced)
+    offset = np.asarray(reduced.offset_arcmin)  # (seeds, scans, axes, channels + AVG)
+    flags = np.asarray(reduced.flags)
+    width = np.asarray(reduced.width_arcmin) * FWHM_PER_SIGMA
+    polarizations = (*shared.channels, "AVG")
+    n = len(shared.sources)
+    fixed = {name: np.tile(np.asarray(values), len(polarizations))
+             for name, values in shared.columns.items()
+             if name not in ("xel_arcmin", "el_arcmin", "good", "polarization")}
+    fixed["source"] = np.tile(np.asarray(shared.sources), len(polarizations))
+    fixed["scan"] = np.tile(np.arange(n), len(polarizations))
+    fixed["polarization"] = np.repeat(np.asarray(polarizations), n)
+    out = {}
+    for m, seed in enumerate(seeds):
+        if diverged[m]:
+            continue
+
+        def stacked(values, axis, m=m):
+            return np.concatenate([values[m, :, axis, c] for c in range(len(polarizations))])
+
+        out[int(seed)] = {
+            **fixed,
+            "xel_arcmin": stacked(offset, 0), "el_arcmin": stacked(offset, 1),
+            "good": (stacked(flags, 0) == 0) & (stacked(flags, 1) == 0),
+            "xel_width_arcmin": stacked(width, 0), "el_width_arcmin": stacked(width, 1),
+        }
+    return out
