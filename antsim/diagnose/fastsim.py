@@ -31,11 +31,13 @@ def shared_schedule_columns(scenario, seeds: Sequence[int]) -> dict[int, dict[st
     from ..plan.vectorized import MemberEngine, quiet_scenario, record_schedule
     from ..world import World
 
+    if not seeds:
+        return {}
     quiet = quiet_scenario(scenario)
     shared, _ = record_schedule(quiet, seed=REFERENCE_SEED)
     reference = World(quiet, simpy.Environment(), REFERENCE_SEED)
     engine = MemberEngine(scenario, shared, reference, (), "baseline")
-    if engine.unshareable or not seeds:
+    if engine.unshareable:
         return {}
     power, std = engine.simulate(list(seeds))
     reduced = engine.reduce(power, std)
