@@ -239,3 +239,16 @@ def test_first_order_filter_is_lfilter_bit_for_bit():
     state = rng.standard_normal((3, 2))
     expected = lfilter([0.3], [1.0, -0.97], cube, axis=0, zi=state[None])[0]
     assert np.array_equal(first_order_filter(cube, 0.3, 0.97, state), expected)
+
+
+def test_scalar_interpolator_is_np_interp_bit_for_bit():
+    from antsim.effects.thermal import ScalarInterpolator
+
+    rng = np.random.default_rng(8)
+    grid = np.arange(-600.0, 6000.0, 60.0)
+    rows = [rng.standard_normal(grid.size) * 10.0 for _ in range(3)]
+    interp = ScalarInterpolator(grid, rows)
+    times = [-1e4, grid[0], grid[5], 123.456, 3599.999, grid[-1], 1e6,
+             *rng.uniform(-700.0, 6100.0, 200)]
+    for t in times:
+        assert interp(float(t)) == [float(np.interp(t, grid, r)) for r in rows], t

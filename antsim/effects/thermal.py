@@ -35,7 +35,9 @@ by default; the 1990 scenario uses them):
 
 from __future__ import annotations
 
+import bisect
 import math
+from collections.abc import Sequence
 from functools import lru_cache
 from typing import ClassVar
 
@@ -104,6 +106,29 @@ def interp_rows(t_s, t_grid: np.ndarray, values: np.ndarray):
     i = np.clip(np.searchsorted(t_grid, t, side="right") - 1, 0, t_grid.size - 2)
     w = np.clip((t - t_grid[i]) / (t_grid[i + 1] - t_grid[i]), 0.0, 1.0)
     return values[..., i] * (1.0 - w) + values[..., i + 1] * w
+
+
+class ScalarInterpolator:
+    """``np.interp(t, t_grid, row)`` of several rows at one time ``t`` (s), with plain
+    floats: np.interp's own arithmetic (bit for bit), one search for all rows, and none of
+    numpy's per-call overhead (the World asks once per integration)."""
+
+    def __init__(self, t_grid: np.ndarray, rows: Sequence[np.ndarray]):
+        self.grid = np.asarray(t_grid, dtype=float).tolist()
+        self.rows = [np.asarray(r, dtype=float).tolist() for r in rows]
+
+    def __call__(self, t: float) -> list[float]:
+        grid = self.grid
+        if t < grid[0]:
+            return [r[0] for r in self.rows]
+        if t >= grid[-1]:
+            return [r[-1] for r in self.rows]
+        j = bisect.bisect_right(grid, t) - 1
+        x0 = grid[j]
+        if x0 == t:
+            return [r[j] for r in self.rows]
+        dx, u = grid[j + 1] - x0, t - x0
+        return [(r[j + 1] - r[j]) / dx * u + r[j] for r in self.rows]
 
 
 def ou_series(rng: np.random.Generator, n: int, step_s: float, tau_s: float,
@@ -241,22 +266,28 @@ class ThermalEffect(Effect):
             forcing * np.sin(sun_az), step, p["pedestal_tau_s"], 0.0)
         self._dish_k = None
         self._dish_t = None
+        self._now = None
 
     def errors_arcsec(self, t_s) -> tuple[np.ndarray, np.ndarray]:
         """(xel, el) thermal error in arcsec at time(s) ``t_s`` (for tests and reports)."""
         return (interp_rows(t_s, self.t_grid, self.xel_arcsec),
                 interp_rows(t_s, self.t_grid, self.el_arcsec))
 
-    def dish_gradients_k(self, state: PointingState) -> tuple[float, float]:
+    def dish_gradients_k(self, state: PointingState, now=None) -> tuple[float, float]:
         """Front-back and left-right dish gradients (K) now, advancing their state from
         the previous call as if the antenna had pointed here since then (the evaluations
-        come every integration; slews between them are short)."""
+        come every integration; slews between them are short). ``now``: this time's
+        values of the series (see :meth:`pointing_error`) when the caller has them."""
         p = self.p
         if p["dish_gradient_k"] == 0.0:
             return 0.0, 0.0
         t = state.t_s
-        sun = np.array([np.interp(t, self.t_grid, row) for row in self._sun_vec])
-        flux = p["dish_gradient_k"] * interp_rows(t, self.t_grid, self._insolation)
+        if now is None:
+            sun = np.array([np.interp(t, self.t_grid, row) for row in self._sun_vec])
+            insolation = interp_rows(t, self.t_grid, self._insolation)
+        else:
+            sun, insolation = np.array(now[2:5]), now[5]
+        flux = p["dish_gradient_k"] * insolation
         cos_e, sin_e = _cos(state.el_rad), _sin(state.el_rad)
         cos_a, sin_a = _cos(state.az_rad), _sin(state.az_rad)
         boresight = np.array((cos_e * cos_a, cos_e * sin_a, sin_e))
@@ -273,14 +304,23 @@ class ThermalEffect(Effect):
 
     def pointing_error(self, state: PointingState) -> tuple[float, float]:
         p = self.p
-        # scalars in a World; arrays with a member axis in antsim.plan's ensembles
-        xel, el = self.errors_arcsec(state.t_s)
-        fb, lr = self.dish_gradients_k(state)
+        # pedestal tilt as AN (north) / AW (east) terms, indicated - true
+        if np.ndim(state.t_s) == 0 and self.el_arcsec.ndim == 1 and self.xel_arcsec.ndim == 1:
+            # a World: one time, every series at once (xel, el, Sun (3), insolation, tilts)
+            if self._now is None:
+                self._now = ScalarInterpolator(self.t_grid, [
+                    self.xel_arcsec, self.el_arcsec, *self._sun_vec, self._insolation,
+                    self._tilt_n_arcsec, self._tilt_e_arcsec])
+            now = self._now(float(state.t_s))
+            xel, el, tilt_n, tilt_e = now[0], now[1], now[6], now[7]
+            fb, lr = self.dish_gradients_k(state, now)
+        else:  # arrays with a member axis in antsim.plan's ensembles
+            xel, el = self.errors_arcsec(state.t_s)
+            fb, lr = self.dish_gradients_k(state)
+            tilt_n = interp_rows(state.t_s, self.t_grid, self._tilt_n_arcsec)
+            tilt_e = interp_rows(state.t_s, self.t_grid, self._tilt_e_arcsec)
         el = el + p["dish_arcsec_per_k"] * fb
         xel = xel + p["dish_arcsec_per_k"] * lr
-        # pedestal tilt as AN (north) / AW (east) terms, indicated - true
-        tilt_n = interp_rows(state.t_s, self.t_grid, self._tilt_n_arcsec)
-        tilt_e = interp_rows(state.t_s, self.t_grid, self._tilt_e_arcsec)
         sin_a, cos_a = _sin(state.az_rad), _cos(state.az_rad)
         tan_e = _tan(state.el_rad)
         d_az = -(tilt_n * sin_a + tilt_e * cos_a) * tan_e
