@@ -19,7 +19,7 @@ _EOP_READY = False
 def use_cached_eop_table() -> None:
     """Make astropy's Earth-orientation table the bundled IERS one, read from a pickle cache
     when there is one: parsing the bundled text tables costs ~0.7 s of every run, the cache
-    ~0.04 s. The cache (``$ANTSIM_CACHE_DIR`` or ``~/.cache/antsim``) is keyed by the astropy
+    ~0.04 s. The cache (``$ANTSIM_CACHE`` or ``~/.cache/antsim``) is keyed by the astropy
     and astropy-iers-data versions, so its content is exactly what astropy would read; any
     failure to read or write it falls back to astropy's own loading, silently."""
     global _EOP_READY
@@ -37,7 +37,7 @@ def use_cached_eop_table() -> None:
         data_version = metadata.version("astropy-iers-data")
     except metadata.PackageNotFoundError:
         return  # let astropy find its tables its own way
-    base = os.environ.get("ANTSIM_CACHE_DIR") or Path(
+    base = os.environ.get("ANTSIM_CACHE") or Path(
         os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "antsim"
     path = Path(base) / f"iers-auto-{astropy.__version__}-{data_version}.pickle"
     table = None

@@ -19,7 +19,7 @@ print(type(iers.earth_orientation_table.get()).__name__,
 
 
 def _run(cache_dir) -> str:
-    env = {**os.environ, "ANTSIM_CACHE_DIR": str(cache_dir)}
+    env = {**os.environ, "ANTSIM_CACHE": str(cache_dir)}
     done = subprocess.run([sys.executable, "-c", SCRIPT], env=env, capture_output=True,
                           text=True, check=True)
     return done.stdout.strip()
