@@ -33,8 +33,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
+from . import pvalues
 from .baseline import SimulatedBaseline
 from .candidates import CANDIDATES, DISTINGUISH_R, Candidate, TermsCandidate
 from .core import Diagnosis, diagnose
@@ -233,7 +233,7 @@ class Harness:
 
     def critical(self, c: Candidate) -> float:
         t = self.tests[c.name]
-        return float(stats.chi2.isf(ALPHA / (self.n_family * max(t.trials, 1.0)), t.dof))
+        return float(pvalues.chi2_isf(ALPHA / (self.n_family * max(t.trials, 1.0)), t.dof))
 
     def threshold(self, c: Candidate, shape: dict[str, Any]) -> tuple[float, float]:
         """(detection threshold of the amplitude, detectable fraction of the signature)."""

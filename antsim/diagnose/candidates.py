@@ -26,10 +26,11 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import optimize
 
 from controller.units import ARCSEC_PER_RAD
 
+from . import pvalues
 from .data import Observations
 from .problem import Problem, _lstsq, term_columns
 
@@ -192,7 +193,7 @@ def _pvalue(problem: Problem, dchi2: float, q: int, current_chi2: float | None =
     if q <= 0:
         return 1.0
     if problem.pred.known_noise:
-        return float(stats.chi2.sf(dchi2, q))
+        return float(pvalues.chi2_sf(dchi2, q))
     n_used = int((problem.used if used is None else used).sum())
     m = problem.current_columns().shape[1]
     dof = 2 * n_used - m - q
@@ -201,7 +202,7 @@ def _pvalue(problem: Problem, dchi2: float, q: int, current_chi2: float | None =
     if current_chi2 is None:
         current_chi2 = problem.fit_current().chi2
     rest = max(current_chi2 - dchi2, 1e-12)
-    return float(stats.f.sf((dchi2 / q) / (rest / dof), q, dof))
+    return float(pvalues.f_sf((dchi2 / q) / (rest / dof), q, dof))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1138,9 +1139,9 @@ class SquintCandidate(Candidate):
         var = 1.0 / (w * f * f).sum(axis=0)
         dchi2 = float(np.sum(mean**2 / var))
         if pred.known_noise:
-            p = float(stats.chi2.sf(dchi2, 2))
+            p = float(pvalues.chi2_sf(dchi2, 2))
         else:
-            p = float(stats.f.sf(dchi2 / 2.0, 2, max(d.shape[0] - 1, 1)))
+            p = float(pvalues.f_sf(dchi2 / 2.0, 2, max(d.shape[0] - 1, 1)))
         # XR minus XL measured corrections are minus the beam separation
         sep = -mean
         amp = float(math.hypot(*sep))
@@ -1214,7 +1215,7 @@ class BeamWidthCandidate(Candidate):
         mean = float((w * d).sum() / w.sum())
         var = float(1.0 / w.sum())
         dchi2 = mean * mean / var
-        p = float(stats.chi2.sf(dchi2, 1))
+        p = float(pvalues.chi2_sf(dchi2, 1))
         scale = math.sqrt(max(1.0 + mean, 1e-6))
         sig_scale = 0.5 * math.sqrt(var) / scale
         return TestResult(self, dchi2, 1, 1.0, p, params={"scale": scale}, amplitude=scale,

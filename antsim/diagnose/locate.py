@@ -17,8 +17,8 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import stats
 
+from . import pvalues
 from .data import Observations
 from .problem import Problem
 
@@ -157,13 +157,13 @@ def locate(problem: Problem, min_scans: int = 5) -> Location:
             # concentrated: larger here than elsewhere (an F test of the two mean squares);
             # with the noise known, also larger than predicted here
             f_ratio = (chi2 / k) / max((total - chi2) / (n_used - k), 1e-12)
-            p = float(stats.f.sf(f_ratio, k, n_used - k))
+            p = float(pvalues.f_sf(f_ratio, k, n_used - k))
             if problem.pred.known_noise:
-                p = max(p, float(stats.chi2.sf(chi2, k)))
+                p = max(p, float(pvalues.chi2_sf(chi2, k)))
             # or offset: the group's mean residual differs from zero (the model's zero
             # points fit the whole), normal approximation
             zbar = float(np.mean(z[m]))
-            p_mean = float(stats.chi2.sf(k * zbar * zbar * (1.0 - k / n_used) ** -1, 1))
+            p_mean = float(pvalues.chi2_sf(k * zbar * zbar * (1.0 - k / n_used) ** -1, 1))
             p = 2.0 * min(p, p_mean)
             hot.append(Hotspot(name, g, k, math.sqrt(chi2 / k), float(np.mean(r[m])),
                                min(1.0, p * n_tests)))

@@ -16,10 +16,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
-from scipy import stats
 
 from controller.model import PointingModel
 
+from . import pvalues
 from .data import Observations
 
 __all__ = ["Prediction", "Problem", "term_columns"]
@@ -294,7 +294,7 @@ class Problem:
             part = f.wres[axis * n_used:(axis + 1) * n_used]
             dof = max(n_used - m / 2.0, 1.0)
             chi2 = float(part @ part)
-            p = float(stats.chi2.sf(chi2, dof)) if self.pred.known_noise else float("nan")
+            p = float(pvalues.chi2_sf(chi2, dof)) if self.pred.known_noise else float("nan")
             out[name] = {"ratio": math.sqrt(chi2 / dof), "chi2": chi2, "dof": dof, "p": p,
                          "n": n_used}
         return out

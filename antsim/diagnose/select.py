@@ -30,8 +30,8 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import stats
 
+from . import pvalues
 from .candidates import CANDIDATES, DISTINGUISH_R, Candidate, TestResult
 from .problem import Problem, folds_for
 
@@ -49,7 +49,7 @@ def sigma_from_p(p: float, log_p: float | None = None) -> float:
     if log_p is None:
         log_p = math.log(p) if p > 0 else -745.0
     if log_p > -700:
-        return float(stats.norm.isf(math.exp(log_p)))
+        return float(pvalues.norm_isf(math.exp(log_p)))
     x = -2.0 * log_p
     return float(math.sqrt(max(x - math.log(x) - math.log(2 * math.pi), 0.0)))
 
@@ -59,7 +59,7 @@ def log_p_family(problem: Problem, res: TestResult, n_family: int) -> float:
     if res.p > 1e-250:
         return math.log(min(1.0, res.p * n_family))
     if problem.pred.known_noise or res.candidate.kind == "channel":
-        base = float(stats.chi2.logsf(res.delta_chi2, max(res.dof, 1)))
+        base = float(pvalues.chi2_logsf(res.delta_chi2, max(res.dof, 1)))
     else:
         base = math.log(max(res.p, 1e-320))
     return min(0.0, base + math.log(max(res.trials, 1.0)) + math.log(n_family))
