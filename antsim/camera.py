@@ -80,13 +80,8 @@ class Camera:
         from .world import tangent_offsets
 
         mid = t.size // 2
-        d_lon, d_lat = world.solve_pointing(enc_lon[mid], enc_lat[mid], state, error_prev)
-        beam_lon = enc_lon - d_lon
-        beam_lat = enc_lat - d_lat
-        for effect in world.fast_effects:
-            j_lon, j_lat = effect.sample_error(t, state.el_rad)
-            beam_lon = beam_lon - j_lon
-            beam_lat = beam_lat - j_lat
+        beam_lon, beam_lat, (d_lon, d_lat) = world.beam_direction(t, enc_lon, enc_lat, state,
+                                                                  error_prev)
         best = None
         for _, src_az, src_el in paths:
             s_lon, s_lat = world.frame.from_altaz(src_az, src_el)

@@ -204,6 +204,21 @@ class World:
         state.el_rad = enc_el_rad - d_el
         return d_az, d_el
 
+    def beam_direction(self, t, enc_a, enc_b, state: PointingState, error_prev) -> tuple:
+        """The beam's true direction per sample on the mount's two axes (rad), from the
+        encoder command per sample ``enc_a``/``enc_b``: the slow errors solved at the middle
+        sample (``state`` is left there, see :meth:`solve_pointing`) and the fast ones per
+        sample. Returns (beam_a, beam_b, slow errors)."""
+        mid = t.size // 2
+        d_a, d_b = self.solve_pointing(enc_a[mid], enc_b[mid], state, error_prev)
+        beam_a = enc_a - d_a
+        beam_b = enc_b - d_b
+        for effect in self.fast_effects:
+            j_a, j_b = effect.sample_error(t, state.el_rad)
+            beam_a = beam_a - j_a
+            beam_b = beam_b - j_b
+        return beam_a, beam_b, (d_a, d_b)
+
     def sample_powers(self, t, enc_az, enc_el, state: PointingState, paths, error_prev,
                       channels) -> tuple[np.ndarray, tuple]:
         """Total-power samples (K) of one integration and the slow errors it solved.
@@ -216,14 +231,8 @@ class World:
         Written to broadcast: ``antsim.plan`` passes per-sample arrays of shape (n, 1) and
         effects whose realisation has a member axis, and gets samples (n, members, channels).
         """
-        mid = t.size // 2
-        d_az, d_el = self.solve_pointing(enc_az[mid], enc_el[mid], state, error_prev)
-        beam_az = enc_az - d_az
-        beam_el = enc_el - d_el
-        for effect in self.fast_effects:
-            j_az, j_el = effect.sample_error(t, state.el_rad)
-            beam_az = beam_az - j_az
-            beam_el = beam_el - j_el
+        beam_az, beam_el, (d_az, d_el) = self.beam_direction(t, enc_az, enc_el, state,
+                                                             error_prev)
         if not self.frame.is_altaz:  # (HA, Dec) of the beam -> azimuth and elevation
             beam_az, beam_el = self.frame.to_altaz(beam_az, beam_el)
 

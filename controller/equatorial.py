@@ -50,7 +50,7 @@ from functools import lru_cache
 import numpy as np
 
 from .model import PointingModel
-from .terms import Term, TermError
+from .terms import Term, TermError, harmonic_factors
 
 __all__ = [
     "EQUATORIAL_MODELS",
@@ -136,11 +136,9 @@ def _harmonic(name: str) -> Term | None:
     m = _HARMONIC.match(name)
     if not m:
         return None
-    result, f1, a1, n1, f2, a2, n2 = m.groups()
-    raw = [(f1, a1, int(n1) if n1 else 1)]
-    if f2:
-        raw.append((f2, a2, int(n2) if n2 else 1))
-    if any(n == 0 for _, _, n in raw):
+    result, *groups = m.groups()
+    raw = harmonic_factors(*groups)
+    if raw is None:
         return None
     factors = tuple(("sin" if f == "S" else "cos", "AN" if a == "H" else "E", n)
                     for f, a, n in raw)

@@ -9,8 +9,8 @@ needs the local horizon (atmosphere, gain against elevation, refraction) convert
 :meth:`MountFrame.to_altaz`.
 
 Conventions: azimuth North = 0, East = pi/2; hour angle positive West (in ``(-pi, pi]``);
-radians; the formulas are ERFA's ``hd2ae``/``ae2hd`` (exact spherical trigonometry, no
-refraction), written with numpy so that they broadcast over any array shapes.
+radians; the conversions are ERFA's ``hd2ae``/``ae2hd`` (exact spherical trigonometry, no
+refraction; ufuncs, so they broadcast over any array shapes).
 """
 
 from __future__ import annotations
@@ -18,38 +18,25 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import erfa
 import numpy as np
 
 __all__ = ["ALTAZ", "MOUNT_KINDS", "MountFrame", "altaz_to_hadec", "hadec_to_altaz"]
 
 #: the mount kinds a scenario may name
 MOUNT_KINDS = ("altaz", "equatorial")
-_TWO_PI = 2.0 * math.pi
 
 
 def hadec_to_altaz(ha_rad, dec_rad, latitude_rad: float) -> tuple[np.ndarray, np.ndarray]:
     """Azimuth (N = 0, E = pi/2, in [0, 2 pi)) and elevation (rad) of hour angle(s) and
-    declination(s) (rad) at geodetic latitude ``latitude_rad`` (as ``erfa.hd2ae``)."""
-    sh, ch = np.sin(ha_rad), np.cos(ha_rad)
-    sd, cd = np.sin(dec_rad), np.cos(dec_rad)
-    sp, cp = math.sin(latitude_rad), math.cos(latitude_rad)
-    x = -ch * cd * sp + sd * cp
-    y = -sh * cd
-    z = ch * cd * cp + sd * sp
-    az = np.arctan2(y, x) % _TWO_PI
-    return az, np.arctan2(z, np.hypot(x, y))
+    declination(s) (rad) at geodetic latitude ``latitude_rad``: ``erfa.hd2ae``."""
+    return erfa.hd2ae(ha_rad, dec_rad, latitude_rad)
 
 
 def altaz_to_hadec(az_rad, el_rad, latitude_rad: float) -> tuple[np.ndarray, np.ndarray]:
     """Hour angle (positive West, in (-pi, pi]) and declination (rad) of azimuth(s) and
-    elevation(s) (rad) at geodetic latitude ``latitude_rad`` (as ``erfa.ae2hd``)."""
-    sa, ca = np.sin(az_rad), np.cos(az_rad)
-    se, ce = np.sin(el_rad), np.cos(el_rad)
-    sp, cp = math.sin(latitude_rad), math.cos(latitude_rad)
-    x = -ca * ce * sp + se * cp
-    y = -sa * ce
-    z = ca * ce * cp + se * sp
-    return np.arctan2(y, x), np.arctan2(z, np.hypot(x, y))
+    elevation(s) (rad) at geodetic latitude ``latitude_rad``: ``erfa.ae2hd``."""
+    return erfa.ae2hd(az_rad, el_rad, latitude_rad)
 
 
 @dataclass(frozen=True)

@@ -83,6 +83,7 @@ __all__ = [
     "combine_scalar",
     "evaluate_basis",
     "get_term",
+    "harmonic_factors",
     "is_term_name",
 ]
 
@@ -289,15 +290,24 @@ _HARMONIC = re.compile(r"^H([AESZ])([SC])([AEZF])(\d*)(?:([SC])([AEZF])(\d*))?$"
 _HARMONIC_RESULT = {"A": ("A", -1), "E": ("E", 1), "S": ("S", -1), "Z": ("E", -1)}
 
 
+def harmonic_factors(f1: str, a1: str, n1: str, f2: str | None, a2: str | None,
+                     n2: str | None) -> list[tuple[str, str, int]] | None:
+    """The (S/C, argument letter, multiplier) factors of a harmonic name's regex groups (a
+    missing multiplier is 1); ``None`` for a zero multiplier. Shared by the alt-az and the
+    equatorial (:mod:`controller.equatorial`) generators."""
+    raw = [(f1, a1, int(n1) if n1 else 1)]
+    if f2:
+        raw.append((f2, a2, int(n2) if n2 else 1))
+    return None if any(n == 0 for _, _, n in raw) else raw
+
+
 def _harmonic(name: str) -> Term | None:
     m = _HARMONIC.match(name)
     if not m:
         return None
-    result, f1, a1, n1, f2, a2, n2 = m.groups()
-    raw = [(f1, a1, int(n1) if n1 else 1)]
-    if f2:
-        raw.append((f2, a2, int(n2) if n2 else 1))
-    if any(n == 0 for _, _, n in raw):
+    result, *groups = m.groups()
+    raw = harmonic_factors(*groups)
+    if raw is None:
         return None
     factors = tuple(
         ("sin" if f == "S" else "cos", "AH" if a == "A" else a, n) for f, a, n in raw

@@ -499,7 +499,36 @@ class HarmonicFamilyCandidate(TermsCandidate):
         return f"{self.name}[{int(digits) if digits else 1}]"
 
 
-class SunsetCandidate(Candidate):
+class _LaggedCandidate(Candidate):
+    """An effect with one time constant ``tau_s`` (a lag or a relaxation): the blind
+    harness draws tau log-uniformly between 30 min and 3 h, with either sign."""
+
+    def _refine_log_theta(self, problem: Problem, perp, z_perp, best: TestResult,
+                          log_lo: float, log_hi: float) -> TestResult:
+        """The time constant between exp(log_lo) and exp(log_hi) that fits best (bounded
+        search in log theta), or ``best`` if that fits better."""
+        obs = problem.obs
+
+        def neg(log_theta: float) -> float:
+            cols, names = self.columns(obs, math.exp(log_theta))
+            return -self._linear(problem, perp, z_perp, cols, names, None).delta_chi2
+
+        opt = optimize.minimize_scalar(neg, bounds=(log_lo, log_hi), method="bounded",
+                                       options={"xatol": 1e-3})
+        theta = float(math.exp(opt.x))
+        cols, names = self.columns(obs, theta)
+        res = self._linear(problem, perp, z_perp, cols, names, theta)
+        return best if res.delta_chi2 < best.delta_chi2 else res
+
+    def draw_shape(self, rng, obs):
+        return {"tau_s": float(math.exp(rng.uniform(math.log(1800.0), math.log(10800.0)))),
+                "sign": float(rng.choice([-1.0, 1.0]))}
+
+    def unit_signal(self, obs, shape):
+        return shape.get("sign", 1.0) * self.columns(obs, shape["tau_s"])[0][:, 0]
+
+
+class SunsetCandidate(_LaggedCandidate):
     name = "sunset_drift"
     effect = "sunset_drift"
     title = "thermal lag after sunset"
@@ -553,17 +582,7 @@ class SunsetCandidate(Candidate):
         b = math.log(self.TAUS[min(i + 1, len(self.TAUS) - 1)]) if i < len(self.TAUS) - 1 \
             else hi
 
-        def neg(logtau: float) -> float:
-            cols, names = self.columns(obs, math.exp(logtau))
-            return -self._linear(problem, perp, z_perp, cols, names, None).delta_chi2
-
-        opt = optimize.minimize_scalar(neg, bounds=(a, b), method="bounded",
-                                       options={"xatol": 1e-3})
-        tau = float(math.exp(opt.x))
-        cols, names = self.columns(obs, tau)
-        res = self._linear(problem, perp, z_perp, cols, names, tau)
-        if res.delta_chi2 < best.delta_chi2:
-            res = best
+        res = self._refine_log_theta(problem, perp, z_perp, best, a, b)
         # joint covariance of (amplitude, log tau) from the Jacobian
         tau = float(res.theta)
         h = 0.01
@@ -597,13 +616,6 @@ class SunsetCandidate(Candidate):
         sig_tau = tau * math.sqrt(max(cov[1, 1], 0.0)) if cov.shape[0] > 1 else float("nan")
         return ({"amplitude_arcsec": amp, "tau_s": tau, "tau_sigma_s": sig_tau}, amp, sig_amp)
 
-    def draw_shape(self, rng, obs):
-        return {"tau_s": float(math.exp(rng.uniform(math.log(1800.0), math.log(10800.0)))),
-                "sign": float(rng.choice([-1.0, 1.0]))}
-
-    def unit_signal(self, obs, shape):
-        return shape.get("sign", 1.0) * self.columns(obs, shape["tau_s"])[0][:, 0]
-
     def effect_params(self, shape, amplitude):
         return {"amplitude_arcsec": float(shape.get("sign", 1.0) * amplitude),
                 "tau_s": float(shape["tau_s"])}
@@ -612,7 +624,7 @@ class SunsetCandidate(Candidate):
         return {"amplitude_arcsec": params["amplitude_arcsec"], "tau_s": params["tau_s"]}
 
 
-class TemperatureCandidate(Candidate):
+class TemperatureCandidate(_LaggedCandidate):
     name = "temperature_drift"
     effect = "temperature_drift"
     title = "temperature-driven elevation drift"
@@ -680,17 +692,7 @@ class TemperatureCandidate(Candidate):
             a = math.log(taus[i - 1]) if taus[i - 1] > 0 else math.log(60.0)
             b = math.log(taus[i + 1]) if i + 1 < len(taus) else math.log(taus[-1] * 1.5)
 
-            def neg(logtau: float) -> float:
-                cols, names = self.columns(obs, math.exp(logtau))
-                return -self._linear(problem, perp, z_perp, cols, names, None).delta_chi2
-
-            opt = optimize.minimize_scalar(neg, bounds=(a, b), method="bounded",
-                                           options={"xatol": 1e-3})
-            tau = float(math.exp(opt.x))
-            cols, names = self.columns(obs, tau)
-            res = self._linear(problem, perp, z_perp, cols, names, tau)
-            if res.delta_chi2 < best.delta_chi2:
-                res = best
+            res = self._refine_log_theta(problem, perp, z_perp, best, a, b)
         tau = float(res.theta)
         if tau > 0:
             h = 0.01
@@ -720,13 +722,6 @@ class TemperatureCandidate(Candidate):
         sig_tau = tau * math.sqrt(max(cov[1, 1], 0.0)) if cov.shape[0] > 1 else float("nan")
         return ({"arcsec_per_k": k, "tau_s": tau, "tau_sigma_s": sig_tau, "reference_c": mean},
                 k, math.sqrt(max(cov[0, 0], 0.0)))
-
-    def draw_shape(self, rng, obs):
-        return {"tau_s": float(math.exp(rng.uniform(math.log(1800.0), math.log(10800.0)))),
-                "sign": float(rng.choice([-1.0, 1.0]))}
-
-    def unit_signal(self, obs, shape):
-        return shape.get("sign", 1.0) * self.columns(obs, shape["tau_s"])[0][:, 0]
 
     def effect_params(self, shape, amplitude):
         return {"arcsec_per_k": float(shape.get("sign", 1.0) * amplitude),

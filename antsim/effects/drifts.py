@@ -17,7 +17,7 @@ import numpy as np
 from controller.units import RAD_PER_ARCSEC
 
 from .base import Effect, Param, PointingState
-from .thermal import GRID_STEP_S, SPINUP_S, relax
+from .thermal import campaign_grid_s, relax
 
 __all__ = ["TemperatureDrift", "structure_temperature_c"]
 
@@ -47,8 +47,7 @@ class TemperatureDrift(Effect):
     }
 
     def start(self, world, rng: np.random.Generator) -> None:
-        step = GRID_STEP_S
-        t = np.arange(-SPINUP_S, world.duration_s + 2 * step, step)
+        t = campaign_grid_s(world.duration_s)
         self.t_grid = t
         self.structure_c = structure_temperature_c(t, world.air_temperature_c(t),
                                                    float(self.p["tau_s"]))

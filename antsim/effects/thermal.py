@@ -131,6 +131,12 @@ class ScalarInterpolator:
         return [(r[j + 1] - r[j]) / dx * u + r[j] for r in self.rows]
 
 
+def campaign_grid_s(duration_s: float) -> np.ndarray:
+    """Times (s) every ``GRID_STEP_S`` from a day of spin-up before the campaign to a little
+    after its end: the grid the structure-temperature models are computed on."""
+    return np.arange(-SPINUP_S, duration_s + 2 * GRID_STEP_S, GRID_STEP_S)
+
+
 def ou_series(rng: np.random.Generator, n: int, step_s: float, tau_s: float,
               rms: float) -> np.ndarray:
     """Stationary Ornstein-Uhlenbeck series of ``n`` points (exact discretisation)."""
@@ -233,7 +239,7 @@ class ThermalEffect(Effect):
 
     def start(self, world, rng: np.random.Generator) -> None:
         step = GRID_STEP_S
-        t = np.arange(-SPINUP_S, world.duration_s + 2 * step, step)
+        t = campaign_grid_s(world.duration_s)
         sun_el = world.sun_el_rad_periodic(t)
         insolation = np.clip(np.sin(sun_el), 0.0, None)
         n = t.size
