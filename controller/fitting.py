@@ -37,14 +37,16 @@ not fitted, its value is 0 and its sigma NaN (null in JSON), and a warning names
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property, partial
 from typing import Any
 
 import numpy as np
 import scipy.linalg
 from scipy.optimize import linprog
 
+from .jackknife import JackknifeResult, cluster_jackknife
 from .model import NAMED_MODELS, PointingModel
 from .terms import Term
 
@@ -209,8 +211,11 @@ class FitResult:
     rejected ones included. ``correlation``: M x M, NaN in rows/columns of unconstrained terms.
     ``condition_number``: 2-norm condition number of the final design matrix of the fitted
     (constrained) terms with columns scaled to unit length. ``warnings``: plain sentences.
-    ``sigma_honest_arcsec``: cluster jackknife (CV3) standard errors of the same
-    coefficients (see :func:`fit_model`); ``honest_clusters`` the number of clusters used.
+    ``sigma_honest_arcsec``: honest error bars of the same coefficients: the cluster
+    jackknife (CV3) standard error ``sigma_jackknife_arcsec`` times sqrt(nu / (nu - 2)), nu
+    its Satterthwaite degrees of freedom ``honest_dof`` (see :mod:`controller.jackknife`),
+    so that (error / sigma_honest) spreads by 1; ``honest_clusters`` the clusters used.
+    These are computed on first use.
     """
 
     model: PointingModel
@@ -234,9 +239,35 @@ class FitResult:
     n_fitted: int = 0
     #: the rms (arcsec, or dimensionless when weighted) that scales sqrt(diag((A^T W A)^-1))
     sigma_scale: float = field(default=float("nan"))
-    sigma_honest_arcsec: np.ndarray | None = None
-    honest_clusters: int = 0
     honest_block_s: float | None = None
+    #: computes the honest error bars on first use (they cost about a third of a fit of
+    #: 100,000 observations, and many callers need only TPOINT's statistics)
+    honest_source: Callable[[], JackknifeResult] | None = field(
+        default=None, repr=False, compare=False)
+
+    @cached_property
+    def _jackknife(self) -> JackknifeResult | None:
+        return None if self.honest_source is None else self.honest_source()
+
+    @property
+    def sigma_honest_arcsec(self) -> np.ndarray | None:
+        j = self._jackknife
+        return None if j is None else _readonly(j.sigma_t_scaled)
+
+    @property
+    def sigma_jackknife_arcsec(self) -> np.ndarray | None:
+        j = self._jackknife
+        return None if j is None else _readonly(j.sigma)
+
+    @property
+    def honest_dof(self) -> np.ndarray | None:
+        j = self._jackknife
+        return None if j is None else _readonly(j.dof)
+
+    @property
+    def honest_clusters(self) -> int:
+        j = self._jackknife
+        return 0 if j is None else j.clusters
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -272,10 +303,14 @@ class FitResult:
             "unconstrained": list(self.unconstrained),
             "honest_sigma": {
                 "method": "cluster jackknife (CV3) of the same least-squares coefficients, "
-                          "per-axis scatter, clusters = observations"
+                          "clusters = observations"
                           + (f" within {self.honest_block_s:g} s time blocks"
-                             if self.honest_block_s else ""),
+                             if self.honest_block_s else "")
+                          + ", times sqrt(dof/(dof-2)) for its Satterthwaite degrees of freedom",
                 "clusters": int(self.honest_clusters),
+                "dof": {n: _json_float(v) for n, v in zip(
+                    names, self.honest_dof if self.honest_dof is not None
+                    else np.full(len(names), np.nan), strict=True)},
             },
         }
 
@@ -591,7 +626,10 @@ def fit_model(
     which is sqrt(2) times the per-equation scatter for isotropic errors and ignores that xel
     and el residuals differ); with ``data.t_s`` the observations are further grouped in time
     blocks of ``block_s`` so that residuals correlated over minutes to an hour (thermal drifts,
-    slow wander) are allowed for.
+    slow wander) are allowed for. With so few clusters the jackknife variance is itself noisy
+    and (error / sigma) follows a t distribution: ``sigma_honest_arcsec`` is the jackknife
+    sigma times sqrt(nu / (nu - 2)), nu its Satterthwaite degrees of freedom, the spread of
+    that t distribution (:mod:`controller.jackknife`).
 
     Raises ``ValueError`` (plain sentence) for no observations, fewer used observations than
     terms, invalid factors, ``weighted=True`` without weights, or a term that is infinite at
@@ -693,8 +731,8 @@ def fit_model(
         scale = sky
     popn = sky * math.sqrt(n_used / (n_used - n_fitted)) if n_used > n_fitted else float("nan")
     sigma = np.sqrt(np.diag(sol.cov_unscaled)) * scale
-    honest, clusters = _jackknife_sigma(a_w, y_w, coeffs, used, sol, n,
-                                       None if data.t_s is None else data.t_s, block_s)
+    honest_source = partial(cluster_jackknife, a_w, y_w - _matvec(a_w, coeffs), used,
+                            list(sol.rank.kept), n, data.t_s, block_s)
     with np.errstate(invalid="ignore", divide="ignore"):
         sd = np.sqrt(np.diag(sol.cov_unscaled))
         corr = sol.cov_unscaled / np.outer(sd, sd)
@@ -734,90 +772,6 @@ def fit_model(
         weighted=weighted,
         n_fitted=n_fitted,
         sigma_scale=scale,
-        sigma_honest_arcsec=_readonly(honest),
-        honest_clusters=clusters,
         honest_block_s=block_s if data.t_s is not None else None,
+        honest_source=honest_source,
     )
-
-
-def _jackknife_sigma(a: np.ndarray, y: np.ndarray, coeffs: np.ndarray, used: np.ndarray,
-                    sol: _Solution, n: int, t_s: np.ndarray | None,
-                    block_s: float) -> tuple[np.ndarray, int]:
-    """Cluster jackknife (CV3) standard errors (see :func:`fit_model`); NaN where not fitted."""
-    m = a.shape[1]
-    out = np.full(m, np.nan)
-    kept = list(sol.rank.kept)
-    idx = np.flatnonzero(used)
-    if not kept or idx.size <= len(kept):
-        return out, 0
-    if t_s is None:
-        cluster = np.arange(idx.size)
-    else:
-        _, cluster = np.unique(np.floor(t_s[idx] / block_s), return_inverse=True)
-    g = int(cluster.max()) + 1
-    if g < 2:
-        return out, g
-    r = y - _matvec(a, coeffs)
-    rows_x, rows_e = a[:, kept][idx], a[:, kept][n + idx]
-    # each observation's xel and el rows belong to its cluster: per-cluster score A_g^T r_g
-    # and information A_g^T A_g
-    score = rows_x * r[idx, None] + rows_e * r[n + idx, None]
-    k = len(kept)
-    score_g = np.zeros((g, k))
-    np.add.at(score_g, cluster, score)
-    total_info = rows_x.T @ rows_x + rows_e.T @ rows_e
-    if t_s is None:
-        delta = _single_observation_deltas(rows_x, rows_e, score, total_info)
-        if delta is not None:
-            cov = (g - 1) / g * (delta.T @ delta)
-            out[kept] = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-            return out, g
-    cov = np.zeros((k, k))
-    for lo in range(0, g, _JACKKNIFE_CHUNK):
-        hi = min(g, lo + _JACKKNIFE_CHUNK)
-        info_g = np.zeros((hi - lo, k, k))
-        mine = (cluster >= lo) & (cluster < hi)
-        c = cluster[mine] - lo
-        np.add.at(info_g, c, rows_x[mine, :, None] * rows_x[mine, None, :]
-                  + rows_e[mine, :, None] * rows_e[mine, None, :])
-        # leave-one-cluster-out change of the coefficients, exactly:
-        # beta_(-g) - beta = -(A^T A - A_g^T A_g)^-1 A_g^T r_g
-        delta = _solve_stack(total_info[None] - info_g, score_g[lo:hi])
-        cov += delta.T @ delta
-    cov *= (g - 1) / g
-    out[kept] = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    return out, g
-
-
-#: clusters per batch of the jackknife's k x k solves (bounds memory at ~k*k*8 kB per 1000)
-_JACKKNIFE_CHUNK = 4096
-
-
-def _single_observation_deltas(rows_x: np.ndarray, rows_e: np.ndarray, score: np.ndarray,
-                               info: np.ndarray) -> np.ndarray | None:
-    """Leave-one-observation-out coefficient changes for clusters of one observation (its
-    two rows), by the Woodbury identity: O(N k^2) instead of N k x k solves. ``None`` when an
-    observation alone constrains a term (the general path then handles it)."""
-    bread = np.linalg.inv(info)
-    u = score @ bread
-    bx, be = rows_x @ bread, rows_e @ bread
-    hxx = np.einsum("ij,ij->i", rows_x, bx)
-    hxe = np.einsum("ij,ij->i", rows_x, be)
-    hee = np.einsum("ij,ij->i", rows_e, be)
-    det = (1.0 - hxx) * (1.0 - hee) - hxe**2
-    if np.any(det < 1e-12):
-        return None
-    qx = np.einsum("ij,ij->i", rows_x, u)
-    qe = np.einsum("ij,ij->i", rows_e, u)
-    wx = ((1.0 - hee) * qx + hxe * qe) / det
-    we = (hxe * qx + (1.0 - hxx) * qe) / det
-    return -(u + bx * wx[:, None] + be * we[:, None])
-
-
-def _solve_stack(matrices: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-    """Solve a stack of small systems; a cluster without which the fit is singular (it alone
-    constrains a term) gets the minimum-norm solution (its term then has no finite error)."""
-    try:
-        return np.linalg.solve(matrices, rhs[..., None])[..., 0]
-    except np.linalg.LinAlgError:
-        return np.einsum("gij,gj->gi", np.linalg.pinv(matrices), rhs)

@@ -606,7 +606,7 @@ def test_honest_sigma_is_the_exact_leave_one_hour_out_jackknife():
     g = len(deltas)
     expected = np.sqrt((g - 1) / g * np.sum(deltas**2, axis=0))
     assert fit.honest_clusters == g == 24
-    np.testing.assert_allclose(fit.sigma_honest_arcsec, expected, rtol=1e-9)
+    np.testing.assert_allclose(fit.sigma_jackknife_arcsec, expected, rtol=1e-9)
 
 
 def test_honest_sigma_covers_hour_correlated_errors():
@@ -645,4 +645,62 @@ def test_honest_sigma_without_times_is_the_leave_one_observation_out_jackknife()
     deltas = np.array(deltas)
     expected = np.sqrt((len(data) - 1) / len(data) * np.sum(deltas**2, axis=0))
     assert fit.honest_clusters == len(data)
-    np.testing.assert_allclose(fit.sigma_honest_arcsec, expected, rtol=1e-8)
+    np.testing.assert_allclose(fit.sigma_jackknife_arcsec, expected, rtol=1e-8)
+
+
+# ------------------------------------------------------------ degrees of freedom of the jackknife
+def _few_cluster_campaign(rng, n=96, hours=8):
+    """Fixed positions and times (8 one-hour clusters), independent errors per draw."""
+    t = np.sort(rng.uniform(0.0, hours * 3600.0, n))
+    az = rng.uniform(0.0, 2 * np.pi, n)
+    el = np.radians(rng.uniform(15.0, 80.0, n))
+
+    def draw(noise):
+        return PointingData(az, el, noise.normal(0, 2.0, n), noise.normal(0, 5.0, n), t_s=t)
+    return draw
+
+
+def test_jackknife_dof_and_the_t_scaled_sigma_over_1500_campaigns():
+    """With Gaussian errors the jackknife variance V is a quadratic form with E[V] = tr K and
+    Var[V] = 2 tr K^2 exactly, so 2 E[V]^2 / Var[V] over many draws must equal the reported
+    Satterthwaite dof. 1500 draws estimate it with a relative standard error of about
+    sqrt((kurtosis - 1) / 1500) = 5% at dof ~ 6: 18% is 3.5 of those. With 8 clusters the
+    raw jackknife pulls spread by sqrt(dof/(dof-2)) ~ 1.2 (measured 1.14-1.19 over 4000
+    draws) and the t-scaled sigma brings them to 0.91-0.99 (below 1 because CV3 overstates
+    the variance a little); a spread's standard error here is ~3%, hence 0.85..1.08 for the
+    scaled and > 1.1 for the mean raw spread."""
+    terms = ["IA", "IE", "CA", "NPAE", "AN", "AW"]
+    draw = _few_cluster_campaign(np.random.default_rng(11))
+    noise = np.random.default_rng(12)
+    values, var, dof, honest = [], [], [], []
+    for _ in range(1500):
+        fit = fit_model(draw(noise), terms, robust=False)
+        values.append(fit.values_arcsec)
+        var.append(fit.sigma_jackknife_arcsec**2)
+        dof.append(fit.honest_dof)
+        honest.append(fit.sigma_honest_arcsec)
+    values, var, dof, honest = map(np.array, (values, var, dof, honest))
+    assert fit.honest_clusters == 8
+    assert np.all((dof > 3) & (dof < 9))  # few clusters: a small dof is the point of the test
+    dof_mc = 2 * var.mean(axis=0) ** 2 / var.var(axis=0)
+    np.testing.assert_allclose(dof.mean(axis=0), dof_mc, rtol=0.18)
+    scaled = np.std(values / honest, axis=0)
+    assert np.all((scaled > 0.85) & (scaled < 1.08)), scaled
+    assert np.mean(np.std(values / np.sqrt(var), axis=0)) > 1.1
+    np.testing.assert_allclose(honest, np.sqrt(var * dof / (dof - 2)), rtol=1e-12)
+
+
+def test_jackknife_dof_is_the_same_on_the_one_observation_fast_path():
+    # t_s=None takes the Woodbury path; distinct times with a tiny block give the same
+    # one-observation clusters through the general path
+    full = _hourly_wander_campaign(np.random.default_rng(5), n=40)
+    fast = fit_model(PointingData(full.az_rad, full.el_rad, full.xel_arcsec, full.el_arcsec),
+                     HONEST_TERMS, robust=False)
+    general = fit_model(full, HONEST_TERMS, robust=False, block_s=1e-3)
+    assert fast.honest_clusters == general.honest_clusters == 40
+    np.testing.assert_allclose(fast.honest_dof, general.honest_dof, rtol=1e-9)
+    np.testing.assert_allclose(fast.sigma_honest_arcsec, general.sigma_honest_arcsec, rtol=1e-9)
+    # 1 <= nu <= the number of clusters; TX (cot E) rests on the few lowest observations,
+    # so its jackknife has the fewest effective degrees of freedom
+    assert np.all((fast.honest_dof >= 1) & (fast.honest_dof <= 40))
+    assert np.argmin(fast.honest_dof) == HONEST_TERMS.index("TX")

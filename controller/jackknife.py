@@ -1,0 +1,241 @@
+"""Honest error bars for a linear pointing fit: the cluster jackknife and its degrees of freedom.
+
+The fitter's rows are the xel rows of the N observations followed by their el rows; an
+observation's two rows always belong to the same cluster. Clusters are single observations,
+or the observations within time blocks when the data carry times (see
+:func:`controller.fitting.fit_model`).
+
+Variance: the cluster jackknife (CV3, MacKinnon, Nielsen and Webb 2023)
+``V = (G-1)/G sum_g d_g d_g^T`` of the exact leave-one-cluster-out changes
+``d_g = -(A^T A - A_g^T A_g)^-1 A_g^T r_g``.
+
+Degrees of freedom. With G ~ 24 one-hour clusters V is itself noisy: a coefficient's error
+divided by sqrt(V) then follows a t distribution rather than a normal one, and its spread over
+many campaigns is sqrt(nu / (nu - 2)) > 1 even when V is unbiased. nu is the Satterthwaite
+value (Bell and McCaffrey 2002; Imbens and Kolesar 2016): V_j is the quadratic form
+``e^T W_j W_j^T e`` in the errors e, and for independent errors of per-axis variance Omega
+(the working model, from the fit's own xel and el rms)
+``nu_j = tr(K_j)^2 / tr(K_j^2)`` with the G x G matrix ``K_j = W_j^T Omega W_j``.
+K_j is diagonal plus rank 2k, so both traces are accumulated cluster by cluster in O(G k^2)
+without forming it (one-observation clusters make G the number of observations).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["JackknifeResult", "cluster_jackknife"]
+
+#: clusters per batch of the k x k inversions (bounds memory at ~k*k*8 kB per 1000)
+_CHUNK = 4096
+
+
+@dataclass(frozen=True)
+class JackknifeResult:
+    """Per fitted term (NaN for terms not fitted): the CV3 jackknife standard error
+    ``sigma`` (same unit as the coefficients), its Satterthwaite degrees of freedom ``dof``,
+    and ``clusters`` used."""
+
+    sigma: np.ndarray
+    dof: np.ndarray
+    clusters: int
+
+    @property
+    def sigma_t_scaled(self) -> np.ndarray:
+        """``sigma * sqrt(dof / (dof - 2))``: the standard deviation of a t variable with
+        ``dof`` degrees of freedom in units of sigma, so that (error / this) has unit spread.
+        Infinite where dof <= 2 (the t distribution then has no finite variance)."""
+        with np.errstate(invalid="ignore", divide="ignore"):
+            factor = np.where(self.dof > 2.0, np.sqrt(self.dof / (self.dof - 2.0)), np.inf)
+        return np.where(np.isfinite(self.sigma), self.sigma * factor, np.nan)
+
+
+def cluster_jackknife(a: np.ndarray, r: np.ndarray, used: np.ndarray, kept: list[int],
+                      n: int, t_s: np.ndarray | None, block_s: float) -> JackknifeResult:
+    """Jackknife sigma and dof of the least-squares coefficients of design ``a`` (2n x m,
+    xel rows then el rows) with residuals ``r`` (2n,), over the ``used`` observations and the
+    fitted (``kept``) columns. Clusters: one per observation when ``t_s`` is None, else the
+    observations in each ``block_s`` time block."""
+    m = a.shape[1]
+    sigma = np.full(m, np.nan)
+    dof = np.full(m, np.nan)
+    idx = np.flatnonzero(used)
+    if not kept or idx.size <= len(kept):
+        return JackknifeResult(sigma, dof, 0)
+    if t_s is None:
+        cluster = np.arange(idx.size)
+    else:
+        _, cluster = np.unique(np.floor(t_s[idx] / block_s), return_inverse=True)
+    g = int(cluster.max()) + 1
+    if g < 2:
+        return JackknifeResult(sigma, dof, g)
+    fitted = a if len(kept) == m else a[:, kept]
+    # row-major: the per-observation products below run along rows (the fitter's design is
+    # column-major for LAPACK)
+    rows_x, rows_e = np.ascontiguousarray(fitted[idx]), np.ascontiguousarray(fitted[n + idx])
+    res_x, res_e = r[idx], r[n + idx]
+    k = len(kept)
+    info = rows_x.T @ rows_x + rows_e.T @ rows_e
+    bread = np.linalg.inv(info)  # the kept columns are independent
+    # working model of the errors: independent, with each axis' own scatter
+    var_x, var_e = float(np.mean(res_x**2)), float(np.mean(res_e**2))
+    if var_x + var_e == 0.0:  # noise-free data: nu does not depend on a common scale
+        var_x = var_e = 1.0
+    dofs = _DofSums(bread, var_x * rows_x.T @ rows_x + var_e * rows_e.T @ rows_e)
+
+    cov = np.zeros((k, k))
+    singles = _single_observation_rows(rows_x, rows_e, bread) if t_s is None else None
+    if singles is not None:
+        bx, be = singles  # a_x^T M_g^-1 and a_e^T M_g^-1 for each observation's M_g
+        for lo in range(0, g, _CHUNK):
+            s = slice(lo, min(g, lo + _CHUNK))
+            delta = -(bx[s] * res_x[s, None] + be[s] * res_e[s, None])
+            cov += delta.T @ delta
+            dofs.add_single_observations(rows_x[s], rows_e[s], bx[s], be[s], var_x, var_e)
+    else:
+        # per-cluster score A_g^T r_g and information A_g^T A_g
+        score = rows_x * res_x[:, None] + rows_e * res_e[:, None]
+        score_g = np.zeros((g, k))
+        np.add.at(score_g, cluster, score)
+        for lo in range(0, g, _CHUNK):
+            hi = min(g, lo + _CHUNK)
+            mine = (cluster >= lo) & (cluster < hi)
+            c = cluster[mine] - lo
+            info_g = np.zeros((hi - lo, k, k))
+            np.add.at(info_g, c, rows_x[mine, :, None] * rows_x[mine, None, :]
+                      + rows_e[mine, :, None] * rows_e[mine, None, :])
+            inverse = _invert_stack(info[None] - info_g)  # M_g^-1, M_g = A^T A - A_g^T A_g
+            delta = -np.einsum("gij,gj->gi", inverse, score_g[lo:hi])
+            cov += delta.T @ delta
+            bx = np.einsum("oi,oij->oj", rows_x[mine], inverse[c])
+            be = np.einsum("oi,oij->oj", rows_e[mine], inverse[c])
+            p, q, d = _cluster_sums(rows_x[mine], rows_e[mine], bx, be, var_x, var_e)
+            dofs.add(*(_sum_by(x, c, hi - lo) for x in (p, q, d)))
+    cov *= (g - 1) / g
+    sigma[kept] = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    dof[kept] = dofs.dof()
+    return JackknifeResult(sigma, dof, g)
+
+
+def _single_observation_rows(rows_x: np.ndarray, rows_e: np.ndarray,
+                             bread: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """``a_x^T M^-1`` and ``a_e^T M^-1`` for each observation, M = A^T A without that
+    observation's two rows, by the Woodbury identity: O(N k^2) instead of N k x k inversions.
+    ``None`` when an observation alone constrains a term (the general path handles that)."""
+    bx, be = rows_x @ bread, rows_e @ bread
+    hxx = np.einsum("ij,ij->i", rows_x, bx)
+    hxe = np.einsum("ij,ij->i", rows_x, be)
+    hee = np.einsum("ij,ij->i", rows_e, be)
+    det = (1.0 - hxx) * (1.0 - hee) - hxe**2
+    if np.any(det < 1e-12):
+        return None
+    return (((1.0 - hee) * bx.T + hxe * be.T) / det).T, ((hxe * bx.T + (1.0 - hxx) * be.T) / det).T
+
+
+def _cluster_sums(rows_x, rows_e, bx, be, var_x: float, var_e: float):
+    """Per observation o and coefficient j (arrays (k, observations, k terms) and
+    (k, observations)): p = A_o^T b, q = A_o^T Omega b and d = b^T Omega b, with b the
+    observation's two entries of column j of M_g^-1-weighted design (``bx``, ``be``)."""
+    bxt, bet = bx.T[:, :, None], be.T[:, :, None]
+    p = bxt * rows_x[None] + bet * rows_e[None]
+    q = var_x * bxt * rows_x[None] + var_e * bet * rows_e[None]
+    d = var_x * bx.T**2 + var_e * be.T**2
+    return p, q, d
+
+
+def _sum_by(values: np.ndarray, cluster: np.ndarray, g: int) -> np.ndarray:
+    """Sum (k, observations, ...) arrays over the observations of each cluster."""
+    out = np.zeros((values.shape[0], g, *values.shape[2:]))
+    np.add.at(out, (slice(None), cluster), values)
+    return out
+
+
+class _DofSums:
+    """Accumulates tr K_j and tr K_j^2 for every coefficient j over batches of clusters.
+
+    For cluster g let p_g = A^T b_g, q_g = A^T Omega b_g and d_g = b_g^T Omega b_g, where b_g
+    is column j of M_g^-1 A_g^T placed in the cluster's rows. With H the hat matrix,
+    K_gh = b_g^T (I-H) Omega (I-H) b_h = delta_gh d_g - p_g.x_h - x_g.p_h + p_g^T C p_h,
+    x = (A^T A)^-1 q and C = (A^T A)^-1 (A^T Omega A) (A^T A)^-1; that is K = D + U V^T with
+    U = [P, X] and V = [P C - X, -P], so tr K^2 = tr D^2 + 2 tr(D U V^T) + tr((V^T U)^2),
+    where V^T U needs only the Gram matrices P^T P, P^T X and X^T X.
+    """
+
+    def __init__(self, bread: np.ndarray, a_omega_a: np.ndarray) -> None:
+        k = bread.shape[0]
+        self.bread = bread
+        self.c = bread @ a_omega_a @ bread
+        self.tr_k = np.zeros(k)
+        self.tr_d2 = np.zeros(k)
+        self.tr_duv = np.zeros(k)
+        self.pp = np.zeros((k, k, k))
+        self.px = np.zeros((k, k, k))
+        self.xx = np.zeros((k, k, k))
+
+    def add(self, p: np.ndarray, q: np.ndarray, d: np.ndarray) -> None:
+        """``p``, ``q``: (k coefficients, clusters, k terms); ``d``: (k, clusters)."""
+        pt = p.transpose(0, 2, 1)
+        self._add(d, np.einsum("jga,jga->jg", p @ self.c, p),
+                  np.einsum("jga,jga->jg", p, q @ self.bread))
+        self._add_grams(pt @ p, pt @ q, q.transpose(0, 2, 1) @ q)
+
+    def add_single_observations(self, rows_x, rows_e, bx, be, var_x: float,
+                                var_e: float) -> None:
+        """The same for clusters of one observation, whose p and q are combinations of its
+        two design rows (``bx``, ``be``: the rows' entries of b for every j): per-row
+        scalars and three weighted Gram products instead of (k, observations, k) arrays."""
+        def quad(m, u, v):
+            return ((u @ m) * v).sum(1)[:, None]
+
+        k = rows_x.shape[1]
+
+        def gram(w, u, v):  # sum_o w[o, j] u_o v_o^T for every j
+            return (w.T @ (u[:, :, None] * v[:, None, :]).reshape(len(u), k * k)).reshape(k, k, k)
+
+        bxx, bxe, bee = bx**2, bx * be, be**2
+        d = (var_x * bxx + var_e * bee).T
+        p_c_p = (bxx * quad(self.c, rows_x, rows_x) + 2.0 * bxe * quad(self.c, rows_x, rows_e)
+                 + bee * quad(self.c, rows_e, rows_e)).T
+        p_x = (var_x * bxx * quad(self.bread, rows_x, rows_x)
+               + (var_x + var_e) * bxe * quad(self.bread, rows_x, rows_e)
+               + var_e * bee * quad(self.bread, rows_e, rows_e)).T
+        self._add(d, p_c_p, p_x)
+        g_xx, g_xe, g_ee = gram(bxx, rows_x, rows_x), gram(bxe, rows_x, rows_e), \
+            gram(bee, rows_e, rows_e)
+        g_ex = g_xe.transpose(0, 2, 1)
+        self._add_grams(g_xx + g_xe + g_ex + g_ee,
+                        var_x * g_xx + var_e * g_xe + var_x * g_ex + var_e * g_ee,
+                        var_x**2 * g_xx + var_x * var_e * (g_xe + g_ex) + var_e**2 * g_ee)
+
+    def _add(self, d, p_c_p, p_x) -> None:
+        """Per (coefficient, cluster): d, p^T C p and p.x."""
+        self.tr_k += d.sum(1) - 2.0 * p_x.sum(1) + p_c_p.sum(1)
+        self.tr_d2 += (d**2).sum(1)
+        self.tr_duv += (d * (p_c_p - 2.0 * p_x)).sum(1)
+
+    def _add_grams(self, pp, pq, qq) -> None:
+        """Per coefficient: P^T P, P^T Q and Q^T Q."""
+        self.pp += pp
+        self.px += pq @ self.bread
+        self.xx += self.bread @ qq @ self.bread
+
+    def dof(self) -> np.ndarray:
+        c = self.c[None]
+        xp = self.px.transpose(0, 2, 1)
+        top = np.concatenate([c @ self.pp - xp, c @ self.px - self.xx], axis=2)
+        bottom = np.concatenate([-self.pp, -self.px], axis=2)
+        vu = np.concatenate([top, bottom], axis=1)
+        tr_k2 = self.tr_d2 + 2.0 * self.tr_duv + np.einsum("jab,jba->j", vu, vu)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return self.tr_k**2 / tr_k2
+
+
+def _invert_stack(matrices: np.ndarray) -> np.ndarray:
+    """Invert a stack of small matrices; a cluster without which the fit is singular (it
+    alone constrains a term) gets the pseudo-inverse (its term then has no finite error)."""
+    try:
+        return np.linalg.inv(matrices)
+    except np.linalg.LinAlgError:
+        return np.linalg.pinv(matrices)
