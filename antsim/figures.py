@@ -657,7 +657,8 @@ def coefficients_figure(fits: Mapping[str, FitResult | None], path: str | Path, 
                 transform=ax.transAxes, ha="right", fontsize=7)
         caption = (f"How far each fit's coefficients are from the {ref_label}, with two error "
                    "bars: TPOINT's formal sigma (assumes independent residuals) and the honest "
-                   "sigma (a jackknife over one-hour blocks), which allows for residuals "
+                   "sigma (a jackknife over one-hour blocks, widened for its few degrees of "
+                   "freedom), which allows for residuals "
                    "correlated in time. A point more than two or three honest sigmas from zero "
                    "is a real disagreement.")
         return _figure_file(fig, Path(path), title, caption, formats)

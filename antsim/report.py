@@ -392,7 +392,8 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
         text = ("Pull = (fit - truth) / sigma. With independent Gaussian residuals pulls "
                 "scatter with unit standard deviation. TPOINT's sigma assumes independent "
                 "residuals; the honest sigma allows for residuals correlated in time "
-                "(a jackknife over one-hour blocks), so its pulls are the ones to trust. "
+                "(a jackknife over one-hour blocks, widened for its few degrees of freedom), "
+                "so its pulls are the ones to trust. "
                 f"Cells above {PULL_WARN:g} are highlighted.")
         if effects:
             text += (" The truth also holds effects the fitted model has no terms for ("
