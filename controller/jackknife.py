@@ -17,7 +17,8 @@ value (Bell and McCaffrey 2002; Imbens and Kolesar 2016): V_j is the quadratic f
 (the working model, from the fit's own xel and el rms)
 ``nu_j = tr(K_j)^2 / tr(K_j^2)`` with the G x G matrix ``K_j = W_j^T Omega W_j``.
 K_j is diagonal plus rank 2k, so both traces are accumulated cluster by cluster in O(G k^2)
-without forming it (one-observation clusters make G the number of observations).
+per coefficient without forming it (one-observation clusters make G the number of
+observations).
 """
 
 from __future__ import annotations

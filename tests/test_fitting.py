@@ -704,3 +704,13 @@ def test_jackknife_dof_is_the_same_on_the_one_observation_fast_path():
     # so its jackknife has the fewest effective degrees of freedom
     assert np.all((fast.honest_dof >= 1) & (fast.honest_dof <= 40))
     assert np.argmin(fast.honest_dof) == HONEST_TERMS.index("TX")
+
+
+def test_t_scaled_sigma_is_unbounded_at_two_or_fewer_degrees_of_freedom():
+    from controller.jackknife import JackknifeResult
+
+    result = JackknifeResult(np.array([2.0, 1.0, np.nan]), np.array([10.0, 1.5, np.nan]), 5)
+    scaled = result.sigma_t_scaled
+    assert scaled[0] == pytest.approx(2.0 * math.sqrt(10.0 / 8.0), rel=1e-15)
+    assert scaled[1] == math.inf  # a t with nu <= 2 has no finite variance
+    assert math.isnan(scaled[2])  # a term not fitted stays without an error bar
