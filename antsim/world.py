@@ -384,13 +384,18 @@ class SimulatedAntenna:
             raise AntennaError("measure_offset needs a trajectory: call track() first")
         return self.env.process(self._measure(float(seconds)))
 
+    def _commanded_samples(self, t_start: float, seconds: float):
+        """Sample times of an exposure starting at ``t_start`` (s), the control clock's
+        reading of them, and the mount's commanded axis angles at those readings (deg)."""
+        t = self.world.receiver.sample_times(t_start, seconds)
+        t_clock = t + self.world._clock_error(t) if self.world._clock_error else t
+        return (t, t_clock, *self.mount.commanded_deg(t_clock))
+
     def _measure(self, seconds: float):
         world = self.world
         t_start = self.env.now
         yield self.env.timeout(seconds)
-        t = world.receiver.sample_times(t_start, seconds)
-        t_clock = t + world._clock_error(t) if world._clock_error else t
-        enc_lon_deg, enc_lat_deg = self.mount.commanded_deg(t_clock)
+        t, t_clock, enc_lon_deg, enc_lat_deg = self._commanded_samples(t_start, seconds)
         enc_lon = enc_lon_deg * RAD_PER_DEG
         enc_lat = enc_lat_deg * RAD_PER_DEG
         mid = t.size // 2
@@ -419,9 +424,7 @@ class SimulatedAntenna:
         world = self.world
         t_start = self.env.now
         yield self.env.timeout(seconds)
-        t = world.receiver.sample_times(t_start, seconds)
-        t_clock = t + world._clock_error(t) if world._clock_error else t
-        enc_az_deg, enc_el_deg = self.mount.commanded_deg(t_clock)
+        t, t_clock, enc_az_deg, enc_el_deg = self._commanded_samples(t_start, seconds)
         limits = world.scenario.mount.el
         enc_el_deg = np.clip(enc_el_deg, limits.min_deg, limits.max_deg)
         enc_az = enc_az_deg * RAD_PER_DEG
