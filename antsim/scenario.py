@@ -29,6 +29,7 @@ from controller.config import (
     ScanConfig,
     SchedulerConfig,
     SearchConfig,
+    SkyConfig,
     TippingConfig,
 )
 from controller.errors import InputError
@@ -414,6 +415,7 @@ def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, re
         estimator=scan_t.string("estimator", ds.estimator, choices=ESTIMATORS),
         snr_min=scan_t.number("snr_min", ds.snr_min, min=0.0),
         overhead_s=scan_t.number("overhead_s", ds.overhead_s, min=0.0, max=3600.0),
+        use_source_size=scan_t.boolean("use_source_size", ds.use_source_size),
     )
     if scan.step_arcmin > 1.2 * scan.hpbw_arcmin:
         raise scan_t.error("step_arcmin", scan.step_arcmin,
@@ -473,12 +475,13 @@ def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, re
     if any(not -360.0 <= f <= 360.0 for f in feed_angles):
         raise t.error("feed_angles_deg", list(feed_angles), "angles must lie in -360..360 deg")
     tipping = _tipping(t.table("tipping")) if "tipping" in t else None
+    sky = _sky(t.table("sky")) if "sky" in t else None
     optical = _optical(t.table("optical")) if "optical" in t else (
         OpticalConfig() if method == "optical" else None)
     gain_curve = _gain_curve(t.table("gain_curve"), names) if "gain_curve" in t else None
     t.finish()
-    catalog = tuple(CatalogSource(s.name, s.ra_deg, s.dec_deg, s.frame, s.flux_jy)
-                    for s in sources)
+    catalog = tuple(CatalogSource(s.name, s.ra_deg, s.dec_deg, s.frame, s.flux_jy,
+                                  s.size_arcmin) for s in sources)
     return ControllerConfig(
         site_latitude_deg=site.latitude_deg, site_longitude_deg=site.longitude_deg,
         site_height_m=site.height_m, epoch_utc=epoch, duration_s=duration_s, sources=catalog,
@@ -487,7 +490,8 @@ def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, re
                        else receiver.frequency_ghz),
         scenario_name=scenario_name, site_name=site.name,
         fit_terms=fit_terms, fit_model_name=fit_name, mount=mount.kind, method=method,
-        feed_angles_deg=feed_angles, tipping=tipping, optical=optical, gain_curve=gain_curve)
+        feed_angles_deg=feed_angles, tipping=tipping, sky=sky, optical=optical,
+        gain_curve=gain_curve)
 
 
 def _fit_spec(t: Table, mount: MountConfig | None = None,
@@ -534,6 +538,14 @@ def _stars(t: Table) -> tuple[SourceConfig, ...]:
     t.finish()
     return tuple(SourceConfig(name, ra, dec, "icrs", 1.0, 0.0, "synthetic bright star")
                  for name, ra, dec in synthetic_stars(count, dec_min))
+
+
+def _sky(t: Table) -> SkyConfig:
+    d = SkyConfig()
+    sky = SkyConfig(zenith_opacity=t.number("zenith_opacity", d.zenith_opacity, min=0.0, max=5.0),
+                    t_atm_k=t.number("t_atm_k", d.t_atm_k, gt=100.0, max=350.0))
+    t.finish()
+    return sky
 
 
 def _tipping(t: Table) -> TippingConfig:

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass, field, replace
 
 from .model import PointingModel
 
 __all__ = ["CatalogSource", "ControllerConfig", "GainCurveConfig", "OpticalConfig", "ScanConfig",
-           "SchedulerConfig", "SearchConfig", "TippingConfig"]
+           "SchedulerConfig", "SearchConfig", "SkyConfig", "TippingConfig"]
 
 
 @dataclass(frozen=True)
@@ -19,6 +20,8 @@ class CatalogSource:
     dec_deg: float
     frame: str = "fk4"
     flux_jy: float = 0.0
+    #: Gaussian FWHM of the source's brightness (arcmin); 0 for a point source
+    size_arcmin: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -33,6 +36,21 @@ class ScanConfig:
     snr_min: float = 4.0
     #: time spent per scan outside the integrations: noise-cal firing, data logging (s)
     overhead_s: float = 0.0
+    #: reduce a source the catalogue gives a size with the width it appears with,
+    #: sqrt(hpbw^2 + size^2), instead of the beam's: a fixed-width estimator with the
+    #: beam's width scales an extended source's offsets by hpbw^2 / (hpbw^2 + size^2)
+    use_source_size: bool = False
+
+    def for_source(self, size_arcmin: float) -> ScanConfig:
+        """These settings for a source of Gaussian FWHM ``size_arcmin`` (arcmin)."""
+        width = self.width_for(size_arcmin)
+        return self if width == self.hpbw_arcmin else replace(self, hpbw_arcmin=width)
+
+    def width_for(self, size_arcmin: float) -> float:
+        """The width (FWHM, arcmin) the reduction assumes for a source of ``size_arcmin``."""
+        if not self.use_source_size or size_arcmin <= 0.0:
+            return self.hpbw_arcmin
+        return math.hypot(self.hpbw_arcmin, size_arcmin)
 
 
 @dataclass(frozen=True)
@@ -75,6 +93,18 @@ class TippingConfig:
     integration_s: float = 10.0
     interval_s: float = 4.0 * 3600.0
     #: the observer's assumed mean radiating temperature of the atmosphere (K)
+    t_atm_k: float = 260.0
+
+
+@dataclass(frozen=True)
+class SkyConfig:
+    """The observer's a-priori atmosphere: its emission ``t_atm_k (1 - exp(-tau / sin E))``
+    is subtracted from every integration before the reduction while no tipping scan has
+    measured the opacity. Clark's straight baseline through the +-4D points removes the
+    emission's slope across a scan but not its change in time as a source rises or sets,
+    which biases elevation offsets with the sign of sin A (docs/assumptions.md)."""
+
+    zenith_opacity: float = 0.0
     t_atm_k: float = 260.0
 
 
@@ -136,6 +166,7 @@ class ControllerConfig:
     #: feed (rotator) angles to cycle through, one per scan (deg); empty: no feed command
     feed_angles_deg: tuple[float, ...] = ()
     tipping: TippingConfig | None = None
+    sky: SkyConfig | None = None
     optical: OpticalConfig | None = None
     gain_curve: GainCurveConfig | None = None
 

@@ -83,11 +83,12 @@ def piecewise_gain(el_deg, knots_deg: Sequence[float], gains: Sequence[float]) -
     return out
 
 
-def corrected_amplitudes(cols: Mapping[str, np.ndarray], hpbw_arcmin: float,
+def corrected_amplitudes(cols: Mapping[str, np.ndarray], hpbw_arcmin: float | np.ndarray,
                          zenith_opacity: float) -> np.ndarray:
     """Per row: the mean of the two axes' amplitudes (K), each corrected for the offset
-    across its scan, times ``exp(tau / sin E)`` (the module's recipe)."""
-    s = hpbw_arcmin / FWHM_PER_SIGMA
+    across its scan, times ``exp(tau / sin E)`` (the module's recipe). ``hpbw_arcmin``: the
+    width the reduction assumed (arcmin), one for all rows or one per row."""
+    s = np.asarray(hpbw_arcmin, dtype=float) / FWHM_PER_SIGMA
     xel = np.asarray(cols["xel_arcmin"], dtype=float)
     el_off = np.asarray(cols["el_arcmin"], dtype=float)
     a_az = np.asarray(cols["xel_amp_k"], dtype=float) * np.exp(el_off ** 2 / (2 * s * s))
@@ -294,8 +295,10 @@ def calibrate(rows, config, tippings: Sequence = ()) -> Calibration | None:
     use = sel & np.isin(cols["source"].astype(str), list(sources))
     fit = None
     if use.sum() > 8:
-        amp = corrected_amplitudes({k: v[use] for k, v in cols.items()}, config.scan.hpbw_arcmin,
-                                   tau)
+        sizes = {s.name: s.size_arcmin for s in config.sources}
+        width = np.array([config.scan.width_for(sizes.get(str(name), 0.0))
+                          for name in cols["source"][use]])
+        amp = corrected_amplitudes({k: v[use] for k, v in cols.items()}, width, tau)
         try:
             if gc.kind == "harmonics":
                 flux = {s.name: s.flux_jy for s in config.sources}

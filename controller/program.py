@@ -17,7 +17,8 @@ scans (:mod:`controller.tipping`) measure the zenith opacity at intervals, and e
 reduced after removing the sky emission they predict, T_atm (1 - exp(-tau / sin E)), from
 every integration (its recorded raw powers are kept as measured): neither five-point baseline
 can carry both the emission's slope across an elevation scan and its drift in time as the
-source rises, and on an equatorial mount both scans cross the slope.
+source rises, and on an equatorial mount both scans cross the slope. Without tipping scans
+an a-priori atmosphere (``config.sky``) can play their part.
 """
 
 from __future__ import annotations
@@ -55,6 +56,8 @@ class ScanOutcome:
     reduced: ReducedScan
     rows: list[dict]
     searches: int
+    #: the sky emission subtracted before the reduction (K; axes, positions, channels)
+    sky_k: np.ndarray | None = None
 
 
 def plan_targets(config: ControllerConfig,
@@ -87,6 +90,10 @@ class ControlProgram:
         self.ephemeris = self.observer.ephemeris
         self.frame = MountFrame(config.mount, config.site_latitude_deg)
         self.scan_duration_s = self._scan_duration_s()
+        sizes = {s.name: s.size_arcmin for s in config.sources}
+        #: scan settings per target: the assumed width follows the catalogued source size
+        self.scan_for = {t.name: config.scan.for_source(sizes.get(t.name, 0.0))
+                         for t in self.targets}
         self.scheduler = make_scheduler(config.scheduler, self.observer, self.targets,
                                         self.scan_duration_s)
         self.correction_arcmin = (0.0, 0.0)
@@ -175,11 +182,13 @@ class ControlProgram:
                 self.feed_angle_deg = angle
         before = self.antenna.encoder_deg()
         searches = 0
+        scan = self.scan_for[target.name]
         while True:
             traj = self.trajectory(target, self.antenna.clock_s())
-            raw = yield env.process(cross_scan(env, self.antenna, traj, self.config.scan,
+            raw = yield env.process(cross_scan(env, self.antenna, traj, scan,
                                                label=target.name))
-            reduced = reduce_scan(self.sky_corrected(raw), self.config.scan)
+            sky_k = self.sky_emission_k(raw)
+            reduced = reduce_scan(self.sky_corrected(raw, sky_k), scan)
             reduced.raw = raw
             if self._detected(reduced, tolerated=Flag(0)) or searches >= 2 \
                     or not self.config.search.enabled:
@@ -202,12 +211,12 @@ class ControlProgram:
                 self.correction_arcmin[0] + gain * float(avg["az"].offset_arcmin[-1]),
                 self.correction_arcmin[1] + gain * float(avg["el"].offset_arcmin[-1]),
             )
-        return ScanOutcome(target, reduced, rows, searches)
+        return ScanOutcome(target, reduced, rows, searches, sky_k)
 
     def search(self, env, target: Target):
         """simpy process: a wide cross scan; adopt the offsets it finds. Returns found axes."""
         self.searches += 1
-        scan = self.config.scan
+        scan = self.scan_for[target.name]
         step = scan.step_arcmin * self.config.search.step_factor
         traj = self.trajectory(target, self.antenna.clock_s())
         raw = yield env.process(cross_scan(env, self.antenna, traj, scan, label=target.name,
@@ -228,27 +237,40 @@ class ControlProgram:
         self.correction_arcmin = (xel, el)
         return found
 
-    def sky_corrected(self, raw: RawScan) -> RawScan:
-        """``raw`` with the sky emission of the latest tipping scan's fit removed from every
-        integration (see the module); ``raw`` itself when there is no tipping fit."""
+    def sky_emission_k(self, raw: RawScan) -> np.ndarray | None:
+        """The sky emission (K) the controller subtracts from each integration of ``raw``,
+        shape (axes, positions, channels): from the latest tipping scan's fit, else from
+        the a-priori ``config.sky``; None when it knows neither (see the module)."""
         fits = [t.fits for t in self.tippings if t.fits]
-        if not fits:
+        if fits:
+            latest = fits[-1]
+            models = [latest.get(ch, latest.get("AVG")) for ch in raw.channels]
+            sky = [(f.tau, f.t_atm_k) for f in models]
+        elif self.config.sky is not None and self.config.sky.zenith_opacity > 0.0:
+            sky = [(self.config.sky.zenith_opacity, self.config.sky.t_atm_k)] * len(raw.channels)
+        else:
+            return None
+        out = np.empty((len(AXES), len(raw.offsets_n), len(raw.channels)))
+        for a, axis in enumerate(AXES):
+            for k, integ in enumerate(raw.integrations[axis]):
+                _, el_deg = self.frame.to_altaz_deg(integ.enc_az_deg, integ.enc_el_deg)
+                airmass = 1.0 / math.sin(math.radians(max(el_deg, 1.0)))
+                for c, (tau, t_atm_k) in enumerate(sky):
+                    out[a, k, c] = t_atm_k * (1.0 - math.exp(-tau * airmass))
+        return out
+
+    def sky_corrected(self, raw: RawScan, sky_k: np.ndarray | None) -> RawScan:
+        """``raw`` with the emission ``sky_k`` (see :meth:`sky_emission_k`) removed."""
+        if sky_k is None:
             return raw
         from dataclasses import replace
 
-        latest = fits[-1]
         out = replace(raw, integrations={})
-        for axis, readings in raw.integrations.items():
-            corrected = []
-            for integ in readings:
-                _, el_deg = self.frame.to_altaz_deg(integ.enc_az_deg, integ.enc_el_deg)
-                airmass = 1.0 / math.sin(math.radians(max(el_deg, 1.0)))
-                power = {}
-                for ch, p in integ.power_k.items():
-                    fit = latest.get(ch, latest.get("AVG"))
-                    power[ch] = p - fit.t_atm_k * (1.0 - math.exp(-fit.tau * airmass))
-                corrected.append(replace(integ, power_k=power))
-            out.integrations[axis] = corrected
+        for a, axis in enumerate(AXES):
+            out.integrations[axis] = [
+                replace(integ, power_k={ch: p - sky_k[a, k, raw.channels.index(ch)]
+                                        for ch, p in integ.power_k.items()})
+                for k, integ in enumerate(raw.integrations[axis])]
         return out
 
     @staticmethod

@@ -18,7 +18,7 @@ from .protocol import Antenna, Integration
 from .reduction import AxisReduction, reduce_clark, reduce_lsq
 
 __all__ = ["AXES", "RawScan", "ReducedScan", "channel_average", "cross_scan", "reduce_powers",
-           "reduce_scan"]
+           "reduce_scan", "reduce_sources"]
 
 AXES = ("az", "el")
 
@@ -141,6 +141,34 @@ def reduce_powers(power: np.ndarray, std: np.ndarray, times: np.ndarray, scan: S
     else:
         raise ValueError(f"unknown estimator {est!r}: use 'clark' or 'lsq'")
     return result
+
+
+def reduce_sources(power: np.ndarray, std: np.ndarray, times: np.ndarray, scan: ScanConfig,
+                   widths_arcmin: np.ndarray, axis: int) -> AxisReduction:
+    """:func:`reduce_powers` of a batch whose index along ``axis`` runs over scans reduced
+    with the assumed widths ``widths_arcmin`` (FWHM, arcmin, one per scan; see
+    :meth:`ScanConfig.width_for`): one reduction per distinct width."""
+    from dataclasses import fields, replace
+
+    widths = np.asarray(widths_arcmin, dtype=float)
+    distinct = np.unique(widths)
+    if distinct.size == 1:
+        return reduce_powers(power, std, times, replace(scan, hpbw_arcmin=float(distinct[0])))
+    shape = np.broadcast_shapes(power.shape, std.shape, times.shape)
+    power, std, times = (np.broadcast_to(x, shape) for x in (power, std, times))
+    out: dict[str, np.ndarray] = {}
+    where = [slice(None)] * (len(shape) - 1)
+    for width in distinct:
+        index = np.flatnonzero(widths == width)
+        where[axis] = index
+        part = reduce_powers(power[tuple(where)], std[tuple(where)], times[tuple(where)],
+                             replace(scan, hpbw_arcmin=float(width)))
+        for f in fields(part):
+            value = np.asarray(getattr(part, f.name))
+            if f.name not in out:
+                out[f.name] = np.empty(shape[:-1], dtype=value.dtype)
+            out[f.name][tuple(where)] = value
+    return AxisReduction(**out)
 
 
 def _take(result: AxisReduction, index: int) -> AxisReduction:

@@ -332,3 +332,33 @@ def test_shared_schedule_baseline_is_the_full_simulation(tmp_path):
                 diff = np.array([r[f"{axis}_arcmin"] for r in full]) \
                     - fast[seed][f"{axis}_arcmin"][mine]
                 assert 60.0 * np.sqrt(np.mean(diff**2)) < 0.2, (seed, pol, axis)
+
+
+def test_offset_scale_follows_the_width_the_reduction_assumed():
+    """The fraction of a pointing error a scan's measured offset shows is
+    assumed^2 / (beam^2 + size^2): 1 for every source when the controller reduces with the
+    catalogued sizes, 0.91 for Cas A (3.46') with the bare 11' beam, from the scenario or
+    from the widths the recordings measured and the widths they say were assumed."""
+    from dataclasses import replace
+
+    from antsim.diagnose.baseline import offset_scale
+    from antsim.scenario import load_scenario
+
+    scenario = load_scenario(Path(__file__).resolve().parents[1] / "scenarios" / "ghigo1990.toml")
+    names = np.array(["3C84", "Cassiopeia A", "W31"] * 4)
+    n = names.size
+    width = np.array([11.0, math.hypot(11.0, 3.46), math.hypot(11.0, 4.0)] * 4)
+    obs = Observations(t_s=np.arange(n, dtype=float), az_rad=np.zeros(n),
+                       el_rad=np.full(n, 0.5), xel_arcsec=np.zeros(n), el_arcsec=np.zeros(n),
+                       good=np.ones(n, bool), source=names, width_xel_arcmin=width,
+                       width_el_arcmin=width, meta={"beam_hpbw_arcmin": 11.0})
+    bare = 121.0 / (121.0 + np.array([0.0, 3.46**2, 16.0] * 4))
+    assert scenario.controller.scan.use_source_size
+    np.testing.assert_allclose(offset_scale(obs, scenario), 1.0, rtol=1e-12)
+    beam_only = replace(scenario, controller=replace(scenario.controller, scan=replace(
+        scenario.controller.scan, use_source_size=False)))
+    np.testing.assert_allclose(offset_scale(obs, beam_only), bare, rtol=1e-12)
+    np.testing.assert_allclose(offset_scale(obs), bare, rtol=1e-12)
+    assumed = {"3C84": 11.0, "Cassiopeia A": width[1], "W31": width[2]}
+    told = replace(obs, meta={**obs.meta, "reduction_width_arcmin": assumed})
+    np.testing.assert_allclose(offset_scale(told), 1.0, rtol=1e-12)

@@ -37,6 +37,13 @@ def test_ghigo1990_loads_as_documented(ghigo_path):
     assert tsys["XL"] == pytest.approx(1.15 * tsys["XR"], rel=1e-9)  # XL 15% above XR
     assert s.controller.scan.step_arcmin == 7.0
     assert s.controller.scan.integration_s == 15.0
+    # the catalogue carries the source sizes and the reduction widens the beam by them
+    cat = {c.name: c for c in s.controller.sources}
+    assert cat["Cassiopeia A"].size_arcmin == 3.46 and cat["3C84"].size_arcmin == 0.0
+    assert s.controller.scan.use_source_size
+    assert s.controller.scan.width_for(3.46) == pytest.approx(11.531, abs=1e-3)
+    assert s.controller.scan.width_for(0.0) == 11.0
+    assert (s.controller.sky.zenith_opacity, s.controller.sky.t_atm_k) == (0.010, 260.0)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -146,6 +153,12 @@ BAD = {
     "source never above the elevation limit": (
         [('dec = "-19d56m00s"', 'dec = "-60d00m00s"')], "sources[5].dec", "-60.0"),
     "TOML syntax error": ([("seed = 1\n", "seed = = 1\n")], "TOML syntax", "line 7"),
+    "negative a-priori sky opacity": (
+        [("zenith_opacity = 0.010\nt_atm_k", "zenith_opacity = -0.01\nt_atm_k")],
+        "controller.sky.zenith_opacity", "-0.01"),
+    "source size switch not a boolean": (
+        [("use_source_size = true", 'use_source_size = "yes"')],
+        "controller.scan.use_source_size", "'yes'"),
 }
 
 

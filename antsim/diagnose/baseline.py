@@ -480,30 +480,34 @@ def _mean_and_sigma_once(values: np.ndarray, t_s: np.ndarray):
 def offset_scale(obs: Observations, scenario=None) -> np.ndarray:
     """Per scan, the fraction of a pointing error its measured offset shows.
 
-    The reduction assumes a Gaussian beam of the nominal width s_a; a source of size s_s seen
-    with the true beam s_b gives a Gaussian of width sqrt(s_b^2 + s_s^2), and the five-point
+    The reduction assumes a Gaussian of width s_a (the nominal beam, or the beam widened by
+    the catalogued source size when the controller uses it); a source of size s_s seen with
+    the true beam s_b gives a Gaussian of width sqrt(s_b^2 + s_s^2), and the five-point
     estimate of its offset is s_a^2 / (s_b^2 + s_s^2) of the true one (0.91 for Taurus A and
-    Cassiopeia A with the 11' beam, DESIGN section 5). With a scenario the sizes are the
-    scenario's; without one they come from the widths the recordings measured per source.
+    Cassiopeia A reduced with the 11' beam, DESIGN section 5). With a scenario the sizes are
+    the scenario's; without one they come from the widths the recordings measured per source.
     """
     n = obs.n
     if obs.source is None:
         return np.ones(n)
     out = np.ones(n)
     if scenario is not None:
-        assumed = float(scenario.controller.scan.hpbw_arcmin)
+        scan = scenario.controller.scan
         beam = float(scenario.beam.hpbw_arcmin)
-        sizes = {s.name: float(s.size_arcmin) for s in scenario.sources}
-        for src, size in sizes.items():
-            out[obs.source == src] = assumed**2 / (beam**2 + size**2)
+        catalogued = {s.name: s.size_arcmin for s in scenario.controller.sources}
+        for s in scenario.sources:
+            assumed = scan.width_for(catalogued.get(s.name, 0.0))
+            out[obs.source == s.name] = assumed**2 / (beam**2 + float(s.size_arcmin) ** 2)
         return out
     hpbw = obs.meta.get("beam_hpbw_arcmin")
     if hpbw is None or obs.width_xel_arcmin is None:
         return out
+    assumed_width = obs.meta.get("reduction_width_arcmin") or {}
     for src in np.unique(obs.source):
         m = (obs.source == src) & obs.good
         w2 = np.concatenate([obs.width_xel_arcmin[m], obs.width_el_arcmin[m]]) ** 2
         w2 = w2[np.isfinite(w2)]
         if w2.size >= 3:
-            out[obs.source == src] = min(1.0, float(hpbw) ** 2 / float(np.median(w2)))
+            assumed = float(assumed_width.get(str(src), hpbw))
+            out[obs.source == src] = min(1.0, assumed**2 / float(np.median(w2)))
     return out

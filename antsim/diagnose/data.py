@@ -188,7 +188,8 @@ def _flat_meta(meta: Mapping[str, Any]) -> dict[str, Any]:
     for key in ("latitude_deg", "longitude_deg"):
         if key in meta:
             out[key] = float(meta[key])
-    for key in ("epoch_utc", "scenario", "seed", "beam_hpbw_arcmin", "duration_s"):
+    for key in ("epoch_utc", "scenario", "seed", "beam_hpbw_arcmin", "duration_s",
+                "reduction_width_arcmin"):
         if key in meta:
             out[key] = meta[key]
     return out

@@ -8,7 +8,7 @@ the measured offsets (arcsec^2); for independent offsets of equal variance s^2 i
 inverse Fisher information s^2 B (the JSON keeps the name ``sigma_fisher_arcsec``).
 
 ``C`` is predicted, scan by scan, by propagating each source of noise through the linear
-response of the controller's own estimator (:func:`controller.scan.reduce_powers`, finite
+response of the controller's own estimator (:func:`controller.scan.reduce_sources`, finite
 differences at the noise-free powers; for white noise this is the Cramer-Rao bound of
 :func:`controller.reduction.cramer_rao_offset_arcmin` where the estimator reaches it) and
 through the beam (the world's :meth:`~antsim.world.World.sample_powers`, nudged):
@@ -320,10 +320,10 @@ def noise_model(engine: MemberEngine, plan_seed: int, n_thermal: int = 256) -> N
 
 def engine_reduce(engine: MemberEngine, power, std, times):
     """The controller's reduction of arbitrary (..., 5) arrays of one variant."""
-    from controller.scan import reduce_powers
+    from controller.scan import reduce_sources
 
-    return reduce_powers(power, std, np.broadcast_to(times, power.shape),
-                         engine.scenario.controller.scan)
+    return reduce_sources(power, std, np.broadcast_to(times, power.shape),
+                          engine.scenario.controller.scan, engine.scan_widths, 0)
 
 
 def predict(shared: SharedSchedule, terms: Sequence[str], noise: NoiseModel,

@@ -19,7 +19,7 @@ through the world's own physics (:meth:`antsim.world.World.sample_powers` with a
   (cloud modulation, lateral forcing) and the weather's wander that drives it; each as one
   array with a member axis (the OU processes and the thermal grids carry it);
 * vectorized across members: the pointing solve, the beam response, the sky emission, the
-  receiver, then :func:`controller.scan.reduce_powers` on every scan of every member at once;
+  receiver, then :func:`controller.scan.reduce_sources` on every scan of every member at once;
   each member is then fitted with :func:`controller.fitting.fit_model` as fit A.
 
 Where the physics does not allow a shared schedule the member is simulated in full
@@ -39,13 +39,14 @@ import copy
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from itertools import pairwise
 from typing import Any
 
 import numpy as np
 
 from controller.fitting import fit_model
-from controller.scan import channel_average, reduce_powers
+from controller.scan import channel_average, reduce_sources
 from controller.units import ARCSEC_PER_RAD
 from controller.variants import VARIANTS, pointing_data, variant_mask
 
@@ -131,6 +132,9 @@ class SharedSchedule:
     scan_spans_s: np.ndarray
     wall_s: float
     channels: tuple[str, ...] = ()
+    #: the sky emission the controller subtracted before each scan's reduction (K),
+    #: (scans, axes, channels, positions); None when it subtracted none
+    scan_sky_k: np.ndarray | None = None
 
     @property
     def n_integrations(self) -> int:
@@ -195,8 +199,17 @@ def record_schedule(quiet: Scenario, seed: int = 0) -> tuple[SharedSchedule, Run
         paths=[it["paths"] for it in recorder.items], scan_int=scan_int,
         scan_times=scan_times, columns=columns, sources=[r["source"] for r in avg],
         searches=int(program.searches), duration_s=quiet.duration_s, scan_spans_s=spans,
-        wall_s=wall, channels=tuple(run.world.antenna.channels))
+        wall_s=wall, channels=tuple(run.world.antenna.channels), scan_sky_k=_scan_sky(program))
     return shared, run
+
+
+def _scan_sky(program) -> np.ndarray | None:
+    """The sky emission each recorded scan had subtracted (K), (scans, axes, channels, 5)."""
+    skies = [o.sky_k for o in program.outcomes]
+    if all(sky is None for sky in skies):
+        return None
+    shape = next(sky.shape for sky in skies if sky is not None)
+    return np.stack([np.zeros(shape) if sky is None else sky for sky in skies]).swapaxes(2, 3)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -546,6 +559,8 @@ class MemberEngine:
         idx = self.shared.scan_int
         p = np.moveaxis(power[idx], (3, 4), (0, 3))  # (M, scans, axes, ch, 5)
         s = np.moveaxis(std[idx], (3, 4), (0, 3))
+        if self.shared.scan_sky_k is not None:  # the controller's sky subtraction
+            p = p - self.shared.scan_sky_k
         p_avg, s_avg = channel_average(p, s, axis=3)
         p = np.concatenate([p, p_avg[:, :, :, None]], axis=3)
         s = np.concatenate([s, s_avg[:, :, :, None]], axis=3)
@@ -556,7 +571,14 @@ class MemberEngine:
         """The controller's reduction of every scan of every member (AxisReduction of shape
         (members, scans, axes, channels + AVG))."""
         p, s, times = self.scan_powers(power, std)
-        return reduce_powers(p, s, times, self.scenario.controller.scan)
+        return reduce_sources(p, s, times, self.scenario.controller.scan, self.scan_widths, 1)
+
+    @cached_property
+    def scan_widths(self) -> np.ndarray:
+        """The width (FWHM, arcmin) the controller assumes for each recorded scan."""
+        c = self.scenario.controller
+        sizes = {s.name: s.size_arcmin for s in c.sources}
+        return np.array([c.scan.width_for(sizes.get(name, 0.0)) for name in self.shared.sources])
 
     def diverges(self, reduced) -> np.ndarray:
         """Members the controller would search for a scan of (their schedule then differs)."""
