@@ -95,7 +95,7 @@ def recording_meta(scenario: Scenario, seed: int, model: PointingModel) -> dict:
         **({"mount": c.mount} if c.mount != "altaz" else {}),
         **({"method": c.method} if c.method != "five_point" else {}),
         **({"feed_angles_deg": list(c.feed_angles_deg)} if c.feed_angles_deg else {}),
-        **({"reduction_width_arcmin": {s.name: c.scan.width_for(s.size_arcmin)
+        **({"reduction_width_arcmin": {s.name: c.reduction_width_arcmin(s.name)
                                        for s in c.sources}}
            if c.scan.use_source_size else {}),
         **({"sky_subtracted": {"zenith_opacity": c.sky.zenith_opacity,

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 from .model import PointingModel
 
@@ -40,11 +40,6 @@ class ScanConfig:
     #: sqrt(hpbw^2 + size^2), instead of the beam's: a fixed-width estimator with the
     #: beam's width scales an extended source's offsets by hpbw^2 / (hpbw^2 + size^2)
     use_source_size: bool = False
-
-    def for_source(self, size_arcmin: float) -> ScanConfig:
-        """These settings for a source of Gaussian FWHM ``size_arcmin`` (arcmin)."""
-        width = self.width_for(size_arcmin)
-        return self if width == self.hpbw_arcmin else replace(self, hpbw_arcmin=width)
 
     def width_for(self, size_arcmin: float) -> float:
         """The width (FWHM, arcmin) the reduction assumes for a source of ``size_arcmin``."""
@@ -169,6 +164,12 @@ class ControllerConfig:
     sky: SkyConfig | None = None
     optical: OpticalConfig | None = None
     gain_curve: GainCurveConfig | None = None
+
+    def reduction_width_arcmin(self, source: str) -> float:
+        """The width (FWHM, arcmin) the reduction assumes for the catalogue's ``source``
+        (the beam's for a source the catalogue does not list)."""
+        size = next((s.size_arcmin for s in self.sources if s.name == source), 0.0)
+        return self.scan.width_for(size)
 
     def fit_spec(self) -> tuple[tuple[str, ...], str]:
         """(terms, model name) to fit. For an equatorial mount the terms are

@@ -295,8 +295,7 @@ def calibrate(rows, config, tippings: Sequence = ()) -> Calibration | None:
     use = sel & np.isin(cols["source"].astype(str), list(sources))
     fit = None
     if use.sum() > 8:
-        sizes = {s.name: s.size_arcmin for s in config.sources}
-        width = np.array([config.scan.width_for(sizes.get(str(name), 0.0))
+        width = np.array([config.reduction_width_arcmin(str(name))
                           for name in cols["source"][use]])
         amp = corrected_amplitudes({k: v[use] for k, v in cols.items()}, width, tau)
         try:

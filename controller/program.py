@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -90,9 +90,9 @@ class ControlProgram:
         self.ephemeris = self.observer.ephemeris
         self.frame = MountFrame(config.mount, config.site_latitude_deg)
         self.scan_duration_s = self._scan_duration_s()
-        sizes = {s.name: s.size_arcmin for s in config.sources}
         #: scan settings per target: the assumed width follows the catalogued source size
-        self.scan_for = {t.name: config.scan.for_source(sizes.get(t.name, 0.0))
+        self.scan_for = {t.name: replace(config.scan,
+                                         hpbw_arcmin=config.reduction_width_arcmin(t.name))
                          for t in self.targets}
         self.scheduler = make_scheduler(config.scheduler, self.observer, self.targets,
                                         self.scan_duration_s)
@@ -263,8 +263,6 @@ class ControlProgram:
         """``raw`` with the emission ``sky_k`` (see :meth:`sky_emission_k`) removed."""
         if sky_k is None:
             return raw
-        from dataclasses import replace
-
         out = replace(raw, integrations={})
         for a, axis in enumerate(AXES):
             out.integrations[axis] = [

@@ -9,7 +9,7 @@ throughout. Both polarizations are recorded; their average is formed for the ``A
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
@@ -148,8 +148,6 @@ def reduce_sources(power: np.ndarray, std: np.ndarray, times: np.ndarray, scan: 
     """:func:`reduce_powers` of a batch whose index along ``axis`` runs over scans reduced
     with the assumed widths ``widths_arcmin`` (FWHM, arcmin, one per scan; see
     :meth:`ScanConfig.width_for`): one reduction per distinct width."""
-    from dataclasses import fields, replace
-
     widths = np.asarray(widths_arcmin, dtype=float)
     distinct = np.unique(widths)
     if distinct.size == 1:
@@ -173,7 +171,5 @@ def reduce_sources(power: np.ndarray, std: np.ndarray, times: np.ndarray, scan: 
 
 def _take(result: AxisReduction, index: int) -> AxisReduction:
     """The reduction of one axis (first batch index) as an AxisReduction."""
-    from dataclasses import fields
-
     return type(result)(**{f.name: np.asarray(getattr(result, f.name))[index]
                            for f in fields(result)})

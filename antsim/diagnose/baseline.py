@@ -492,11 +492,9 @@ def offset_scale(obs: Observations, scenario=None) -> np.ndarray:
         return np.ones(n)
     out = np.ones(n)
     if scenario is not None:
-        scan = scenario.controller.scan
         beam = float(scenario.beam.hpbw_arcmin)
-        catalogued = {s.name: s.size_arcmin for s in scenario.controller.sources}
         for s in scenario.sources:
-            assumed = scan.width_for(catalogued.get(s.name, 0.0))
+            assumed = scenario.controller.reduction_width_arcmin(s.name)
             out[obs.source == s.name] = assumed**2 / (beam**2 + float(s.size_arcmin) ** 2)
         return out
     hpbw = obs.meta.get("beam_hpbw_arcmin")

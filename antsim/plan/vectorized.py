@@ -577,8 +577,7 @@ class MemberEngine:
     def scan_widths(self) -> np.ndarray:
         """The width (FWHM, arcmin) the controller assumes for each recorded scan."""
         c = self.scenario.controller
-        sizes = {s.name: s.size_arcmin for s in c.sources}
-        return np.array([c.scan.width_for(sizes.get(name, 0.0)) for name in self.shared.sources])
+        return np.array([c.reduction_width_arcmin(name) for name in self.shared.sources])
 
     def diverges(self, reduced) -> np.ndarray:
         """Members the controller would search for a scan of (their schedule then differs)."""
