@@ -46,7 +46,7 @@ import numpy as np
 import scipy.linalg
 from scipy.optimize import linprog
 
-from .jackknife import JackknifeResult, cluster_jackknife
+from .jackknife import JackknifeResult, Rejection, cluster_jackknife
 from .model import NAMED_MODELS, PointingModel
 from .terms import Term
 
@@ -702,6 +702,7 @@ def fit_model(
         used &= ((abs_x <= max(lad_factor * abs_x.mean(), floor))
                  & (abs_e <= max(lad_factor * abs_e.mean(), floor)))
         check_enough(used, "rejecting beyond lad_factor x the mean absolute deviation")
+        kept_lad = used.copy()
         rows = np.concatenate([used, used])
         sol = _least_squares(a_w[rows], y_w[rows], names)
         abs_x, abs_e = normalised_residuals(sol.coeffs)
@@ -732,7 +733,8 @@ def fit_model(
     popn = sky * math.sqrt(n_used / (n_used - n_fitted)) if n_used > n_fitted else float("nan")
     sigma = np.sqrt(np.diag(sol.cov_unscaled)) * scale
     honest_source = partial(cluster_jackknife, a_w, y_w - _matvec(a_w, coeffs), used,
-                            list(sol.rank.kept), n, data.t_s, block_s)
+                            list(sol.rank.kept), n, data.t_s, block_s,
+                            Rejection(kept_lad, rms_factor, floor, y_w) if robust else None)
     with np.errstate(invalid="ignore", divide="ignore"):
         sd = np.sqrt(np.diag(sol.cov_unscaled))
         corr = sol.cov_unscaled / np.outer(sd, sd)
