@@ -306,6 +306,9 @@ class FitResult:
                           "clusters = observations"
                           + (f" within {self.honest_block_s:g} s time blocks"
                              if self.honest_block_s else "")
+                          + (", scaled by the mean variance ratio of replicates that repeat the "
+                             "fit's outlier rejection" if self.robust and self.honest_block_s
+                             else "")
                           + ", times sqrt(dof/(dof-2)) for its Satterthwaite degrees of freedom",
                 "clusters": int(self.honest_clusters),
                 "dof": {n: _json_float(v) for n, v in zip(
@@ -629,7 +632,9 @@ def fit_model(
     slow wander) are allowed for. With so few clusters the jackknife variance is itself noisy
     and (error / sigma) follows a t distribution: ``sigma_honest_arcsec`` is the jackknife
     sigma times sqrt(nu / (nu - 2)), nu its Satterthwaite degrees of freedom, the spread of
-    that t distribution (:mod:`controller.jackknife`).
+    that t distribution (:mod:`controller.jackknife`). A robust fit's rejection makes the
+    coefficients vary more than the kept residuals say; with time blocks the jackknife
+    replays the last rejection in each replicate and scales the variances by the mean ratio.
 
     Raises ``ValueError`` (plain sentence) for no observations, fewer used observations than
     terms, invalid factors, ``weighted=True`` without weights, or a term that is infinite at
