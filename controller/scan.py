@@ -85,16 +85,19 @@ def cross_scan(env, antenna: Antenna, trajectory, scan: ScanConfig, label: str =
     raw = RawScan(label=label, step_arcmin=step, offsets_n=scan.offsets_n,
                   channels=tuple(antenna.channels))
     raw.t_track_s = yield antenna.track(trajectory, label)
+    move_s = 0.0  # the last move's duration: the estimate of the next one's
     for axis in AXES:
         readings = []
         for n in scan.offsets_n:
             if axis == "az":
-                el_deg = trajectory.elevation_deg(antenna.clock_s())
+                # the step holds at the middle of the integration: near the zenith cos E
+                # changes by ~3%/min, ~0.7% between the move's start and that middle
+                el_deg = trajectory.sky_elevation_deg(antenna.clock_s() + move_s + 0.5 * tau)
                 cos_el = max(math.cos(math.radians(el_deg)), 1e-3)
                 raw.cos_el = cos_el
-                yield antenna.set_offset(n * step / 60.0 / cos_el, 0.0)
+                move_s = yield antenna.set_offset(n * step / 60.0 / cos_el, 0.0)
             else:
-                yield antenna.set_offset(0.0, n * step / 60.0)
+                move_s = yield antenna.set_offset(0.0, n * step / 60.0)
             readings.append((yield antenna.integrate(tau)))
         raw.integrations[axis] = readings
     yield antenna.set_offset(0.0, 0.0)

@@ -136,6 +136,9 @@ class FixedTrajectory:
     def elevation_deg(self, t_s: float) -> float:
         return self.lat_deg
 
+    def sky_elevation_deg(self, t_s: float) -> float:
+        return self.lat_deg
+
 
 def _clear_azimuth(config: TippingConfig, frame: MountFrame, observer, t_s: float,
                    sched: SchedulerConfig) -> float | None:

@@ -140,6 +140,20 @@ class SourceTrajectory:
         mount (the latitude-like axis whose cosine scales cross-axis steps)."""
         return float(self(np.array([t_s]))[1][0])
 
+    def sky_elevation_deg(self, t_s: float) -> float:
+        """Where the beam should be on the sky at one instant: the commanded elevation less
+        the pointing model's and the correction's share (degrees; the declination on an
+        equatorial mount). Azimuth steps of a cross scan are divided by its cosine: a
+        source at sky elevation E is n D / cos E away in azimuth from a beam at n D in
+        cross-elevation, wherever the model puts the encoder (12' above it for the 1990
+        model, which would scale the steps by 1 + 12' tan E, 3.7% at 85 deg)."""
+        t = np.array([t_s])
+        if self._covered(t):
+            offset_el = np.interp(t, self._t_nodes, self._offset_el)
+        else:
+            offset_el = self._exact(t)[4]
+        return float(self(t)[1][0] - offset_el[0] * DEG_PER_RAD)
+
     @staticmethod
     def cos_el(el_deg: float) -> float:
         return math.cos(math.radians(el_deg))
