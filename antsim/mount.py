@@ -51,6 +51,11 @@ class MountConfig:
 
 def move_time_s(distance_deg, speed_deg_s: float, accel_deg_s2: float):
     """Rest-to-rest time of a trapezoidal (or triangular) velocity profile (s)."""
+    if isinstance(distance_deg, float):  # one move (the simulation's case): plain floats
+        d = abs(distance_deg)
+        if d <= speed_deg_s ** 2 / accel_deg_s2:
+            return 2.0 * math.sqrt(d / accel_deg_s2)
+        return d / speed_deg_s + speed_deg_s / accel_deg_s2
     d = np.abs(np.asarray(distance_deg, dtype=float))
     ramp = speed_deg_s ** 2 / accel_deg_s2  # distance covered accelerating + braking
     return np.where(d <= ramp, 2.0 * np.sqrt(d / accel_deg_s2),

@@ -58,10 +58,13 @@ class WeatherModel:
         self._t = np.arange(-spinup_s, duration_s + 2 * step, step)
         self._wander = ou_series(rng, self._t.size, step, config.wander_timescale_s,
                                  config.wander_rms_c)
+        self._wander_now = None
 
     def daily_curve_c(self, t_s) -> np.ndarray:
         """The deterministic daily temperature curve (C)."""
         c = self.config
+        if isinstance(t_s, float):  # the World asks once per integration: plain floats
+            return self._daily_curve_scalar_c(t_s)
         local_h = (self._epoch_local_h + np.asarray(t_s, dtype=float) / 3600.0) % 24.0
         rise_h = (c.max_local_h - c.min_local_h) % 24.0
         since_min = (local_h - c.min_local_h) % 24.0
@@ -70,6 +73,15 @@ class WeatherModel:
                          1.0 + (since_min - rise_h) / (24.0 - rise_h))
         # phase 0 -> minimum, 1 -> maximum, 2 -> minimum again
         return c.air_min_c + (c.air_max_c - c.air_min_c) * 0.5 * (1.0 - np.cos(math.pi * phase))
+
+    def _daily_curve_scalar_c(self, t_s: float) -> float:
+        c = self.config
+        local_h = (self._epoch_local_h + t_s / 3600.0) % 24.0
+        rise_h = (c.max_local_h - c.min_local_h) % 24.0
+        since_min = (local_h - c.min_local_h) % 24.0
+        phase = (since_min / rise_h if since_min < rise_h
+                 else 1.0 + (since_min - rise_h) / (24.0 - rise_h))
+        return c.air_min_c + (c.air_max_c - c.air_min_c) * 0.5 * (1.0 - math.cos(math.pi * phase))
 
     def daily_shape(self, t_s) -> np.ndarray:
         """0 at the daily temperature minimum, 1 at the maximum."""
@@ -89,8 +101,13 @@ class WeatherModel:
 
     def reading(self, t_s: float) -> WeatherReading:
         """What the weather sensors report at ``t_s``."""
+        t_s = float(t_s)
+        if self._wander_now is None:
+            from antsim.effects.thermal import ScalarInterpolator
+
+            self._wander_now = ScalarInterpolator(self._t, [self._wander])
         return WeatherReading(
-            temperature_c=float(self.air_temperature_c(t_s)),
+            temperature_c=self.daily_curve_c(t_s) + self._wander_now(t_s)[0],
             pressure_hpa=self.pressure_hpa,
             relative_humidity=self.relative_humidity,
             wind_speed_m_s=float(self.wind_m_s(t_s)),

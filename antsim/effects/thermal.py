@@ -273,6 +273,7 @@ class ThermalEffect(Effect):
         self._dish_k = None
         self._dish_t = None
         self._now = None
+        self._now_cache = None
 
     def errors_arcsec(self, t_s) -> tuple[np.ndarray, np.ndarray]:
         """(xel, el) thermal error in arcsec at time(s) ``t_s`` (for tests and reports)."""
@@ -288,17 +289,26 @@ class ThermalEffect(Effect):
         if p["dish_gradient_k"] == 0.0:
             return 0.0, 0.0
         t = state.t_s
-        if now is None:
-            sun = np.array([np.interp(t, self.t_grid, row) for row in self._sun_vec])
-            insolation = interp_rows(t, self.t_grid, self._insolation)
+        if now is not None and np.ndim(state.az_rad) == 0 and np.ndim(state.el_rad) == 0:
+            # one time and one direction (a World): plain floats
+            sun_n, sun_e, sun_u, insolation = now[2:6]
+            flux = p["dish_gradient_k"] * insolation
+            cos_e, sin_e = math.cos(state.el_rad), math.sin(state.el_rad)
+            cos_a, sin_a = math.cos(state.az_rad), math.sin(state.az_rad)
+            forcing = (flux * (sun_n * cos_e * cos_a + sun_e * cos_e * sin_a + sun_u * sin_e),
+                       flux * (sun_e * cos_a - sun_n * sin_a))
         else:
-            sun, insolation = np.array(now[2:5]), now[5]
-        flux = p["dish_gradient_k"] * insolation
-        cos_e, sin_e = _cos(state.el_rad), _sin(state.el_rad)
-        cos_a, sin_a = _cos(state.az_rad), _sin(state.az_rad)
-        boresight = np.array((cos_e * cos_a, cos_e * sin_a, sin_e))
-        side = np.array((-sin_a, cos_a, np.zeros_like(sin_a)))
-        forcing = (flux * np.dot(sun, boresight), flux * np.dot(sun, side))
+            if now is None:
+                sun = np.array([np.interp(t, self.t_grid, row) for row in self._sun_vec])
+                insolation = interp_rows(t, self.t_grid, self._insolation)
+            else:
+                sun, insolation = np.array(now[2:5]), now[5]
+            flux = p["dish_gradient_k"] * insolation
+            cos_e, sin_e = _cos(state.el_rad), _sin(state.el_rad)
+            cos_a, sin_a = _cos(state.az_rad), _sin(state.az_rad)
+            boresight = np.array((cos_e * cos_a, cos_e * sin_a, sin_e))
+            side = np.array((-sin_a, cos_a, np.zeros_like(sin_a)))
+            forcing = (flux * np.dot(sun, boresight), flux * np.dot(sun, side))
         if self._dish_k is None:
             self._dish_k = forcing
         elif t > self._dish_t:
@@ -317,7 +327,10 @@ class ThermalEffect(Effect):
                 self._now = ScalarInterpolator(self.t_grid, [
                     self.xel_arcsec, self.el_arcsec, *self._sun_vec, self._insolation,
                     self._tilt_n_arcsec, self._tilt_e_arcsec])
-            now = self._now(float(state.t_s))
+            t = float(state.t_s)
+            if self._now_cache is None or self._now_cache[0] != t:  # once per integration
+                self._now_cache = (t, self._now(t))
+            now = self._now_cache[1]
             xel, el, tilt_n, tilt_e = now[0], now[1], now[6], now[7]
             fb, lr = self.dish_gradients_k(state, now)
         else:  # arrays with a member axis in antsim.plan's ensembles
