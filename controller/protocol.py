@@ -92,7 +92,8 @@ class Antenna(Protocol):
         """The antenna's clock: seconds since the campaign epoch."""
 
     def track(self, trajectory: Trajectory, label: str = ""):
-        """Slew to and track ``trajectory``; the event fires once on track and settled.
+        """Slew to and track ``trajectory``; the event fires once on track and settled, its
+        value the time the slew and settling took (s).
 
         The offset is reset to zero. The event fails with :class:`AntennaError` if the
         trajectory is outside the mount's limits at arrival.
@@ -100,7 +101,7 @@ class Antenna(Protocol):
 
     def set_offset(self, d_az_deg: float, d_el_deg: float):
         """Offset the encoder command from the trajectory (degrees of encoder angle);
-        the event fires once settled."""
+        the event fires once settled, its value the time the move and settling took (s)."""
 
     def integrate(self, seconds: float):
         """Integrate total power for ``seconds``; the event's value is an :class:`Integration`."""
