@@ -121,7 +121,7 @@ def test_fomalont_run_recovers_every_injected_term(fomalont_run):
     expected.update(feed["coefficients_arcsec"])
     assert set(expected) == set(fit["terms"])
     # TPOINT's sigma (see the module docstring of tests/test_equatorial.py); here the honest
-    # sigma passes as well (largest pull 2.3)
+    # sigma passes as well (largest pull 2.1)
     for name, entry in fit["terms"].items():
         assert abs(entry["value_arcsec"] - expected[name]) < 3.0 * entry["sigma_arcsec"], name
     # Fomalont's own parameters back from the linear coefficients
