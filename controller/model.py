@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .terms import Term, combine_scalar, evaluate_basis, get_term
+from .terms import Term, combine_arrays, combine_scalar, evaluate_basis, get_term
 from .units import ARCSEC_PER_RAD, RAD_PER_ARCSEC, to_value
 
 __all__ = ["NAMED_MODELS", "PointingModel", "named_model_terms"]
@@ -150,12 +150,10 @@ class PointingModel:
 
     def offset_scalar_rad(self, az_rad: float, el_rad: float,
                           feed_rad: float | None = None) -> tuple[float, float]:
-        """:meth:`offset_rad` at one point with plain floats (a fast path for simulations);
-        arrays (an ensemble's member axis) go through :meth:`offset_rad`."""
-        if np.ndim(az_rad) or np.ndim(el_rad):
-            return self.offset_rad(az_rad, el_rad, feed_rad)
-        corr_az, corr_el = combine_scalar(self.terms, self._coeff_rad, az_rad, el_rad,
-                                          feed_rad)
+        """:meth:`offset_rad` without a basis matrix (a fast path for simulations): plain
+        floats at one point, element by element for arrays (an ensemble's member axis)."""
+        combine = combine_arrays if np.ndim(az_rad) or np.ndim(el_rad) else combine_scalar
+        corr_az, corr_el = combine(self.terms, self._coeff_rad, az_rad, el_rad, feed_rad)
         return -corr_az, -corr_el
 
     @property

@@ -72,6 +72,7 @@ import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 
@@ -80,6 +81,7 @@ __all__ = [
     "KATPOINT_EQUIVALENTS",
     "Term",
     "TermError",
+    "combine_arrays",
     "combine_scalar",
     "evaluate_basis",
     "get_term",
@@ -218,7 +220,20 @@ def _argument_scalar(arg, az: float, el: float, feed=None) -> float:
 def combine_scalar(terms: Sequence[Term], coeffs: Sequence[float], az_rad: float,
                    el_rad: float, feed_rad: float | None = None) -> tuple[float, float]:
     """``sum_j coeffs[j] * basis_j`` at one point, with plain floats (fast for scalars)."""
-    cache: dict[Factor, float] = {}
+    return _combine(terms, coeffs, az_rad, el_rad, feed_rad, _MATH, _argument_scalar, math.cos)
+
+
+def combine_arrays(terms: Sequence[Term], coeffs: Sequence[float], az_rad: np.ndarray,
+                   el_rad: np.ndarray, feed_rad=None) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`combine_scalar` on arrays of any (common) shape, element by element: no basis
+    matrix (the fast path for a few points, e.g. an ensemble's members at one instant)."""
+    az, el = np.broadcast_arrays(np.asarray(az_rad, dtype=float), np.asarray(el_rad, dtype=float))
+    total_az, total_el = _combine(terms, coeffs, az, el, feed_rad, _FUNCTIONS, _argument, np.cos)
+    return total_az + np.zeros(az.shape), total_el + np.zeros(az.shape)
+
+
+def _combine(terms, coeffs, az, el, feed, functions, argument, cos):
+    cache: dict[Factor, Any] = {}
     total_az = total_el = 0.0
     for term, coeff in zip(terms, coeffs, strict=True):
         if coeff == 0.0:
@@ -229,15 +244,15 @@ def combine_scalar(terms: Sequence[Term], coeffs: Sequence[float], az_rad: float
                 f = cache.get(factor)
                 if f is None:
                     func, arg, mult = factor
-                    f = _MATH[func](mult * _argument_scalar(arg, az_rad, el_rad, feed_rad))
+                    f = functions[func](mult * argument(arg, az, el, feed))
                     cache[factor] = f
-                value *= f
+                value = value * f
             if axis == "A":
-                total_az += value
+                total_az = total_az + value
             elif axis == "E":
-                total_el += value
+                total_el = total_el + value
             else:
-                total_az += value / math.cos(el_rad)
+                total_az = total_az + value / cos(el)
     return total_az, total_el
 
 

@@ -333,7 +333,16 @@ class ThermalEffect(Effect):
             now = self._now_cache[1]
             xel, el, tilt_n, tilt_e = now[0], now[1], now[6], now[7]
             fb, lr = self.dish_gradients_k(state, now)
-        else:  # arrays with a member axis in antsim.plan's ensembles
+        elif np.ndim(state.t_s) == 0:  # one time, series with a member axis (antsim.plan)
+            t = float(state.t_s)
+            if self._now_cache is None or self._now_cache[0] != t:  # once per integration
+                self._now_cache = (t, [interp_rows(t, self.t_grid, v) for v in (
+                    self.xel_arcsec, self.el_arcsec, *self._sun_vec, self._insolation,
+                    self._tilt_n_arcsec, self._tilt_e_arcsec)])
+            now = self._now_cache[1]
+            xel, el, tilt_n, tilt_e = now[0], now[1], now[6], now[7]
+            fb, lr = self.dish_gradients_k(state, now)
+        else:  # times with a member axis
             xel, el = self.errors_arcsec(state.t_s)
             fb, lr = self.dish_gradients_k(state)
             tilt_n = interp_rows(state.t_s, self.t_grid, self._tilt_n_arcsec)
