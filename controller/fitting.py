@@ -46,7 +46,7 @@ import numpy as np
 import scipy.linalg
 from scipy.optimize import linprog
 
-from .jackknife import JackknifeResult, Rejection, cluster_jackknife
+from .jackknife import JackknifeResult, Rejection, cluster_jackknife, within_rms
 from .model import NAMED_MODELS, PointingModel
 from .terms import Term
 
@@ -710,11 +710,7 @@ def fit_model(
         kept_lad = used.copy()
         rows = np.concatenate([used, used])
         sol = _least_squares(a_w[rows], y_w[rows], names)
-        abs_x, abs_e = normalised_residuals(sol.coeffs)
-        rms_x = math.sqrt(float(np.mean(abs_x[used] ** 2)))
-        rms_e = math.sqrt(float(np.mean(abs_e[used] ** 2)))
-        used &= ((abs_x <= max(rms_factor * rms_x, floor))
-                 & (abs_e <= max(rms_factor * rms_e, floor)))
+        used = within_rms(*normalised_residuals(sol.coeffs), used, rms_factor, floor)
         check_enough(used, "rejecting beyond rms_factor x the rms")
 
     rows = np.concatenate([used, used])

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["JackknifeResult", "Rejection", "cluster_jackknife"]
+__all__ = ["JackknifeResult", "Rejection", "cluster_jackknife", "within_rms"]
 
 #: clusters per batch of the k x k inversions (bounds memory at ~k*k*8 kB per 1000)
 _CHUNK = 4096
@@ -65,6 +65,16 @@ class Rejection:
     rms_factor: float
     floor: float
     target: np.ndarray  # (2n,) the fitted quantity (weighted as the design is)
+
+
+def within_rms(abs_x: np.ndarray, abs_e: np.ndarray, used: np.ndarray, factor: float,
+               floor: float) -> np.ndarray:
+    """``used`` less the observations whose |residual| on either axis exceeds ``factor`` x
+    that axis' rms over ``used`` (a threshold never below ``floor``): the robust fit's last
+    rejection, shared by the fitter and the jackknife that replays it."""
+    limit_x = max(factor * math.sqrt(float(np.mean(abs_x[used] ** 2))), floor)
+    limit_e = max(factor * math.sqrt(float(np.mean(abs_e[used] ** 2))), floor)
+    return used & (abs_x <= limit_x) & (abs_e <= limit_e)
 
 
 def cluster_jackknife(a: np.ndarray, r: np.ndarray, used: np.ndarray, kept: list[int],
@@ -187,13 +197,9 @@ def _replayed_variance(fitted: np.ndarray, n: int, t_s: np.ndarray, block_s: flo
 
     def last_stage(first: np.ndarray, info: np.ndarray, score: np.ndarray) -> np.ndarray:
         b = solve(info, score)
-        abs_x, abs_e = np.abs(yx - ax @ b), np.abs(ye - ae @ b)
-        limit_x = max(rejection.rms_factor * math.sqrt(float(np.mean(abs_x[first] ** 2))),
-                      rejection.floor)
-        limit_e = max(rejection.rms_factor * math.sqrt(float(np.mean(abs_e[first] ** 2))),
-                      rejection.floor)
-        dropped = first & ((abs_x > limit_x) | (abs_e > limit_e))
-        info_d, score_d = sums(dropped)
+        kept = within_rms(np.abs(yx - ax @ b), np.abs(ye - ae @ b), first,
+                          rejection.rms_factor, rejection.floor)
+        info_d, score_d = sums(first & ~kept)
         return solve(info - info_d, score - score_d)
 
     info1, score1 = sums(lad)

@@ -318,28 +318,27 @@ class ThermalEffect(Effect):
         self._dish_t = t
         return self._dish_k
 
+    def _series_at(self, t: float) -> list:
+        """Every series at time ``t`` (s), looked up once per integration (the fixed point
+        asks twice): xel, el (arcsec), the Sun (3), insolation, tilts (arcsec). Plain floats
+        when no series has a member axis (np.interp's arithmetic), else interp_rows."""
+        if self._now_cache is None or self._now_cache[0] != t:
+            series = (self.xel_arcsec, self.el_arcsec, *self._sun_vec, self._insolation,
+                      self._tilt_n_arcsec, self._tilt_e_arcsec)
+            if all(np.ndim(v) == 1 for v in series):
+                if self._now is None:
+                    self._now = ScalarInterpolator(self.t_grid, series)
+                values = self._now(t)
+            else:
+                values = [interp_rows(t, self.t_grid, v) for v in series]
+            self._now_cache = (t, values)
+        return self._now_cache[1]
+
     def pointing_error(self, state: PointingState) -> tuple[float, float]:
         p = self.p
         # pedestal tilt as AN (north) / AW (east) terms, indicated - true
-        if np.ndim(state.t_s) == 0 and self.el_arcsec.ndim == 1 and self.xel_arcsec.ndim == 1:
-            # a World: one time, every series at once (xel, el, Sun (3), insolation, tilts)
-            if self._now is None:
-                self._now = ScalarInterpolator(self.t_grid, [
-                    self.xel_arcsec, self.el_arcsec, *self._sun_vec, self._insolation,
-                    self._tilt_n_arcsec, self._tilt_e_arcsec])
-            t = float(state.t_s)
-            if self._now_cache is None or self._now_cache[0] != t:  # once per integration
-                self._now_cache = (t, self._now(t))
-            now = self._now_cache[1]
-            xel, el, tilt_n, tilt_e = now[0], now[1], now[6], now[7]
-            fb, lr = self.dish_gradients_k(state, now)
-        elif np.ndim(state.t_s) == 0:  # one time, series with a member axis (antsim.plan)
-            t = float(state.t_s)
-            if self._now_cache is None or self._now_cache[0] != t:  # once per integration
-                self._now_cache = (t, [interp_rows(t, self.t_grid, v) for v in (
-                    self.xel_arcsec, self.el_arcsec, *self._sun_vec, self._insolation,
-                    self._tilt_n_arcsec, self._tilt_e_arcsec)])
-            now = self._now_cache[1]
+        if np.ndim(state.t_s) == 0:  # one time (a World, or antsim.plan's shared schedule)
+            now = self._series_at(float(state.t_s))
             xel, el, tilt_n, tilt_e = now[0], now[1], now[6], now[7]
             fb, lr = self.dish_gradients_k(state, now)
         else:  # times with a member axis
