@@ -320,6 +320,10 @@ def test_shared_schedule_baseline_is_the_full_simulation(tmp_path):
     scenario = load_scenario(path)
     fast = shared_schedule_columns(scenario, [11, 12])
     assert set(fast) == {11, 12}
+    streamed = shared_schedule_columns(scenario, [11, 12], jobs=2)  # members in a 2nd process
+    for seed in (11, 12):
+        for name, values in fast[seed].items():
+            np.testing.assert_array_equal(streamed[seed][name], values, err_msg=name)
     for seed in (11, 12):
         rows = simulate(scenario, seed).rows
         for pol in ("XR", "XL", "AVG"):

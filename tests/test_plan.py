@@ -7,7 +7,6 @@ the whole module stays well under a minute.
 
 from __future__ import annotations
 
-import itertools
 import json
 import math
 from dataclasses import replace
@@ -21,7 +20,7 @@ from antsim.plan.planfile import load_plan
 from antsim.plan.study import run_plan
 from antsim.plan.vectorized import (
     MemberEngine,
-    _Replay,
+    _MemberDraws,
     member_seed,
     quiet_scenario,
     record_schedule,
@@ -158,8 +157,9 @@ def test_member_seeds_are_fixed_and_distinct():
 
 
 def test_ou_process_with_a_member_axis_is_each_members_process():
-    """OUProcess(rms of shape (members, k)) replaying each member's draws equals the members'
-    own processes (the edit of antsim.effects.thermal that the ensembles rely on)."""
+    """OUProcess(rms of shape (members, k)) drawing from each member's own generator equals
+    the members' own processes (the edit of antsim.effects.thermal that the ensembles rely
+    on), however the draws are cut into integrations and buffered ahead."""
     rms = np.array([3e-4, 2e-3])
     times = [np.arange(15) + 0.5 + 21.0 * i for i in range(6)] + [np.arange(80) + 200.5]
     seeds = [11, 12, 13]
@@ -167,14 +167,43 @@ def test_ou_process_with_a_member_axis_is_each_members_process():
     for s in seeds:
         p = OUProcess(np.random.default_rng(s), rms, 60.0)
         own.append(np.concatenate([p.sample(t) for t in times]))
-    draws = [np.random.default_rng(s).standard_normal((sum(t.size for t in times), 2))
-             for s in seeds]
-    stacked = np.stack(draws, axis=1)
-    offsets = np.cumsum([0] + [t.size for t in times])
-    blocks = [stacked[a:b] for a, b in itertools.pairwise(offsets)]
-    batched = OUProcess(_Replay(blocks), np.tile(rms, (3, 1)), 60.0)
+    draws = _MemberDraws([np.random.default_rng(s) for s in seeds])
+    draws.CHUNK = 50  # refills inside an integration too
+    batched = OUProcess(draws, np.tile(rms, (3, 1)), 60.0)
     out = np.concatenate([batched.sample(t) for t in times])
-    np.testing.assert_allclose(out, np.stack(own, axis=1), rtol=1e-12, atol=1e-18)
+    np.testing.assert_array_equal(out, np.stack(own, axis=1))
+    with pytest.raises(RuntimeError, match="for 2 members asked of 3"):
+        draws.standard_normal((4, 2, 2))
+
+
+def test_streamed_members_equal_the_members_on_the_finished_schedule(short_engine):
+    """Members integrated in a second process while the quiet run records the schedule give
+    the powers of MemberEngine.simulate on the finished schedule, bit for bit."""
+    from antsim.plan.streaming import MemberStream
+
+    scenario, engine = short_engine
+    seeds = [member_seed(7, m) for m in range(3)]
+    quiet = quiet_scenario(scenario)
+    with MemberStream(scenario, quiet, seeds) as stream:
+        shared, _ = record_schedule(quiet, on_integration=stream.send)
+        power, std = stream.result()
+    assert shared.n_integrations == engine.shared.n_integrations > 100
+    ref_power, ref_std = engine.simulate(seeds)
+    np.testing.assert_array_equal(power, ref_power)
+    np.testing.assert_array_equal(std, ref_std)
+
+
+def test_a_failing_members_process_is_an_error_not_a_hang(short_engine):
+    """A broken schedule item reaches the members' process, which reports its failure; the
+    parent raises it instead of waiting forever."""
+    from antsim.plan.streaming import MemberStream
+
+    scenario, engine = short_engine
+    with MemberStream(scenario, quiet_scenario(scenario), [1, 2]) as stream:
+        stream.send(t=np.arange(3.0), enc_az=np.zeros(2), enc_el=np.zeros(3),
+                    state=engine.shared.state[0], paths=[])
+        with pytest.raises(RuntimeError, match="members' process failed"):
+            stream.result()
 
 
 def test_vectorized_members_reproduce_their_full_simulation(short_engine):

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -38,8 +39,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "times and compare (default 4; 0 skips it)")
     parser.add_argument("--sims", type=int, default=8, metavar="K",
                         help="simulations of the scenario that predict the noise (default 8)")
-    parser.add_argument("--jobs", type=int, default=1, metavar="J",
-                        help="processes for the simulations (default 1)")
+    parser.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1), metavar="J",
+                        help="processes for the simulations (default: 2 on a machine with two "
+                             "or more cores, else 1)")
     parser.add_argument("--cache", metavar="DIR",
                         help="cache of the baseline simulations (default $ANTSIM_CACHE or "
                              "~/.cache/antsim)")
@@ -69,6 +71,10 @@ def _library_text() -> str:
 
 
 def main(args: argparse.Namespace) -> int:
+    if args.scenario and not args.list:  # a cold baseline may stream its members (2 cores)
+        from antsim.plan.streaming import prestart
+
+        prestart(args.jobs)
     from antsim.diagnose import diagnose, load_observations
 
     if args.list:

@@ -278,10 +278,16 @@ class SimulatedBaseline:
                 except (OSError, KeyError, ValueError):
                     pass
             todo.append(seed)
-        if todo and self.scenario.controller.method == "five_point":
+        streams = bool(todo) and self.scenario.controller.method == "five_point"
+        if not streams:
+            from ..plan.streaming import release_prestarted
+
+            release_prestarted()
+        if streams:
             from .fastsim import shared_schedule_columns
 
-            for seed, cols in shared_schedule_columns(self.scenario, todo).items():
+            shared = shared_schedule_columns(self.scenario, todo, self.jobs)
+            for seed, cols in shared.items():
                 prod = _products(from_columns(cols), self.terms)
                 out[seed] = prod
                 if self.use_cache:

@@ -22,24 +22,34 @@ from controller.program import FWHM_PER_SIGMA
 __all__ = ["shared_schedule_columns"]
 
 
-def shared_schedule_columns(scenario, seeds: Sequence[int]) -> dict[int, dict[str, np.ndarray]]:
+def shared_schedule_columns(scenario, seeds: Sequence[int], jobs: int = 1
+                            ) -> dict[int, dict[str, np.ndarray]]:
     """Recording columns (XR, XL and AVG rows of every scan) of each seed that keeps the
-    shared schedule; seeds missing from the result need a full simulation."""
+    shared schedule; seeds missing from the result need a full simulation. With ``jobs`` >= 2
+    (and two cores) the members run in a second process behind the quiet run
+    (:mod:`antsim.plan.streaming`; same numbers)."""
     import simpy
 
     from ..plan.ensemble import REFERENCE_SEED
+    from ..plan.streaming import MemberStream, stream_available
     from ..plan.vectorized import MemberEngine, quiet_scenario, record_schedule
     from ..world import World
 
     if not seeds:
         return {}
     quiet = quiet_scenario(scenario)
-    shared, _ = record_schedule(quiet, seed=REFERENCE_SEED)
-    reference = World(quiet, simpy.Environment(), REFERENCE_SEED)
-    engine = MemberEngine(scenario, shared, reference, (), "baseline")
-    if engine.unshareable:
-        return {}
-    power, std = engine.simulate(list(seeds))
+    stream = MemberStream(scenario, quiet, seeds) if stream_available(jobs) else None
+    try:
+        shared, _ = record_schedule(quiet, seed=REFERENCE_SEED,
+                                    on_integration=stream.send if stream else None)
+        reference = World(quiet, simpy.Environment(), REFERENCE_SEED)
+        engine = MemberEngine(scenario, shared, reference, (), "baseline")
+        if engine.unshareable:
+            return {}
+        power, std = stream.result() if stream else engine.simulate(list(seeds))
+    finally:
+        if stream is not None:
+            stream.close()
     reduced = engine.reduce(power, std)
     diverged = engine.diverges(reduced)
     offset = np.asarray(reduced.offset_arcmin)  # (seeds, scans, axes, channels + AVG)

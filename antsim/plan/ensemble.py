@@ -34,14 +34,12 @@ from .vectorized import (
     member_seed,
     record_schedule,
 )
+from .workers import single_threaded
 
 __all__ = ["Job", "make_executor", "task_block", "task_full", "task_noise", "task_record"]
 
 #: seed of the deterministic runs (their residual randomness, ~1e-9 K, is irrelevant)
 REFERENCE_SEED = 0
-#: environment of spawned workers: one BLAS/OpenMP thread each (the pool is the parallelism)
-SINGLE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
-                     "MKL_NUM_THREADS": "1"}
 
 
 @dataclass(frozen=True)
@@ -158,19 +156,11 @@ class PoolExecutor(Executor):
 
         self.workers = workers
         self.description = f"local process pool of {workers} workers"
-        saved = {k: os.environ.get(k) for k in SINGLE_THREAD_ENV}
-        os.environ.update(SINGLE_THREAD_ENV)
-        try:
+        with single_threaded():
             self._pool = ProcessPoolExecutor(max_workers=workers,
                                              mp_context=multiprocessing.get_context("spawn"))
             # start the workers now, while the environment says one thread
             list(self._pool.map(_warm_up, range(workers)))
-        finally:
-            for k, v in saved.items():
-                if v is None:
-                    os.environ.pop(k, None)
-                else:
-                    os.environ[k] = v
 
     def submit(self, fn: Callable, *args: Any) -> Future:
         return self._pool.submit(fn, *args)

@@ -37,10 +37,9 @@ from __future__ import annotations
 
 import copy
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from itertools import pairwise
 from typing import Any
 
 import numpy as np
@@ -149,19 +148,35 @@ class SharedSchedule:
     def n_scans(self) -> int:
         return int(self.scan_int.shape[0])
 
+    @classmethod
+    def arriving(cls, duration_s: float, channels: tuple[str, ...]) -> SharedSchedule:
+        """A schedule whose integrations are still to come (:mod:`antsim.plan.streaming`):
+        what the members' effects need to start, nothing recorded yet."""
+        return cls(t=[], enc_az=[], enc_el=[], state=[], paths=[],
+                   scan_int=np.zeros((0, 2, 5), dtype=np.int64), scan_times=np.zeros((0, 2, 5)),
+                   columns={}, sources=[], searches=0, duration_s=duration_s,
+                   scan_spans_s=np.zeros(0), wall_s=0.0, channels=channels)
+
 
 class _Recorder:
-    def __init__(self):
+    def __init__(self, also: Callable[..., None] | None = None):
         self.items: list[dict] = []
+        self.also = also
 
     def __call__(self, **item: Any) -> None:
         self.items.append(item)
+        if self.also is not None:
+            self.also(**item)
 
 
-def record_schedule(quiet: Scenario, seed: int = 0) -> tuple[SharedSchedule, RunResult]:
+def record_schedule(quiet: Scenario, seed: int = 0,
+                    on_integration: Callable[..., None] | None = None
+                    ) -> tuple[SharedSchedule, RunResult]:
     """Run the deterministic simulation of ``quiet`` (see :func:`quiet_scenario`) with the
-    antenna's recorder attached; returns the shared schedule and the run."""
-    recorder = _Recorder()
+    antenna's recorder attached; returns the shared schedule and the run. ``on_integration``
+    is also called with each integration's recorder keywords as it is recorded (e.g.
+    :meth:`antsim.plan.streaming.MemberStream.send`)."""
+    recorder = _Recorder(on_integration)
 
     def attach(world: World) -> None:
         world.antenna.recorder = recorder
@@ -215,22 +230,69 @@ def _scan_sky(program) -> np.ndarray | None:
 # ---------------------------------------------------------------------------------------------
 # members with a member axis
 # ---------------------------------------------------------------------------------------------
-class _Replay:
-    """Stands in for a numpy Generator: hands out pre-drawn standard normals, block by block,
-    in the order the world's components ask for them (``None`` blocks: zeros)."""
+class _MemberDraws:
+    """Stands in for a numpy Generator with a member axis: a call for draws of shape
+    (n, members, *rest) takes each member's next ``n * prod(rest)`` standard normals from
+    that member's own generator, in the order its world would ask for them. numpy's normal
+    stream does not depend on how it is cut into calls, so drawing ahead in chunks changes no
+    value, and the draws need not know the schedule's length (it may still be arriving).
+    ``generators`` None: every draw is zero (the quiet members)."""
 
-    def __init__(self, blocks: Sequence[np.ndarray | None]):
-        self.blocks = blocks
-        self.i = 0
+    CHUNK = 8192
+
+    def __init__(self, generators: Sequence[np.random.Generator] | None):
+        self.generators = generators
+        self._buffers = [np.empty(0) for _ in generators or ()]
+        self._used = [0 for _ in generators or ()]
+
+    def _take(self, j: int, count: int) -> np.ndarray:
+        buffer, used = self._buffers[j], self._used[j]
+        if used + count > buffer.size:
+            buffer = np.concatenate([buffer[used:], self.generators[j].standard_normal(
+                max(count, self.CHUNK))])
+            used = 0
+            self._buffers[j] = buffer
+        self._used[j] = used + count
+        return buffer[used:used + count]
 
     def standard_normal(self, shape) -> np.ndarray:
-        block = self.blocks[self.i]
-        self.i += 1
-        if block is None:
+        if self.generators is None:
             return np.zeros(shape)
-        if block.shape != tuple(shape):
-            raise RuntimeError(f"replayed draw of shape {block.shape}, asked for {shape}")
-        return block
+        n, members, *rest = shape
+        if members != len(self.generators):
+            raise RuntimeError(f"draws for {members} members asked of {len(self.generators)}")
+        count = n * int(np.prod(rest, dtype=np.int64))
+        out = np.empty((n, members, *rest))
+        for j in range(members):
+            out[:, j] = self._take(j, count).reshape(n, *rest)
+        return out
+
+
+class _MemberGusts:
+    """The gusts of every member (each drawn at its own jitter's start), looked up per
+    integration: displacement (n, members, 2) rad, as each member's
+    :meth:`TrackingJitter.gusts_rad` gives it."""
+
+    def __init__(self, effects: Sequence[TrackingJitter]):
+        starts = [e.gust_start_s for e in effects]
+        order = np.argsort(np.concatenate(starts), kind="stable")
+        self.start_s = np.concatenate(starts)[order]
+        self.member = np.concatenate([np.full(s.size, j) for j, s in enumerate(starts)]
+                                     ).astype(np.int64)[order]
+        self.rad = np.concatenate([e.gust_rad for e in effects])[order]
+        self.n_members = len(effects)
+        self.duration_s = effects[0].p["gust_duration_s"]
+
+    def __call__(self, t_s: np.ndarray) -> np.ndarray:
+        out = np.zeros((t_s.size, self.n_members, 2))
+        first = np.searchsorted(self.start_s, t_s[0] - self.duration_s)
+        last = np.searchsorted(self.start_s, t_s[-1], side="right")
+        for g in range(first, last):  # a member's gusts in its own (time) order
+            phase = (t_s - self.start_s[g]) / self.duration_s
+            inside = (phase >= 0.0) & (phase <= 1.0)
+            out[inside, self.member[g]] += np.sin(np.pi * phase[inside])[:, None] ** 2 \
+                * self.rad[g]
+        return out
 
 
 class _MemberView:
@@ -252,17 +314,16 @@ class _MemberView:
 
 
 class _MemberJitter(TrackingJitter):
-    """Tracking jitter with a member axis: the OU process replays each member's own draws and
-    the gusts (drawn per member at its start) are looked up per integration."""
+    """Tracking jitter with a member axis: the OU process draws each member's own normals
+    and the gusts are each member's own (:class:`_MemberGusts`)."""
 
-    def set_members(self, process: OUProcess, gusts: list[np.ndarray]) -> None:
+    def set_members(self, process: OUProcess, gusts: _MemberGusts) -> None:
         self.process = process
         self._gusts = gusts
-        self.gust_start_s = np.zeros(1 if any(np.any(g) for g in gusts) else 0)
-        self.cursor = 0
+        self.gust_start_s = gusts.start_s
 
     def gusts_rad(self, t_s: np.ndarray) -> np.ndarray:
-        return self._gusts[self.cursor]
+        return self._gusts(t_s)
 
 
 class _MemberWorld(World):
@@ -364,6 +425,36 @@ def fit_rows(columns: dict[str, np.ndarray], terms: Sequence[str], name: str):
         return None
 
 
+class _MemberRun:
+    """Members integrating a schedule one integration at a time, in time order (the slow
+    errors' fixed point and the OU processes carry from one integration to the next)."""
+
+    def __init__(self, world: _MemberWorld, n_members: int, channels: tuple[str, ...]):
+        self.world = world
+        self.channels = channels
+        self.error = (np.zeros(n_members), np.zeros(n_members))
+        self._empty = np.zeros((0, n_members, len(channels)))
+        self.power: list[np.ndarray] = []
+        self.std: list[np.ndarray] = []
+
+    def integrate(self, t: np.ndarray, enc_az: np.ndarray, enc_el: np.ndarray,
+                  state: PointingState, paths: list) -> None:
+        """One integration of the schedule (a :class:`SharedSchedule` entry)."""
+        member_paths = [(i, az[:, None], el[:, None]) for i, az, el in paths]
+        samples, self.error = self.world.sample_powers(t, enc_az[:, None], enc_el[:, None],
+                                                       replace(state), member_paths,
+                                                       self.error, self.channels)
+        self.power.append(samples.mean(axis=0))
+        self.std.append(samples.std(axis=0, ddof=1) if t.size > 1
+                        else np.zeros(samples.shape[1:]))
+
+    def result(self) -> tuple[np.ndarray, np.ndarray]:
+        """Mean power and sample std (K), shape (integrations, members, channels)."""
+        if not self.power:
+            return self._empty, self._empty
+        return np.stack(self.power), np.stack(self.std)
+
+
 @dataclass
 class MemberEngine:
     """Simulates members of one variant on its shared schedule.
@@ -442,14 +533,11 @@ class MemberEngine:
 
     # ------------------------------------------------------------------ simulation
     def _effects(self, seeds: Sequence[int], quiet: bool, slow_only: bool = False
-                 ) -> tuple[list, list, _MemberJitter | None]:
+                 ) -> tuple[list, list]:
         """Slow and fast effects of the members ``seeds`` with a member axis."""
-        sh = self.shared
         views = [self._view(s, quiet) for s in seeds]
         slow: list = [self.reference.geometry]
         fast: list = []
-        jitter: _MemberJitter | None = None
-        offsets = np.concatenate([[0], np.cumsum([t.size for t in sh.t])])
         for kind, i, spec in self._kinds:
             params = {**spec.params, **(QUIET_PARAMS.get(spec.name, {}) if quiet else {})}
             spec_m = EffectSpec(spec.name, params)
@@ -458,89 +546,66 @@ class MemberEngine:
             elif kind == "member":
                 slow.append(_stack([self._started(i, spec_m, s, v)
                                     for s, v in zip(seeds, views, strict=True)]))
-            elif not slow_only:  # tracking jitter
-                flat_t = np.concatenate(sh.t)
-                n_members = len(seeds)
-                stacked = np.zeros((offsets[-1], n_members, 2))
-                stacked_g = np.zeros((offsets[-1], n_members, 2))
-                for j, (s, v) in enumerate(zip(seeds, views, strict=True)):
+            elif not slow_only:  # tracking jitter: each member's generator continues after
+                members, generators = [], []  # its start (the gusts) with the OU draws
+                for s, v in zip(seeds, views, strict=True):
                     rng = component_rng(s, f"effect:{i}:{spec.name}")
                     effect = TrackingJitter(**params)
-                    effect.start(v, rng)  # draws the member's gusts
-                    if not quiet:
-                        stacked[:, j] = rng.standard_normal((offsets[-1], 2))
-                    if effect.gust_start_s.size:
-                        stacked_g[:, j] = effect.gusts_rad(flat_t)
+                    effect.start(v, rng)
+                    members.append(effect)
+                    generators.append(rng)
                 jitter = _MemberJitter(**params)
                 jitter.start(views[0], np.random.default_rng(0))
-                blocks: list = ([None] * (offsets.size - 1) if quiet
-                                else [stacked[a:b] for a, b in pairwise(offsets)])
                 jitter.set_members(
-                    OUProcess(_Replay(blocks), np.ones((n_members, 2)), jitter.p["timescale_s"]),
-                    [stacked_g[a:b] for a, b in pairwise(offsets)])
+                    OUProcess(_MemberDraws(None if quiet else generators),
+                              np.ones((len(seeds), 2)), jitter.p["timescale_s"]),
+                    _MemberGusts(members))
                 fast.append(jitter)
-        return slow, fast, jitter
+        return slow, fast
 
     def _receiver(self, seeds: Sequence[int], quiet: bool) -> Receiver:
-        """The receiver of the members ``seeds``, replaying their own draws."""
-        sh = self.shared
+        """The receiver of the members ``seeds``, each drawing from its own generator."""
         cfg = self.scenario.receiver
-        n_ch, n_members = len(cfg.channels), len(seeds)
-        offsets = np.concatenate([[0], np.cumsum([t.size for t in sh.t])])
-        if quiet:
-            blocks: list = [None] * (2 * (offsets.size - 1))
-        else:
-            z = np.empty((2 * offsets[-1] * n_ch, n_members))
-            for j, s in enumerate(seeds):
-                z[:, j] = component_rng(s, "receiver").standard_normal(2 * offsets[-1] * n_ch)
-            blocks = []
-            for a, b in pairwise(offsets):
-                chunk = z[2 * a * n_ch:2 * b * n_ch].reshape(2, b - a, n_ch, n_members)
-                blocks += [chunk[0].transpose(0, 2, 1), chunk[1].transpose(0, 2, 1)]
-        replay = _Replay(blocks)
-        receiver = Receiver(cfg, replay)
+        draws = _MemberDraws(None if quiet else [component_rng(s, "receiver") for s in seeds])
+        receiver = Receiver(cfg, draws)
         rms = np.array([cfg.gain_fluctuation if c.gain_fluctuation is None else
                         c.gain_fluctuation for c in cfg.channels])
-        receiver._gain = OUProcess(replay, np.tile(0.0 * rms if quiet else rms, (n_members, 1)),
+        receiver._gain = OUProcess(draws, np.tile(0.0 * rms if quiet else rms, (len(seeds), 1)),
                                    cfg.gain_timescale_s)
         return receiver
+
+    def member_run(self, seeds: Sequence[int] | None, *, nudges: tuple | None = None,
+                   quiet: bool = False) -> _MemberRun:
+        """The members of the given seeds, ready to integrate the schedule in time order.
+        ``quiet``: every random part off (the deterministic simulation, with one member per
+        ``nudges`` entry); ``nudges``: (xel_rad, el_rad) arrays (members,) of constant extra
+        pointing error."""
+        n_members = len(seeds) if seeds is not None else len(nudges[0])
+        if quiet:
+            seeds = [0] * n_members
+        slow, fast = self._effects(seeds, quiet)
+        if nudges is not None:
+            fast.append(_Nudge(*nudges))
+        world = _MemberWorld(self.reference, slow, fast, self._receiver(seeds, quiet))
+        return _MemberRun(world, n_members, self.shared.channels)
 
     def simulate(self, seeds: Sequence[int] | None, *, nudges: tuple | None = None,
                  quiet: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """Mean power and sample std (K) of every integration, shape (integrations, members,
-        channels), for members of the given seeds. ``quiet``: every random part off (the
-        deterministic simulation, with one member per ``nudges`` entry); ``nudges``:
-        (xel_rad, el_rad) arrays (members,) of constant extra pointing error."""
+        channels), for members of the given seeds (``nudges``, ``quiet``: see
+        :meth:`member_run`)."""
         sh = self.shared
-        n_members = len(seeds) if seeds is not None else len(nudges[0])
-        if quiet:
-            seeds = [0] * n_members
-        slow, fast, jitter = self._effects(seeds, quiet)
-        if nudges is not None:
-            fast.append(_Nudge(*nudges))
-        world = _MemberWorld(self.reference, slow, fast, self._receiver(seeds, quiet))
-        n_int, n_ch = sh.n_integrations, len(sh.channels)
-        power = np.empty((n_int, n_members, n_ch))
-        std = np.empty((n_int, n_members, n_ch))
-        error = (np.zeros(n_members), np.zeros(n_members))
-        for k in range(n_int):
-            if jitter is not None:
-                jitter.cursor = k
-            t = sh.t[k]
-            paths = [(i, az[:, None], el[:, None]) for i, az, el in sh.paths[k]]
-            samples, error = world.sample_powers(t, sh.enc_az[k][:, None], sh.enc_el[k][:, None],
-                                                 replace(sh.state[k]), paths, error,
-                                                 sh.channels)
-            power[k] = samples.mean(axis=0)
-            std[k] = samples.std(axis=0, ddof=1) if t.size > 1 else 0.0
-        return power, std
+        run = self.member_run(seeds, nudges=nudges, quiet=quiet)
+        for k in range(sh.n_integrations):
+            run.integrate(sh.t[k], sh.enc_az[k], sh.enc_el[k], sh.state[k], sh.paths[k])
+        return run.result()
 
     def slow_errors(self, seeds: Sequence[int], quiet: bool = False) -> np.ndarray:
         """The slowly varying pointing errors of members ``seeds`` at every integration, on
         the sky: (members, integrations, 2) xel and el (arcsec), indicated - true."""
         sh = self.shared
         n_members = len(seeds)
-        slow, _, _ = self._effects(seeds, quiet, slow_only=True)
+        slow, _ = self._effects(seeds, quiet, slow_only=True)
         world = _MemberWorld(self.reference, slow, [], None)
         out = np.empty((n_members, sh.n_integrations, 2))
         error = (np.zeros(n_members), np.zeros(n_members))
