@@ -13,6 +13,7 @@ says why).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 
 import numpy as np
@@ -46,7 +47,15 @@ def shared_schedule_columns(scenario, seeds: Sequence[int], jobs: int = 1
         engine = MemberEngine(scenario, shared, reference, (), "baseline")
         if engine.unshareable:
             return {}
-        power, std = stream.result() if stream else engine.simulate(list(seeds))
+        power = std = None
+        if stream is not None:
+            try:
+                power, std = stream.result()
+            except RuntimeError as err:  # the same numbers, only later
+                warnings.warn(f"{err}; simulating the baseline's members in this process",
+                              RuntimeWarning, stacklevel=2)
+        if power is None:
+            power, std = engine.simulate(list(seeds))
     finally:
         if stream is not None:
             stream.close()

@@ -129,7 +129,9 @@ class MemberStream:
         self._inbox.put((scenario, quiet, [int(s) for s in seeds]))
 
     def send(self, **item: Any) -> None:
-        """One recorded integration (the antenna recorder's keywords)."""
+        """One recorded integration (the antenna recorder's keywords). The queue pickles
+        it later, in its own thread: the arrays and state must not change afterwards (the
+        world hands the recorder fresh ones, which the shared schedule keeps too)."""
         self._batch.append({k: item[k] for k in ("t", "enc_az", "enc_el", "state", "paths")})
         if len(self._batch) >= BATCH:
             self._inbox.put(self._batch)
