@@ -194,8 +194,8 @@ def test_streamed_members_equal_the_members_on_the_finished_schedule(short_engin
 
 
 def test_a_failing_members_process_is_an_error_not_a_hang(short_engine):
-    """A broken schedule item reaches the members' process, which reports its failure; the
-    parent raises it instead of waiting forever."""
+    """A broken schedule item reaches the members' process, which reports its failure, and
+    a killed process sends nothing: either way the parent raises instead of waiting forever."""
     from antsim.plan.streaming import MemberStream
 
     scenario, engine = short_engine
@@ -203,6 +203,11 @@ def test_a_failing_members_process_is_an_error_not_a_hang(short_engine):
         stream.send(t=np.arange(3.0), enc_az=np.zeros(2), enc_el=np.zeros(3),
                     state=engine.shared.state[0], paths=[])
         with pytest.raises(RuntimeError, match="members' process failed"):
+            stream.result()
+    with MemberStream(scenario, quiet_scenario(scenario), [1, 2]) as stream:
+        stream._process.terminate()  # killed: no result will ever come
+        stream._process.join()
+        with pytest.raises(RuntimeError, match="ended without a result"):
             stream.result()
 
 

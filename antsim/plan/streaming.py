@@ -145,11 +145,12 @@ class MemberStream:
             self._batch = []
         self._inbox.put(None)
         while True:
-            try:
+            alive = self._process.is_alive()  # before the wait: a result sent just before
+            try:                              # the end is still read
                 status, *payload = self._outbox.get(timeout=POLL_S)
                 break
             except queue.Empty:
-                if not self._process.is_alive():
+                if not alive:
                     raise RuntimeError("the members' process ended without a result "
                                        f"(exit code {self._process.exitcode})") from None
         if status != "ok":
