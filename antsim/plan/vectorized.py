@@ -36,6 +36,7 @@ milliseconds; the shared schedule keeps the quiet run's, which changes no pointi
 from __future__ import annotations
 
 import copy
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
@@ -242,18 +243,8 @@ class _MemberDraws:
 
     def __init__(self, generators: Sequence[np.random.Generator] | None):
         self.generators = generators
-        self._buffers = [np.empty(0) for _ in generators or ()]
-        self._used = [0 for _ in generators or ()]
-
-    def _take(self, j: int, count: int) -> np.ndarray:
-        buffer, used = self._buffers[j], self._used[j]
-        if used + count > buffer.size:
-            buffer = np.concatenate([buffer[used:], self.generators[j].standard_normal(
-                max(count, self.CHUNK))])
-            used = 0
-            self._buffers[j] = buffer
-        self._used[j] = used + count
-        return buffer[used:used + count]
+        self._buffer = np.empty((len(generators or ()), 0))  # (members, drawn ahead)
+        self._used = 0
 
     def standard_normal(self, shape) -> np.ndarray:
         if self.generators is None:
@@ -261,11 +252,17 @@ class _MemberDraws:
         n, members, *rest = shape
         if members != len(self.generators):
             raise RuntimeError(f"draws for {members} members asked of {len(self.generators)}")
-        count = n * int(np.prod(rest, dtype=np.int64))
-        out = np.empty((n, members, *rest))
-        for j in range(members):
-            out[:, j] = self._take(j, count).reshape(n, *rest)
-        return out
+        count = n * math.prod(rest)
+        used = self._used
+        if used + count > self._buffer.shape[1]:  # every member takes the same count
+            ahead = max(count, self.CHUNK)
+            self._buffer = np.concatenate(
+                [self._buffer[:, used:],
+                 np.stack([g.standard_normal(ahead) for g in self.generators])], axis=1)
+            used = 0
+        self._used = used + count
+        block = self._buffer[:, used:used + count]
+        return block.reshape(members, n, *rest).swapaxes(0, 1).copy()  # C order, as drawn
 
 
 class _MemberGusts:
