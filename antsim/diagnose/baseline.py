@@ -278,12 +278,11 @@ class SimulatedBaseline:
                 except (OSError, KeyError, ValueError):
                     pass
             todo.append(seed)
-        streams = bool(todo) and self.scenario.controller.method == "five_point"
-        if not streams:
+        if not todo or self.scenario.controller.method != "five_point":
             from ..plan.streaming import release_prestarted
 
-            release_prestarted()
-        if streams:
+            release_prestarted()  # no members to stream (antsim diagnose started one)
+        else:
             from .fastsim import shared_schedule_columns
 
             shared = shared_schedule_columns(self.scenario, todo, self.jobs)
