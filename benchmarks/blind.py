@@ -18,7 +18,10 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
+import shutil
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -253,10 +256,6 @@ def real(args) -> None:
 def _command_seconds(argv: list[str], cache: str, cold: bool) -> float:
     """Wall time of one ``antsim`` command (Python start-up included), with the baseline
     cache ``cache`` emptied first when ``cold``."""
-    import os
-    import shutil
-    import subprocess
-
     if cold:
         shutil.rmtree(cache, ignore_errors=True)
     t0 = time.perf_counter()
@@ -271,8 +270,6 @@ def speed(args) -> None:
     the baseline cached, and of the TPOINT path."""
     scenario = load_scenario(SCENARIO)
     with tempfile.TemporaryDirectory() as tmp:
-        import subprocess
-
         subprocess.run([sys.executable, "-m", "antsim", "run", str(SCENARIO), "--out",
                         f"{tmp}/run", "--seed", "4242", "--no-report"], check=True,
                        stdout=subprocess.DEVNULL)

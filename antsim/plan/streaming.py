@@ -104,6 +104,7 @@ def prestart(jobs: int) -> None:
         import atexit
 
         _PRESTARTED = _Helper()
+        atexit.unregister(release_prestarted)  # once, however often this is called
         atexit.register(release_prestarted)
 
 
