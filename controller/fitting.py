@@ -46,7 +46,13 @@ import numpy as np
 import scipy.linalg
 from scipy.optimize import linprog
 
-from .jackknife import JackknifeResult, Rejection, cluster_jackknife, within_rms
+from .jackknife import (
+    BLOCK_PHASES,
+    JackknifeResult,
+    Rejection,
+    cluster_jackknife,
+    within_rms,
+)
 from .model import NAMED_MODELS, PointingModel
 from .terms import Term
 
@@ -214,8 +220,8 @@ class FitResult:
     ``sigma_honest_arcsec``: honest error bars of the same coefficients: the cluster
     jackknife (CV3) standard error ``sigma_jackknife_arcsec`` times sqrt(nu / (nu - 2)), nu
     its Satterthwaite degrees of freedom ``honest_dof`` (see :mod:`controller.jackknife`),
-    so that (error / sigma_honest) spreads by 1; ``honest_clusters`` the clusters used.
-    These are computed on first use.
+    so that (error / sigma_honest) spreads by 1; ``honest_clusters`` the clusters used,
+    ``honest_phases`` the time-block grids averaged. These are computed on first use.
     """
 
     model: PointingModel
@@ -270,6 +276,12 @@ class FitResult:
         return 0 if j is None else j.clusters
 
     @property
+    def honest_phases(self) -> int:
+        """Time-block grids whose jackknife variances were averaged (1 without times)."""
+        j = self._jackknife
+        return 0 if j is None else j.phases
+
+    @property
     def names(self) -> tuple[str, ...]:
         return self.model.names
 
@@ -305,6 +317,9 @@ class FitResult:
                 "method": "cluster jackknife (CV3) of the same least-squares coefficients, "
                           "clusters = observations"
                           + (f" within {self.honest_block_s:g} s time blocks"
+                             + (f", variances averaged over {self.honest_phases} block grids "
+                                f"shifted by 1/{self.honest_phases} block"
+                                if self.honest_phases > 1 else "")
                              if self.honest_block_s else "")
                           + (", scaled by the mean variance ratio of replicates that repeat the "
                              "fit's outlier rejection" if self.robust and self.honest_block_s
@@ -616,6 +631,7 @@ def fit_model(
     lad_factor: float = 4.0,
     rms_factor: float = 3.0,
     block_s: float = 3600.0,
+    block_phases: int = BLOCK_PHASES,
 ) -> FitResult:
     """Fit the linear pointing terms ``terms`` to ``data``; see the module docstring.
 
@@ -629,7 +645,9 @@ def fit_model(
     which is sqrt(2) times the per-equation scatter for isotropic errors and ignores that xel
     and el residuals differ); with ``data.t_s`` the observations are further grouped in time
     blocks of ``block_s`` so that residuals correlated over minutes to an hour (thermal drifts,
-    slow wander) are allowed for. With so few clusters the jackknife variance is itself noisy
+    slow wander) are allowed for; the variance is the mean over ``block_phases`` block grids,
+    each shifted by 1/``block_phases`` of a block (less noisy than one grid, the same
+    expectation). With so few clusters the jackknife variance is itself noisy
     and (error / sigma) follows a t distribution: ``sigma_honest_arcsec`` is the jackknife
     sigma times sqrt(nu / (nu - 2)), nu its Satterthwaite degrees of freedom, the spread of
     that t distribution (:mod:`controller.jackknife`). A robust fit's rejection makes the
@@ -637,9 +655,9 @@ def fit_model(
     replays the last rejection in each replicate and scales the variances by the mean ratio.
 
     Raises ``ValueError`` (plain sentence) for no observations, fewer used observations than
-    terms, invalid factors, ``weighted=True`` without weights, or a term that is infinite at
-    an observation (e.g. TX at elevation 0, CA at 90 deg). Unknown term names raise
-    :class:`~controller.terms.TermError`.
+    terms, invalid factors or ``block_phases``, ``weighted=True`` without weights, or a term
+    that is infinite at an observation (e.g. TX at elevation 0, CA at 90 deg). Unknown term
+    names raise :class:`~controller.terms.TermError`.
     """
     if not isinstance(data, PointingData):
         raise TypeError(f"data must be a PointingData, not {type(data).__name__}")
@@ -654,6 +672,8 @@ def fit_model(
     for label, factor in (("lad_factor", lad_factor), ("rms_factor", rms_factor)):
         if not (math.isfinite(factor) and factor > 0):
             raise ValueError(f"{label} must be a positive number, not {factor!r}")
+    if isinstance(block_phases, bool) or not isinstance(block_phases, int) or block_phases < 1:
+        raise ValueError(f"block_phases must be a whole number >= 1, not {block_phases!r}")
     if weighted and not data.weighted:
         raise ValueError("weighted=True needs weight_xel and weight_el in the data")
     if n < m:
@@ -735,7 +755,8 @@ def fit_model(
     sigma = np.sqrt(np.diag(sol.cov_unscaled)) * scale
     honest_source = partial(cluster_jackknife, a_w, y_w - _matvec(a_w, coeffs), used,
                             list(sol.rank.kept), n, data.t_s, block_s,
-                            Rejection(kept_lad, rms_factor, floor, y_w) if robust else None)
+                            Rejection(kept_lad, rms_factor, floor, y_w) if robust else None,
+                            block_phases)
     with np.errstate(invalid="ignore", divide="ignore"):
         sd = np.sqrt(np.diag(sol.cov_unscaled))
         corr = sol.cov_unscaled / np.outer(sd, sd)

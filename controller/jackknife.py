@@ -19,6 +19,16 @@ value (Bell and McCaffrey 2002; Imbens and Kolesar 2016): V_j is the quadratic f
 K_j is diagonal plus rank 2k, so both traces are accumulated cluster by cluster in O(G k^2)
 per coefficient without forming it (one-observation clusters make G the number of
 observations).
+
+Time blocks on several grids. Where the clock puts the block edges is arbitrary, and with
+~24 blocks one grid's variance is noisy: over 200 campaigns of ghigo1990 without heating its
+effective dof (2 E[V]^2 / Var V) was 9-13. The variance is therefore the mean over
+``BLOCK_PHASES`` grids shifted by a quarter block each (overlapping batch means, Meketon and
+Schmeiser 1984: the same expectation, a smaller spread): effective dof 12-17 on the same
+campaigns. The reported dof is the mean of the grids' Satterthwaite values (15-20 there).
+The mean's own Satterthwaite value would be higher still, and the measured effective dof
+lie below even the single grid's value (the errors are neither Gaussian nor of one
+variance, as the working model assumes), so the t widening keeps the single grid's.
 """
 
 from __future__ import annotations
@@ -32,17 +42,23 @@ __all__ = ["JackknifeResult", "Rejection", "cluster_jackknife", "within_rms"]
 
 #: clusters per batch of the k x k inversions (bounds memory at ~k*k*8 kB per 1000)
 _CHUNK = 4096
+#: elements of the (blocks, observations) arrays of one batch of rejection replays
+_BATCH_ELEMENTS = 2_000_000
+#: time-block grids averaged, each shifted by a fraction 1/BLOCK_PHASES of a block
+BLOCK_PHASES = 4
 
 
 @dataclass(frozen=True)
 class JackknifeResult:
     """Per fitted term (NaN for terms not fitted): the CV3 jackknife standard error
     ``sigma`` (same unit as the coefficients), its Satterthwaite degrees of freedom ``dof``,
-    and ``clusters`` used."""
+    the ``clusters`` used (of the unshifted block grid) and the number of block grids
+    (``phases``) whose variances were averaged."""
 
     sigma: np.ndarray
     dof: np.ndarray
     clusters: int
+    phases: int = 1
 
     @property
     def sigma_t_scaled(self) -> np.ndarray:
@@ -79,15 +95,22 @@ def within_rms(abs_x: np.ndarray, abs_e: np.ndarray, used: np.ndarray, factor: f
 
 def cluster_jackknife(a: np.ndarray, r: np.ndarray, used: np.ndarray, kept: list[int],
                       n: int, t_s: np.ndarray | None, block_s: float,
-                      rejection: Rejection | None = None) -> JackknifeResult:
+                      rejection: Rejection | None = None,
+                      phases: int = BLOCK_PHASES) -> JackknifeResult:
     """Jackknife sigma and dof of the least-squares coefficients of design ``a`` (2n x m,
     xel rows then el rows) with residuals ``r`` (2n,), over the ``used`` observations and the
     fitted (``kept``) columns. Clusters: one per observation when ``t_s`` is None, else the
     observations in each ``block_s`` time block.
 
+    Time blocks: the variance is the mean of the jackknife variances of ``phases`` block
+    grids, each shifted by ``block_s / phases`` from the last (the overlapping-batch idea of
+    Meketon and Schmeiser 1984): each grid is as honest about correlations shorter than a
+    block, and their mean is less noisy than any one. The dof are the mean of the grids'
+    Satterthwaite values (see the module docstring for why that is kept).
+
     ``rejection``: the fit rejected outliers. A fit that keeps only residuals within 3 rms
     varies more than its kept residuals say (the window moves with the data: ~5% in sigma
-    for 1990-like data), so with time blocks the variance is scaled by
+    for 1990-like data), so with time blocks each grid's variance is scaled by
     :func:`_rejection_factor`, which replays the rejection in every replicate. The dof stay
     those of the linear estimator on the kept observations."""
     m = a.shape[1]
@@ -96,69 +119,112 @@ def cluster_jackknife(a: np.ndarray, r: np.ndarray, used: np.ndarray, kept: list
     idx = np.flatnonzero(used)
     if not kept or idx.size <= len(kept):
         return JackknifeResult(sigma, dof, 0)
-    if t_s is None:
-        cluster = np.arange(idx.size)
-    else:
-        _, cluster = np.unique(np.floor(t_s[idx] / block_s), return_inverse=True)
-    g = int(cluster.max()) + 1
-    if g < 2:
-        return JackknifeResult(sigma, dof, g)
+    if t_s is not None and phases < 1:
+        raise ValueError(f"phases must be at least 1, not {phases!r}")
     fitted = a if len(kept) == m else a[:, kept]
     # row-major: the per-observation products below run along rows (the fitter's design is
     # column-major for LAPACK)
     rows_x, rows_e = np.ascontiguousarray(fitted[idx]), np.ascontiguousarray(fitted[n + idx])
     res_x, res_e = r[idx], r[n + idx]
-    k = len(kept)
     info = rows_x.T @ rows_x + rows_e.T @ rows_e
     bread = np.linalg.inv(info)  # the kept columns are independent
     # working model of the errors: independent, with each axis' own scatter
     var_x, var_e = float(np.mean(res_x**2)), float(np.mean(res_e**2))
     if var_x + var_e == 0.0:  # noise-free data: nu does not depend on a common scale
         var_x = var_e = 1.0
-    dofs = _DofSums(bread, var_x * rows_x.T @ rows_x + var_e * rows_e.T @ rows_e)
-
-    cov = np.zeros((k, k))
-    singles = _single_observation_rows(rows_x, rows_e, bread) if t_s is None else None
-    if singles is not None:
-        bx, be = singles  # a_x^T M_g^-1 and a_e^T M_g^-1 for each observation's M_g
-        for lo in range(0, g, _CHUNK):
-            s = slice(lo, min(g, lo + _CHUNK))
-            delta = -(bx[s] * res_x[s, None] + be[s] * res_e[s, None])
-            cov += delta.T @ delta
-            dofs.add_single_observations(rows_x[s], rows_e[s], bx[s], be[s], var_x, var_e)
+    a_omega_a = var_x * rows_x.T @ rows_x + var_e * rows_e.T @ rows_e
+    if t_s is None:
+        g = idx.size
+        if g < 2:
+            return JackknifeResult(sigma, dof, g)
+        cov, nu = _single_observation_pass(rows_x, rows_e, res_x, res_e, info, bread,
+                                           a_omega_a, var_x, var_e)
+        phases = 1
     else:
-        # per-cluster score A_g^T r_g and information A_g^T A_g
-        score = rows_x * res_x[:, None] + rows_e * res_e[:, None]
-        score_g = np.zeros((g, k))
-        np.add.at(score_g, cluster, score)
-        for lo in range(0, g, _CHUNK):
-            hi = min(g, lo + _CHUNK)
-            mine = (cluster >= lo) & (cluster < hi)
-            c = cluster[mine] - lo
-            info_g = np.zeros((hi - lo, k, k))
-            np.add.at(info_g, c, rows_x[mine, :, None] * rows_x[mine, None, :]
-                      + rows_e[mine, :, None] * rows_e[mine, None, :])
-            inverse = _invert_stack(info[None] - info_g)  # M_g^-1, M_g = A^T A - A_g^T A_g
-            delta = -np.einsum("gij,gj->gi", inverse, score_g[lo:hi])
-            cov += delta.T @ delta
-            bx = np.einsum("oi,oij->oj", rows_x[mine], inverse[c])
-            be = np.einsum("oi,oij->oj", rows_e[mine], inverse[c])
-            p, q, d = _cluster_sums(rows_x[mine], rows_e[mine], bx, be, var_x, var_e)
-            dofs.add(*(_sum_by(x, c, hi - lo) for x in (p, q, d)))
-    if rejection is not None and t_s is not None:
-        cov = cov * _rejection_factor(a if len(kept) == m else a[:, kept], n, t_s, block_s,
-                                      rejection, np.diag(cov) * (g - 1) / g)
-    cov *= (g - 1) / g
+        covs, nus, g = [], [], 0
+        obs_outer = (rows_x[:, :, None] * rows_x[:, None, :]
+                     + rows_e[:, :, None] * rows_e[:, None, :])
+        replay = _Replay(fitted, n, rejection) if rejection is not None else None
+        for p in range(phases):
+            shift_s = p * block_s / phases
+            _, cluster = np.unique(np.floor((t_s[idx] - shift_s) / block_s),
+                                   return_inverse=True)
+            g_p = int(cluster.max()) + 1
+            if g_p < 2:
+                continue
+            cov_p, nu_p = _block_pass(rows_x, rows_e, res_x, res_e, info, bread, a_omega_a,
+                                      var_x, var_e, cluster, g_p, obs_outer)
+            if replay is not None:
+                cov_p = cov_p * _rejection_factor(replay, t_s - shift_s, block_s,
+                                                  np.diag(cov_p))
+            covs.append(cov_p)
+            nus.append(nu_p)
+            g = g or g_p  # the unshifted grid's count is the one reported
+        if not covs:
+            return JackknifeResult(sigma, dof, g_p)
+        cov, nu = np.mean(covs, axis=0), np.mean(nus, axis=0)
+        phases = len(covs)
     sigma[kept] = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    dof[kept] = dofs.dof()
-    return JackknifeResult(sigma, dof, g)
+    dof[kept] = nu
+    return JackknifeResult(sigma, dof, g, phases)
 
 
-def _rejection_factor(fitted: np.ndarray, n: int, t_s: np.ndarray, block_s: float,
-                      rejection: Rejection, linear_var: np.ndarray) -> float:
+def _single_observation_pass(rows_x, rows_e, res_x, res_e, info, bread, a_omega_a,
+                             var_x: float, var_e: float) -> tuple[np.ndarray, np.ndarray]:
+    """CV3 covariance (with its (G-1)/G) and Satterthwaite dof for one-observation
+    clusters: the Woodbury fast path, else the general one with each observation alone."""
+    g = rows_x.shape[0]
+    singles = _single_observation_rows(rows_x, rows_e, bread)
+    if singles is None:
+        return _block_pass(rows_x, rows_e, res_x, res_e, info, bread, a_omega_a, var_x,
+                           var_e, np.arange(g), g)
+    k = rows_x.shape[1]
+    cov = np.zeros((k, k))
+    dofs = _DofSums(bread, a_omega_a)
+    bx, be = singles  # a_x^T M_g^-1 and a_e^T M_g^-1 for each observation's M_g
+    for lo in range(0, g, _CHUNK):
+        s = slice(lo, min(g, lo + _CHUNK))
+        delta = -(bx[s] * res_x[s, None] + be[s] * res_e[s, None])
+        cov += delta.T @ delta
+        dofs.add_single_observations(rows_x[s], rows_e[s], bx[s], be[s], var_x, var_e)
+    return cov * (g - 1) / g, dofs.dof()
+
+
+def _block_pass(rows_x, rows_e, res_x, res_e, info, bread, a_omega_a, var_x: float,
+                var_e: float, cluster: np.ndarray, g: int,
+                obs_outer: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """CV3 covariance (with its (G-1)/G) and Satterthwaite dof for the ``g`` clusters
+    ``cluster`` (per observation, 0..g-1); ``obs_outer``: each observation's A_o^T A_o
+    when the caller has them."""
+    k = rows_x.shape[1]
+    cov = np.zeros((k, k))
+    dofs = _DofSums(bread, a_omega_a)
+    # per-cluster score A_g^T r_g and information A_g^T A_g
+    score = rows_x * res_x[:, None] + rows_e * res_e[:, None]
+    score_g = _group_sum(score, cluster, g)
+    for lo in range(0, g, _CHUNK):
+        hi = min(g, lo + _CHUNK)
+        mine = (cluster >= lo) & (cluster < hi)
+        c = cluster[mine] - lo
+        own = (obs_outer[mine] if obs_outer is not None
+               else rows_x[mine, :, None] * rows_x[mine, None, :]
+               + rows_e[mine, :, None] * rows_e[mine, None, :])
+        info_g = _group_sum(own, c, hi - lo)
+        inverse = _invert_stack(info[None] - info_g)  # M_g^-1, M_g = A^T A - A_g^T A_g
+        delta = -np.einsum("gij,gj->gi", inverse, score_g[lo:hi])
+        cov += delta.T @ delta
+        bx = np.einsum("oi,oij->oj", rows_x[mine], inverse[c])
+        be = np.einsum("oi,oij->oj", rows_e[mine], inverse[c])
+        p, q, d = _cluster_sums(rows_x[mine], rows_e[mine], bx, be, var_x, var_e)
+        dofs.add(*(_sum_by(x, c, hi - lo) for x in (p, q, d)))
+    return cov * (g - 1) / g, dofs.dof()
+
+
+def _rejection_factor(replay: _Replay, t_s: np.ndarray, block_s: float,
+                      linear_var: np.ndarray) -> float:
     """How much the rejection widens the jackknife variance, one factor for all terms: the
     mean over terms of (jackknife variance with the rejection replayed in each replicate,
-    :func:`_replayed_variance`) / ``linear_var`` (the linear jackknife's, same blocks).
+    :meth:`_Replay.variance`) / ``linear_var`` (the linear jackknife's, same blocks).
 
     Why pooled: the replayed variances alone are right on average but jumpy (a point
     crossing the threshold moves a replicate by a step), so their spread across campaigns
@@ -167,50 +233,77 @@ def _rejection_factor(fitted: np.ndarray, n: int, t_s: np.ndarray, block_s: floa
     computed) and corrects the common scale. Over seeds 201..400 of ghigo1990 without heating
     the pulls' spread went from 1.03-1.14 to 0.93-1.04 and the fraction within 3 sigma from
     98-100% to 99.5-100% (seeds 1..200, on which the form was chosen: README)."""
-    replayed = _replayed_variance(fitted, n, t_s, block_s, rejection)
+    replayed = replay.variance(t_s, block_s)
     ok = np.isfinite(replayed) & np.isfinite(linear_var) & (linear_var > 0)
     return float(np.mean(replayed[ok] / linear_var[ok])) if ok.any() else 1.0
 
 
-def _replayed_variance(fitted: np.ndarray, n: int, t_s: np.ndarray, block_s: float,
-                       rejection: Rejection) -> np.ndarray:
-    """CV3 jackknife variance per term ``(G-1)/G sum_g (b_g - b)^2``, where b repeats the
-    robust fit's last stage (least squares on the observations the LAD stage kept, rejection
-    beyond ``rms_factor`` x each axis' rms, least squares) and b_g does the same without
-    time block g (G blocks). Normal equations, downdated by the observations each step
-    removes."""
-    ax, ae = fitted[:n], fitted[n:]
-    y = rejection.target
-    yx, ye = y[:n], y[n:]
-    lad = rejection.kept_lad
-    _, block = np.unique(np.floor(t_s / block_s), return_inverse=True)
+class _Replay:
+    """The robust fit's last stage, repeated without each time block: least squares on the
+    observations the LAD stage kept, rejection beyond ``rms_factor`` x each axis' rms, least
+    squares. Normal equations, downdated by the observations each step removes; the
+    per-observation products are shared by every block grid."""
 
-    def sums(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        mx, me = ax[mask], ae[mask]
-        return mx.T @ mx + me.T @ me, mx.T @ yx[mask] + me.T @ ye[mask]
+    def __init__(self, fitted: np.ndarray, n: int, rejection: Rejection) -> None:
+        self.ax, self.ae = fitted[:n], fitted[n:]
+        y = rejection.target
+        self.yx, self.ye = y[:n], y[n:]
+        self.rejection = rejection
+        ax, ae = self.ax, self.ae
+        self.outer = ax[:, :, None] * ax[:, None, :] + ae[:, :, None] * ae[:, None, :]
+        self.rhs = ax * self.yx[:, None] + ae * self.ye[:, None]
+        lad = rejection.kept_lad
+        self.info1, self.score1 = self.outer[lad].sum(axis=0), self.rhs[lad].sum(axis=0)
+        self.full = self._last_stage(lad[None, :], self.info1[None], self.score1[None])[0]
 
-    def solve(info: np.ndarray, score: np.ndarray) -> np.ndarray:
-        try:
-            return np.linalg.solve(info, score)
-        except np.linalg.LinAlgError:  # the block alone constrains a term
-            return np.linalg.lstsq(info, score, rcond=None)[0]
+    def variance(self, t_s: np.ndarray, block_s: float) -> np.ndarray:
+        """CV3 jackknife variance per term ``(G-1)/G sum_g (b_g - b)^2`` over the
+        ``block_s`` time blocks of ``t_s`` (G blocks), b the full fit's last stage and b_g
+        the same without block g; all blocks of a batch at once."""
+        lad = self.rejection.kept_lad
+        n = lad.size
+        _, block = np.unique(np.floor(t_s / block_s), return_inverse=True)
+        blocks = np.unique(block[lad])
+        slot = np.searchsorted(blocks, block[lad])
+        info = self.info1[None] - _group_sum(self.outer[lad], slot, blocks.size)
+        score = self.score1[None] - _group_sum(self.rhs[lad], slot, blocks.size)
+        b = np.empty((blocks.size, self.info1.shape[0]))
+        batch = max(1, _BATCH_ELEMENTS // max(n, 1))  # bounds the (batch, n) arrays
+        for lo in range(0, blocks.size, batch):
+            s = slice(lo, lo + batch)
+            first = lad[None, :] & (block[None, :] != blocks[s, None])
+            b[s] = self._last_stage(first, info[s], score[s])
+        var = ((b - self.full) ** 2).sum(axis=0)
+        return var * (blocks.size - 1) / max(blocks.size, 1)
 
-    def last_stage(first: np.ndarray, info: np.ndarray, score: np.ndarray) -> np.ndarray:
-        b = solve(info, score)
-        kept = within_rms(np.abs(yx - ax @ b), np.abs(ye - ae @ b), first,
-                          rejection.rms_factor, rejection.floor)
-        info_d, score_d = sums(first & ~kept)
-        return solve(info - info_d, score - score_d)
+    def _last_stage(self, first: np.ndarray, info: np.ndarray,
+                    score: np.ndarray) -> np.ndarray:
+        """Solutions after the rms rejection, one per row of ``first`` (the observations
+        each replicate starts from) with its normal equations ``info``, ``score``."""
+        rej = self.rejection
+        b0 = _solve_stack(info, score)
+        abs_x = np.abs(self.yx[None, :] - b0 @ self.ax.T)
+        abs_e = np.abs(self.ye[None, :] - b0 @ self.ae.T)
+        count = first.sum(axis=1)
+        limit_x = np.maximum(rej.rms_factor * np.sqrt(
+            np.where(first, abs_x**2, 0.0).sum(axis=1) / count), rej.floor)
+        limit_e = np.maximum(rej.rms_factor * np.sqrt(
+            np.where(first, abs_e**2, 0.0).sum(axis=1) / count), rej.floor)
+        drop_g, drop_o = np.nonzero(first & ((abs_x > limit_x[:, None])
+                                             | (abs_e > limit_e[:, None])))
+        rows = b0.shape[0]
+        return _solve_stack(info - _group_sum(self.outer[drop_o], drop_g, rows),
+                            score - _group_sum(self.rhs[drop_o], drop_g, rows))
 
-    info1, score1 = sums(lad)
-    full = last_stage(lad, info1, score1)
-    blocks = np.unique(block[lad])
-    var = np.zeros(fitted.shape[1])
-    for g in blocks:
-        inside = lad & (block == g)
-        info_g, score_g = sums(inside)
-        var += (last_stage(lad & ~inside, info1 - info_g, score1 - score_g) - full) ** 2
-    return var * (blocks.size - 1) / max(blocks.size, 1)
+
+def _solve_stack(info: np.ndarray, score: np.ndarray) -> np.ndarray:
+    """Solve a stack of normal equations; a singular one (the block left out alone
+    constrained a term) by least squares."""
+    try:
+        return np.linalg.solve(info, score[..., None])[..., 0]
+    except np.linalg.LinAlgError:
+        return np.array([np.linalg.lstsq(m, v, rcond=None)[0] for m, v in zip(info, score,
+                                                                               strict=True)])
 
 
 def _single_observation_rows(rows_x: np.ndarray, rows_e: np.ndarray,
@@ -241,8 +334,18 @@ def _cluster_sums(rows_x, rows_e, bx, be, var_x: float, var_e: float):
 
 def _sum_by(values: np.ndarray, cluster: np.ndarray, g: int) -> np.ndarray:
     """Sum (k, observations, ...) arrays over the observations of each cluster."""
-    out = np.zeros((values.shape[0], g, *values.shape[2:]))
-    np.add.at(out, (slice(None), cluster), values)
+    return _group_sum(values.swapaxes(0, 1), cluster, g).swapaxes(0, 1)
+
+
+def _group_sum(values: np.ndarray, labels: np.ndarray, g: int) -> np.ndarray:
+    """Sums of the rows of ``values`` with each label 0..g-1 (zeros for a label without
+    rows): one sort and ``np.add.reduceat``, several times faster than ``np.add.at``."""
+    out = np.zeros((g, *values.shape[1:]))
+    if labels.size == 0:
+        return out
+    order = np.argsort(labels, kind="stable")
+    present, starts = np.unique(labels[order], return_index=True)
+    out[present] = np.add.reduceat(values[order], starts, axis=0)
     return out
 
 
