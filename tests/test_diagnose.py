@@ -304,11 +304,10 @@ def test_feed_angle_terms_in_the_baseline_are_refused_in_one_line(tmp_path, caps
     assert "HSCF HSSF HECF HESF" in err and "--model ghigo10" in err
 
 
-def test_a_failed_members_process_falls_back_to_this_one(tmp_path, monkeypatch):
-    """When the second process fails, the baseline warns and simulates its members here:
-    the same columns as without the second process."""
+def test_a_failed_quiet_run_process_falls_back_to_this_one(tmp_path, monkeypatch):
+    """When the second process fails, the baseline warns and runs the quiet campaign and
+    the members here: the same columns as without the second process."""
     from antsim.diagnose.fastsim import shared_schedule_columns
-    from antsim.plan.streaming import MemberStream
     from antsim.scenario import load_scenario
 
     root = Path(__file__).resolve().parents[1]
@@ -318,16 +317,20 @@ def test_a_failed_members_process_falls_back_to_this_one(tmp_path, monkeypatch):
     scenario = load_scenario(path)
     here = shared_schedule_columns(scenario, [11], jobs=1)
 
-    def broken(self):
-        raise RuntimeError("the members' process failed: test")
+    def broken(stream, scenario, seeds):
+        raise RuntimeError("the quiet run's process failed: test")
 
-    monkeypatch.setattr(MemberStream, "result", broken)
+    monkeypatch.setattr("antsim.plan.streaming.stream_members", broken)
     monkeypatch.setattr("antsim.plan.streaming.stream_available", lambda jobs: True)
-    with pytest.warns(RuntimeWarning, match="simulating the baseline's members in this"):
+    with pytest.warns(RuntimeWarning, match="baseline's members in this process"):
         fallback = shared_schedule_columns(scenario, [11], jobs=2)
     assert set(fallback) == {11} and len(here[11]["t_s"]) > 10
     for name, values in here[11].items():
         np.testing.assert_array_equal(fallback[11][name], values, err_msg=name)
+    monkeypatch.undo()
+    streamed = shared_schedule_columns(scenario, [11], jobs=2)  # two cores: the stream
+    for name, values in here[11].items():
+        np.testing.assert_array_equal(streamed[11][name], values, err_msg=name)
 
 
 def test_shared_schedule_baseline_is_the_full_simulation(tmp_path):

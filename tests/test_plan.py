@@ -177,38 +177,43 @@ def test_ou_process_with_a_member_axis_is_each_members_process():
 
 
 def test_streamed_members_equal_the_members_on_the_finished_schedule(short_engine):
-    """Members integrated in a second process while the quiet run records the schedule give
-    the powers of MemberEngine.simulate on the finished schedule, bit for bit."""
-    from antsim.plan.streaming import MemberStream
+    """The quiet run in a second process, the members integrated here as its integrations
+    arrive: the same schedule as the quiet run in this process, and the powers of
+    MemberEngine.simulate on it, bit for bit."""
+    from antsim.plan.streaming import ScheduleStream, stream_members
 
     scenario, engine = short_engine
     seeds = [member_seed(7, m) for m in range(3)]
-    quiet = quiet_scenario(scenario)
-    with MemberStream(scenario, quiet, seeds) as stream:
-        shared, _ = record_schedule(quiet, on_integration=stream.send)
-        power, std = stream.result()
-    assert shared.n_integrations == engine.shared.n_integrations > 100
+    with ScheduleStream(quiet_scenario(scenario), 0) as stream:
+        shared, (power, std) = stream_members(stream, scenario, seeds)
+    ref = engine.shared
+    assert shared.n_integrations == ref.n_integrations > 100
+    for k in (0, ref.n_integrations // 2, ref.n_integrations - 1):
+        np.testing.assert_array_equal(shared.t[k], ref.t[k])
+        np.testing.assert_array_equal(shared.enc_el[k], ref.enc_el[k])
+        assert shared.state[k] == ref.state[k]
+    np.testing.assert_array_equal(shared.scan_int, ref.scan_int)
+    for name, values in ref.columns.items():
+        np.testing.assert_array_equal(shared.columns[name], values, err_msg=name)
     ref_power, ref_std = engine.simulate(seeds)
     np.testing.assert_array_equal(power, ref_power)
     np.testing.assert_array_equal(std, ref_std)
 
 
-def test_a_failing_members_process_is_an_error_not_a_hang(short_engine):
-    """A broken schedule item reaches the members' process, which reports its failure, and
-    a killed process sends nothing: either way the parent raises instead of waiting forever."""
-    from antsim.plan.streaming import MemberStream
+def test_a_failing_quiet_run_process_is_an_error_not_a_hang(short_engine):
+    """A quiet run that fails reports its failure, and a killed process sends nothing:
+    either way the parent raises instead of waiting forever."""
+    from antsim.plan.streaming import ScheduleStream
 
-    scenario, engine = short_engine
-    with MemberStream(scenario, quiet_scenario(scenario), [1, 2]) as stream:
-        stream.send(t=np.arange(3.0), enc_az=np.zeros(2), enc_el=np.zeros(3),
-                    state=engine.shared.state[0], paths=[])
-        with pytest.raises(RuntimeError, match="members' process failed"):
-            stream.result()
-    with MemberStream(scenario, quiet_scenario(scenario), [1, 2]) as stream:
-        stream._process.terminate()  # killed: no result will ever come
+    scenario, _ = short_engine
+    with ScheduleStream(None, 0) as stream, \
+            pytest.raises(RuntimeError, match="quiet run's process failed: AttributeError"):
+        stream.schedule()
+    with ScheduleStream(quiet_scenario(scenario), 0) as stream:
+        stream._process.terminate()  # killed: no schedule will ever come
         stream._process.join()
-        with pytest.raises(RuntimeError, match="ended without a result"):
-            stream.result()
+        with pytest.raises(RuntimeError, match="ended without its schedule"):
+            list(stream.items())
 
 
 def test_vectorized_members_reproduce_their_full_simulation(short_engine):

@@ -71,12 +71,6 @@ def _library_text() -> str:
 
 
 def main(args: argparse.Namespace) -> int:
-    if args.scenario and not args.list:  # a cold baseline may stream its members (2 cores)
-        from antsim.plan.streaming import prestart
-
-        prestart(args.jobs)
-    from antsim.diagnose import diagnose, load_observations
-
     if args.list:
         print(_library_text())
         return 0
@@ -88,7 +82,6 @@ def main(args: argparse.Namespace) -> int:
         raise InputError("command line", "--sims", args.sims, "must be at least 2")
     if args.resimulate is not None and args.resimulate < 0:
         raise InputError("command line", "--resimulate", args.resimulate, "must be >= 0")
-    obs = load_observations(args.recordings)
     scenario = None
     if args.scenario:
         from antsim.scenario import load_scenario
@@ -97,10 +90,19 @@ def main(args: argparse.Namespace) -> int:
         if not path.exists():
             raise InputError(str(path), "--scenario", str(path), "no such file")
         scenario = load_scenario(path)
-        if obs.kind == "tpoint":
-            raise InputError(args.recordings, "--scenario", args.scenario,
-                             "a TPOINT data file has no times or sources to simulate against",
-                             "diagnose it without --scenario")
+        if Path(args.recordings).is_file():
+            # a cold baseline's quiet campaign starts now, on the second core, while this
+            # process imports the analysis and reads the recordings (antsim.plan.streaming)
+            from antsim.plan.streaming import prestart
+
+            prestart(args.jobs, scenario)
+    from antsim.diagnose import diagnose, load_observations
+
+    obs = load_observations(args.recordings)
+    if scenario is not None and obs.kind == "tpoint":
+        raise InputError(args.recordings, "--scenario", args.scenario,
+                         "a TPOINT data file has no times or sources to simulate against",
+                         "diagnose it without --scenario")
     try:
         diag = diagnose(obs, scenario, args.model, n_sims=args.sims, cache_dir=args.cache,
                         use_cache=not args.no_cache, jobs=args.jobs)

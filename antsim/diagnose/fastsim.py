@@ -27,38 +27,36 @@ def shared_schedule_columns(scenario, seeds: Sequence[int], jobs: int = 1
                             ) -> dict[int, dict[str, np.ndarray]]:
     """Recording columns (XR, XL and AVG rows of every scan) of each seed that keeps the
     shared schedule; seeds missing from the result need a full simulation. With ``jobs`` >= 2
-    (and two cores) the members run in a second process behind the quiet run
+    (and two cores) the quiet run is a second process and the members follow it here
     (:mod:`antsim.plan.streaming`; same numbers)."""
     import simpy
 
     from ..plan.ensemble import REFERENCE_SEED
-    from ..plan.streaming import MemberStream, stream_available
+    from ..plan.streaming import stream_available, stream_members, take
     from ..plan.vectorized import MemberEngine, quiet_scenario, record_schedule
     from ..world import World
 
     if not seeds:
         return {}
     quiet = quiet_scenario(scenario)
-    stream = MemberStream(scenario, quiet, seeds) if stream_available(jobs) else None
-    try:
-        shared, _ = record_schedule(quiet, seed=REFERENCE_SEED,
-                                    on_integration=stream.send if stream else None)
-        reference = World(quiet, simpy.Environment(), REFERENCE_SEED)
-        engine = MemberEngine(scenario, shared, reference, (), "baseline")
-        if engine.unshareable:
-            return {}
-        power = std = None
-        if stream is not None:
-            try:
-                power, std = stream.result()
-            except RuntimeError as err:  # the same numbers, only later
-                warnings.warn(f"{err}; simulating the baseline's members in this process",
-                              RuntimeWarning, stacklevel=2)
-        if power is None:
-            power, std = engine.simulate(list(seeds))
-    finally:
-        if stream is not None:
+    shared = power = std = None
+    if stream_available(jobs):
+        stream = take(scenario, REFERENCE_SEED)
+        try:
+            shared, (power, std) = stream_members(stream, scenario, seeds)
+        except RuntimeError as err:  # the same numbers, only later
+            warnings.warn(f"{err}; running the quiet campaign and the baseline's members in "
+                          "this process", RuntimeWarning, stacklevel=2)
+        finally:
             stream.close()
+    if shared is None:
+        shared, _ = record_schedule(quiet, seed=REFERENCE_SEED)
+    reference = World(quiet, simpy.Environment(), REFERENCE_SEED)
+    engine = MemberEngine(scenario, shared, reference, (), "baseline")
+    if engine.unshareable:
+        return {}
+    if power is None:
+        power, std = engine.simulate(list(seeds))
     reduced = engine.reduce(power, std)
     diverged = engine.diverges(reduced)
     offset = np.asarray(reduced.offset_arcmin)  # (seeds, scans, axes, channels + AVG)

@@ -1,169 +1,198 @@
-"""Members simulated in a second process while the quiet run records their schedule.
+"""The quiet run in a second process, its schedule streamed to the members as it is recorded.
 
-The members integrate the shared schedule in time order, one integration after another
-(:class:`~antsim.plan.vectorized._MemberRun`), and every random number they use comes from
-their own generators, whatever the schedule's length. So they need not wait for the quiet run
-to finish: :class:`MemberStream` starts a process that takes the schedule's integrations as
-the quiet run records them and integrates the members behind it. On two cores the members'
-cost then hides under the quiet run's. The powers are bit-identical to
-:meth:`~antsim.plan.vectorized.MemberEngine.simulate` on the finished schedule.
+The baseline of ``antsim diagnose`` is the quiet (noise-free) campaign of the scenario, whose
+schedule its members share (:mod:`antsim.plan.schedule`), and the members integrated on that
+schedule (:class:`~antsim.plan.vectorized.MemberEngine`). The members integrate the schedule
+one integration at a time, in time order, and every random number they use comes from their
+own generators whatever the schedule's length, so they need not wait for the quiet run to end.
 
-Whether the finished schedule can be shared at all (no search, one integration length) is only
-known at its end: the caller checks it with a :class:`MemberEngine` of the whole schedule and
-discards the stream's powers when it cannot (:meth:`MemberStream.close`).
+:func:`prestart` forks a process that runs the quiet campaign of a scenario as soon as the
+scenario is read, and sends each recorded integration back. The command meanwhile imports the
+analysis and reads the recordings; :class:`ScheduleStream` then integrates the members behind
+the quiet run as the integrations arrive, and takes the finished schedule at its end. On two
+cores the command's own start-up and the members' cost both hide under the quiet run. The
+powers are bit-identical to :meth:`~antsim.plan.vectorized.MemberEngine.simulate` on the
+finished schedule.
 
-:func:`prestart` starts the process before the caller has imported the simulation or read its
-inputs, so that the process's own imports (about a second) are done when the schedule starts
-to arrive.
+The process is forked, not spawned: it starts with this process's imports done (a spawned one
+pays about a second of imports before its first integration). Whether the schedule can be
+shared at all (no search, one integration length) is only known at its end; the caller checks
+it as before and discards the members' powers when it cannot.
 """
 
 from __future__ import annotations
 
 import os
 import queue
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from dataclasses import replace
 from typing import Any
 
-import numpy as np
-
 from ..scenario import Scenario
-from .workers import single_threaded
 
-__all__ = ["MemberStream", "prestart", "release_prestarted", "stream_available"]
+__all__ = ["ScheduleStream", "prestart", "release_prestarted", "stream_available"]
 
 #: integrations per message: few enough messages, small enough to start the members early
 BATCH = 32
-#: how often the waiting parent checks that the members' process is alive (s)
+#: how often the waiting parent checks that the quiet run's process is alive (s)
 POLL_S = 0.5
+#: the recorder's keywords that the members need
+ITEM_KEYS = ("t", "enc_az", "enc_el", "state", "paths")
 
 
 def stream_available(jobs: int) -> bool:
-    """Whether a second process may run the members (``jobs`` >= 2 and two cores)."""
+    """Whether a second process may run the quiet campaign (``jobs`` >= 2 and two cores)."""
     return jobs >= 2 and (os.cpu_count() or 1) >= 2
 
 
-def _members_process(inbox, outbox) -> None:
-    """The second process: takes (scenario, quiet scenario, seeds) from ``inbox``, then the
-    integrations arriving there (lists of recorder items, then None); sends ("ok", power,
-    std) or ("error", message)."""
+def _quiet_run_process(quiet: Scenario, seed: int, outbox) -> None:
+    """The second process: the quiet campaign of ``quiet``, its integrations sent in batches
+    ("items", [...]), then ("done", the schedule without its integrations) or ("error",
+    message)."""
     try:
-        import simpy
+        from .schedule import record_schedule
 
-        from ..world import World
-        from .ensemble import REFERENCE_SEED
-        from .vectorized import MemberEngine, SharedSchedule
+        batch: list[dict[str, Any]] = []
 
-        scenario, quiet, seeds = inbox.get()
-        reference = World(quiet, simpy.Environment(), REFERENCE_SEED)
-        channels = tuple(c.name for c in quiet.receiver.channels)
-        engine = MemberEngine(scenario, SharedSchedule.arriving(quiet.duration_s, channels),
-                              reference, (), "baseline")
-        run = engine.member_run(seeds)
-        while (batch := inbox.get()) is not None:
-            for item in batch:
-                run.integrate(item["t"], item["enc_az"], item["enc_el"], item["state"],
-                              item["paths"])
-        outbox.put(("ok", *run.result()))
+        def send(**item: Any) -> None:
+            nonlocal batch
+            batch.append({k: item[k] for k in ITEM_KEYS})
+            if len(batch) >= BATCH:
+                outbox.put(("items", batch))
+                batch = []  # the queue pickles the sent list later, in its own thread
+
+        shared, _ = record_schedule(quiet, seed=seed, on_integration=send)
+        if batch:
+            outbox.put(("items", batch))
+        outbox.put(("done", replace(shared, t=[], enc_az=[], enc_el=[], state=[], paths=[])))
     except Exception as err:  # reported to the parent, which raises it
         outbox.put(("error", f"{type(err).__name__}: {err}"))
 
 
-class _Helper:
-    """A started process waiting for its members' job (it imports while the parent works)."""
+class ScheduleStream:
+    """The quiet campaign of ``quiet`` (seed ``seed``) running in a forked process: iterate
+    :meth:`items` for its integrations as they are recorded, then take :meth:`schedule`."""
 
-    def __init__(self):
+    def __init__(self, quiet: Scenario, seed: int):
         import multiprocessing
 
-        ctx = multiprocessing.get_context("spawn")  # no fork of a process with BLAS threads
-        self.inbox = ctx.Queue()  # put() never blocks: the quiet run never waits
-        self.outbox = ctx.Queue()
-        with single_threaded():
-            self.process = ctx.Process(target=_members_process, daemon=True,
-                                       args=(self.inbox, self.outbox))
-            self.process.start()
+        self.quiet, self.seed = quiet, int(seed)
+        #: the scenario ``quiet`` was made from, when the caller says (see :func:`take`)
+        self.source: Scenario | None = None
+        ctx = multiprocessing.get_context("fork")
+        self._outbox = ctx.Queue()
+        self._process = ctx.Process(target=_quiet_run_process, daemon=True,
+                                    args=(quiet, self.seed, self._outbox))
+        self._process.start()
+        self._items: list[dict[str, Any]] = []
+        self._done = None
+
+    def items(self) -> Iterator[dict[str, Any]]:
+        """The recorded integrations in time order (the recorder's keywords ``t``,
+        ``enc_az``, ``enc_el``, ``state``, ``paths``), as they arrive. Raises RuntimeError if
+        the process fails or ends without finishing."""
+        while self._done is None:
+            kind, payload = self._next()
+            if kind == "items":
+                self._items.extend(payload)
+                yield from payload
+            elif kind == "done":
+                self._done = payload
+            else:
+                raise RuntimeError(f"the quiet run's process failed: {payload}")
+
+    def schedule(self):
+        """The finished :class:`~antsim.plan.schedule.SharedSchedule` (after :meth:`items`
+        is exhausted; it drains the stream first if not)."""
+        for _ in self.items():
+            pass
+        items = self._items
+        return replace(self._done, **{k: [it[k] for it in items] for k in ITEM_KEYS})
+
+    def _next(self) -> tuple[str, Any]:
+        while True:
+            alive = self._process.is_alive()  # before the wait: a message sent just before
+            try:                              # the end is still read
+                return self._outbox.get(timeout=POLL_S)
+            except queue.Empty:
+                if not alive:
+                    raise RuntimeError("the quiet run's process ended without its schedule "
+                                       f"(exit code {self._process.exitcode})") from None
 
     def close(self) -> None:
-        """End the process (done, waiting for work, or busy) and release its queues."""
-        if self.process.is_alive():
-            self.process.terminate()
-        self.process.join()
-        for q in (self.inbox, self.outbox):
-            q.close()
-            q.cancel_join_thread()
+        """End the process (finished or not) and release its queue."""
+        if self._process.is_alive():
+            self._process.terminate()
+        self._process.join()
+        self._outbox.close()
+        self._outbox.cancel_join_thread()
+
+    def __enter__(self) -> ScheduleStream:
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
 
 
-_PRESTARTED: _Helper | None = None
+_PRESTARTED: ScheduleStream | None = None
 
 
-def prestart(jobs: int) -> None:
-    """Start the members' process now, if :func:`stream_available`, so that its imports
-    overlap the caller's (``antsim diagnose`` calls this first thing). The next
-    :class:`MemberStream` takes it; an unused one ends at exit."""
+def prestart(jobs: int, scenario: Scenario) -> None:
+    """Start the quiet campaign of ``scenario`` now in a second process, if
+    :func:`stream_available`, so that it runs while the caller imports and reads its inputs
+    (``antsim diagnose`` calls this as soon as the scenario is read). :func:`take` hands it
+    to the baseline; an unused one ends at exit or at :func:`release_prestarted`."""
     global _PRESTARTED
     if _PRESTARTED is None and stream_available(jobs):
         import atexit
 
-        _PRESTARTED = _Helper()
+        from .ensemble import REFERENCE_SEED
+        from .schedule import quiet_scenario
+
+        _PRESTARTED = ScheduleStream(quiet_scenario(scenario), REFERENCE_SEED)
+        _PRESTARTED.source = scenario
         atexit.unregister(release_prestarted)  # once, however often this is called
         atexit.register(release_prestarted)
 
 
+def take(scenario: Scenario, seed: int) -> ScheduleStream:
+    """The prestarted stream if it runs the quiet campaign of ``scenario`` (the same object,
+    or an equal one) with ``seed``, else a new one."""
+    global _PRESTARTED
+    from .schedule import quiet_scenario
+
+    stream, _PRESTARTED = _PRESTARTED, None
+    if stream is not None and not (stream.seed == int(seed) and (
+            stream.source is scenario or stream.quiet == quiet_scenario(scenario))):
+        stream.close()
+        stream = None
+    return stream if stream is not None else ScheduleStream(quiet_scenario(scenario), seed)
+
+
 def release_prestarted() -> None:
-    """End a prestarted process that no stream will use (e.g. the baseline was cached): a
-    busy second core would slow this process's multi-threaded numpy several times."""
+    """End a prestarted quiet run that no baseline will use (e.g. the baseline was cached):
+    a busy second core would slow this process's multi-threaded numpy several times."""
     global _PRESTARTED
     if _PRESTARTED is not None:
         _PRESTARTED.close()
         _PRESTARTED = None
 
 
-class MemberStream:
-    """A process integrating members ``seeds`` of ``scenario`` behind the quiet run of
-    ``quiet``: pass :meth:`send` as the quiet run's ``on_integration``, then :meth:`result`."""
+def stream_members(stream: ScheduleStream, scenario: Scenario,
+                   seeds: Sequence[int]):
+    """Members ``seeds`` of ``scenario`` integrated behind ``stream``'s quiet run: returns
+    the finished schedule and the members' (power, std), (integrations, members, channels)."""
+    import simpy
 
-    def __init__(self, scenario: Scenario, quiet: Scenario, seeds: Sequence[int]):
-        global _PRESTARTED
-        self._helper, _PRESTARTED = (_PRESTARTED or _Helper()), None
-        self._inbox, self._outbox = self._helper.inbox, self._helper.outbox
-        self._process = self._helper.process
-        self._batch: list[dict[str, Any]] = []
-        self._inbox.put((scenario, quiet, [int(s) for s in seeds]))
+    from ..world import World
+    from .vectorized import MemberEngine, SharedSchedule
 
-    def send(self, **item: Any) -> None:
-        """One recorded integration (the antenna recorder's keywords). The queue pickles
-        it later, in its own thread: the arrays and state must not change afterwards (the
-        world hands the recorder fresh ones, which the shared schedule keeps too)."""
-        self._batch.append({k: item[k] for k in ("t", "enc_az", "enc_el", "state", "paths")})
-        if len(self._batch) >= BATCH:
-            self._inbox.put(self._batch)
-            self._batch = []
-
-    def result(self) -> tuple[np.ndarray, np.ndarray]:
-        """Mean power and sample std (K), (integrations, members, channels), once the quiet
-        run has ended."""
-        if self._batch:
-            self._inbox.put(self._batch)
-            self._batch = []
-        self._inbox.put(None)
-        while True:
-            alive = self._process.is_alive()  # before the wait: a result sent just before
-            try:                              # the end is still read
-                status, *payload = self._outbox.get(timeout=POLL_S)
-                break
-            except queue.Empty:
-                if not alive:
-                    raise RuntimeError("the members' process ended without a result "
-                                       f"(exit code {self._process.exitcode})") from None
-        if status != "ok":
-            raise RuntimeError(f"the members' process failed: {payload[0]}")
-        return payload[0], payload[1]
-
-    def close(self) -> None:
-        """Stop the process (whether or not its result was taken)."""
-        self._helper.close()
-
-    def __enter__(self) -> MemberStream:
-        return self
-
-    def __exit__(self, *exc: Any) -> None:
-        self.close()
+    quiet = stream.quiet
+    reference = World(quiet, simpy.Environment(), stream.seed)
+    channels = tuple(c.name for c in quiet.receiver.channels)
+    engine = MemberEngine(scenario, SharedSchedule.arriving(quiet.duration_s, channels),
+                          reference, (), "baseline")
+    run = engine.member_run([int(s) for s in seeds])
+    for item in stream.items():
+        run.integrate(item["t"], item["enc_az"], item["enc_el"], item["state"], item["paths"])
+    return stream.schedule(), run.result()
