@@ -120,8 +120,8 @@ def record_schedule(quiet: Scenario, seed: int = 0,
                     ) -> tuple[SharedSchedule, RunResult]:
     """Run the deterministic simulation of ``quiet`` (see :func:`quiet_scenario`) with the
     antenna's recorder attached; returns the shared schedule and the run. ``on_integration``
-    is also called with each integration's recorder keywords as it is recorded (e.g.
-    :meth:`antsim.plan.streaming.MemberStream.send`)."""
+    is also called with each integration's recorder keywords as it is recorded (e.g. by
+    :mod:`antsim.plan.streaming`'s quiet-run process, to send them on)."""
     recorder = _Recorder(on_integration)
 
     def attach(world: World) -> None:

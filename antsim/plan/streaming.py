@@ -41,8 +41,12 @@ ITEM_KEYS = ("t", "enc_az", "enc_el", "state", "paths")
 
 
 def stream_available(jobs: int) -> bool:
-    """Whether a second process may run the quiet campaign (``jobs`` >= 2 and two cores)."""
-    return jobs >= 2 and (os.cpu_count() or 1) >= 2
+    """Whether a second process may run the quiet campaign (``jobs`` >= 2, two cores, and
+    an operating system that forks)."""
+    import multiprocessing
+
+    return (jobs >= 2 and (os.cpu_count() or 1) >= 2
+            and "fork" in multiprocessing.get_all_start_methods())
 
 
 def _quiet_run_process(quiet: Scenario, seed: int, outbox) -> None:
@@ -181,7 +185,8 @@ def release_prestarted() -> None:
 def stream_members(stream: ScheduleStream, scenario: Scenario,
                    seeds: Sequence[int]):
     """Members ``seeds`` of ``scenario`` integrated behind ``stream``'s quiet run: returns
-    the finished schedule and the members' (power, std), (integrations, members, channels)."""
+    the finished schedule and the members' (power, std), (integrations, members, channels).
+    Raises RuntimeError if the stream fails or the members cannot follow it."""
     import simpy
 
     from ..world import World
@@ -194,5 +199,10 @@ def stream_members(stream: ScheduleStream, scenario: Scenario,
                           reference, (), "baseline")
     run = engine.member_run([int(s) for s in seeds])
     for item in stream.items():
-        run.integrate(item["t"], item["enc_az"], item["enc_el"], item["state"], item["paths"])
+        try:
+            run.integrate(item["t"], item["enc_az"], item["enc_el"], item["state"],
+                          item["paths"])
+        except Exception as err:  # e.g. a schedule that cannot be shared; the caller redoes it
+            raise RuntimeError("the members could not follow the quiet run "
+                               f"({type(err).__name__}: {err})") from err
     return stream.schedule(), run.result()
