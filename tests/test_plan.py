@@ -216,6 +216,22 @@ def test_a_failing_quiet_run_process_is_an_error_not_a_hang(short_engine):
             list(stream.items())
 
 
+def test_members_that_cannot_follow_the_quiet_run_are_an_error(short_engine, monkeypatch):
+    """Whatever stops the members mid-stream becomes the RuntimeError on which the baseline
+    falls back to running both in this process (tests/test_diagnose.py)."""
+    from antsim.plan import vectorized
+    from antsim.plan.streaming import ScheduleStream, stream_members
+
+    def broken(self, *args):
+        raise ValueError("test")
+
+    monkeypatch.setattr(vectorized._MemberRun, "integrate", broken)
+    scenario, _ = short_engine
+    with ScheduleStream(quiet_scenario(scenario), 0) as stream, \
+            pytest.raises(RuntimeError, match=r"could not follow the quiet run \(ValueError"):
+        stream_members(stream, scenario, [1])
+
+
 def test_vectorized_members_reproduce_their_full_simulation(short_engine):
     """A member on the shared schedule measures what its full simulation measures; the
     only difference is the weather's wander, which moves the refraction correction and the
