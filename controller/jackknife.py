@@ -87,7 +87,8 @@ def within_rms(abs_x: np.ndarray, abs_e: np.ndarray, used: np.ndarray, factor: f
                floor: float) -> np.ndarray:
     """``used`` less the observations whose |residual| on either axis exceeds ``factor`` x
     that axis' rms over ``used`` (a threshold never below ``floor``): the robust fit's last
-    rejection, shared by the fitter and the jackknife that replays it."""
+    rejection. :class:`_Replay` applies the same rule to many replicates at once (a test
+    checks it against refits with the fitter itself)."""
     limit_x = max(factor * math.sqrt(float(np.mean(abs_x[used] ** 2))), floor)
     limit_e = max(factor * math.sqrt(float(np.mean(abs_e[used] ** 2))), floor)
     return used & (abs_x <= limit_x) & (abs_e <= limit_e)

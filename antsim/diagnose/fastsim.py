@@ -31,9 +31,9 @@ def shared_schedule_columns(scenario, seeds: Sequence[int], jobs: int = 1
     (:mod:`antsim.plan.streaming`; same numbers)."""
     import simpy
 
-    from ..plan.ensemble import REFERENCE_SEED
+    from ..plan.schedule import REFERENCE_SEED, quiet_scenario, record_schedule
     from ..plan.streaming import stream_available, stream_members, take
-    from ..plan.vectorized import MemberEngine, quiet_scenario, record_schedule
+    from ..plan.vectorized import MemberEngine
     from ..world import World
 
     if not seeds:

@@ -26,6 +26,7 @@ from typing import Any
 from controller.errors import InputError
 
 from ..scenario import Scenario
+from .schedule import REFERENCE_SEED
 from .vectorized import (
     MemberEngine,
     MemberResults,
@@ -37,9 +38,6 @@ from .vectorized import (
 from .workers import single_threaded
 
 __all__ = ["Job", "make_executor", "task_block", "task_full", "task_noise", "task_record"]
-
-#: seed of the deterministic runs (their residual randomness, ~1e-9 K, is irrelevant)
-REFERENCE_SEED = 0
 
 
 @dataclass(frozen=True)

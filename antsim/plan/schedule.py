@@ -24,9 +24,11 @@ from ..runner import RunResult, simulate
 from ..scenario import EffectSpec, Scenario
 from ..world import World
 
-__all__ = ["QUIET_BANDWIDTH_MHZ", "QUIET_PARAMS", "SharedSchedule", "quiet_scenario",
-           "record_schedule"]
+__all__ = ["QUIET_BANDWIDTH_MHZ", "QUIET_PARAMS", "REFERENCE_SEED", "SharedSchedule",
+           "quiet_scenario", "record_schedule"]
 
+#: seed of the deterministic runs (their residual randomness, ~1e-9 K, is irrelevant)
+REFERENCE_SEED = 0
 #: huge receiver bandwidth of the quiet run: radiometer noise ~1e-9 K (must stay > 0)
 QUIET_BANDWIDTH_MHZ = 1e15
 #: parameters that switch an effect's random part off (its expected value stays)

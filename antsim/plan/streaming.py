@@ -150,8 +150,7 @@ def prestart(jobs: int, scenario: Scenario) -> None:
     if _PRESTARTED is None and stream_available(jobs):
         import atexit
 
-        from .ensemble import REFERENCE_SEED
-        from .schedule import quiet_scenario
+        from .schedule import REFERENCE_SEED, quiet_scenario
 
         _PRESTARTED = ScheduleStream(quiet_scenario(scenario), REFERENCE_SEED)
         _PRESTARTED.source = scenario
