@@ -87,10 +87,17 @@ def within_rms(abs_x: np.ndarray, abs_e: np.ndarray, used: np.ndarray, factor: f
                floor: float) -> np.ndarray:
     """``used`` less the observations whose |residual| on either axis exceeds ``factor`` x
     that axis' rms over ``used`` (a threshold never below ``floor``): the robust fit's last
-    rejection. :class:`_Replay` applies the same rule to many replicates at once (a test
-    checks it against refits with the fitter itself)."""
-    limit_x = max(factor * math.sqrt(float(np.mean(abs_x[used] ** 2))), floor)
-    limit_e = max(factor * math.sqrt(float(np.mean(abs_e[used] ** 2))), floor)
+    rejection. ``used`` and the residuals are (n,) for the fit, or (replicates, n) for the
+    jackknife that replays the rejection in every replicate at once (:class:`_Replay`)."""
+    if used.ndim == 1:
+        limit_x = max(factor * math.sqrt(float(np.mean(abs_x[used] ** 2))), floor)
+        limit_e = max(factor * math.sqrt(float(np.mean(abs_e[used] ** 2))), floor)
+    else:
+        count = used.sum(axis=1, keepdims=True)
+        limit_x = np.maximum(factor * np.sqrt(
+            np.where(used, abs_x**2, 0.0).sum(axis=1, keepdims=True) / count), floor)
+        limit_e = np.maximum(factor * np.sqrt(
+            np.where(used, abs_e**2, 0.0).sum(axis=1, keepdims=True) / count), floor)
     return used & (abs_x <= limit_x) & (abs_e <= limit_e)
 
 
@@ -285,13 +292,8 @@ class _Replay:
         b0 = _solve_stack(info, score)
         abs_x = np.abs(self.yx[None, :] - b0 @ self.ax.T)
         abs_e = np.abs(self.ye[None, :] - b0 @ self.ae.T)
-        count = first.sum(axis=1)
-        limit_x = np.maximum(rej.rms_factor * np.sqrt(
-            np.where(first, abs_x**2, 0.0).sum(axis=1) / count), rej.floor)
-        limit_e = np.maximum(rej.rms_factor * np.sqrt(
-            np.where(first, abs_e**2, 0.0).sum(axis=1) / count), rej.floor)
-        drop_g, drop_o = np.nonzero(first & ((abs_x > limit_x[:, None])
-                                             | (abs_e > limit_e[:, None])))
+        kept = within_rms(abs_x, abs_e, first, rej.rms_factor, rej.floor)
+        drop_g, drop_o = np.nonzero(first & ~kept)
         rows = b0.shape[0]
         return _solve_stack(info - _group_sum(self.outer[drop_o], drop_g, rows),
                             score - _group_sum(self.rhs[drop_o], drop_g, rows))
