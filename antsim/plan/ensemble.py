@@ -20,6 +20,7 @@ import os
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures import as_completed as futures_as_completed
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,9 +36,28 @@ from .vectorized import (
     member_seed,
     record_schedule,
 )
-from .workers import single_threaded
 
 __all__ = ["Job", "make_executor", "task_block", "task_full", "task_noise", "task_record"]
+
+#: environment of spawned workers: one BLAS/OpenMP thread each (the pool is the parallelism)
+SINGLE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
+                     "MKL_NUM_THREADS": "1"}
+
+
+@contextmanager
+def single_threaded() -> Iterator[None]:
+    """Processes spawned inside this block start with :data:`SINGLE_THREAD_ENV`; this
+    process's environment is restored after it."""
+    saved = {k: os.environ.get(k) for k in SINGLE_THREAD_ENV}
+    os.environ.update(SINGLE_THREAD_ENV)
+    try:
+        yield
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
 
 
 @dataclass(frozen=True)
