@@ -62,10 +62,18 @@ class Receiver:
 
     def sample(self, t_s: np.ndarray, t_in_k: np.ndarray) -> np.ndarray:
         """Total-power samples (K), shape (n, channels), for input temperatures
-        ``t_in_k`` of shape (n, channels) excluding the receiver's own Tsys."""
+        ``t_in_k`` of shape (n, channels) excluding the receiver's own Tsys. With ``t_s``
+        of shape (K, n) (K integrations, see :class:`~antsim.effects.thermal.OUProcess`)
+        and ``t_in_k`` (K, n, channels): samples (K, n, channels), the same values as K
+        calls."""
         cfg = self.config
-        total = self.tsys_k[None, :] + t_in_k
-        gains = self._gain.sample(t_s)
-        dt = cfg.sample_interval_s
-        radiometer = total / math.sqrt(cfg.bandwidth_mhz * 1e6 * dt)
-        return total * (1.0 + gains) + radiometer * self.rng.standard_normal(total.shape)
+        total = self.tsys_k + t_in_k
+        if t_s.ndim == 2:  # per integration its gain draws, then its radiometer draws
+            normals = self.rng.standard_normal((t_s.shape[0], 2, *total.shape[1:]))
+            gains = self._gain.sample(t_s, normals[:, 0])
+            noise = normals[:, 1]
+        else:
+            gains = self._gain.sample(t_s)
+            noise = self.rng.standard_normal(total.shape)
+        radiometer = total / math.sqrt(cfg.bandwidth_mhz * 1e6 * cfg.sample_interval_s)
+        return total * (1.0 + gains) + radiometer * noise

@@ -15,6 +15,12 @@ How an integration is computed (all vectorized over the samples of the integrati
    channel (squint included) times flux, gain, elevation efficiency and transmission;
 5. the receiver adds system and sky temperature, gain fluctuations and radiometer noise.
 
+Steps 2-5 wait until the integration's powers are first read (the control program reads a
+scan's ten at its end): then every integration not yet computed is, those of one track
+together, vectorized over their samples and over the integrations
+(:meth:`World.sample_blocks`), with each component's random numbers drawn in the order
+one-by-one integrations would draw them. When the reads come changes no value.
+
 Other mounts and instruments: on an equatorial mount (``scenario.mount.kind``) the encoders,
 the pointing errors and the per-sample jitter live in (hour angle, declination); the beam's
 true direction is converted to azimuth and elevation before step 4 (sources, atmosphere and
@@ -28,7 +34,7 @@ from __future__ import annotations
 
 import math
 import zlib
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import replace
 from functools import lru_cache
 from typing import TYPE_CHECKING
@@ -49,6 +55,7 @@ from controller.units import ARCMIN_PER_RAD, RAD_PER_DEG
 from .atmosphere import Atmosphere
 from .beam import Beam
 from .effects import EFFECTS, GeometricEffect, PointingState
+from .effects.base import BLOCK_FIELDS
 from .mount import Mount
 from .receiver import Receiver
 from .sky import Sky
@@ -61,6 +68,10 @@ __all__ = ["SimulatedAntenna", "World", "component_rng", "weather_model"]
 
 #: the ephemeris extends this far beyond the campaign, for scans still running at its end (s)
 EPHEMERIS_MARGIN_S = 3600.0
+#: the fixed point of a block of integrations stops when no error changes by more (rad,
+#: 1e-5 arcsec), or after this many steps
+SOLVE_TOL_RAD = 5e-11
+SOLVE_MAX_STEPS = 12
 #: true source paths are tabulated per track at this step over this span (s)
 TABLE_STEP_S = 2.0
 TABLE_SPAN_S = 900.0
@@ -231,8 +242,64 @@ class World:
         Written to broadcast: ``antsim.plan`` passes per-sample arrays of shape (n, 1) and
         effects whose realisation has a member axis, and gets samples (n, members, channels).
         """
-        beam_az, beam_el, (d_az, d_el) = self.beam_direction(t, enc_az, enc_el, state,
-                                                             error_prev)
+        beam_az, beam_el, errors = self.beam_direction(t, enc_az, enc_el, state, error_prev)
+        return self._received(t, beam_az, beam_el, state, paths, channels), errors
+
+    def sample_blocks(self, t, enc_az, enc_el, states: list[PointingState], paths,
+                      error_prev, channels) -> tuple[np.ndarray, tuple]:
+        """:meth:`sample_powers` of K equally long integrations at once, in time order: ``t``,
+        ``enc_az``, ``enc_el`` (K, n), one state per integration, ``paths`` (K, n) per
+        source. Returns samples (K, n, channels) and the last integration's slow errors.
+        The slow errors are solved for the K middles together (:meth:`solve_pointing_block`,
+        converged where one call's two steps stop short), everything after that (the fast
+        effects, the beam, the receiver) once for the K, with the random numbers of K calls
+        in the same order: the values of K calls, with numpy's per-call cost paid once."""
+        mid = t.shape[1] // 2
+        block = PointingState(**{f: np.array([getattr(s, f) for s in states])
+                                 for f in BLOCK_FIELDS})
+        d_az, d_el = self.solve_pointing_block(enc_az[:, mid], enc_el[:, mid], block,
+                                               error_prev)
+        beam_az = enc_az - d_az[:, None]
+        beam_el = enc_el - d_el[:, None]
+        for f in BLOCK_FIELDS:  # one value per integration, against (K, n) samples
+            setattr(block, f, getattr(block, f)[:, None])
+        for effect in self.fast_effects:
+            j_a, j_b = effect.sample_error(t, block.el_rad)
+            beam_az = beam_az - j_a
+            beam_el = beam_el - j_b
+        return (self._received(t, beam_az, beam_el, block, paths, channels),
+                (float(d_az[-1]), float(d_el[-1])))
+
+    def solve_pointing_block(self, enc_az_rad, enc_el_rad, state: PointingState,
+                             error_prev) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`solve_pointing` at K instants (arrays (K,)), all from ``error_prev``:
+        fixed-point steps until no error changes by more than ``SOLVE_TOL_RAD`` (the
+        error left is then smaller still: the step shrinks it by the errors' slope, at
+        most a few percent per radian). Returns the errors (d_az, d_el), each (K,)."""
+        d_az = np.full(enc_az_rad.shape, float(error_prev[0]))
+        d_el = np.full(enc_el_rad.shape, float(error_prev[1]))
+        for _ in range(SOLVE_MAX_STEPS):
+            state.az_rad = enc_az_rad - d_az
+            state.el_rad = enc_el_rad - d_el
+            new_az = new_el = 0.0
+            for effect in self.slow_effects:
+                a, e = effect.block_error(state)
+                new_az = new_az + a
+                new_el = new_el + e
+            change = max(float(np.max(np.abs(new_az - d_az))),
+                         float(np.max(np.abs(new_el - d_el))))
+            d_az = np.broadcast_to(new_az, enc_az_rad.shape)
+            d_el = np.broadcast_to(new_el, enc_el_rad.shape)
+            if change < SOLVE_TOL_RAD:
+                break
+        state.az_rad = enc_az_rad - d_az
+        state.el_rad = enc_el_rad - d_el
+        return d_az, d_el
+
+    def _received(self, t, beam_az, beam_el, state: PointingState, paths,
+                  channels) -> np.ndarray:
+        """Steps 4-5 of the module docstring: samples (..., channels) of the receiver for
+        the beam's true direction per sample on the mount's axes (rad)."""
         if not self.frame.is_altaz:  # (HA, Dec) of the beam -> azimuth and elevation
             beam_az, beam_el = self.frame.to_altaz(beam_az, beam_el)
 
@@ -256,7 +323,7 @@ class World:
                     (d_xel - off_x) * ARCMIN_PER_RAD, (d_el_src - off_e) * ARCMIN_PER_RAD,
                     float(sky.size_arcmin[i]))
         t_in = t_src + self.atmosphere.emission_k(beam_el)[..., None]
-        return self.receiver.sample(t, t_in), (d_az, d_el)
+        return self.receiver.sample(t, t_in)
 
     def efficiency(self, az_rad, el_rad) -> np.ndarray:
         """Relative gain towards (az, el) (rad): the beam's elevation curve, or with
@@ -299,6 +366,7 @@ class SimulatedAntenna:
         self._targets: list[int] = []
         self._tables: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._error_prev = (0.0, 0.0)
+        self._pending: list[_Pending] = []
         self._feed_angle_deg = 0.0
         self.slews = 0
         #: called with each integration's deterministic inputs (see :meth:`_integrate`)
@@ -327,15 +395,19 @@ class SimulatedAntenna:
         self._tables = {}
         return duration
 
-    def _source_path(self, index: int, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """True observed position of source ``index`` at sample times ``t``.
+    def _source_path(self, index: int, t: np.ndarray,
+                     tables: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """True observed position of source ``index`` at sample times ``t``, from the
+        path ``tables`` of a track (default: the current one's).
 
         Tabulated every ``TABLE_STEP_S`` over ``TABLE_SPAN_S`` from first use (one
         vectorized ephemeris call per track; linear interpolation error < 0.01" below 85 deg
         elevation), with the refraction of the weather at tabulation time (it changes by
         far less than 0.01" in minutes).
         """
-        table = self._tables.get(index)
+        if tables is None:
+            tables = self._tables
+        table = tables.get(index)
         if table is None or t[0] < table[0][0] or t[-1] > table[0][-1]:
             limit = self.world.duration_s + EPHEMERIS_MARGIN_S
             grid = np.arange(t[0], min(t[0] + TABLE_SPAN_S, limit), TABLE_STEP_S)
@@ -343,7 +415,7 @@ class SimulatedAntenna:
                 grid = np.linspace(t[0], t[-1] + TABLE_STEP_S, 4)
             az, el = self.world.sky.observed_altaz_rad(index, grid, t_weather_s=float(t[0]))
             table = (grid, np.unwrap(az), el)
-            self._tables[index] = table
+            tables[index] = table
         grid, az, el = table
         return np.interp(t, grid, az), np.interp(t, grid, el)
 
@@ -395,6 +467,7 @@ class SimulatedAntenna:
         world = self.world
         t_start = self.env.now
         yield self.env.timeout(seconds)
+        self.flush()  # the integrations before it carry the slow errors' fixed point
         t, t_clock, enc_lon_deg, enc_lat_deg = self._commanded_samples(t_start, seconds)
         enc_lon = enc_lon_deg * RAD_PER_DEG
         enc_lat = enc_lat_deg * RAD_PER_DEG
@@ -444,22 +517,120 @@ class SimulatedAntenna:
                               approach_az=self.mount.approach[0],
                               approach_el=self.mount.approach[1],
                               feed_angle_rad=math.radians(self._feed_angle_deg))
-        paths = [(i, *self._source_path(i, t)) for i in self._targets]
+        pending = _Pending(self, t, enc_az, enc_el, state, self._targets, self._tables)
         if self.recorder is not None:  # the shared schedule of antsim.plan's ensembles
+            pending.paths = [(i, *self._source_path(i, t)) for i in self._targets]
             self.recorder(t=t, enc_az=enc_az, enc_el=enc_el, state=replace(state),
-                          paths=paths, seconds=seconds)
-        samples, self._error_prev = world.sample_powers(t, enc_az, enc_el, state, paths,
-                                                        self._error_prev, self.channels)
-        n_ch = len(self.channels)
-        power = samples.mean(axis=0)
-        std = samples.std(axis=0, ddof=1) if t.size > 1 else np.zeros(n_ch)
+                          paths=pending.paths, seconds=seconds)
+        self._pending.append(pending)
         return Integration(
             t_start_s=float(t_start + (t_clock[0] - t[0])),
             t_end_s=float(t_start + seconds + (t_clock[-1] - t[-1])),
-            power_k={ch: float(power[c]) for c, ch in enumerate(self.channels)},
-            std_k={ch: float(std[c]) for c, ch in enumerate(self.channels)},
+            power_k=_Deferred(pending, 0),
+            std_k=_Deferred(pending, 1),
             enc_az_deg=float(np.mean(enc_az_deg)),
             enc_el_deg=float(np.mean(enc_el_deg)),
             weather=world.weather.reading(float(t[mid])),
             n_samples=int(t.size),
         )
+
+    def flush(self) -> None:
+        """Compute the powers of every integration not yet read, oldest first.
+
+        An integration's samples are computed when its powers are first read (the control
+        program reads a scan's ten at its end), so that consecutive integrations of one
+        track and one length are computed together (:meth:`World.sample_blocks`); the
+        values do not depend on when that happens."""
+        pending, self._pending = self._pending, []
+        start = 0
+        while start < len(pending):
+            first = pending[start]
+            stop = start + 1
+            while (stop < len(pending) and pending[stop].t.size == first.t.size
+                   and pending[stop].tables is first.tables):
+                stop += 1
+            self._compute(pending[start:stop])
+            start = stop
+
+    def _compute(self, block: list[_Pending]) -> None:
+        """The samples of ``block``: integrations of one track, equally long, in order."""
+        t = np.stack([p.t for p in block])
+        paths = self._block_paths(block, t)
+        samples, self._error_prev = self.world.sample_blocks(
+            t, np.stack([p.enc_az for p in block]), np.stack([p.enc_el for p in block]),
+            [p.state for p in block], paths, self._error_prev, self.channels)
+        power = samples.mean(axis=1)
+        std = samples.std(axis=1, ddof=1) if t.shape[1] > 1 else np.zeros_like(power)
+        for k, p in enumerate(block):
+            p.values = ({ch: float(power[k, c]) for c, ch in enumerate(self.channels)},
+                        {ch: float(std[k, c]) for c, ch in enumerate(self.channels)})
+
+    def _block_paths(self, block: list[_Pending], t: np.ndarray) -> list:
+        """The sources' true paths (K, n) at the block's sample times ``t`` (K, n): the
+        recorded ones, else from the track's tables (one lookup for the block where the
+        table covers it; else integration by integration, as when each came)."""
+        if block[0].paths is not None:
+            return [(i, np.stack([p.paths[j][1] for p in block]),
+                     np.stack([p.paths[j][2] for p in block]))
+                    for j, (i, _, _) in enumerate(block[0].paths)]
+        tables = block[0].tables
+        out = []
+        for i in block[0].targets:
+            first = self._source_path(i, t[0], tables)  # builds the table as it would
+            grid, az, el = tables[i]
+            if grid[0] <= t[0, 0] and t[-1, -1] <= grid[-1]:
+                out.append((i, np.interp(t, grid, az), np.interp(t, grid, el)))
+            else:
+                rows = [first, *(self._source_path(i, row, tables) for row in t[1:])]
+                out.append((i, np.stack([r[0] for r in rows]), np.stack([r[1] for r in rows])))
+        return out
+
+
+class _Pending:
+    """An integration whose samples are not computed yet: what they depend on, fixed when
+    it ended (sample times, encoder command, state, the sources near the beam and the
+    track's path tables), and its (power, std) per channel once computed."""
+
+    __slots__ = ("antenna", "enc_az", "enc_el", "paths", "state", "t", "tables", "targets",
+                 "values")
+
+    def __init__(self, antenna: SimulatedAntenna, t, enc_az, enc_el, state, targets, tables):
+        self.antenna = antenna
+        self.t = t
+        self.enc_az = enc_az
+        self.enc_el = enc_el
+        self.state = state
+        self.targets = targets
+        self.tables = tables
+        self.paths: list | None = None
+        self.values: tuple[dict, dict] | None = None
+
+
+class _Deferred(Mapping):
+    """Power or std per channel (K) of an integration, computed when first read."""
+
+    __slots__ = ("_pending", "_which")
+
+    def __init__(self, pending: _Pending, which: int):
+        self._pending = pending
+        self._which = which
+
+    def _dict(self) -> dict[str, float]:
+        if self._pending.values is None:
+            self._pending.antenna.flush()
+        return self._pending.values[self._which]
+
+    def __getitem__(self, channel: str) -> float:
+        return self._dict()[channel]
+
+    def __iter__(self):
+        return iter(self._dict())
+
+    def __len__(self) -> int:
+        return len(self._dict())
+
+    def __repr__(self) -> str:
+        return repr(self._dict())
+
+    def __reduce__(self):  # pickles and copies as the plain dict it stands for
+        return dict, (self._dict(),)

@@ -20,7 +20,7 @@ Fomalont 1973).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Protocol, runtime_checkable
 
@@ -62,14 +62,15 @@ class Integration:
     """One total-power integration, as the backend reports it.
 
     ``power_k`` and ``std_k`` map channel name (``"XR"``, ``"XL"``) to the mean total power
-    and the standard deviation of the samples within the integration (kelvin).
+    and the standard deviation of the samples within the integration (kelvin); an antenna
+    may compute them when they are first read (the simulated one does).
     ``enc_az_deg``/``enc_el_deg`` are the mean encoder readings during the integration.
     """
 
     t_start_s: float
     t_end_s: float
-    power_k: dict[str, float]
-    std_k: dict[str, float]
+    power_k: Mapping[str, float]
+    std_k: Mapping[str, float]
     enc_az_deg: float
     enc_el_deg: float
     weather: WeatherReading

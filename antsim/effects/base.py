@@ -21,7 +21,7 @@ import numpy as np
 if TYPE_CHECKING:
     from antsim.tomlcheck import Table
 
-__all__ = ["Effect", "Param", "PointingState"]
+__all__ = ["BLOCK_FIELDS", "Effect", "Param", "PointingState"]
 
 
 @dataclass
@@ -42,6 +42,11 @@ class PointingState:
     approach_el: float = 1.0
     source: str = ""
     feed_angle_rad: float = 0.0
+
+
+#: the PointingState fields that carry one value per instant in a block (see block_error)
+BLOCK_FIELDS = ("t_s", "az_rad", "el_rad", "az_rate_rad_s", "el_rate_rad_s", "approach_az",
+                "approach_el", "feed_angle_rad")
 
 
 @dataclass(frozen=True)
@@ -115,6 +120,20 @@ class Effect:
     def pointing_error(self, state: PointingState) -> tuple[float, float]:
         """Indicated minus true (azimuth, elevation) in radians at ``state``."""
         return 0.0, 0.0
+
+    def block_error(self, state: PointingState) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`pointing_error` at K instants at once, for the antenna's integrations
+        computed together: ``state``'s fields are arrays (K,), in time order. The fixed
+        point asks several times with the same times and new directions; an effect with a
+        state of its own advances it once per set of times. Default: one
+        :meth:`pointing_error` per instant; effects that are elementwise in ``state`` use
+        :meth:`pointing_error` itself (``block_error = pointing_error``)."""
+        if type(self).pointing_error is Effect.pointing_error:
+            return 0.0, 0.0
+        errors = np.array([self.pointing_error(PointingState(
+            **{name: getattr(state, name)[k] for name in BLOCK_FIELDS}))
+            for k in range(np.size(state.t_s))])
+        return errors[:, 0], errors[:, 1]
 
     def sample_error(self, t_s: np.ndarray, el_rad: float) -> tuple[np.ndarray, np.ndarray]:
         """Per-sample indicated minus true (azimuth, elevation) in radians (``per_sample``)."""

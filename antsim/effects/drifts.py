@@ -59,3 +59,6 @@ class TemperatureDrift(Effect):
 
     def pointing_error(self, state: PointingState) -> tuple[float, float]:
         return 0.0, float(self.error_arcsec(state.t_s)) * RAD_PER_ARCSEC
+
+    def block_error(self, state: PointingState) -> tuple[float, np.ndarray]:
+        return 0.0, self.error_arcsec(state.t_s) * RAD_PER_ARCSEC

@@ -53,6 +53,8 @@ class ServoLag(Effect):
         # the axis is behind its command, so the encoder command leads the true position
         return lag * state.az_rate_rad_s, lag * state.el_rate_rad_s
 
+    block_error = pointing_error
+
 
 class Backlash(Effect):
     """Gear backlash: half the dead band, with the sign of the last approach direction."""
@@ -70,3 +72,5 @@ class Backlash(Effect):
     def pointing_error(self, state: PointingState) -> tuple[float, float]:
         return (0.5 * self.p["az_arcsec"] * RAD_PER_ARCSEC * state.approach_az,
                 0.5 * self.p["el_arcsec"] * RAD_PER_ARCSEC * state.approach_el)
+
+    block_error = pointing_error

@@ -39,6 +39,8 @@ class GeometricEffect(Effect):
                                                 state.feed_angle_rad)
         return self.model.offset_scalar_rad(state.az_rad, state.el_rad)
 
+    block_error = pointing_error  # offset_scalar_rad is elementwise on arrays
+
 
 class TermsEffect(GeometricEffect):
     """Extra geometric terms by name, e.g. ``HESA2 = 6.0`` (arcsec, TPOINT sign)."""

@@ -101,6 +101,8 @@ class HarmonicEffect(Effect):
     def pointing_error(self, state: PointingState) -> tuple[float, float]:
         return self.model.offset_scalar_rad(state.az_rad, state.el_rad)
 
+    block_error = pointing_error  # offset_scalar_rad is elementwise on arrays
+
 
 class AzimuthTrack2A(HarmonicEffect):
     name: ClassVar[str] = "az_track_2a"

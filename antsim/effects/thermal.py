@@ -155,6 +155,8 @@ class OUProcess:
     have shape (n, *rms.shape), e.g. (n, members, channels) for :mod:`antsim.plan`). Within a
     call the samples must be evenly spaced (an integration's samples are); the step from the
     previous call's last sample may be anything (exact discretisation, stationary start).
+    Times of shape (K, n) are K such integrations at once, in time order and equally long
+    (the antenna's deferred integrations): the same values as K calls, one block each.
     """
 
     def __init__(self, rng: np.random.Generator, rms, timescale_s: float):
@@ -164,15 +166,17 @@ class OUProcess:
         self.state = np.zeros_like(self.rms)
         self.t_last: float | None = None
 
-    def sample(self, t_s: np.ndarray) -> np.ndarray:
-        """Values at times ``t_s`` (evenly spaced), shape (n, *rms.shape)."""
+    def sample(self, t_s: np.ndarray, normals: np.ndarray | None = None) -> np.ndarray:
+        """Values at times ``t_s`` (evenly spaced), shape (n, *rms.shape); for ``t_s`` of
+        shape (K, n), (K, n, *rms.shape). ``normals``: the standard normals of that shape
+        to use instead of drawing them from the generator."""
+        if t_s.ndim == 2:
+            return self._sample_blocks(t_s, normals)
         n = t_s.size
-        draws = self.rng.standard_normal((n, *self.rms.shape)) * self.rms
-        if self.t_last is None:
-            first = draws[0]
-        else:
-            rho0 = math.exp(-max(float(t_s[0]) - self.t_last, 0.0) / self.tau)
-            first = rho0 * self.state + math.sqrt(1.0 - rho0 * rho0) * draws[0]
+        if normals is None:
+            normals = self.rng.standard_normal((n, *self.rms.shape))
+        draws = normals * self.rms
+        first = self._first(float(t_s[0]), draws[0])
         if n == 1:
             out = first[None, ...]
         elif n > 64:  # long integrations: a recursive filter, not an n x n kernel
@@ -189,6 +193,33 @@ class OUProcess:
         self.state = out[-1].copy()
         self.t_last = float(t_s[-1])
         return out
+
+    def _first(self, t0_s: float, draw: np.ndarray) -> np.ndarray:
+        """The value at ``t0_s`` from the last one (or a stationary start), given the
+        scaled draw for it (copied: the caller reuses the draw's slot)."""
+        if self.t_last is None:
+            return draw.copy()
+        rho0 = math.exp(-max(t0_s - self.t_last, 0.0) / self.tau)
+        return rho0 * self.state + math.sqrt(1.0 - rho0 * rho0) * draw
+
+    def _sample_blocks(self, t_s: np.ndarray, normals: np.ndarray | None) -> np.ndarray:
+        blocks, n = t_s.shape
+        if normals is None:  # numpy's normal stream does not depend on how it is cut
+            normals = self.rng.standard_normal((blocks, n, *self.rms.shape))
+        if n == 1 or n > 64:
+            return np.stack([self.sample(t_s[k], normals[k]) for k in range(blocks)])
+        draws = normals * self.rms
+        heads = draws[:, 0].copy()
+        draws[:, 0] = 0.0
+        rho = math.exp(-float(t_s[0, 1] - t_s[0, 0]) / self.tau)
+        powers, kernel = _ar1_kernel(n, rho)
+        within = np.matmul(kernel, draws.reshape(blocks, n, -1)).reshape(draws.shape)
+        firsts = np.empty_like(heads)
+        for k in range(blocks):  # each block starts from the previous one's last value
+            firsts[k] = first = self._first(float(t_s[k, 0]), heads[k])
+            self.state = within[k, -1] + powers[-1] * first
+            self.t_last = float(t_s[k, -1])
+        return within + powers.reshape(1, n, *[1] * (heads.ndim - 1)) * firsts[:, None]
 
 
 @lru_cache(maxsize=64)
@@ -274,6 +305,7 @@ class ThermalEffect(Effect):
         self._dish_t = None
         self._now = None
         self._now_cache = None
+        self._block = None
 
     def errors_arcsec(self, t_s) -> tuple[np.ndarray, np.ndarray]:
         """(xel, el) thermal error in arcsec at time(s) ``t_s`` (for tests and reports)."""
@@ -355,6 +387,56 @@ class ThermalEffect(Effect):
         return ((xel / _cos(state.el_rad) + d_az) * RAD_PER_ARCSEC,
                 el * RAD_PER_ARCSEC)
 
+    def block_error(self, state: PointingState) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`pointing_error` at K instants (arrays (K,)), see
+        :meth:`Effect.block_error`. The dish gradients advance over the K times from where
+        they stood before them, forced from the directions of the latest call, so the fixed
+        point converges to gradients forced from where the beam truly pointed."""
+        p = self.p
+        t = state.t_s
+        key = (t.size, float(t[0]), float(t[-1]))
+        if self._block is None or self._block[0] != key:
+            series = [np.interp(t, self.t_grid, v)
+                      for v in (self.xel_arcsec, self.el_arcsec, *self._sun_vec,
+                                self._insolation, self._tilt_n_arcsec, self._tilt_e_arcsec)]
+            self._block = (key, series, (self._dish_k, self._dish_t))
+        _, (xel, el, sun_n, sun_e, sun_u, insolation, tilt_n, tilt_e), start = self._block
+        self._dish_k, self._dish_t = start
+        fb, lr = self._dish_block(t, state.az_rad, state.el_rad, sun_n, sun_e, sun_u,
+                                  insolation)
+        el = el + p["dish_arcsec_per_k"] * fb
+        xel = xel + p["dish_arcsec_per_k"] * lr
+        sin_a, cos_a = np.sin(state.az_rad), np.cos(state.az_rad)
+        d_az = -(tilt_n * sin_a + tilt_e * cos_a) * np.tan(state.el_rad)
+        el = el + (-tilt_n * cos_a + tilt_e * sin_a)
+        return (xel / np.cos(state.el_rad) + d_az) * RAD_PER_ARCSEC, el * RAD_PER_ARCSEC
+
+    def _dish_block(self, t, az_rad, el_rad, sun_n, sun_e, sun_u,
+                    insolation) -> tuple[np.ndarray, np.ndarray]:
+        """The dish gradients (K) at times ``t`` (K,), pointing at (az, el) (rad) at each:
+        :meth:`dish_gradients_k` once per time, its forcing computed for all at once."""
+        p = self.p
+        if p["dish_gradient_k"] == 0.0:
+            return np.zeros(t.size), np.zeros(t.size)
+        flux = p["dish_gradient_k"] * insolation
+        cos_e, sin_e = np.cos(el_rad), np.sin(el_rad)
+        cos_a, sin_a = np.cos(az_rad), np.sin(az_rad)
+        forcing_fb = flux * (sun_n * cos_e * cos_a + sun_e * cos_e * sin_a + sun_u * sin_e)
+        forcing_lr = flux * (sun_e * cos_a - sun_n * sin_a)
+        fb, lr = np.empty(t.size), np.empty(t.size)
+        tau = p["dish_tau_s"]
+        pairs = zip(forcing_fb.tolist(), forcing_lr.tolist(), strict=True)
+        for k, (t_k, forcing) in enumerate(zip(t.tolist(), pairs, strict=True)):
+            if self._dish_k is None:
+                self._dish_k = forcing
+            elif t_k > self._dish_t:
+                decay = math.exp(-(t_k - self._dish_t) / tau)
+                self._dish_k = tuple(f + (d - f) * decay
+                                     for f, d in zip(forcing, self._dish_k, strict=True))
+            self._dish_t = t_k
+            fb[k], lr[k] = self._dish_k
+        return fb, lr
+
 
 class SunsetDrift(Effect):
     """Elevation drift after sunset: ``a (1 - exp(-(t - t_set) / tau))``, relaxing back
@@ -384,3 +466,6 @@ class SunsetDrift(Effect):
 
     def pointing_error(self, state: PointingState) -> tuple[float, float]:
         return 0.0, float(self.error_arcsec(state.t_s)) * RAD_PER_ARCSEC
+
+    def block_error(self, state: PointingState) -> tuple[float, np.ndarray]:
+        return 0.0, self.error_arcsec(state.t_s) * RAD_PER_ARCSEC

@@ -70,10 +70,17 @@ class TrackingJitter(Effect):
         return out
 
     def sample_error(self, t_s: np.ndarray, el_rad: float) -> tuple[np.ndarray, np.ndarray]:
-        wind = float(self.weather.wind_m_s(t_s[t_s.size // 2]))
+        """Per-sample error (rad) at times ``t_s`` (n,), or (K, n) for K integrations
+        (``el_rad`` then (K, 1)); ``el_rad`` is the elevation at each integration's middle."""
+        wind = self.weather.wind_m_s(t_s[..., t_s.shape[-1] // 2])
         scale = 1.0 + (wind / self.p["wind_ref_m_s"]) ** 2
-        out = self.process.sample(t_s) * (self.rms_rad * scale)
-        if self.gust_start_s.size:
-            out = out + self.gusts_rad(t_s)
+        if t_s.ndim == 2:
+            out = self.process.sample(t_s) * (self.rms_rad * scale[:, None, None])
+            if self.gust_start_s.size:
+                out = out + self.gusts_rad(t_s.ravel()).reshape(out.shape)
+        else:
+            out = self.process.sample(t_s) * (self.rms_rad * float(scale))
+            if self.gust_start_s.size:
+                out = out + self.gusts_rad(t_s)
         # out is (n, 2), or (n, members, 2) in antsim.plan's ensembles (el_rad then (members,))
         return out[..., 0] / (np.cos(el_rad) if np.ndim(el_rad) else math.cos(el_rad)), out[..., 1]
