@@ -106,9 +106,15 @@ class WeatherModel:
             from antsim.effects.thermal import ScalarInterpolator
 
             self._wander_now = ScalarInterpolator(self._t, [self._wander])
+        c = self.config
+        daily_c = self._daily_curve_scalar_c(t_s)
+        wind = c.wind_speed_m_s
+        if c.wind_day_m_s is not None:  # wind_m_s, from the same daily curve
+            shape = (daily_c - c.air_min_c) / max(c.air_max_c - c.air_min_c, 1e-9)
+            wind = c.wind_speed_m_s + (c.wind_day_m_s - c.wind_speed_m_s) * shape
         return WeatherReading(
-            temperature_c=self.daily_curve_c(t_s) + self._wander_now(t_s)[0],
+            temperature_c=daily_c + self._wander_now(t_s)[0],
             pressure_hpa=self.pressure_hpa,
             relative_humidity=self.relative_humidity,
-            wind_speed_m_s=float(self.wind_m_s(t_s)),
+            wind_speed_m_s=float(wind),
         )

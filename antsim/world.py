@@ -528,8 +528,8 @@ class SimulatedAntenna:
             t_end_s=float(t_start + seconds + (t_clock[-1] - t[-1])),
             power_k=_Deferred(pending, 0),
             std_k=_Deferred(pending, 1),
-            enc_az_deg=float(np.mean(enc_az_deg)),
-            enc_el_deg=float(np.mean(enc_el_deg)),
+            enc_az_deg=math.fsum(enc_az_deg.tolist()) / t.size,
+            enc_el_deg=math.fsum(enc_el_deg.tolist()) / t.size,
             weather=world.weather.reading(float(t[mid])),
             n_samples=int(t.size),
         )

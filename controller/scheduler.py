@@ -53,16 +53,25 @@ class Observer:
     """The site's view of the sky: positions of targets and of the Sun at campaign times."""
 
     ephemeris: Ephemeris
+    _last: tuple | None = field(default=None, init=False, repr=False, compare=False)
 
     def altaz_deg(self, target: Target, t_s: float) -> tuple[float, float]:
         az, el = self.ephemeris.altaz_rad(target.index, np.array([t_s]))
         return math.degrees(az[0]), math.degrees(el[0])
 
     def altaz_all_deg(self, targets: Sequence[Target], t_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """Azimuths and elevations (deg) of several targets at one time, in one call."""
-        index = np.array([tg.index for tg in targets])
-        az, el = self.ephemeris.altaz_rad(index, np.full(index.size, float(t_s)))
-        return np.degrees(az), np.degrees(el)
+        """Azimuths and elevations (deg) of several targets at one time, in one call (the
+        last time's answer is kept: a decision asks its constraints, then its policy)."""
+        t = float(t_s)
+        index = tuple(tg.index for tg in targets)
+        cached = self._last
+        if cached is not None and cached[0] == t and set(index) <= cached[1].keys():
+            where = cached[1]
+            return cached[2][[where[i] for i in index]], cached[3][[where[i] for i in index]]
+        az, el = self.ephemeris.altaz_rad(np.array(index), np.full(len(index), t))
+        az_deg, el_deg = np.degrees(az), np.degrees(el)
+        self._last = (t, {i: k for k, i in enumerate(index)}, az_deg, el_deg)
+        return az_deg, el_deg
 
     def sun_el_deg(self, t_s) -> np.ndarray:
         return np.degrees(self.ephemeris.sun_altaz_rad(np.atleast_1d(t_s))[1])
@@ -113,7 +122,7 @@ class ElevationConstraint(Constraint):
 
     def mask(self, observer, targets, t_s, history) -> np.ndarray:
         ok = np.ones(len(targets), dtype=bool)
-        for t in (t_s, t_s + self.duration_s):
+        for t in (t_s + self.duration_s, t_s):  # now last: the policy asks for now next
             _, el = observer.altaz_all_deg(targets, t)
             ok &= (el >= self.min_deg) & (el <= self.max_deg)
         return ok

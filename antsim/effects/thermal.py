@@ -423,19 +423,24 @@ class ThermalEffect(Effect):
         cos_a, sin_a = np.cos(az_rad), np.sin(az_rad)
         forcing_fb = flux * (sun_n * cos_e * cos_a + sun_e * cos_e * sin_a + sun_u * sin_e)
         forcing_lr = flux * (sun_e * cos_a - sun_n * sin_a)
-        fb, lr = np.empty(t.size), np.empty(t.size)
-        tau = p["dish_tau_s"]
-        pairs = zip(forcing_fb.tolist(), forcing_lr.tolist(), strict=True)
-        for k, (t_k, forcing) in enumerate(zip(t.tolist(), pairs, strict=True)):
-            if self._dish_k is None:
-                self._dish_k = forcing
-            elif t_k > self._dish_t:
-                decay = math.exp(-(t_k - self._dish_t) / tau)
-                self._dish_k = tuple(f + (d - f) * decay
-                                     for f, d in zip(forcing, self._dish_k, strict=True))
-            self._dish_t = t_k
-            fb[k], lr[k] = self._dish_k
-        return fb, lr
+        times = t.tolist()
+        if self._dish_k is None:  # no past: the first instant starts at its forcing
+            self._dish_k, self._dish_t = (float(forcing_fb[0]), float(forcing_lr[0])), times[0]
+        last_t = self._dish_t
+        gaps = np.diff(np.array([last_t, *times]))
+        decays = np.where(gaps > 0.0, np.exp(-np.maximum(gaps, 0.0) / p["dish_tau_s"]),
+                          1.0).tolist()
+        now_fb, now_lr = self._dish_k
+        fb, lr = [], []
+        for f_fb, f_lr, decay in zip(forcing_fb.tolist(), forcing_lr.tolist(), decays,
+                                     strict=True):
+            if decay != 1.0:  # time went on (as dish_gradients_k: only when it does)
+                now_fb = f_fb + (now_fb - f_fb) * decay
+                now_lr = f_lr + (now_lr - f_lr) * decay
+            fb.append(now_fb)
+            lr.append(now_lr)
+        self._dish_k, self._dish_t = (now_fb, now_lr), max(last_t, times[-1])
+        return np.array(fb), np.array(lr)
 
 
 class SunsetDrift(Effect):
