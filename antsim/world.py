@@ -274,8 +274,9 @@ class World:
                              error_prev) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`solve_pointing` at K instants (arrays (K,)), all from ``error_prev``:
         fixed-point steps until no error changes by more than ``SOLVE_TOL_RAD`` (the
-        error left is then smaller still: the step shrinks it by the errors' slope, at
-        most a few percent per radian). Returns the errors (d_az, d_el), each (K,)."""
+        error left is smaller still: each step shrinks it by the errors' slope, a few
+        hundredths at most). ``state`` is left at the true directions B. Returns the
+        errors (d_az, d_el), each (K,)."""
         d_az = np.full(enc_az_rad.shape, float(error_prev[0]))
         d_el = np.full(enc_el_rad.shape, float(error_prev[1]))
         for _ in range(SOLVE_MAX_STEPS):
@@ -618,6 +619,9 @@ class _Deferred(Mapping):
     def _dict(self) -> dict[str, float]:
         if self._pending.values is None:
             self._pending.antenna.flush()
+            if self._pending.values is None:  # its block raised when first read
+                raise RuntimeError("this integration's samples could not be computed "
+                                   "(see the error raised when they were first read)")
         return self._pending.values[self._which]
 
     def __getitem__(self, channel: str) -> float:

@@ -202,3 +202,24 @@ def test_deferred_powers_behave_as_a_dict(ghigo):
     assert type(copy.deepcopy(integ).power_k) is dict
     shifted = dataclasses.replace(integ, power_k={c: p - 1.0 for c, p in integ.power_k.items()})
     assert shifted.power_k["XR"] == pytest.approx(plain["XR"] - 1.0)
+
+
+def test_an_integration_whose_block_failed_says_so(ghigo, monkeypatch):
+    world = World(ghigo, simpy.Environment(), seed=1)
+    env, antenna = world.env, world.antenna
+    got = []
+
+    def run():
+        yield antenna.track(source_trajectory(world, 0))
+        got.append((yield antenna.integrate(5.0)))
+
+    env.run(until=env.process(run()))
+
+    def broken(*args, **kwargs):
+        raise ValueError("broken physics")
+
+    monkeypatch.setattr(world, "sample_blocks", broken)
+    with pytest.raises(ValueError, match="broken physics"):
+        dict(got[0].power_k)
+    with pytest.raises(RuntimeError, match="could not be computed"):
+        dict(got[0].std_k)
