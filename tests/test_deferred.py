@@ -184,8 +184,9 @@ def test_integrations_read_together_equal_read_one_by_one(ghigo, monkeypatch, sp
     assert source_k.max() > 0.5  # the source is in the scan: the beam's flanks are tested
 
 
-def test_deferred_powers_behave_as_a_dict(ghigo):
-    world = World(ghigo, simpy.Environment(), seed=1)
+def _one_integration(scenario):
+    """A world of ``scenario`` (seed 1) and one 5-s integration on 3C 84, not yet read."""
+    world = World(scenario, simpy.Environment(), seed=1)
     env, antenna = world.env, world.antenna
     got = []
 
@@ -194,7 +195,11 @@ def test_deferred_powers_behave_as_a_dict(ghigo):
         got.append((yield antenna.integrate(5.0)))
 
     env.run(until=env.process(run()))
-    integ = got[0]
+    return world, got[0]
+
+
+def test_deferred_powers_behave_as_a_dict(ghigo):
+    _, integ = _one_integration(ghigo)
     plain = dict(integ.power_k)
     assert set(plain) == {"XR", "XL"} and all(math.isfinite(v) for v in plain.values())
     assert integ.power_k == plain and len(integ.std_k) == 2
@@ -205,21 +210,13 @@ def test_deferred_powers_behave_as_a_dict(ghigo):
 
 
 def test_an_integration_whose_block_failed_says_so(ghigo, monkeypatch):
-    world = World(ghigo, simpy.Environment(), seed=1)
-    env, antenna = world.env, world.antenna
-    got = []
-
-    def run():
-        yield antenna.track(source_trajectory(world, 0))
-        got.append((yield antenna.integrate(5.0)))
-
-    env.run(until=env.process(run()))
+    world, integ = _one_integration(ghigo)
 
     def broken(*args, **kwargs):
         raise ValueError("broken physics")
 
     monkeypatch.setattr(world, "sample_blocks", broken)
     with pytest.raises(ValueError, match="broken physics"):
-        dict(got[0].power_k)
+        dict(integ.power_k)
     with pytest.raises(RuntimeError, match="could not be computed"):
-        dict(got[0].std_k)
+        dict(integ.std_k)

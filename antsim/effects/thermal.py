@@ -233,6 +233,16 @@ def _ar1_kernel(n: int, rho: float) -> tuple[np.ndarray, np.ndarray]:
     return rho ** k, kernel
 
 
+def _dish_forcing(flux, sun_n, sun_e, sun_u, az_rad, el_rad, maths) -> tuple:
+    """Front-back and left-right dish gradients (K) the Sun (unit vector north, east, up)
+    drives with ``flux`` (K) on a dish pointing at (az, el) (rad): ``maths`` is ``math``
+    for plain floats, ``np`` for arrays."""
+    cos_e, sin_e = maths.cos(el_rad), maths.sin(el_rad)
+    cos_a, sin_a = maths.cos(az_rad), maths.sin(az_rad)
+    return (flux * (sun_n * cos_e * cos_a + sun_e * cos_e * sin_a + sun_u * sin_e),
+            flux * (sun_e * cos_a - sun_n * sin_a))
+
+
 class ThermalEffect(Effect):
     """Solar heating and structure-temperature lag (see module docstring)."""
 
@@ -325,10 +335,8 @@ class ThermalEffect(Effect):
             # one time and one direction (a World): plain floats
             sun_n, sun_e, sun_u, insolation = now[2:6]
             flux = p["dish_gradient_k"] * insolation
-            cos_e, sin_e = math.cos(state.el_rad), math.sin(state.el_rad)
-            cos_a, sin_a = math.cos(state.az_rad), math.sin(state.az_rad)
-            forcing = (flux * (sun_n * cos_e * cos_a + sun_e * cos_e * sin_a + sun_u * sin_e),
-                       flux * (sun_e * cos_a - sun_n * sin_a))
+            forcing = _dish_forcing(flux, sun_n, sun_e, sun_u, state.az_rad, state.el_rad,
+                                    math)
         else:
             if now is None:
                 sun = np.array([np.interp(t, self.t_grid, row) for row in self._sun_vec])
@@ -418,11 +426,8 @@ class ThermalEffect(Effect):
         p = self.p
         if p["dish_gradient_k"] == 0.0:
             return np.zeros(t.size), np.zeros(t.size)
-        flux = p["dish_gradient_k"] * insolation
-        cos_e, sin_e = np.cos(el_rad), np.sin(el_rad)
-        cos_a, sin_a = np.cos(az_rad), np.sin(az_rad)
-        forcing_fb = flux * (sun_n * cos_e * cos_a + sun_e * cos_e * sin_a + sun_u * sin_e)
-        forcing_lr = flux * (sun_e * cos_a - sun_n * sin_a)
+        forcing_fb, forcing_lr = _dish_forcing(p["dish_gradient_k"] * insolation, sun_n, sun_e,
+                                               sun_u, az_rad, el_rad, np)
         times = t.tolist()
         if self._dish_k is None:  # no past: the first instant starts at its forcing
             self._dish_k, self._dish_t = (float(forcing_fb[0]), float(forcing_lr[0])), times[0]
