@@ -253,12 +253,16 @@ class World:
         The slow errors are solved for the K middles together (:meth:`solve_pointing_block`,
         converged where one call's two steps stop short), everything after that (the fast
         effects, the beam, the receiver) once for the K, with the random numbers of K calls
-        in the same order: the values of K calls, with numpy's per-call cost paid once."""
+        in the same order: the values of K calls, with numpy's per-call cost paid once.
+        With a member axis (``antsim.plan``): ``enc_*`` and the paths (K, n, 1), effects and
+        receiver with member-stacked realisations, ``error_prev`` (members,) arrays; samples
+        are then (K, n, members, channels) and the slow errors (members,) arrays."""
         mid = t.shape[1] // 2
-        block = PointingState(**{f: np.array([getattr(s, f) for s in states])
+        enc_az_mid, enc_el_mid = enc_az[:, mid], enc_el[:, mid]  # (K,), or (K, 1): members
+        block = PointingState(**{f: np.array([getattr(s, f) for s in states]
+                                             ).reshape(enc_az_mid.shape)
                                  for f in BLOCK_FIELDS})
-        d_az, d_el = self.solve_pointing_block(enc_az[:, mid], enc_el[:, mid], block,
-                                               error_prev)
+        d_az, d_el = self.solve_pointing_block(enc_az_mid, enc_el_mid, block, error_prev)
         beam_az = enc_az - d_az[:, None]
         beam_el = enc_el - d_el[:, None]
         for f in BLOCK_FIELDS:  # one value per integration, against (K, n) samples
@@ -267,8 +271,8 @@ class World:
             j_a, j_b = effect.sample_error(t, block.el_rad)
             beam_az = beam_az - j_a
             beam_el = beam_el - j_b
-        return (self._received(t, beam_az, beam_el, block, paths, channels),
-                (float(d_az[-1]), float(d_el[-1])))
+        last = (d_az[-1], d_el[-1]) if d_az.ndim > 1 else (float(d_az[-1]), float(d_el[-1]))
+        return self._received(t, beam_az, beam_el, block, paths, channels), last
 
     def solve_pointing_block(self, enc_az_rad, enc_el_rad, state: PointingState,
                              error_prev) -> tuple[np.ndarray, np.ndarray]:
@@ -276,9 +280,11 @@ class World:
         fixed-point steps until no error changes by more than ``SOLVE_TOL_RAD`` (the
         error left is smaller still: each step shrinks it by the errors' slope, a few
         hundredths at most). ``state`` is left at the true directions B. Returns the
-        errors (d_az, d_el), each (K,)."""
-        d_az = np.full(enc_az_rad.shape, float(error_prev[0]))
-        d_el = np.full(enc_el_rad.shape, float(error_prev[1]))
+        errors (d_az, d_el), each (K,); with ``enc_*`` (K, 1) and ``error_prev`` (members,)
+        arrays, each (K, members)."""
+        shape = np.broadcast_shapes(enc_az_rad.shape, np.shape(error_prev[0]))
+        d_az = np.broadcast_to(np.asarray(error_prev[0], dtype=float), shape)
+        d_el = np.broadcast_to(np.asarray(error_prev[1], dtype=float), shape)
         for _ in range(SOLVE_MAX_STEPS):
             state.az_rad = enc_az_rad - d_az
             state.el_rad = enc_el_rad - d_el
@@ -289,8 +295,8 @@ class World:
                 new_el = new_el + e
             change = max(float(np.max(np.abs(new_az - d_az))),
                          float(np.max(np.abs(new_el - d_el))))
-            d_az = np.broadcast_to(new_az, enc_az_rad.shape)
-            d_el = np.broadcast_to(new_el, enc_el_rad.shape)
+            d_az = np.broadcast_to(new_az, shape)
+            d_el = np.broadcast_to(new_el, shape)
             if change < SOLVE_TOL_RAD:
                 break
         state.az_rad = enc_az_rad - d_az

@@ -220,3 +220,33 @@ def test_an_integration_whose_block_failed_says_so(ghigo, monkeypatch):
         dict(integ.power_k)
     with pytest.raises(RuntimeError, match="could not be computed"):
         dict(integ.std_k)
+
+
+def test_default_block_errors_ask_once_per_instant_with_or_without_members():
+    """An effect without a block_error of its own is asked once per instant: plain numbers
+    for a World's block (fields (K,)), and with a member axis (fields (K, 1), directions
+    (K, members)) one number per integration and the directions per member, its answers
+    broadcast to (K, members)."""
+    from antsim.effects import Effect
+
+    class Tilted(Effect):  # math.sin: a number per instant, as a World gives
+        name = "tilted"
+
+        def pointing_error(self, state):
+            return (1e-6 * math.sin(state.t_s / 100.0) * np.cos(state.az_rad),
+                    2e-6 * math.copysign(1.0, state.approach_el))
+
+    effect = Tilted()
+    t = np.array([10.0, 30.0, 50.0])
+    az = np.array([[0.1, 0.2], [0.3, 0.4], [0.5, 0.6]])
+    fields = {f: np.zeros(3) for f in BLOCK_FIELDS} | {"t_s": t, "approach_el": -np.ones(3)}
+    world_block = effect.block_error(PointingState(**fields | {"az_rad": az[:, 0]}))
+    members = effect.block_error(PointingState(
+        **{f: v[:, None] for f, v in fields.items()} | {"az_rad": az, "el_rad": az}))
+    for k in range(3):
+        for m in range(2):
+            want = effect.pointing_error(PointingState(t_s=float(t[k]), az_rad=az[k, m],
+                                                       el_rad=0.0, approach_el=-1.0))
+            assert members[0][k, m] == want[0] and members[1][k, m] == want[1] == -2e-6
+        assert world_block[0][k] == members[0][k, 0]
+    assert members[0].shape == members[1].shape == (3, 2) and world_block[1].shape == (3,)

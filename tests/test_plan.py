@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from antsim.cli import main as cli_main
+from antsim.effects import PointingState
 from antsim.effects.thermal import OUProcess
 from antsim.plan.planfile import load_plan
 from antsim.plan.study import run_plan
@@ -172,8 +173,96 @@ def test_ou_process_with_a_member_axis_is_each_members_process():
     batched = OUProcess(draws, np.tile(rms, (3, 1)), 60.0)
     out = np.concatenate([batched.sample(t) for t in times])
     np.testing.assert_array_equal(out, np.stack(own, axis=1))
+    # K integrations at once (the member blocks): draws (K, n, members, k), each member's
+    # own in its own order
+    blocks = OUProcess(_MemberDraws([np.random.default_rng(s) for s in seeds]),
+                       np.tile(rms, (3, 1)), 60.0)
+    out = np.concatenate([*blocks.sample(np.stack(times[:6])), blocks.sample(times[6])])
+    np.testing.assert_allclose(out, np.stack(own, axis=1), rtol=1e-12, atol=0.0)
     with pytest.raises(RuntimeError, match="for 2 members asked of 3"):
         draws.standard_normal((4, 2, 2))
+
+
+def test_member_blocks_equal_members_one_integration_at_a_time(short_engine, monkeypatch):
+    """Members compute their integrations in blocks (World.sample_blocks with a member
+    axis): the jitter, gain and radiometer draws of each member come in the order one
+    integration at a time would draw them, and the OU processes and the dish gradients
+    carry across block boundaries. Blocks of one integration each give the same powers.
+    Tolerance: only the fixed point's start differs (it converges to 5e-11 rad from either),
+    which moves a power by < 1e-7 K; a draw out of order would move it by ~0.01-1 K."""
+    from antsim.plan import vectorized
+
+    _, engine = short_engine
+    seeds = [member_seed(7, m) for m in range(3)]
+    power, std = engine.simulate(seeds)
+    assert power.shape == (engine.shared.n_integrations, 3, 2)
+    monkeypatch.setattr(vectorized._MemberRun, "MAX_BLOCK", 1)
+    one_power, one_std = engine.simulate(seeds)
+    np.testing.assert_allclose(power, one_power, rtol=0.0, atol=1e-7)
+    np.testing.assert_allclose(std, one_std, rtol=0.0, atol=1e-7)
+    assert not np.allclose(power[:, 0], power[:, 1], atol=1e-3)  # members differ
+
+
+def test_thermal_block_errors_with_a_member_axis_are_each_members(short_engine):
+    """The stacked thermal effect of three members (cloud modulation and lateral forcing
+    drawn per member, sunlit dish and pedestal on), asked for K integrations at once with
+    a direction per member, answers each member's own block errors; asked again with new
+    directions (the fixed point's next step) its dish restarts from before the block, and
+    the next block continues from the last."""
+    _, engine = short_engine
+    seeds = [member_seed(7, m) for m in range(3)]
+    stacked = engine._effects(seeds, quiet=False, slow_only=True)[0][1]
+    own = [engine._effects([s], quiet=False, slow_only=True)[0][1] for s in seeds]
+    assert stacked.name == "thermal" and np.ndim(stacked.el_arcsec) == 2
+    assert stacked.p["dish_gradient_k"] > 0 and stacked.p["pedestal_gradient_k"] > 0
+    rng = np.random.default_rng(3)
+    for start_s in (5000.0, 5300.0):  # two blocks in sunlight, in order
+        assert np.interp(start_s, stacked.t_grid, stacked._insolation[0]) > 0.1
+        t = start_s + 21.0 * np.arange(6)[:, None]  # (K, 1)
+        asked = []
+        for _ in range(2):  # the fixed point asks twice with the same times
+            az = rng.uniform(0.5, 4.0, (6, 3))
+            el = rng.uniform(0.3, 1.2, (6, 3))
+            got = stacked.block_error(PointingState(t_s=t, az_rad=az, el_rad=el))
+            asked.append((az, el, got))
+            for m, effect in enumerate(own):
+                want = effect.block_error(PointingState(t_s=t[:, 0], az_rad=az[:, m],
+                                                        el_rad=el[:, m]))
+                for g, w in zip(got, want, strict=True):
+                    np.testing.assert_allclose(g[:, m], w, rtol=1e-12, atol=1e-18)
+        # asked once more with the first directions: the first answer again
+        az, el, first = asked[0]
+        again = stacked.block_error(PointingState(t_s=t, az_rad=az, el_rad=el))
+        np.testing.assert_array_equal(again[1], first[1])
+        for m, effect in enumerate(own):  # every member's own state alike
+            effect.block_error(PointingState(t_s=t[:, 0], az_rad=az[:, m], el_rad=el[:, m]))
+
+
+def test_effects_without_a_member_axis_make_the_schedule_unshareable(short_engine, monkeypatch):
+    """An effect that answers one member but not a block of members (its block errors do
+    not broadcast to (integrations, members)) is named, and the members are then simulated
+    in full rather than wrongly."""
+    from antsim.effects import EFFECTS, Effect
+    from antsim.scenario import EffectSpec
+
+    class OneMemberOnly(Effect):
+        name = "one_member_only"
+
+        def pointing_error(self, state):
+            return 0.0, 1e-6 * np.asarray(state.el_rad)
+
+        def block_error(self, state):  # loses the member axis
+            return 0.0, 1e-6 * np.asarray(state.el_rad)[:, 0]
+
+    monkeypatch.setitem(EFFECTS, "one_member_only", OneMemberOnly)
+    scenario, engine = short_engine
+    odd = replace(scenario, effects=(*scenario.effects, EffectSpec("one_member_only", {})))
+    eng = MemberEngine(odd, engine.shared, engine.reference, engine.terms, engine.fit_name)
+    assert any("one_member_only does not accept a member axis (ValueError)" in why
+               for why in eng.unshareable), eng.unshareable
+    fine = MemberEngine(scenario, engine.shared, engine.reference, engine.terms,
+                        engine.fit_name)
+    assert fine.unshareable == []
 
 
 def test_streamed_members_equal_the_members_on_the_finished_schedule(short_engine):

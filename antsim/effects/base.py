@@ -60,6 +60,12 @@ class Param:
     kind: str = "number"  # "number", "string", "table" (name -> number)
 
 
+def _instant(value):
+    """One instant's field of a block: a number where it is one value (a member block's
+    (1,) rows), else the array (members,)."""
+    return value.item() if np.ndim(value) and np.size(value) == 1 else value
+
+
 class Effect:
     """Base class of the physical-effects catalogue."""
 
@@ -127,12 +133,20 @@ class Effect:
         point asks several times with the same times and new directions; an effect with a
         state of its own advances it once per set of times. Default: one
         :meth:`pointing_error` per instant; effects that are elementwise in ``state`` use
-        :meth:`pointing_error` itself (``block_error = pointing_error``)."""
+        :meth:`pointing_error` itself (``block_error = pointing_error``). With a member axis
+        (``antsim.plan``) the fields are (K, 1), or (K, members) for the directions and what
+        differs between members; the answer then broadcasts to (K, members)."""
         if type(self).pointing_error is Effect.pointing_error:
             return 0.0, 0.0
-        errors = np.array([self.pointing_error(PointingState(
-            **{name: getattr(state, name)[k] for name in BLOCK_FIELDS}))
-            for k in range(np.size(state.t_s))])
+        fields = [getattr(state, name) for name in BLOCK_FIELDS]
+        per_instant = np.broadcast_shapes(*(np.shape(v)[1:] for v in fields))
+        errors = []
+        for k in range(np.shape(state.t_s)[0]):
+            instant = PointingState(**{name: _instant(v[k]) for name, v
+                                       in zip(BLOCK_FIELDS, fields, strict=True)})
+            errors.append([np.broadcast_to(e, per_instant)
+                           for e in self.pointing_error(instant)])
+        errors = np.array(errors)
         return errors[:, 0], errors[:, 1]
 
     def sample_error(self, t_s: np.ndarray, el_rad: float) -> tuple[np.ndarray, np.ndarray]:

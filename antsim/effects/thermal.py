@@ -401,10 +401,11 @@ class ThermalEffect(Effect):
         they stood before them, forced from the directions of the latest call, so the fixed
         point converges to gradients forced from where the beam truly pointed."""
         p = self.p
-        t = state.t_s
-        key = (t.size, float(t[0]), float(t[-1]))
+        t = state.t_s  # (K,), or (K, 1) with a member axis
+        key = (t.size, float(t.flat[0]), float(t.flat[-1]))
         if self._block is None or self._block[0] != key:
-            series = [np.interp(t, self.t_grid, v)
+            series = [np.interp(t, self.t_grid, v) if np.ndim(v) == 1
+                      else interp_rows(t.ravel(), self.t_grid, v).T  # (K, members)
                       for v in (self.xel_arcsec, self.el_arcsec, *self._sun_vec,
                                 self._insolation, self._tilt_n_arcsec, self._tilt_e_arcsec)]
             self._block = (key, series, (self._dish_k, self._dish_t))
@@ -422,23 +423,26 @@ class ThermalEffect(Effect):
     def _dish_block(self, t, az_rad, el_rad, sun_n, sun_e, sun_u,
                     insolation) -> tuple[np.ndarray, np.ndarray]:
         """The dish gradients (K) at times ``t`` (K,), pointing at (az, el) (rad) at each:
-        :meth:`dish_gradients_k` once per time, its forcing computed for all at once."""
+        :meth:`dish_gradients_k` once per time, its forcing computed for all at once. With
+        a member axis: ``t`` (K, 1), directions (K, members), gradients (K, members)."""
         p = self.p
         if p["dish_gradient_k"] == 0.0:
-            return np.zeros(t.size), np.zeros(t.size)
+            return np.zeros(t.shape), np.zeros(t.shape)
         forcing_fb, forcing_lr = _dish_forcing(p["dish_gradient_k"] * insolation, sun_n, sun_e,
                                                sun_u, az_rad, el_rad, np)
-        times = t.tolist()
+        # plain floats per instant for a World; rows (members,) with a member axis
+        rows_fb, rows_lr = ((f.tolist() if f.ndim == 1 else list(f))
+                            for f in np.broadcast_arrays(forcing_fb, forcing_lr))
+        times = t.ravel().tolist()
         if self._dish_k is None:  # no past: the first instant starts at its forcing
-            self._dish_k, self._dish_t = (float(forcing_fb[0]), float(forcing_lr[0])), times[0]
+            self._dish_k, self._dish_t = (rows_fb[0], rows_lr[0]), times[0]
         last_t = self._dish_t
         gaps = np.diff(np.array([last_t, *times]))
         decays = np.where(gaps > 0.0, np.exp(-np.maximum(gaps, 0.0) / p["dish_tau_s"]),
                           1.0).tolist()
         now_fb, now_lr = self._dish_k
         fb, lr = [], []
-        for f_fb, f_lr, decay in zip(forcing_fb.tolist(), forcing_lr.tolist(), decays,
-                                     strict=True):
+        for f_fb, f_lr, decay in zip(rows_fb, rows_lr, decays, strict=True):
             if decay != 1.0:  # time went on (as dish_gradients_k: only when it does)
                 now_fb = f_fb + (now_fb - f_fb) * decay
                 now_lr = f_lr + (now_lr - f_lr) * decay

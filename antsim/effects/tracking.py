@@ -71,11 +71,13 @@ class TrackingJitter(Effect):
 
     def sample_error(self, t_s: np.ndarray, el_rad: float) -> tuple[np.ndarray, np.ndarray]:
         """Per-sample error (rad) at times ``t_s`` (n,), or (K, n) for K integrations
-        (``el_rad`` then (K, 1)); ``el_rad`` is the elevation at each integration's middle."""
+        (``el_rad`` then (K, 1), or (K, 1, members)); ``el_rad`` is the elevation at each
+        integration's middle."""
         wind = self.weather.wind_m_s(t_s[..., t_s.shape[-1] // 2])
         scale = 1.0 + (wind / self.p["wind_ref_m_s"]) ** 2
-        if t_s.ndim == 2:
-            out = self.process.sample(t_s) * (self.rms_rad * scale[:, None, None])
+        if t_s.ndim == 2:  # scale per integration against (K, n, [members,] 2)
+            out = self.process.sample(t_s)
+            out = out * (self.rms_rad * scale.reshape(-1, *[1] * (out.ndim - 1)))
             if self.gust_start_s.size:
                 out = out + self.gusts_rad(t_s.ravel()).reshape(out.shape)
         else:

@@ -198,10 +198,17 @@ def stream_members(stream: ScheduleStream, scenario: Scenario,
                           reference, (), "baseline")
     run = engine.member_run([int(s) for s in seeds])
     for item in stream.items():
-        try:
-            run.integrate(item["t"], item["enc_az"], item["enc_el"], item["state"],
-                          item["paths"])
-        except Exception as err:  # e.g. a schedule that cannot be shared; the caller redoes it
-            raise RuntimeError("the members could not follow the quiet run "
-                               f"({type(err).__name__}: {err})") from err
-    return stream.schedule(), run.result()
+        _following(run.integrate, item["t"], item["enc_az"], item["enc_el"], item["state"],
+                   item["paths"])
+    result = _following(run.result)  # the last block
+    return stream.schedule(), result
+
+
+def _following(call, *args):
+    """``call(*args)`` for the members; whatever stops them becomes a RuntimeError (e.g. a
+    schedule that cannot be shared: the caller then redoes it in one process)."""
+    try:
+        return call(*args)
+    except Exception as err:
+        raise RuntimeError("the members could not follow the quiet run "
+                           f"({type(err).__name__}: {err})") from err

@@ -50,6 +50,7 @@ from controller.units import ARCSEC_PER_RAD
 from controller.variants import VARIANTS, pointing_data, variant_mask
 
 from ..effects import EFFECTS, PointingState
+from ..effects.base import BLOCK_FIELDS
 from ..effects.thermal import OUProcess
 from ..effects.tracking import TrackingJitter
 from ..receiver import Receiver
@@ -89,8 +90,11 @@ def member_seed(plan_seed: int, member: int) -> int:
 # ---------------------------------------------------------------------------------------------
 class _MemberDraws:
     """Stands in for a numpy Generator with a member axis: a call for draws of shape
-    (n, members, *rest) takes each member's next ``n * prod(rest)`` standard normals from
-    that member's own generator, in the order its world would ask for them. numpy's normal
+    (*lead, members, last) takes each member's next ``prod(lead) * last`` standard normals
+    from that member's own generator, in the order its world would ask for them (the
+    member axis is the second to last of every draw: (n, members, 2) for the jitter,
+    (K, n, members, 2) for K integrations at once, (K, 2, n, members, channels) for the
+    receiver's gain and radiometer draws of K integrations). numpy's normal
     stream does not depend on how it is cut into calls, so drawing ahead in chunks changes no
     value, and the draws need not know the schedule's length (it may still be arriving).
     ``generators`` None: every draw is zero (the quiet members)."""
@@ -105,10 +109,10 @@ class _MemberDraws:
     def standard_normal(self, shape) -> np.ndarray:
         if self.generators is None:
             return np.zeros(shape)
-        n, members, *rest = shape
+        *lead, members, last = shape
         if members != len(self.generators):
             raise RuntimeError(f"draws for {members} members asked of {len(self.generators)}")
-        count = n * math.prod(rest)
+        count = math.prod(lead) * last
         used = self._used
         if used + count > self._buffer.shape[1]:  # every member takes the same count
             ahead = max(count, self.CHUNK)
@@ -118,7 +122,7 @@ class _MemberDraws:
             used = 0
         self._used = used + count
         block = self._buffer[:, used:used + count]
-        return block.reshape(members, n, *rest).swapaxes(0, 1).copy()  # C order, as drawn
+        return np.moveaxis(block.reshape(members, *lead, last), 0, -2).copy()  # C order
 
 
 class _MemberGusts:
@@ -205,8 +209,8 @@ class _Nudge:
         self.el_rad = el_rad
 
     def sample_error(self, t_s: np.ndarray, el_rad) -> tuple[np.ndarray, np.ndarray]:
-        """Azimuth and elevation errors (rad), shape (samples, members)."""
-        shape = (t_s.size, self.el_rad.size)
+        """Azimuth and elevation errors (rad), shape (*t_s.shape, members)."""
+        shape = (*t_s.shape, self.el_rad.size)
         return (np.broadcast_to(self.xel_rad / np.cos(el_rad), shape),
                 np.broadcast_to(self.el_rad, shape))
 
@@ -279,8 +283,13 @@ def fit_rows(columns: dict[str, np.ndarray], terms: Sequence[str], name: str):
 
 
 class _MemberRun:
-    """Members integrating a schedule one integration at a time, in time order (the slow
-    errors' fixed point and the OU processes carry from one integration to the next)."""
+    """Members integrating a schedule in time order (the slow errors' fixed point and the
+    OU processes carry from one integration to the next). Integrations are queued and
+    computed in blocks, as the antenna computes its own (:meth:`World.sample_blocks` with a
+    member axis): consecutive integrations of one length that see the same sources."""
+
+    #: at most this many integrations per block (a few scans; memory stays small)
+    MAX_BLOCK = 64
 
     def __init__(self, world: _MemberWorld, n_members: int, channels: tuple[str, ...]):
         self.world = world
@@ -289,20 +298,36 @@ class _MemberRun:
         self._empty = np.zeros((0, n_members, len(channels)))
         self.power: list[np.ndarray] = []
         self.std: list[np.ndarray] = []
+        self._queue: list[tuple] = []
 
     def integrate(self, t: np.ndarray, enc_az: np.ndarray, enc_el: np.ndarray,
                   state: PointingState, paths: list) -> None:
-        """One integration of the schedule (a :class:`SharedSchedule` entry)."""
-        member_paths = [(i, az[:, None], el[:, None]) for i, az, el in paths]
-        samples, self.error = self.world.sample_powers(t, enc_az[:, None], enc_el[:, None],
-                                                       replace(state), member_paths,
-                                                       self.error, self.channels)
-        self.power.append(samples.mean(axis=0))
-        self.std.append(samples.std(axis=0, ddof=1) if t.size > 1
-                        else np.zeros(samples.shape[1:]))
+        """One integration of the schedule (a :class:`SharedSchedule` entry), computed with
+        the rest of its block."""
+        key = (t.size, tuple(i for i, _, _ in paths))
+        if self._queue and (self._queue[0][0] != key or len(self._queue) >= self.MAX_BLOCK):
+            self._flush()
+        self._queue.append((key, t, enc_az, enc_el, state, paths))
+
+    def _flush(self) -> None:
+        block, self._queue = self._queue, []
+        if not block:
+            return
+        t = np.stack([b[1] for b in block])
+        paths = [(i, np.stack([b[5][j][1] for b in block])[..., None],
+                  np.stack([b[5][j][2] for b in block])[..., None])
+                 for j, (i, _, _) in enumerate(block[0][5])]
+        samples, self.error = self.world.sample_blocks(
+            t, np.stack([b[2] for b in block])[..., None],
+            np.stack([b[3] for b in block])[..., None], [b[4] for b in block], paths,
+            self.error, self.channels)  # samples (K, n, members, channels)
+        self.power.extend(samples.mean(axis=1))
+        self.std.extend(samples.std(axis=1, ddof=1) if t.shape[1] > 1
+                        else np.zeros((t.shape[0], *samples.shape[2:])))
 
     def result(self) -> tuple[np.ndarray, np.ndarray]:
         """Mean power and sample std (K), shape (integrations, members, channels)."""
+        self._flush()
         if not self.power:
             return self._empty, self._empty
         return np.stack(self.power), np.stack(self.std)
@@ -361,6 +386,12 @@ class MemberEngine:
         probes = (self._view(1), self._view(2))
         state = PointingState(t_s=0.5 * self.shared.duration_s, az_rad=np.array([1.0, 1.1]),
                               el_rad=np.array([0.5, 0.6]))
+        # a block of 3 integrations of 2 members, as World.sample_blocks asks it
+        block = PointingState(**{f: np.full((3, 1), getattr(PointingState(0.0, 0.0, 0.0), f),
+                                            dtype=float) for f in BLOCK_FIELDS})
+        block.t_s = state.t_s + np.array([[0.0], [15.0], [30.0]])
+        block.az_rad = np.array([[1.0, 1.1], [1.01, 1.11], [1.02, 1.12]])
+        block.el_rad = np.array([[0.5, 0.6], [0.51, 0.61], [0.52, 0.62]])
         for i, spec in enumerate(self.scenario.effects, start=1):
             cls = EFFECTS[spec.name]
             if cls.per_sample:
@@ -375,9 +406,15 @@ class MemberEngine:
             effect = _stack([a, b]) if kind == "member" else a
             try:
                 d_az, d_el = effect.pointing_error(replace(state))
+                np.broadcast_shapes(np.shape(d_az), np.shape(d_el), (2,))
+                b_az, b_el = effect.block_error(replace(block))
+                if np.broadcast_shapes(np.shape(b_az), np.shape(b_el), (3, 2)) != (3, 2):
+                    raise ValueError("block errors of the wrong shape")
+                per_sample = PointingState(**{f: getattr(block, f)[:, None]
+                                              for f in BLOCK_FIELDS})
                 for ch in self.shared.channels:
                     effect.beam_offset(ch, replace(state))
-                np.broadcast_shapes(np.shape(d_az), np.shape(d_el), (2,))
+                    effect.beam_offset(ch, per_sample)
             except Exception as err:  # an effect written for scalars only
                 self.unshareable.append(f"effect {spec.name} does not accept a member axis "
                                         f"({type(err).__name__})")
