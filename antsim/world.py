@@ -8,8 +8,9 @@ How an integration is computed (all vectorized over the samples of the integrati
 
 1. encoder command at the antenna's clock time (trajectory + offset on the cable-wrap turn);
 2. the slowly varying pointing errors (geometry, thermal, ...) at the integration's middle:
-   the true beam direction ``B`` solves ``B + d(B) = encoder`` (two fixed-point steps from the
-   previous solution; the error changes by far less than an arcsec per arcmin);
+   the true beam direction ``B`` solves ``B + d(B) = encoder`` (fixed-point steps from the
+   previous solution until they change nothing above 1e-5"; the error changes by far less
+   than an arcsec per arcmin, so a few steps do);
 3. per-sample errors (wind and servo jitter) on top;
 4. each source near the beam at its true, refracted position; the beam's response per
    channel (squint included) times flux, gain, elevation efficiency and transmission;

@@ -11,7 +11,7 @@ inverse Fisher information s^2 B (the JSON keeps the name ``sigma_fisher_arcsec`
 response of the controller's own estimator (:func:`controller.scan.reduce_sources`, finite
 differences at the noise-free powers; for white noise this is the Cramer-Rao bound of
 :func:`controller.reduction.cramer_rao_offset_arcmin` where the estimator reaches it) and
-through the beam (the world's :meth:`~antsim.world.World.sample_powers`, nudged):
+through the beam (the world's :meth:`~antsim.world.World.sample_blocks`, nudged):
 
 * receiver: gain fluctuations (Ornstein-Uhlenbeck of each channel: the exact covariance of
   the integration means, correlated between the five points of an axis and between scans)

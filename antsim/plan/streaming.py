@@ -3,8 +3,9 @@
 The baseline of ``antsim diagnose`` is the quiet (noise-free) campaign of the scenario, whose
 schedule its members share (:mod:`antsim.plan.schedule`), and the members integrated on that
 schedule (:class:`~antsim.plan.vectorized.MemberEngine`). The members integrate the schedule
-one integration at a time, in time order, and every random number they use comes from their
-own generators whatever the schedule's length, so they need not wait for the quiet run to end.
+in time order, a scan's integrations at a time, and every random number they use comes from
+their own generators whatever the schedule's length, so they need not wait for the quiet run
+to end.
 
 :func:`prestart` forks a process that runs the quiet campaign of a scenario as soon as the
 scenario is read, and sends each recorded integration back. The command meanwhile imports the

@@ -8,7 +8,8 @@ antenna's recorder attached and keeps, per integration, the sample times, the en
 per sample, the antenna's state at the middle and the true paths of the sources near the beam.
 
 :class:`MemberEngine` then re-simulates only what is random, for a block of members at once,
-through the world's own physics (:meth:`antsim.world.World.sample_powers` with a member axis):
+through the world's own physics (:meth:`antsim.world.World.sample_blocks` with a member axis, a
+scan's integrations at a time):
 
 * shared (from the quiet run): schedule, encoder commands, source paths (ephemeris and
   refraction), beam, atmosphere, and every effect whose realisation draws no random numbers
@@ -184,7 +185,7 @@ class _MemberJitter(TrackingJitter):
 
 
 class _MemberWorld(World):
-    """The parts of a :class:`World` that :meth:`World.sample_powers` uses, with a member
+    """The parts of a :class:`World` that :meth:`World.sample_blocks` uses, with a member
     axis; deliberately not built by ``World.__init__``: sky, beam and atmosphere are the
     reference world's."""
 
@@ -386,9 +387,11 @@ class MemberEngine:
         probes = (self._view(1), self._view(2))
         state = PointingState(t_s=0.5 * self.shared.duration_s, az_rad=np.array([1.0, 1.1]),
                               el_rad=np.array([0.5, 0.6]))
-        # a block of 3 integrations of 2 members, as World.sample_blocks asks it
-        block = PointingState(**{f: np.full((3, 1), getattr(PointingState(0.0, 0.0, 0.0), f),
-                                            dtype=float) for f in BLOCK_FIELDS})
+        # a block of 3 integrations of 2 members, as World.sample_blocks asks it (rates,
+        # approach and feed angle at their defaults)
+        defaults = PointingState(t_s=0.0, az_rad=0.0, el_rad=0.0)
+        block = PointingState(**{f: np.full((3, 1), float(getattr(defaults, f)))
+                                 for f in BLOCK_FIELDS})
         block.t_s = state.t_s + np.array([[0.0], [15.0], [30.0]])
         block.az_rad = np.array([[1.0, 1.1], [1.01, 1.11], [1.02, 1.12]])
         block.el_rad = np.array([[0.5, 0.6], [0.51, 0.61], [0.52, 0.62]])
