@@ -178,6 +178,7 @@ def test_ou_process_with_a_member_axis_is_each_members_process():
     blocks = OUProcess(_MemberDraws([np.random.default_rng(s) for s in seeds]),
                        np.tile(rms, (3, 1)), 60.0)
     out = np.concatenate([*blocks.sample(np.stack(times[:6])), blocks.sample(times[6])])
+    # the blocks' batched matrix product sums in another order: equal to a few ulps
     np.testing.assert_allclose(out, np.stack(own, axis=1), rtol=1e-12, atol=0.0)
     with pytest.raises(RuntimeError, match="for 2 members asked of 3"):
         draws.standard_normal((4, 2, 2))
@@ -240,8 +241,8 @@ def test_thermal_block_errors_with_a_member_axis_are_each_members(short_engine):
 
 def test_effects_without_a_member_axis_make_the_schedule_unshareable(short_engine, monkeypatch):
     """An effect that answers one member but not a block of members (its block errors do
-    not broadcast to (integrations, members)) is named, and the members are then simulated
-    in full rather than wrongly."""
+    not broadcast to (integrations, members)) is named as the reason the schedule cannot
+    be shared (the members are then simulated in full, as for a cold start below)."""
     from antsim.effects import EFFECTS, Effect
     from antsim.scenario import EffectSpec
 
