@@ -83,17 +83,20 @@ class WeatherModel:
                  else 1.0 + (since_min - rise_h) / (24.0 - rise_h))
         return c.air_min_c + (c.air_max_c - c.air_min_c) * 0.5 * (1.0 - math.cos(math.pi * phase))
 
-    def daily_shape(self, t_s) -> np.ndarray:
-        """0 at the daily temperature minimum, 1 at the maximum."""
-        c = self.config
-        return (self.daily_curve_c(t_s) - c.air_min_c) / max(c.air_max_c - c.air_min_c, 1e-9)
-
     def wind_m_s(self, t_s) -> np.ndarray:
         """Wind speed (m/s) at time(s) ``t_s``."""
+        if self.config.wind_day_m_s is None:
+            return np.full(np.shape(t_s), self.config.wind_speed_m_s)
+        return self._wind_from_daily(self.daily_curve_c(t_s))
+
+    def _wind_from_daily(self, daily_c):
+        """Wind speed (m/s) where the daily temperature curve stands at ``daily_c`` (C): the
+        night's speed at the daily minimum, the day's at the maximum."""
         c = self.config
         if c.wind_day_m_s is None:
-            return np.full(np.shape(t_s), c.wind_speed_m_s)
-        return c.wind_speed_m_s + (c.wind_day_m_s - c.wind_speed_m_s) * self.daily_shape(t_s)
+            return c.wind_speed_m_s
+        shape = (daily_c - c.air_min_c) / max(c.air_max_c - c.air_min_c, 1e-9)
+        return c.wind_speed_m_s + (c.wind_day_m_s - c.wind_speed_m_s) * shape
 
     def air_temperature_c(self, t_s) -> np.ndarray:
         """Air temperature (C): the daily curve plus this run's random wander."""
@@ -106,12 +109,8 @@ class WeatherModel:
             from antsim.effects.thermal import ScalarInterpolator
 
             self._wander_now = ScalarInterpolator(self._t, [self._wander])
-        c = self.config
         daily_c = self._daily_curve_scalar_c(t_s)
-        wind = c.wind_speed_m_s
-        if c.wind_day_m_s is not None:  # wind_m_s, from the same daily curve
-            shape = (daily_c - c.air_min_c) / max(c.air_max_c - c.air_min_c, 1e-9)
-            wind = c.wind_speed_m_s + (c.wind_day_m_s - c.wind_speed_m_s) * shape
+        wind = self._wind_from_daily(daily_c)
         return WeatherReading(
             temperature_c=daily_c + self._wander_now(t_s)[0],
             pressure_hpa=self.pressure_hpa,

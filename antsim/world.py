@@ -231,26 +231,14 @@ class World:
             beam_b = beam_b - j_b
         return beam_a, beam_b, (d_a, d_b)
 
-    def sample_powers(self, t, enc_az, enc_el, state: PointingState, paths, error_prev,
-                      channels) -> tuple[np.ndarray, tuple]:
-        """Total-power samples (K) of one integration and the slow errors it solved.
-
-        Steps 2-5 of the module docstring: ``t`` (n,) sample times (s), ``enc_az``/``enc_el``
-        the encoder command per sample (rad), ``state`` the antenna's state at the middle
-        (its ``az_rad``/``el_rad`` are set here), ``paths`` ``(source index, az, el)`` true
-        paths per sample (rad), ``error_prev`` the previous integration's slow errors (the
-        fixed point's start). Returns samples (n, channels) and the slow errors (d_az, d_el).
-        Written to broadcast: ``antsim.plan`` passes per-sample arrays of shape (n, 1) and
-        effects whose realisation has a member axis, and gets samples (n, members, channels).
-        """
-        beam_az, beam_el, errors = self.beam_direction(t, enc_az, enc_el, state, error_prev)
-        return self._received(t, beam_az, beam_el, state, paths, channels), errors
-
     def sample_blocks(self, t, enc_az, enc_el, states: list[PointingState], paths,
                       error_prev, channels) -> tuple[np.ndarray, tuple]:
-        """:meth:`sample_powers` of K equally long integrations at once, in time order: ``t``,
-        ``enc_az``, ``enc_el`` (K, n), one state per integration, ``paths`` (K, n) per
-        source. Returns samples (K, n, channels) and the last integration's slow errors.
+        """Total-power samples (K) of K equally long integrations, in time order: steps 2-5
+        of the module docstring. ``t`` (K, n) sample times (s), ``enc_az``/``enc_el`` (K, n)
+        the encoder command per sample (rad), one state per integration (at its middle),
+        ``paths`` ``(source index, az, el)`` true paths (K, n) per source (rad),
+        ``error_prev`` the previous integration's slow errors (the fixed point's start).
+        Returns samples (K, n, channels) and the last integration's slow errors.
         The slow errors are solved for the K middles together (:meth:`solve_pointing_block`,
         converged where one call's two steps stop short), everything after that (the fast
         effects, the beam, the receiver) once for the K, with the random numbers of K calls
