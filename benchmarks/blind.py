@@ -4,6 +4,7 @@
     python benchmarks/blind.py --fomalont [--seeds 16]   # the after-sunset drift, many seeds
     python benchmarks/blind.py --tilt                    # exact tilt at 25-40' (not drawn)
     python benchmarks/blind.py --real                    # auxtel and MMT, no simulation
+    python benchmarks/blind.py --bound                   # auxtel: best of <= 4 findings
     python benchmarks/blind.py --speed                   # runtime of a ~300-scan campaign
 
 Targets (issue 5): >= 100 blind cases, >= 95% correct identification of the hidden effect,
@@ -219,6 +220,132 @@ def _nested_cv(obs) -> tuple[float, float]:
     return math.sqrt(sq_d / obs.n), math.sqrt(sq_a / obs.n)
 
 
+def _loo_blocks(q: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-observation 2x2 blocks (xel-xel, el-el, xel-el) of the hat matrix q q^T."""
+    return (np.einsum("ij,ij->i", q[:n], q[:n]), np.einsum("ij,ij->i", q[n:], q[n:]),
+            np.einsum("ij,ij->i", q[:n], q[n:]))
+
+
+def _loo_rms(h: tuple, e: np.ndarray, n: int) -> float:
+    """Leave-one-star-out Sky RMS of a least-squares fit from its residuals ``e`` (2n,) and
+    hat-matrix blocks ``h``: each star's held-out residual is (I - H_ii)^-1 e_i, exactly
+    what refitting without its two rows gives (_cv_fixed with one star per fold)."""
+    a, d, b = 1.0 - h[0], 1.0 - h[1], -h[2]
+    det = a * d - b * b
+    if np.any(det < 1e-9):
+        return math.inf  # a star that alone determines a term: no held-out prediction
+    r1 = (d * e[:n] - b * e[n:]) / det
+    r2 = (a * e[n:] - b * e[:n]) / det
+    return math.sqrt(float(np.mean(r1**2 + r2**2)))
+
+
+def _finding_pool(base: list[str]) -> dict[str, tuple[str, ...]]:
+    """Every linear finding the library can make beyond ``base`` (its harmonic effects and
+    each order of its harmonic families), and, more generously than the library, every
+    sin/cos pair of TPOINT's harmonic generator for dE, dA and dA cos E against A or E up
+    to 9 cycles per turn, and the two effects DESIGN's signature table gives two orders
+    (azimuth encoder runout 1A and 2A, azimuth track unevenness 2A and 3A) as one finding
+    each: label -> terms."""
+    from antsim.diagnose.candidates import (
+        CANDIDATES,
+        HarmonicFamilyCandidate,
+        TermsCandidate,
+    )
+
+    pool: dict[str, tuple[str, ...]] = {}
+    seen: set[tuple[str, ...]] = set()
+
+    def add(label: str, terms: tuple[str, ...]) -> None:
+        key = tuple(sorted(terms))
+        if key not in seen and not set(terms) <= set(base):
+            seen.add(key)
+            pool[label] = terms
+
+    for c in CANDIDATES:
+        if isinstance(c, HarmonicFamilyCandidate):
+            for n in c.orders:
+                add(c.label(n), c._pair(n))
+        elif isinstance(c, TermsCandidate) and c.kind == "offsets":
+            add(c.name, c.terms)
+    add("az_runout_1a_2a", ("HASA", "HACA", "HASA2", "HACA2"))
+    add("az_track_2a_3a", ("HESA2", "HECA2", "HESA3", "HECA3"))
+    for res in "EAS":
+        for arg in "AE":
+            for k in range(1, 10):
+                order = "" if k == 1 else str(k)
+                add(f"H{res}{arg}{k}", (f"H{res}S{arg}{order}", f"H{res}C{arg}{order}"))
+    return pool
+
+
+def _parsimonious_bound(obs, base: list[str], max_findings: int):
+    """The smallest leave-one-star-out Sky RMS of any model of ``base`` plus at most
+    ``max_findings`` findings of :func:`_finding_pool`, every combination tried. The
+    combination is chosen with the held-out stars in view, so no selection procedure
+    limited to that many findings can cross-validate better: a lower bound for it."""
+    import itertools
+
+    from antsim.diagnose.problem import term_columns
+
+    n = obs.n
+    y = np.concatenate([obs.xel_arcsec, obs.el_arcsec])
+    qb, _ = np.linalg.qr(term_columns(base, obs))
+    hb = _loo_blocks(qb, n)
+    pool = _finding_pool(base)
+    # each finding's columns with the base projected out: the hat matrix of base + findings
+    # is the base's plus that of the projected columns (one small QR per combination)
+    cols = {}
+    for label, terms in pool.items():
+        x = term_columns(terms, obs)
+        cols[label] = x - qb @ (qb.T @ x)
+    yb = y - qb @ (qb.T @ y)
+    best = [(_loo_rms(hb, yb, n), ())]
+    for k in range(1, max_findings + 1):
+        top = (math.inf, ())
+        for combo in itertools.combinations(pool, k):
+            x = np.hstack([cols[c] for c in combo])
+            q, r = np.linalg.qr(x)
+            diag = np.abs(np.diag(r))
+            if diag.min() < 1e-8 * max(diag.max(), 1e-300):
+                continue  # a finding in the span of the base or of another
+            e = yb - q @ (q.T @ yb)
+            hx = _loo_blocks(q, n)
+            rms = _loo_rms(tuple(u + v for u, v in zip(hb, hx, strict=True)), e, n)
+            if rms < top[0]:
+                top = (rms, combo)
+        best.append(top)
+    return best, pool
+
+
+def bound(args) -> None:
+    """auxtel: the best leave-one-out Sky RMS any model of the eight terms plus at most 4
+    findings can reach (every combination, chosen with the held-out stars in view), against
+    TPOINT's 22-term FAUTO model refitted with its terms fixed."""
+    path = REAL / "auxtel_20200315.dat"
+    if not path.exists():
+        print(f"{path}: absent, skipped")
+        return
+    obs = load_observations(path)
+    base = ["IA", "IE", "NPAE", "CA", "AN", "AW", "TF", "TX"]
+    loo = np.arange(obs.n)
+    t0 = time.perf_counter()
+    best, pool = _parsimonious_bound(obs, base, args.max_findings)
+    dt = time.perf_counter() - t0
+    auto = _cv_fixed(obs, list(AUXTEL_22), loo)
+    print(f"{path.name}: {obs.n} stars; leave-one-star-out Sky RMS, refitted in every fold")
+    print(f"  TPOINT FAUTO 22 terms (TX10 as TX), terms fixed: {auto:.2f}\"")
+    print(f"  eight terms: {_cv_fixed(obs, base, loo):.2f}\"")
+    for k, (rms, combo) in enumerate(best):
+        if k == 0:
+            continue
+        terms = base + [t for c in combo for t in pool[c]]
+        check = _cv_fixed(obs, terms, loo)  # the closed form against plain refits
+        print(f"  best with {k} finding(s) of {len(pool)}: {rms:.2f}\" (refitted {check:.2f}\"),"
+              f" {len(terms)} terms: {', '.join(combo)}")
+    reached = best[-1][0] <= auto
+    print(f"  => {'a' if reached else 'no'} model of at most {args.max_findings} findings "
+          f"reaches the 22-term model's {auto:.2f}\" ({dt:.0f} s, every combination)")
+
+
 def real(args) -> None:
     """auxtel and MMT: findings, degeneracies, cross-validated Sky RMS against TPOINT's."""
     from antsim.diagnose.problem import folds_for
@@ -328,11 +455,13 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--nested", action="store_true",
                         help="with --real: also cross-validate the selection procedures")
+    parser.add_argument("--max-findings", type=int, default=4,
+                        help="with --bound: findings beyond the eight terms (default 4)")
     mode = parser.add_mutually_exclusive_group()
-    for m in ("fomalont", "tilt", "real", "speed"):
+    for m in ("fomalont", "tilt", "real", "bound", "speed"):
         mode.add_argument(f"--{m}", action="store_true")
     args = parser.parse_args()
-    for m in ("fomalont", "tilt", "real", "speed"):
+    for m in ("fomalont", "tilt", "real", "bound", "speed"):
         if getattr(args, m):
             globals()[m](args)
             return
