@@ -12,12 +12,16 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from controller.fitting import FitResult
 from controller.tpoint import TPointModel, write_mod
 from controller.variants import VARIANTS, fit_variants
 
 from .runner import RunResult
+
+if TYPE_CHECKING:
+    from .rendering import FigureProcess
 
 __all__ = ["fit_tables", "run_fits", "write_outputs"]
 
@@ -63,9 +67,11 @@ def fit_tables(fits: dict[str, FitResult | None], title: str) -> str:
     return "\n".join(lines).rstrip() + "\n"
 
 
-def write_outputs(result: RunResult, report: bool = True) -> str:
+def write_outputs(result: RunResult, report: bool = True,
+                  renderer: FigureProcess | None = None) -> str:
     """Write the products of a run into its output directory; return a short summary.
-    With ``report`` also the figures (``figures/``) and ``report.html`` (antsim.report)."""
+    With ``report`` also the figures (``figures/``) and ``report.html`` (antsim.report),
+    the figures drawn by ``renderer`` when given (:mod:`antsim.rendering`)."""
     out = Path(result.out_dir)
     fits = run_fits(result)
     doc = {k: (v.to_json() if v is not None else None) for k, v in fits.items()}
@@ -100,6 +106,6 @@ def write_outputs(result: RunResult, report: bool = True) -> str:
     if report:
         from .report import write_run_report
 
-        _, figures = write_run_report(result, fits, out)
+        _, figures = write_run_report(result, fits, out, renderer=renderer)
         written += f" report.html figures/ ({len(figures)} figures)"
     return summary + f"\nwrote {out}/: {written}"

@@ -33,6 +33,7 @@ from ._version import __version__
 
 if TYPE_CHECKING:
     from .figures import FigureFile
+    from .rendering import FigureProcess
     from .runner import RunResult
 
 __all__ = [
@@ -351,8 +352,10 @@ def truth_terms_arcsec(truth: Mapping[str, Any] | None) -> dict[str, float]:
 
 
 def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
-                     out_dir: str | Path | None = None) -> tuple[Path, list[FigureFile]]:
-    """Figures (``DIR/figures/``) and ``DIR/report.html`` of a run; returns both."""
+                     out_dir: str | Path | None = None, renderer: FigureProcess | None = None
+                     ) -> tuple[Path, list[FigureFile]]:
+    """Figures (``DIR/figures/``) and ``DIR/report.html`` of a run; returns both. The
+    figures are drawn by ``renderer`` when given (:mod:`antsim.rendering`), else here."""
     from .figures import REPORT_TABLE2_ARCSEC, run_figures
 
     out = Path(out_dir if out_dir is not None else result.out_dir)
@@ -360,7 +363,8 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
     truth = truth_terms_arcsec(result.truth)
     reference = REPORT_TABLE2_ARCSEC if scenario.name == "ghigo1990" else None
     el_limit = scenario.controller.scheduler.elevation_min_deg
-    figures = run_figures(result.rows, fits, out / "figures", truth_arcsec=truth or None,
+    draw = renderer.run_figures if renderer is not None else run_figures
+    figures = draw(result.rows, fits, out / "figures", truth_arcsec=truth or None,
                           name=scenario.name, start_label=f"UTC {scenario.epoch_utc}",
                           el_limit_deg=el_limit, reference_rms=reference,
                           gain_fit=_elevation_gain_fit(result))

@@ -27,6 +27,20 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
+    renderer = None
+    if not args.no_report:
+        from antsim.rendering import FigureProcess
+
+        # first thing: its matplotlib imports overlap the campaign, on the other core
+        renderer = FigureProcess.start()
+    try:
+        return _run(args, renderer)
+    finally:
+        if renderer is not None:
+            renderer.close()
+
+
+def _run(args: argparse.Namespace, renderer) -> int:
     from antsim.runner import run_campaign
     from antsim.scenario import load_scenario
 
@@ -53,6 +67,6 @@ def main(args: argparse.Namespace) -> int:
                           show_progress=args.progress)
     from antsim.outputs import write_outputs
 
-    summary = write_outputs(result, report=not args.no_report)
+    summary = write_outputs(result, report=not args.no_report, renderer=renderer)
     print(summary, file=sys.stdout)
     return 0
