@@ -94,6 +94,10 @@ _STYLE = {
     "svg.hashsalt": "antsim",
     "svg.fonttype": "path",
     "path.simplify": True,
+    # a fixed title height: matplotlib otherwise measures every tick label of the axes to
+    # lift the title above any on top (none of ours has labels there: same pixels, ~4% less
+    # drawing time)
+    "axes.titley": 1.0,
 }
 _PNG_METADATA = {"Software": "antsim"}
 #: zlib level of the PNGs: 3 encodes in 2/3 of the time of PIL's default 6 for files <1% larger

@@ -19,6 +19,7 @@ warns and does so too.
 from __future__ import annotations
 
 import os
+import pickle
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
@@ -37,11 +38,15 @@ _COST = {"histogram_figure": 3.0, "pointing_errors_figure": 2.4, "amplitude_figu
 
 
 def rendering_available() -> bool:
-    """Whether the figures may be drawn in forked processes (an operating system that
-    forks, and two cores)."""
+    """Whether the figures may be drawn in forked processes: an operating system that
+    forks, two cores, and no other thread in this process (a fork copies only the calling
+    thread, and a lock another one held, such as the import lock, would never be released
+    in the copy)."""
     import multiprocessing
+    import threading
 
-    return (os.cpu_count() or 1) >= 2 and "fork" in multiprocessing.get_all_start_methods()
+    return ((os.cpu_count() or 1) >= 2 and threading.active_count() == 1
+            and "fork" in multiprocessing.get_all_start_methods())
 
 
 def _take_jobs(jobs: list, order: list[int], counter) -> dict[int, Any]:
@@ -131,7 +136,7 @@ class FigureProcess:
         """:func:`antsim.figures.run_figures` drawn by the process (once: it ends after)."""
         try:
             answer = self._ask((rows, fits, str(out_dir), options))
-        except (OSError, RuntimeError) as err:
+        except RuntimeError as err:
             warnings.warn(f"drawing the figures here: {err}", RuntimeWarning, stacklevel=2)
             from .figures import run_figures
 
@@ -140,14 +145,18 @@ class FigureProcess:
 
     def _ask(self, request) -> list:
         try:
-            self._conn.send(request)
+            try:
+                self._conn.send(request)
+            except (pickle.PicklingError, TypeError, AttributeError) as err:
+                raise RuntimeError(f"the figures' inputs cannot be sent: {err}") from None
             while not self._conn.poll(POLL_S):
                 if not self._process.is_alive() and not self._conn.poll(0):
-                    raise RuntimeError("the figure process ended without an answer "
-                                       f"(exit code {self._process.exitcode})")
+                    raise EOFError
             kind, payload = self._conn.recv()
-        except EOFError:
-            raise RuntimeError("the figure process ended without an answer") from None
+        except (EOFError, OSError):  # ended before or while it was asked
+            self._process.join(timeout=POLL_S)
+            raise RuntimeError("the figure process ended without an answer (exit code "
+                               f"{self._process.exitcode})") from None
         finally:
             self.close()
         if kind != "ok":

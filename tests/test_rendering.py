@@ -1,95 +1,90 @@
 """A run's figures drawn in forked processes (antsim.rendering): the same files, byte for
-byte, as drawn in this process; a process that fails or dies leaves the figures to this
-process with a warning; the two drawing processes each draw some of them.
+byte, as drawn in this process; both drawing processes draw; a process that fails or dies
+leaves the figures to this process with a warning; no process while another thread runs.
 
-The run is the 1990 scenario cut to 3 hours (conftest's ``short_ghigo_text``).
+The checks run in a fresh Python process (tests/data/rendering_checks.py): a fork copies
+only the calling thread, and this one may have threads left by earlier tests, so the module
+would rightly refuse to fork here. The run is the 1990 scenario cut to 3 hours (conftest's
+``short_ghigo_text``).
 """
 
 from __future__ import annotations
 
+import json
 import os
-import signal
-import warnings
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
-from antsim import figures, rendering
-from antsim.outputs import run_fits
-from antsim.runner import simulate
-from antsim.scenario import load_scenario
+from antsim import rendering
 
-pytestmark = pytest.mark.skipif(not rendering.rendering_available(),
-                                reason="no fork or one core: figures are drawn in-process")
+ROOT = Path(__file__).resolve().parents[1]
+CHECKS = Path(__file__).parent / "data" / "rendering_checks.py"
+
+pytestmark = pytest.mark.skipif(
+    (os.cpu_count() or 1) < 2 or not hasattr(os, "fork"),
+    reason="no fork or one core: figures are drawn in-process")
 
 
 @pytest.fixture(scope="module")
-def short_run(short_ghigo_text, tmp_path_factory):
-    path = tmp_path_factory.mktemp("scenario") / "short.toml"
-    path.write_text(short_ghigo_text, encoding="utf-8")
-    result = simulate(load_scenario(path))
-    return result, run_fits(result)
+def found(short_ghigo_text, tmp_path_factory) -> dict:
+    scenario = tmp_path_factory.mktemp("scenario") / "short.toml"
+    scenario.write_text(short_ghigo_text, encoding="utf-8")
+    out = tmp_path_factory.mktemp("rendering")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    done = subprocess.run([sys.executable, str(CHECKS), str(scenario), str(out)], env=env,
+                          capture_output=True, text=True, timeout=600, check=False)
+    assert done.returncode == 0, done.stderr[-3000:]
+    return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def _options() -> dict:
-    return {"name": "short", "el_limit_deg": 10.0,
-            "reference_rms": figures.REPORT_TABLE2_ARCSEC}
+def test_a_fresh_process_may_fork(found):
+    assert found["available"] is True
 
 
-def _bytes(files) -> dict[str, bytes]:
-    return {Path(f.path).name: Path(f.path).read_bytes() for f in files}
+def test_forked_figures_are_the_same_files_as_in_process(found):
+    same = found["same"]
+    assert same["n"] == [10, 10]
+    assert same["bytes"] and same["titles"] and same["captions"]
+    assert len(same["folders"]) == 1 and same["folders"][0].endswith("there")
+    assert same["warnings"] == []  # drawn there, not by the fallback here
 
 
-def test_forked_figures_are_the_same_files_as_in_process(short_run, tmp_path):
-    result, fits = short_run
-    here = figures.run_figures(result.rows, fits, tmp_path / "here", **_options())
-    process = rendering.FigureProcess.start()
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")  # drawn there, not by the fallback here
-        there = process.run_figures(result.rows, fits, tmp_path / "there", **_options())
-    assert [f.title for f in there] == [f.title for f in here]
-    assert [f.caption for f in there] == [f.caption for f in here]
-    assert [Path(f.path).parent for f in there] == [tmp_path / "there"] * len(there)
-    assert _bytes(there) == _bytes(here)
-    assert len(here) == 10
+def test_both_processes_draw_each_figure_once_in_order(found):
+    drawers = found["drawers"]
+    assert drawers["n_jobs"] == drawers["n_files"] == 10
+    assert len(drawers["pids"]) == 2
+    assert drawers["order"]
 
 
-def test_both_processes_draw(short_run, tmp_path):
-    """Each of the two processes draws at least one figure (the work is shared)."""
-    result, fits = short_run
-    jobs = figures.run_figure_jobs(result.rows, fits, tmp_path, **_options())
-
-    def tagged(job):
-        def call():
-            out = job()
-            (tmp_path / f"{out.path.stem}.pid").write_text(str(os.getpid()))
-            return out
-        call.func = job.func  # the cost table is keyed by the figure function
-        return call
-
-    files = rendering.draw_in_two([tagged(j) for j in jobs])
-    drawers = {(tmp_path / f"{f.path.stem}.pid").read_text() for f in files}
-    assert len(files) == len(jobs) == len({f.path for f in files})
-    assert len(drawers) == 2, drawers
-
-
-def test_a_failing_figure_process_leaves_the_figures_to_this_one(short_run, tmp_path):
+def test_a_failing_figure_process_leaves_the_figures_to_this_one(found):
     """The process answers with its error; this process warns and draws the figures itself,
-    which here raises the same error where a user sees its traceback."""
-    result, fits = short_run
-    process = rendering.FigureProcess.start()
-    with pytest.warns(RuntimeWarning, match="drawing the figures here: the figure process "
-                                            "failed: TypeError"), pytest.raises(TypeError):
-        process.run_figures(result.rows, fits, tmp_path, no_such_option=1)
-    assert not process._process.is_alive()
+    which raises the same error where a user sees its traceback."""
+    failing = found["failing"]
+    assert failing["raised"] is not None and "no_such_option" in failing["raised"]
+    assert len(failing["warnings"]) == 1
+    assert failing["warnings"][0].startswith(
+        "drawing the figures here: the figure process failed: TypeError")
+    assert failing["alive"] is False
 
 
-def test_a_killed_figure_process_leaves_the_figures_to_this_one(short_run, tmp_path):
-    result, fits = short_run
-    process = rendering.FigureProcess.start()
-    os.kill(process._process.pid, signal.SIGKILL)
-    process._process.join()
-    with pytest.warns(RuntimeWarning, match="drawing the figures here"):
-        files = process.run_figures(result.rows, fits, tmp_path, **_options())
-    assert _bytes(files) == _bytes(figures.run_figures(result.rows, fits, tmp_path / "ref",
-                                                       **_options()))
+def test_a_killed_figure_process_leaves_the_figures_to_this_one(found):
+    killed = found["killed"]
+    assert killed["bytes"]
+    assert len(killed["warnings"]) == 1
+    assert "ended without an answer" in killed["warnings"][0]
+
+
+def test_no_figure_process_while_another_thread_runs(found):
+    assert found["with_thread"] is True
+    assert found["after_thread"] is True
+
+
+def test_cost_table_names_real_figure_functions():
+    """A renamed figure function would silently lose its place in the drawing order."""
+    from antsim import figures
+
+    assert all(callable(getattr(figures, name, None)) for name in rendering._COST)

@@ -1,0 +1,108 @@
+"""The checks of tests/test_rendering.py, run in a fresh Python process.
+
+A fork copies only the calling thread, and the test process may have threads left by
+earlier tests (dask's), so :mod:`antsim.rendering` would rightly refuse to fork there. This
+script starts single-threaded, simulates the short scenario given as ``argv[1]``, runs each
+check in a directory under ``argv[2]`` and prints one JSON object of findings.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import sys
+import threading
+import warnings
+from pathlib import Path
+
+from antsim import figures, rendering
+from antsim.outputs import run_fits
+from antsim.runner import simulate
+from antsim.scenario import load_scenario
+
+OPTIONS = {"name": "short", "el_limit_deg": 10.0, "reference_rms": figures.REPORT_TABLE2_ARCSEC}
+
+
+def file_bytes(files) -> dict[str, str]:
+    return {Path(f.path).name: Path(f.path).read_bytes().hex() for f in files}
+
+
+def main() -> None:
+    scenario, out = Path(sys.argv[1]), Path(sys.argv[2])
+    result = simulate(load_scenario(scenario))
+    fits = run_fits(result)
+    rows = result.rows
+    found: dict = {"available": rendering.rendering_available()}
+
+    # the same files, titles and captions as drawn here, and no fallback warning
+    here = figures.run_figures(rows, fits, out / "here", **OPTIONS)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        there = rendering.FigureProcess.start().run_figures(rows, fits, out / "there",
+                                                            **OPTIONS)
+    found["same"] = {
+        "n": [len(here), len(there)],
+        "bytes": file_bytes(here) == file_bytes(there),
+        "titles": [f.title for f in here] == [f.title for f in there],
+        "captions": [f.caption for f in here] == [f.caption for f in there],
+        "folders": sorted({str(Path(f.path).parent) for f in there}),
+        "warnings": [str(w.message) for w in caught],
+    }
+
+    # both drawing processes draw: each figure leaves the pid of its drawer beside it
+    jobs = figures.run_figure_jobs(rows, fits, out / "pids", **OPTIONS)
+
+    def tagged(job):
+        def call():
+            drawn = job()
+            drawn.path.with_suffix(".pid").write_text(str(os.getpid()))
+            return drawn
+        call.func = job.func  # the cost table is keyed by the figure function
+        return call
+
+    drawn = rendering.draw_in_two([tagged(j) for j in jobs])
+    found["drawers"] = {
+        "n_jobs": len(jobs), "n_files": len({str(f.path) for f in drawn}),
+        "pids": sorted({f.path.with_suffix(".pid").read_text() for f in drawn}),
+        "order": [f.path.name for f in drawn] == [Path(f.path).name for f in here],
+    }
+
+    # a request the process cannot draw: it answers with the error, this process warns and
+    # draws the figures itself, which raises the same error here
+    process = rendering.FigureProcess.start()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            process.run_figures(rows, fits, out / "failing", no_such_option=1)
+            raised = None
+        except TypeError as err:
+            raised = f"TypeError: {err}"
+    found["failing"] = {"raised": raised, "warnings": [str(w.message) for w in caught],
+                        "alive": process._process.is_alive()}
+
+    # a process killed before it answers: the figures are drawn here, the same files
+    process = rendering.FigureProcess.start()
+    os.kill(process._process.pid, signal.SIGKILL)
+    process._process.join()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        files = process.run_figures(rows, fits, out / "killed", **OPTIONS)
+    found["killed"] = {"bytes": file_bytes(files) == file_bytes(here),
+                       "warnings": [str(w.message) for w in caught]}
+
+    # with another thread running there is no process
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)
+    other.start()
+    try:
+        found["with_thread"] = rendering.FigureProcess.start() is None
+    finally:
+        stop.set()
+        other.join()
+    found["after_thread"] = rendering.rendering_available()
+    print(json.dumps(found))
+
+
+if __name__ == "__main__":
+    main()
