@@ -53,6 +53,7 @@ __all__ = [
     "comparison_figure",
     "histogram_figure",
     "pointing_errors_figure",
+    "recording_figure_jobs",
     "residual_quiver_figure",
     "residual_time_figure",
     "run_figure_jobs",
@@ -845,26 +846,16 @@ def run_figures(rows, fits: Mapping[str, FitResult | None], out_dir: str | Path,
     return [job() for job in run_figure_jobs(rows, fits, out_dir, **options)]
 
 
-def run_figure_jobs(rows, fits: Mapping[str, FitResult | None], out_dir: str | Path, *,
-                    truth_arcsec: Mapping[str, float] | None = None, name: str = "",
-                    start_label: str = "", el_limit_deg: float | None = None,
-                    reference_rms: Mapping[str, tuple[float, float]] | None = None,
-                    gain_curve: Sequence[tuple[float, float]] = REPORT_GAIN_CURVE,
-                    formats: Sequence[str] = ("png",), gain_fit=None
-                    ) -> list[partial[FigureFile]]:
-    """The figures of :func:`run_figures`, each a call that draws and writes it, in the
-    report's order (independent of each other: :mod:`antsim.rendering` runs them in two
-    processes).
-
-    ``truth_arcsec``: the injected coefficients by term name, if known; ``name``: prefixed
-    to the titles; ``reference_rms``: ``{fit: (xel, el)}`` published rms (arcsec) drawn
-    beside the run's.
-    """
+def recording_figure_jobs(rows, out_dir: str | Path, *, name: str = "",
+                          el_limit_deg: float | None = None,
+                          formats: Sequence[str] = ("png",)) -> list[partial[FigureFile]]:
+    """The first figures of :func:`run_figure_jobs`, those drawn from the recordings alone
+    (Fig. 1, Fig. 2a-d), with the options they take: they can be drawn before the fits."""
     out = Path(out_dir)
     prefix = f"{name}: " if name else ""
     obs = _Observations.from_rows(rows, "AVG")
     defined = np.isfinite(obs.xel_arcsec) & np.isfinite(obs.el_arcsec)
-    jobs = [
+    return [
         partial(sky_distribution_figure, obs.az_deg, obs.el_deg, out / "fig1_sky.png",
                 source=obs.source, good=obs.good, el_limit_deg=el_limit_deg,
                 title=f"Fig. 1  {prefix}sky distribution of the observations",
@@ -881,11 +872,34 @@ def run_figure_jobs(rows, fits: Mapping[str, FitResult | None], out_dir: str | P
                     "and azimuth. Red crosses are scans the reduction flagged (S/N < 4, ...). "
                     "The large constant elevation error is the encoder zero offset (W6).",
             formats=formats),
+    ]
+
+
+def run_figure_jobs(rows, fits: Mapping[str, FitResult | None], out_dir: str | Path, *,
+                    truth_arcsec: Mapping[str, float] | None = None, name: str = "",
+                    start_label: str = "", el_limit_deg: float | None = None,
+                    reference_rms: Mapping[str, tuple[float, float]] | None = None,
+                    gain_curve: Sequence[tuple[float, float]] = REPORT_GAIN_CURVE,
+                    formats: Sequence[str] = ("png",), gain_fit=None
+                    ) -> list[partial[FigureFile]]:
+    """The figures of :func:`run_figures`, each a call that draws and writes it, in the
+    report's order (independent of each other: :mod:`antsim.rendering` runs them in two
+    processes), starting with :func:`recording_figure_jobs`.
+
+    ``truth_arcsec``: the injected coefficients by term name, if known; ``name``: prefixed
+    to the titles; ``reference_rms``: ``{fit: (xel, el)}`` published rms (arcsec) drawn
+    beside the run's.
+    """
+    out = Path(out_dir)
+    prefix = f"{name}: " if name else ""
+    obs = _Observations.from_rows(rows, "AVG")
+    jobs = recording_figure_jobs(rows, out, name=name, el_limit_deg=el_limit_deg,
+                                 formats=formats)
+    jobs.append(
         partial(amplitude_figure, obs.el_deg, obs.amp_k, obs.source, out / "fig4_amplitude.png",
                 good=obs.good, gain_curve=gain_curve,
                 title=f"Fig. 4  {prefix}amplitude against elevation, strong sources",
-                formats=formats, fitted=gain_fit),
-    ]
+                formats=formats, fitted=gain_fit))
     fit_a = fits.get("A")
     if fit_a is not None:
         data, sun = _fit_a_data(rows)

@@ -18,6 +18,7 @@ warns and does so too.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import pickle
 import warnings
@@ -25,7 +26,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-__all__ = ["FigureProcess", "rendering_available"]
+__all__ = ["FigureProcess", "recording_figure_options", "rendering_available"]
 
 #: how often the waiting parent checks that the figure process is alive (s)
 POLL_S = 0.5
@@ -35,6 +36,15 @@ _COST = {"histogram_figure": 3.0, "pointing_errors_figure": 2.4, "amplitude_figu
          "sky_distribution_figure": 1.2, "coefficients_figure": 1.2,
          "residual_time_figure": 1.1, "comparison_figure": 1.0,
          "residual_quiver_figure": 0.5}
+
+
+def recording_figure_options(result) -> dict[str, Any]:
+    """The options of a run's figures of the recordings alone
+    (:func:`antsim.figures.recording_figure_jobs`): the scenario's name for the titles and
+    its scheduler's elevation limit. ``result``: an :class:`antsim.runner.RunResult`."""
+    scenario = result.scenario
+    return {"name": scenario.name,
+            "el_limit_deg": scenario.controller.scheduler.elevation_min_deg}
 
 
 def rendering_available() -> bool:
@@ -98,18 +108,39 @@ def draw_in_two(jobs: list) -> list:
 
 
 def _serve(conn) -> None:
-    """The figure process: import matplotlib, then draw what is asked and answer ("ok",
-    [FigureFile, ...]) or ("error", message)."""
+    """The figure process: import matplotlib; on ("begin", rows, out_dir, options) draw
+    :func:`antsim.figures.recording_figure_jobs`; on ("draw", rows, fits, out_dir, options)
+    draw the rest of :func:`antsim.figures.run_figure_jobs` (all of it if what was begun
+    differs) and answer ("ok", [FigureFile, ...]) or ("error", message)."""
     from . import figures
 
     figures.warm_up()  # while the command simulates: neither drawing process pays it
+    early: tuple[tuple, list] | None = None
     try:
-        rows, fits, out_dir, options = conn.recv()
+        while True:
+            message = conn.recv()
+            if message[0] == "begin":
+                _, rows, out_dir, options = message
+                try:
+                    early = ((out_dir, options),
+                             [job() for job in figures.recording_figure_jobs(
+                                 rows, out_dir, **options)])
+                except Exception:  # drawn (and reported) with the others
+                    early = None
+                continue
+            _, rows, fits, out_dir, options = message
+            break
     except EOFError:  # the command ended (or failed) before its figures
         return
     try:
-        conn.send(("ok", draw_in_two(figures.run_figure_jobs(rows, fits, out_dir,
-                                                             **options))))
+        jobs = figures.run_figure_jobs(rows, fits, out_dir, **options)
+        drawn: list = []
+        if early is not None:
+            (early_dir, early_options), drawn = early
+            wanted = {k: options.get(k) for k in early_options}
+            if early_dir != out_dir or wanted != early_options:
+                drawn = []  # begun with other inputs: drawn again
+        conn.send(("ok", drawn + draw_in_two(jobs[len(drawn):])))
     except Exception as err:  # reported to the parent, which draws the figures itself
         conn.send(("error", f"{type(err).__name__}: {err}"))
 
@@ -131,11 +162,19 @@ class FigureProcess:
         """The process, or None where figures are better drawn in this process."""
         return cls() if rendering_available() else None
 
+    def begin(self, rows, out_dir: str | Path, **options: Any) -> None:
+        """Have the process draw the figures of the recordings alone now
+        (:func:`antsim.figures.recording_figure_jobs` with ``options``), while this process
+        fits; :meth:`run_figures` with the same directory and options then draws only the
+        others. A process that cannot be reached is left to :meth:`run_figures` to report."""
+        with contextlib.suppress(OSError, pickle.PicklingError, TypeError, AttributeError):
+            self._conn.send(("begin", rows, str(out_dir), options))
+
     def run_figures(self, rows, fits: Mapping[str, Any], out_dir: str | Path,
                     **options: Any) -> list:
         """:func:`antsim.figures.run_figures` drawn by the process (once: it ends after)."""
         try:
-            answer = self._ask((rows, fits, str(out_dir), options))
+            answer = self._ask(("draw", rows, fits, str(out_dir), options))
         except RuntimeError as err:
             warnings.warn(f"drawing the figures here: {err}", RuntimeWarning, stacklevel=2)
             from .figures import run_figures

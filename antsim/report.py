@@ -357,17 +357,16 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
     """Figures (``DIR/figures/``) and ``DIR/report.html`` of a run; returns both. The
     figures are drawn by ``renderer`` when given (:mod:`antsim.rendering`), else here."""
     from .figures import REPORT_TABLE2_ARCSEC, run_figures
+    from .rendering import recording_figure_options
 
     out = Path(out_dir if out_dir is not None else result.out_dir)
     scenario = result.scenario
     truth = truth_terms_arcsec(result.truth)
     reference = REPORT_TABLE2_ARCSEC if scenario.name == "ghigo1990" else None
-    el_limit = scenario.controller.scheduler.elevation_min_deg
     draw = renderer.run_figures if renderer is not None else run_figures
     figures = draw(result.rows, fits, out / "figures", truth_arcsec=truth or None,
-                          name=scenario.name, start_label=f"UTC {scenario.epoch_utc}",
-                          el_limit_deg=el_limit, reference_rms=reference,
-                          gain_fit=_elevation_gain_fit(result))
+                   start_label=f"UTC {scenario.epoch_utc}", reference_rms=reference,
+                   gain_fit=_elevation_gain_fit(result), **recording_figure_options(result))
     good = sum(1 for r in result.rows if r["polarization"] == "AVG" and r["good"])
     fit_a = fits.get("A")
     summary = (f"{scenario.description or scenario.name}. Campaign of "

@@ -1,5 +1,6 @@
 """A run's figures drawn in forked processes (antsim.rendering): the same files, byte for
-byte, as drawn in this process; both drawing processes draw; a process that fails or dies
+byte, as drawn in this process, also when the figures of the recordings are begun before
+the fits; both drawing processes draw; a process that fails or dies
 leaves the figures to this process with a warning; no process while another thread runs.
 
 The checks run in a fresh Python process (tests/data/rendering_checks.py): a fork copies
@@ -51,6 +52,15 @@ def test_forked_figures_are_the_same_files_as_in_process(found):
     assert same["bytes"] and same["titles"] and same["captions"]
     assert len(same["folders"]) == 1 and same["folders"][0].endswith("there")
     assert same["warnings"] == []  # drawn there, not by the fallback here
+
+
+def test_begun_figures_are_drawn_before_the_fits_and_kept(found):
+    """The figures of the recordings alone are drawn as soon as the campaign ends; begun
+    with other options they are drawn again (the files always match this process's)."""
+    begun = found["begun"]
+    assert begun["before_fits"]
+    assert begun["bytes"] and begun["titles"] and begun["other_bytes"]
+    assert begun["warnings"] == []
 
 
 def test_both_processes_draw_each_figure_once_in_order(found):

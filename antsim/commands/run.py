@@ -65,6 +65,10 @@ def _run(args: argparse.Namespace, renderer) -> int:
                          "use --resume to continue that run, or another directory")
     result = run_campaign(scenario, out, seed=args.seed, model=model, resume=args.resume,
                           show_progress=args.progress)
+    if renderer is not None:  # the figures of the recordings alone, drawn while we fit
+        from antsim.rendering import recording_figure_options
+
+        renderer.begin(result.rows, out / "figures", **recording_figure_options(result))
     from antsim.outputs import write_outputs
 
     summary = write_outputs(result, report=not args.no_report, renderer=renderer)

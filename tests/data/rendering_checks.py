@@ -13,6 +13,7 @@ import os
 import signal
 import sys
 import threading
+import time
 import warnings
 from pathlib import Path
 
@@ -49,6 +50,27 @@ def main() -> None:
         "folders": sorted({str(Path(f.path).parent) for f in there}),
         "warnings": [str(w.message) for w in caught],
     }
+
+    # begun before the fits: the figures of the recordings alone are there before the
+    # fits are sent, and the files are the same; begun with other options: drawn again
+    process = rendering.FigureProcess.start()
+    early = {"name": OPTIONS["name"], "el_limit_deg": OPTIONS["el_limit_deg"]}
+    process.begin(rows, out / "begun", **early)
+    first = [out / "begun" / "fig1_sky.png", out / "begun" / "fig2_total_errors.png"]
+    deadline = time.monotonic() + 60.0
+    while not all(p.exists() for p in first) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    before_fits = all(p.exists() for p in first)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        begun = process.run_figures(rows, fits, out / "begun", **OPTIONS)
+    process = rendering.FigureProcess.start()
+    process.begin(rows, out / "other", **{**early, "name": "another name"})
+    other = process.run_figures(rows, fits, out / "other", **OPTIONS)
+    found["begun"] = {"before_fits": before_fits, "bytes": file_bytes(begun) == file_bytes(here),
+                      "titles": [f.title for f in begun] == [f.title for f in here],
+                      "other_bytes": file_bytes(other) == file_bytes(here),
+                      "warnings": [str(w.message) for w in caught]}
 
     # both drawing processes draw: each figure leaves the pid of its drawer beside it
     jobs = figures.run_figure_jobs(rows, fits, out / "pids", **OPTIONS)
