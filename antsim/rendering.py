@@ -21,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import os
 import pickle
+import signal
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
@@ -107,11 +108,16 @@ def draw_in_two(jobs: list) -> list:
     return [mine[i] for i in range(len(jobs))]
 
 
-def _serve(conn) -> None:
+def _serve(conn, parent_end) -> None:
     """The figure process: import matplotlib; on ("begin", rows, out_dir, options) draw
     :func:`antsim.figures.recording_figure_jobs`; on ("draw", rows, fits, out_dir, options)
     draw the rest of :func:`antsim.figures.run_figure_jobs` (all of it if what was begun
     differs) and answer ("ok", [FigureFile, ...]) or ("error", message)."""
+    # the command's end of the pipe, inherited by the fork: closed, so that the command's
+    # end (by exit, failure or SIGKILL) reaches this process as EOF and it ends too
+    parent_end.close()
+    # Ctrl-C reaches the whole process group: the command handles it and ends this process
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     from . import figures
 
     figures.warm_up()  # while the command simulates: neither drawing process pays it
@@ -153,7 +159,7 @@ class FigureProcess:
 
         ctx = multiprocessing.get_context("fork")
         self._conn, child = ctx.Pipe()
-        self._process = ctx.Process(target=_serve, args=(child,), daemon=True)
+        self._process = ctx.Process(target=_serve, args=(child, self._conn), daemon=True)
         self._process.start()
         child.close()
 

@@ -1,7 +1,8 @@
 """A run's figures drawn in forked processes (antsim.rendering): the same files, byte for
 byte, as drawn in this process, also when the figures of the recordings are begun before
 the fits; both drawing processes draw; a process that fails or dies
-leaves the figures to this process with a warning; no process while another thread runs.
+leaves the figures to this process with a warning; a killed or interrupted command leaves no
+figure process behind; no process while another thread runs.
 
 The checks run in a fresh Python process (tests/data/rendering_checks.py): a fork copies
 only the calling thread, and this one may have threads left by earlier tests, so the module
@@ -86,6 +87,14 @@ def test_a_killed_figure_process_leaves_the_figures_to_this_one(found):
     assert killed["bytes"]
     assert len(killed["warnings"]) == 1
     assert "ended without an answer" in killed["warnings"][0]
+
+
+def test_the_figure_process_ends_with_its_command(found):
+    """Killed with SIGKILL (as tests/test_campaign.py does) or interrupted with Ctrl-C, the
+    command leaves no figure process behind, and the figure process prints nothing."""
+    for how, outcome in found["orphans"].items():
+        assert outcome["ended"], how
+        assert outcome["stderr"] == "", (how, outcome["stderr"])
 
 
 def test_no_figure_process_while_another_thread_runs(found):

@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import os
 import signal
+import subprocess
 import sys
 import threading
 import time
@@ -27,6 +28,49 @@ OPTIONS = {"name": "short", "el_limit_deg": 10.0, "reference_rms": figures.REPOR
 
 def file_bytes(files) -> dict[str, str]:
     return {Path(f.path).name: Path(f.path).read_bytes().hex() for f in files}
+
+
+COMMAND = """
+import sys, time
+from antsim import rendering
+process = rendering.FigureProcess.start()
+print(process._process.pid, flush=True)
+try:
+    time.sleep(120)
+except KeyboardInterrupt:
+    sys.exit(130)
+"""
+
+
+def ended(pid: int) -> bool:
+    """Gone, or a zombie waiting for its (new) parent to reap it."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (FileNotFoundError, ProcessLookupError, IndexError):
+        return True
+    return state == "Z"
+
+
+def command_ends(sig: int) -> dict:
+    """Start a command that holds a figure process, send it ``sig`` (SIGINT to its process
+    group, as a terminal's Ctrl-C; SIGKILL to the command alone, as tests/test_campaign.py
+    does), and say whether the figure process ended within 10 s and what was printed."""
+    command = subprocess.Popen([sys.executable, "-c", COMMAND], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, start_new_session=True)
+    pid = int(command.stdout.readline())
+    time.sleep(0.5)  # the figure process is importing matplotlib now
+    if sig == signal.SIGINT:
+        os.killpg(command.pid, sig)
+    else:
+        os.kill(command.pid, sig)
+    command.wait(timeout=30)
+    deadline = time.monotonic() + 10.0
+    while not ended(pid) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    if not ended(pid):
+        os.kill(pid, signal.SIGKILL)
+        return {"ended": False, "stderr": command.stderr.read()}
+    return {"ended": True, "stderr": command.stderr.read()}
 
 
 def main() -> None:
@@ -112,6 +156,11 @@ def main() -> None:
         files = process.run_figures(rows, fits, out / "killed", **OPTIONS)
     found["killed"] = {"bytes": file_bytes(files) == file_bytes(here),
                        "warnings": [str(w.message) for w in caught]}
+
+    # the command killed (SIGKILL) or interrupted (Ctrl-C reaches its whole process group):
+    # its figure process ends too, and says nothing
+    found["orphans"] = {name: command_ends(sig) for name, sig in
+                        (("killed", signal.SIGKILL), ("interrupted", signal.SIGINT))}
 
     # with another thread running there is no process
     stop = threading.Event()
