@@ -851,9 +851,13 @@ def recording_figure_jobs(rows, out_dir: str | Path, *, name: str = "",
                           formats: Sequence[str] = ("png",)) -> list[partial[FigureFile]]:
     """The first figures of :func:`run_figure_jobs`, those drawn from the recordings alone
     (Fig. 1, Fig. 2a-d), with the options they take: they can be drawn before the fits."""
-    out = Path(out_dir)
+    return _recording_jobs(_Observations.from_rows(rows, "AVG"), Path(out_dir), name,
+                           el_limit_deg, formats)
+
+
+def _recording_jobs(obs: _Observations, out: Path, name: str, el_limit_deg: float | None,
+                    formats: Sequence[str]) -> list[partial[FigureFile]]:
     prefix = f"{name}: " if name else ""
-    obs = _Observations.from_rows(rows, "AVG")
     defined = np.isfinite(obs.xel_arcsec) & np.isfinite(obs.el_arcsec)
     return [
         partial(sky_distribution_figure, obs.az_deg, obs.el_deg, out / "fig1_sky.png",
@@ -893,8 +897,7 @@ def run_figure_jobs(rows, fits: Mapping[str, FitResult | None], out_dir: str | P
     out = Path(out_dir)
     prefix = f"{name}: " if name else ""
     obs = _Observations.from_rows(rows, "AVG")
-    jobs = recording_figure_jobs(rows, out, name=name, el_limit_deg=el_limit_deg,
-                                 formats=formats)
+    jobs = _recording_jobs(obs, out, name, el_limit_deg, formats)
     jobs.append(
         partial(amplitude_figure, obs.el_deg, obs.amp_k, obs.source, out / "fig4_amplitude.png",
                 good=obs.good, gain_curve=gain_curve,

@@ -4,10 +4,13 @@ Drawing the ten figures of ``antsim run`` costs about as much as the 24-hour cam
 itself, and importing matplotlib a good part of that. :meth:`FigureProcess.start` forks a
 process as the command starts: it imports matplotlib and :mod:`antsim.figures` and draws a
 first figure to nothing (:func:`antsim.figures.warm_up`) while this process simulates on the
-other core, then waits. :meth:`FigureProcess.run_figures` sends it the recordings and fits;
-it forks once more (the copy starts warmed up, with the data in memory) and the two draw
-the figures of :func:`antsim.figures.run_figure_jobs` between them, the costliest first,
-each taking the next one not yet taken.
+other core, then waits. :meth:`FigureProcess.begin` sends it the recordings as soon as the
+campaign ends, and it draws the figures of the recordings alone
+(:func:`antsim.figures.recording_figure_jobs`) while this process fits.
+:meth:`FigureProcess.run_figures` sends it the fits; it forks once more (the copy starts
+warmed up, with the data in memory) and the two draw the rest of
+:func:`antsim.figures.run_figure_jobs` between them, the costliest first, each taking the
+next one not yet taken.
 
 The files are byte-identical to :func:`antsim.figures.run_figures` in this process (each
 figure is drawn from the same inputs with matplotlib's style reset, whatever process draws
