@@ -14,7 +14,7 @@ next one not yet taken.
 
 The files are byte-identical to :func:`antsim.figures.run_figures` in this process (each
 figure is drawn from the same inputs with matplotlib's style reset, whatever process draws
-it). Where the operating system does not fork, or on one core, there is no process and the
+it). Off Linux, on one core, or with another thread running there is no process and the
 caller draws the figures itself; if the process fails, :meth:`FigureProcess.run_figures`
 warns and does so too.
 """
@@ -25,6 +25,7 @@ import contextlib
 import os
 import pickle
 import signal
+import sys
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
@@ -52,15 +53,15 @@ def recording_figure_options(result) -> dict[str, Any]:
 
 
 def rendering_available() -> bool:
-    """Whether the figures may be drawn in forked processes: an operating system that
-    forks, two cores, and no other thread in this process (a fork copies only the calling
-    thread, and a lock another one held, such as the import lock, would never be released
-    in the copy)."""
-    import multiprocessing
+    """Whether the figures may be drawn in forked processes: Linux (macOS can fork, but
+    its system libraries are not safe to use in a forked copy, which is why Python spawns
+    there by default), two cores, and no other thread in this process (a fork copies only
+    the calling thread, and a lock another one held, such as the import lock, would never
+    be released in the copy)."""
     import threading
 
-    return ((os.cpu_count() or 1) >= 2 and threading.active_count() == 1
-            and "fork" in multiprocessing.get_all_start_methods())
+    return (sys.platform.startswith("linux") and (os.cpu_count() or 1) >= 2
+            and threading.active_count() == 1)
 
 
 def _take_jobs(jobs: list, order: list[int], counter) -> dict[int, Any]:
