@@ -319,7 +319,9 @@ def _parsimonious_bound(obs, base: list[str], max_findings: int):
 def bound(args) -> None:
     """auxtel: the best leave-one-out Sky RMS any model of the eight terms plus at most 4
     findings can reach (every combination, chosen with the held-out stars in view), against
-    TPOINT's 22-term FAUTO model refitted with its terms fixed."""
+    TPOINT's 22-term FAUTO model refitted with its terms fixed; and the same with the
+    selection repeated inside each fold (compare ``--real --nested``'s automatic 22-term
+    search, selected the same way)."""
     path = REAL / "auxtel_20200315.dat"
     if not path.exists():
         print(f"{path}: absent, skipped")
@@ -344,6 +346,51 @@ def bound(args) -> None:
     reached = best[-1][0] <= auto
     print(f"  => {'a' if reached else 'no'} model of at most {args.max_findings} findings "
           f"reaches the 22-term model's {auto:.2f}\" ({dt:.0f} s, every combination)")
+    print("  selection repeated inside each leave-one-out fold (the procedure, not one model,"
+          " cross-validated): findings added while the fold's own leave-one-out Sky RMS falls")
+    for k in range(1, args.max_findings + 1):
+        print(f"    at most {k} finding(s): {_nested_cv_selection(obs, base, pool, k):.2f}\"")
+
+
+def _nested_cv_selection(obs, base: list[str], pool: dict[str, tuple[str, ...]],
+                         max_findings: int) -> float:
+    """Leave-one-star-out Sky RMS of a selection procedure run inside each fold: forward
+    selection from ``pool`` by the training stars' own leave-one-out Sky RMS, at most
+    ``max_findings``, stopping when no finding lowers it."""
+    from antsim.diagnose.problem import _lstsq, term_columns
+
+    n = obs.n
+    y = np.concatenate([obs.xel_arcsec, obs.el_arcsec])
+    base_cols = term_columns(base, obs)
+    cols = {label: term_columns(terms, obs) for label, terms in pool.items()}
+
+    def inner(x: np.ndarray, yy: np.ndarray, m: int) -> float:
+        q, r = np.linalg.qr(x)
+        diag = np.abs(np.diag(r))
+        if diag.min() < 1e-8 * max(diag.max(), 1e-300):
+            return math.inf
+        return _loo_rms(_loo_blocks(q, m), yy - q @ (q.T @ yy), m)
+
+    sq = 0.0
+    for i in range(n):
+        train = np.ones(n, dtype=bool)
+        train[i] = False
+        rows = np.concatenate([train, train])
+        chosen: list[str] = []
+        current = inner(base_cols[rows], y[rows], n - 1)
+        for _ in range(max_findings):
+            score, label = min(
+                (inner(np.hstack([base_cols, *(cols[c] for c in (*chosen, p))])[rows], y[rows],
+                       n - 1), p) for p in pool if p not in chosen)
+            if score >= current:
+                break
+            chosen.append(label)
+            current = score
+        x = np.hstack([base_cols, *(cols[c] for c in chosen)])
+        coef, _ = _lstsq(x[rows], y[rows])
+        held = (y - x @ coef).reshape(2, -1)[:, i]
+        sq += float(held @ held)
+    return math.sqrt(sq / n)
 
 
 def real(args) -> None:
