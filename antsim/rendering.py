@@ -166,6 +166,7 @@ class FigureProcess:
         self._process = ctx.Process(target=_serve, args=(child, self._conn), daemon=True)
         self._process.start()
         child.close()
+        self._answered = False
 
     @classmethod
     def start(cls) -> FigureProcess | None:
@@ -202,6 +203,7 @@ class FigureProcess:
                 if not self._process.is_alive() and not self._conn.poll(0):
                     raise EOFError
             kind, payload = self._conn.recv()
+            self._answered = True
         except (EOFError, OSError):  # ended before or while it was asked
             self._process.join(timeout=POLL_S)
             raise RuntimeError("the figure process ended without an answer (exit code "
@@ -213,9 +215,11 @@ class FigureProcess:
         return payload
 
     def close(self) -> None:
-        """End the process (it ends by itself once it has answered)."""
+        """End the process: it ends by itself once it has answered; before that (the command
+        failed, or ends without figures) it is stopped at once."""
         self._conn.close()
-        self._process.join(timeout=POLL_S)
+        if self._answered:
+            self._process.join(timeout=POLL_S)
         if self._process.is_alive():
             self._process.terminate()
             self._process.join()
