@@ -5,8 +5,12 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from controller.errors import InputError
+
+if TYPE_CHECKING:
+    from antsim.rendering import FigureProcess
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -40,7 +44,7 @@ def main(args: argparse.Namespace) -> int:
             renderer.close()
 
 
-def _run(args: argparse.Namespace, renderer) -> int:
+def _run(args: argparse.Namespace, renderer: FigureProcess | None) -> int:
     from antsim.runner import run_campaign
     from antsim.scenario import load_scenario
 
