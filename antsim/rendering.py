@@ -46,7 +46,9 @@ _COST = {"histogram_figure": 3.0, "pointing_errors_figure": 2.4, "amplitude_figu
 def recording_figure_options(result) -> dict[str, Any]:
     """The options of a run's figures of the recordings alone
     (:func:`antsim.figures.recording_figure_jobs`): the scenario's name for the titles and
-    its scheduler's elevation limit. ``result``: an :class:`antsim.runner.RunResult`."""
+    its scheduler's elevation limit. ``result``: an :class:`antsim.runner.RunResult`.
+    Here rather than in :mod:`antsim.figures`, which imports the fitter (scipy): the
+    command asks for them before it imports that."""
     scenario = result.scenario
     return {"name": scenario.name,
             "el_limit_deg": scenario.controller.scheduler.elevation_min_deg}

@@ -142,6 +142,8 @@ def _cv_fixed(obs, terms, folds):
     return math.sqrt(sq / obs.n)
 
 
+#: the baseline diagnose uses for TPOINT data without a model
+EIGHT_TERMS = ("IA", "IE", "NPAE", "CA", "AN", "AW", "TF", "TX")
 AUXTEL_22 = ("IA", "NPAE", "AN", "AW", "TF", "TX", "HESE", "HESE5", "HESE7", "HECE7", "HESE8",
              "HECE8", "HACA2", "HASA7", "HESACE", "HESA2", "HESA3", "HSCA5CE8", "HSSA6CE6",
              "HSCE3", "HSSE8", "HSCE8")
@@ -195,7 +197,7 @@ def _nested_cv(obs) -> tuple[float, float]:
     and an unpenalized automatic search to 22 terms (TPOINT FAUTO's size)."""
     from antsim.diagnose.problem import _lstsq, term_columns
 
-    names = ["IA", "IE", "NPAE", "CA", "AN", "AW", "TF", "TX", *_harmonic_pool()]
+    names = [*EIGHT_TERMS, *_harmonic_pool()]
     cols_all = term_columns(names, obs)
     y = np.concatenate([obs.xel_arcsec, obs.el_arcsec])
     sq_d = sq_a = 0.0
@@ -237,6 +239,14 @@ def _loo_rms(h: tuple, e: np.ndarray, n: int) -> float:
     r1 = (d * e[:n] - b * e[n:]) / det
     r2 = (a * e[n:] - b * e[:n]) / det
     return math.sqrt(float(np.mean(r1**2 + r2**2)))
+
+
+def _orthonormal(x: np.ndarray) -> np.ndarray | None:
+    """An orthonormal basis of the columns of ``x`` (QR), or None when they are not
+    independent (a finding in the span of the base or of another)."""
+    q, r = np.linalg.qr(x)
+    diag = np.abs(np.diag(r))
+    return None if diag.min() < 1e-8 * max(diag.max(), 1e-300) else q
 
 
 def _finding_pool(base: list[str]) -> dict[str, tuple[str, ...]]:
@@ -302,11 +312,9 @@ def _parsimonious_bound(obs, base: list[str], max_findings: int):
     for k in range(1, max_findings + 1):
         top = (math.inf, ())
         for combo in itertools.combinations(pool, k):
-            x = np.hstack([cols[c] for c in combo])
-            q, r = np.linalg.qr(x)
-            diag = np.abs(np.diag(r))
-            if diag.min() < 1e-8 * max(diag.max(), 1e-300):
-                continue  # a finding in the span of the base or of another
+            q = _orthonormal(np.hstack([cols[c] for c in combo]))
+            if q is None:
+                continue
             e = yb - q @ (q.T @ yb)
             hx = _loo_blocks(q, n)
             rms = _loo_rms(tuple(u + v for u, v in zip(hb, hx, strict=True)), e, n)
@@ -327,7 +335,7 @@ def bound(args) -> None:
         print(f"{path}: absent, skipped")
         return
     obs = load_observations(path)
-    base = ["IA", "IE", "NPAE", "CA", "AN", "AW", "TF", "TX"]
+    base = list(EIGHT_TERMS)
     loo = np.arange(obs.n)
     t0 = time.perf_counter()
     best, pool = _parsimonious_bound(obs, base, args.max_findings)
@@ -365,9 +373,8 @@ def _nested_cv_selection(obs, base: list[str], pool: dict[str, tuple[str, ...]],
     cols = {label: term_columns(terms, obs) for label, terms in pool.items()}
 
     def inner(x: np.ndarray, yy: np.ndarray, m: int) -> float:
-        q, r = np.linalg.qr(x)
-        diag = np.abs(np.diag(r))
-        if diag.min() < 1e-8 * max(diag.max(), 1e-300):
+        q = _orthonormal(x)
+        if q is None:
             return math.inf
         return _loo_rms(_loo_blocks(q, m), yy - q @ (q.T @ yy), m)
 
