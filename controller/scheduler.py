@@ -10,6 +10,7 @@ may be observed at a time (elevation window, day/night window, revisit interval)
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -91,8 +92,12 @@ class History:
     names: list[str] = field(default_factory=list)
     az_deg: list[float] = field(default_factory=list)
     el_deg: list[float] = field(default_factory=list)
+    #: whether ``t_s`` never decreased, so that :meth:`recent` may bisect it
+    in_time_order: bool = field(default=True, repr=False)
 
     def add(self, t_s: float, name: str, az_deg: float, el_deg: float) -> None:
+        if self.t_s and t_s < self.t_s[-1]:
+            self.in_time_order = False
         self.t_s.append(t_s)
         self.names.append(name)
         self.az_deg.append(az_deg)
@@ -103,6 +108,15 @@ class History:
             if n == name:
                 return t
         return None
+
+    def recent(self, t_s: float, memory_s: float) -> range | list[int]:
+        """Indices of the observations with ``t_s - t <= memory_s``. Bisected, because a scan
+        over the whole history made a month-long campaign quadratic in its length; the same
+        comparison as the scan, so the same indices."""
+        if not self.in_time_order:
+            return [i for i, t in enumerate(self.t_s) if t_s - t <= memory_s]
+        start = bisect.bisect_left(self.t_s, True, key=lambda t: t_s - t <= memory_s)
+        return range(start, len(self.t_s))
 
 
 class Constraint:
@@ -230,7 +244,7 @@ class SpreadScheduler(Scheduler):
 
     def choose(self, t_s, position_deg, allowed):
         hist = self.history
-        recent = [i for i, t in enumerate(hist.t_s) if t_s - t <= self.memory_s]
+        recent = hist.recent(t_s, self.memory_s)
         if recent:
             az_h = np.radians(np.array([hist.az_deg[i] for i in recent]))
             el_h = np.radians(np.array([hist.el_deg[i] for i in recent]))

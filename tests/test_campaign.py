@@ -175,6 +175,27 @@ def test_ghigo1990_gives_about_300_scans_over_all_sources(ghigo):
     assert pols.count("XR") == pols.count("XL") == pols.count("AVG")
 
 
+def test_recent_history_is_the_same_as_scanning_it_all():
+    """The spread policy's memory is bisected (a month's history made the scan quadratic);
+    it must keep exactly the observations the plain comparison keeps, boundaries included."""
+    from controller.scheduler import History
+
+    rng = np.random.default_rng(5)
+    memory_s = 6 * 3600.0
+    history = History()
+    for t in np.cumsum(rng.choice([0.0, 250.0, 0.1, memory_s], size=400)):
+        history.add(float(t), "s", 0.0, 45.0)
+    # now at, just after and between the observation times, so t_s - t == memory_s occurs
+    for now in [t + memory_s for t in history.t_s[::7]] + [0.0, history.t_s[-1] + 1e6]:
+        plain = [i for i, t in enumerate(history.t_s) if now - t <= memory_s]
+        assert list(history.recent(now, memory_s)) == plain
+    history.add(history.t_s[-1] - 10.0, "s", 0.0, 45.0)  # out of order: no bisection
+    now = history.t_s[-1] + memory_s
+    assert not history.in_time_order
+    assert list(history.recent(now, memory_s)) == [
+        i for i, t in enumerate(history.t_s) if now - t <= memory_s]
+
+
 def test_night_window_keeps_the_sun_down(ghigo):
     sched = replace(ghigo.controller.scheduler, window="night")
     sc = replace(ghigo, controller=replace(ghigo.controller, scheduler=sched))
