@@ -21,7 +21,7 @@ from controller.variants import VARIANTS, fit_variants
 from .runner import RunResult
 
 if TYPE_CHECKING:
-    from .rendering import FigureProcess
+    from .rendering import SecondDrawer
 
 __all__ = ["fit_tables", "run_fits", "write_outputs"]
 
@@ -68,7 +68,7 @@ def fit_tables(fits: dict[str, FitResult | None], title: str) -> str:
 
 
 def write_outputs(result: RunResult, report: bool = True,
-                  renderer: FigureProcess | None = None) -> str:
+                  renderer: SecondDrawer | None = None) -> str:
     """Write the products of a run into its output directory; return a short summary.
     With ``report`` also the figures (``figures/``) and ``report.html`` (antsim.report),
     the figures drawn by ``renderer`` when given (:mod:`antsim.rendering`)."""
@@ -84,9 +84,7 @@ def write_outputs(result: RunResult, report: bool = True,
         write_mod(TPointModel.from_fit(fit_a, caption=caption), out / "model.dat")
     from controller.gaincurve import calibrate
 
-    program = result.program
-    result.calibration = calibrate(result.rows, result.scenario.controller,
-                                   getattr(program, "tippings", ()))
+    result.calibration = calibrate(result.rows, result.scenario.controller, result.tippings)
     if result.calibration is not None:
         (out / "gaincurve.json").write_text(
             json.dumps(result.calibration.to_json(), indent=2) + "\n", encoding="utf-8")

@@ -1,22 +1,23 @@
-"""A run's figures drawn in two processes forked before the campaign starts.
+"""A run's outputs written by a process forked before the campaign starts, its figures
+drawn in two.
 
-Drawing the ten figures of ``antsim run`` costs about as much as the 24-hour campaign
-itself, and importing matplotlib a good part of that. :meth:`FigureProcess.start` forks a
-process as the command starts: it imports matplotlib and :mod:`antsim.figures` and draws a
-first figure to nothing (:func:`antsim.figures.warm_up`) while this process simulates on the
-other core, then waits. :meth:`FigureProcess.begin` sends it the recordings as soon as the
-campaign ends, and it draws the figures of the recordings alone
-(:func:`antsim.figures.recording_figure_jobs`) while this process fits.
-:meth:`FigureProcess.run_figures` sends it the fits; it forks once more (the copy starts
-warmed up, with the data in memory) and the two draw the rest of
-:func:`antsim.figures.run_figure_jobs` between them, the costliest first, each taking the
-next one not yet taken.
+After the campaign, ``antsim run`` fits the recordings (importing the fitter: scipy), writes
+the fits, tables and model, and draws ten figures, which cost more than the 24-hour campaign
+itself. :meth:`OutputProcess.start` forks a process as the command starts; while this
+process simulates on the other core, it imports matplotlib, the fitter and
+:mod:`antsim.outputs`, and draws a first figure to nothing (:func:`antsim.figures.warm_up`),
+then waits. :meth:`OutputProcess.write_outputs` sends it the run's result as soon as the
+campaign ends. It forks once more at once (:class:`SecondDrawer`): the copy draws the
+figures of the recordings alone (:func:`antsim.figures.recording_figure_jobs`) while the
+process fits and writes the files of :func:`antsim.outputs.write_outputs`; then the two draw
+the rest of :func:`antsim.figures.run_figure_jobs` between them, the costliest first, each
+taking the next one not yet taken. The command waits for the summary line.
 
-The files are byte-identical to :func:`antsim.figures.run_figures` in this process (each
-figure is drawn from the same inputs with matplotlib's style reset, whatever process draws
-it). Off Linux, on one core, or with another thread running there is no process and the
-caller draws the figures itself; if the process fails, :meth:`FigureProcess.run_figures`
-warns and does so too.
+The files are byte-identical to those of :func:`antsim.outputs.write_outputs` in this process
+(the same code on the same inputs; each figure is drawn with matplotlib's style reset,
+whatever process draws it). Off Linux, on one core, or with another thread running there is
+no process and the caller writes the outputs itself; if the process fails,
+:meth:`OutputProcess.write_outputs` warns and does so too.
 """
 
 from __future__ import annotations
@@ -26,14 +27,16 @@ import os
 import pickle
 import signal
 import sys
+import threading
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-__all__ = ["FigureProcess", "recording_figure_options", "rendering_available"]
+__all__ = ["OutputProcess", "SecondDrawer", "recording_figure_options",
+           "rendering_available"]
 
-#: how often the waiting parent checks that the figure process is alive (s)
+#: how often the waiting command checks that the output process is alive (s)
 POLL_S = 0.5
 #: relative drawing cost by figure function, as measured on the 1990 run (0.1 s = 1): the
 #: costliest are handed out first, so that the two processes end together
@@ -47,8 +50,7 @@ def recording_figure_options(result) -> dict[str, Any]:
     """The options of a run's figures of the recordings alone
     (:func:`antsim.figures.recording_figure_jobs`): the scenario's name for the titles and
     its scheduler's elevation limit. ``result``: an :class:`antsim.runner.RunResult`.
-    Here rather than in :mod:`antsim.figures`, which imports the fitter (scipy): the
-    command asks for them before it imports that."""
+    One function for the report and :class:`SecondDrawer`, which must agree on them."""
     scenario = result.scenario
     return {"name": scenario.name,
             "el_limit_deg": scenario.controller.scheduler.elevation_min_deg}
@@ -60,105 +62,166 @@ def rendering_available() -> bool:
     there by default), two cores, and no other thread in this process (a fork copies only
     the calling thread, and a lock another one held, such as the import lock, would never
     be released in the copy)."""
-    import threading
-
     return (sys.platform.startswith("linux") and (os.cpu_count() or 1) >= 2
             and threading.active_count() == 1)
 
 
-def _take_jobs(jobs: list, order: list[int], counter) -> dict[int, Any]:
-    """Draw jobs in ``order``, each the next not yet taken by either process."""
-    done = {}
-    while True:
-        with counter.get_lock():
-            k = counter.value
-            counter.value = k + 1
-        if k >= len(order):
-            return done
-        done[order[k]] = jobs[order[k]]()
+def draw_order(jobs: list, first: int = 0) -> list[int]:
+    """Indices of the figure ``jobs`` in drawing order: the ``first`` ones as they are, then
+    the rest costliest first (:data:`_COST`), so that two processes end together."""
+    rest = sorted(range(first, len(jobs)),
+                  key=lambda i: -_COST.get(jobs[i].func.__name__, 1.0))
+    return list(range(first)) + rest
 
 
-def draw_in_two(jobs: list) -> list:
-    """Run the figure ``jobs`` (calls returning a FigureFile) in this process and a forked
-    copy of it; their results in the order of ``jobs``."""
-    import multiprocessing
+class SecondDrawer:
+    """In the output process: a forked copy of it that draws the figures of the recordings
+    alone (:func:`antsim.figures.recording_figure_jobs`) at once, while this process fits,
+    then shares the other figures with it in :meth:`run_figures` (each process takes the next
+    figure not yet taken). Use as a context manager: leaving it ends the copy.
 
-    ctx = multiprocessing.get_context("fork")
-    order = sorted(range(len(jobs)), key=lambda i: -_COST.get(jobs[i].func.__name__, 1.0))
-    counter = ctx.Value("i", 0)
-    receive, send = ctx.Pipe(duplex=False)
-    pid = os.fork()
-    if pid == 0:  # the copy: draw, send what it drew, and leave without running exit hooks
-        status = 1
-        try:
-            receive.close()
+    ``result``: the :class:`antsim.runner.RunResult` whose figures go to
+    ``result.out_dir / "figures"``.
+    """
+
+    def __init__(self, result) -> None:
+        import multiprocessing
+
+        from . import figures
+
+        ctx = multiprocessing.get_context("fork")
+        self.rows = result.rows
+        self.out_dir = str(Path(result.out_dir) / "figures")
+        self.early_options = recording_figure_options(result)
+        self.early = figures.recording_figure_jobs(self.rows, self.out_dir,
+                                                   **self.early_options)
+        self.counter = ctx.Value("i", 0)
+        fits_in, self._fits_out = ctx.Pipe(duplex=False)  # this process -> the copy
+        self._drawn_in, drawn_out = ctx.Pipe(duplex=False)  # the copy -> this process
+        self.pid = os.fork()
+        if self.pid == 0:  # the copy: draw, send what it drew, leave without exit hooks
+            status = 1
             try:
-                send.send(("ok", _take_jobs(jobs, order, counter)))
-                status = 0
-            except BaseException as err:
-                send.send(("error", f"{type(err).__name__}: {err}"))
-        finally:
-            os._exit(status)
-    send.close()
-    try:
-        mine = _take_jobs(jobs, order, counter)
+                self._fits_out.close()
+                self._drawn_in.close()
+                try:
+                    drawn = self._take(lambda: self._jobs_from(fits_in))
+                    drawn_out.send(("ok", drawn))
+                    status = 0
+                except BaseException as err:
+                    drawn_out.send(("error", f"{type(err).__name__}: {err}"))
+            finally:
+                os._exit(status)
+        fits_in.close()
+        drawn_out.close()
+
+    def _jobs_from(self, fits_in) -> list | None:
+        """The copy's figure jobs, once this process has sent the fits (None: it never
+        will, having failed before)."""
+        from . import figures
+
         try:
-            kind, theirs = receive.recv()
+            fits, options = pickle.loads(fits_in.recv_bytes())
+        except EOFError:
+            return None
+        return figures.run_figure_jobs(self.rows, fits, self.out_dir, **options)
+
+    def _take(self, get_jobs) -> dict[int, Any]:
+        """Draw figures, each the next not yet taken by either process: first those of the
+        recordings alone, then, with the jobs ``get_jobs()`` gives, the others."""
+        done: dict[int, Any] = {}
+        order: list[int] | None = None
+        jobs: list | None = None
+        n_early = len(self.early)
+        while True:
+            with self.counter.get_lock():
+                k = self.counter.value
+                self.counter.value = k + 1
+            if k < n_early:
+                done[k] = self.early[k]()
+                continue
+            if jobs is None:
+                jobs = get_jobs()
+                if jobs is None:
+                    return done
+                order = draw_order(jobs, n_early)
+            if k >= len(order):
+                return done
+            done[order[k]] = jobs[order[k]]()
+
+    def run_figures(self, rows, fits: Mapping[str, Any], out_dir: str | Path,
+                    **options: Any) -> list:
+        """:func:`antsim.figures.run_figures` drawn by this process and the copy; for the
+        run this drawer was made for (anything else is a programming error)."""
+        from . import figures
+
+        early = {k: options.get(k) for k in self.early_options}
+        if str(out_dir) != self.out_dir or early != self.early_options or rows is not self.rows:
+            raise RuntimeError("the figures asked for are not those of the run begun")
+        try:
+            message = pickle.dumps((fits, options))
+        except (pickle.PicklingError, TypeError, AttributeError) as err:
+            raise RuntimeError(f"the fits cannot be sent to the second drawer: {err}") from None
+        # sent by a thread: the fits are larger than a pipe holds, and the copy reads them
+        # only when it has drawn the figures of the recordings (a plain send waited for that)
+        sender = threading.Thread(target=self._send_quietly, args=(message,), daemon=True)
+        sender.start()
+        jobs = figures.run_figure_jobs(rows, fits, out_dir, **options)
+        if [j.func for j in jobs[:len(self.early)]] != [j.func for j in self.early]:
+            raise RuntimeError("the figures of the recordings are not the first figures")
+        mine = self._take(lambda: jobs)
+        try:
+            kind, theirs = self._drawn_in.recv()
         except EOFError:
             kind, theirs = "error", "the second drawing process ended without an answer"
-    finally:
-        os.waitpid(pid, 0)
-    if kind != "ok":
-        raise RuntimeError(theirs)
-    mine.update(theirs)
-    return [mine[i] for i in range(len(jobs))]
+        sender.join()
+        if kind != "ok":
+            raise RuntimeError(theirs)
+        mine.update(theirs)
+        return [mine[i] for i in range(len(jobs))]
+
+    def _send_quietly(self, message: bytes) -> None:
+        with contextlib.suppress(OSError):  # the copy ended: its answer says why
+            self._fits_out.send_bytes(message)
+
+    def __enter__(self) -> SecondDrawer:
+        return self
+
+    def __exit__(self, exc_type, *exc) -> None:
+        if exc_type is not None:  # this process failed: the copy's figures are not wanted
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(self.pid, signal.SIGKILL)
+        self._fits_out.close()  # a copy still waiting for the fits sees EOF and ends
+        self._drawn_in.close()
+        os.waitpid(self.pid, 0)
 
 
 def _serve(conn, parent_end) -> None:
-    """The figure process: import matplotlib; on ("begin", rows, out_dir, options) draw
-    :func:`antsim.figures.recording_figure_jobs`; on ("draw", rows, fits, out_dir, options)
-    draw the rest of :func:`antsim.figures.run_figure_jobs` (all of it if what was begun
-    differs) and answer ("ok", [FigureFile, ...]) or ("error", message)."""
+    """The output process: import matplotlib and the fitter; on ("outputs", result) write
+    the run's outputs with :class:`SecondDrawer` and answer ("ok", summary) or ("error",
+    message)."""
     # the command's end of the pipe, inherited by the fork: closed, so that the command's
     # end (by exit, failure or SIGKILL) reaches this process as EOF and it ends too
     parent_end.close()
     # Ctrl-C reaches the whole process group: the command handles it and ends this process
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    from . import figures
+    from . import figures, outputs, report  # noqa: F401  (imported while the command simulates)
 
-    figures.warm_up()  # while the command simulates: neither drawing process pays it
-    early: tuple[tuple, list] | None = None
+    figures.warm_up()  # neither drawing process pays it
     try:
-        while True:
-            message = conn.recv()
-            if message[0] == "begin":
-                _, rows, out_dir, options = message
-                try:
-                    early = ((out_dir, options),
-                             [job() for job in figures.recording_figure_jobs(
-                                 rows, out_dir, **options)])
-                except Exception:  # drawn (and reported) with the others
-                    early = None
-                continue
-            _, rows, fits, out_dir, options = message
-            break
-    except EOFError:  # the command ended (or failed) before its figures
+        _, result = conn.recv()
+    except EOFError:  # the command ended (or failed) before its outputs
         return
     try:
-        jobs = figures.run_figure_jobs(rows, fits, out_dir, **options)
-        drawn: list = []
-        if early is not None:
-            (early_dir, early_options), drawn = early
-            wanted = {k: options.get(k) for k in early_options}
-            if early_dir != out_dir or wanted != early_options:
-                drawn = []  # begun with other inputs: drawn again
-        conn.send(("ok", drawn + draw_in_two(jobs[len(drawn):])))
-    except Exception as err:  # reported to the parent, which draws the figures itself
+        with SecondDrawer(result) as drawer:
+            summary = outputs.write_outputs(result, report=True, renderer=drawer)
+        conn.send(("ok", summary))
+    except Exception as err:  # reported to the command, which writes the outputs itself
         conn.send(("error", f"{type(err).__name__}: {err}"))
 
 
-class FigureProcess:
-    """A forked process, ready to draw a run's figures: see the module docstring."""
+class OutputProcess:
+    """A forked process, ready to write a run's outputs: see the module docstring."""
 
     def __init__(self) -> None:
         import multiprocessing
@@ -171,36 +234,29 @@ class FigureProcess:
         self._answered = False
 
     @classmethod
-    def start(cls) -> FigureProcess | None:
-        """The process, or None where figures are better drawn in this process."""
+    def start(cls) -> OutputProcess | None:
+        """The process, or None where the outputs are better written in this process."""
         return cls() if rendering_available() else None
 
-    def begin(self, rows, out_dir: str | Path, **options: Any) -> None:
-        """Have the process draw the figures of the recordings alone now
-        (:func:`antsim.figures.recording_figure_jobs` with ``options``), while this process
-        fits; :meth:`run_figures` with the same directory and options then draws only the
-        others. A process that cannot be reached is left to :meth:`run_figures` to report."""
-        with contextlib.suppress(OSError, pickle.PicklingError, TypeError, AttributeError):
-            self._conn.send(("begin", rows, str(out_dir), options))
-
-    def run_figures(self, rows, fits: Mapping[str, Any], out_dir: str | Path,
-                    **options: Any) -> list:
-        """:func:`antsim.figures.run_figures` drawn by the process (once: it ends after)."""
+    def write_outputs(self, result) -> str:
+        """:func:`antsim.outputs.write_outputs` of ``result`` (an
+        :class:`antsim.runner.RunResult`) with the report, written by the process (once: it
+        ends after); its summary. If the process fails, a warning, and they are written
+        here."""
         try:
-            answer = self._ask(("draw", rows, fits, str(out_dir), options))
+            return self._ask(("outputs", result.portable()))
         except RuntimeError as err:
-            warnings.warn(f"drawing the figures here: {err}", RuntimeWarning, stacklevel=2)
-            from .figures import run_figures
+            warnings.warn(f"writing the outputs here: {err}", RuntimeWarning, stacklevel=2)
+            from .outputs import write_outputs
 
-            return run_figures(rows, fits, out_dir, **options)
-        return answer
+            return write_outputs(result, report=True)
 
-    def _ask(self, request) -> list:
+    def _ask(self, request) -> str:
         try:
             try:
                 self._conn.send(request)
             except (pickle.PicklingError, TypeError, AttributeError) as err:
-                raise RuntimeError(f"the figures' inputs cannot be sent: {err}") from None
+                raise RuntimeError(f"the run cannot be sent: {err}") from None
             while not self._conn.poll(POLL_S):
                 if not self._process.is_alive() and not self._conn.poll(0):
                     raise EOFError
@@ -208,17 +264,17 @@ class FigureProcess:
             self._answered = True
         except (EOFError, OSError):  # ended before or while it was asked
             self._process.join(timeout=POLL_S)
-            raise RuntimeError("the figure process ended without an answer (exit code "
+            raise RuntimeError("the output process ended without an answer (exit code "
                                f"{self._process.exitcode})") from None
         finally:
             self.close()
         if kind != "ok":
-            raise RuntimeError(f"the figure process failed: {payload}")
+            raise RuntimeError(f"the output process failed: {payload}")
         return payload
 
     def close(self) -> None:
         """End the process: it ends by itself once it has answered; before that (the command
-        failed, or ends without figures) it is stopped at once."""
+        failed, or ends without outputs) it is stopped at once."""
         self._conn.close()
         if self._answered:
             self._process.join(timeout=POLL_S)

@@ -33,7 +33,7 @@ from ._version import __version__
 
 if TYPE_CHECKING:
     from .figures import FigureFile
-    from .rendering import FigureProcess
+    from .rendering import SecondDrawer
     from .runner import RunResult
 
 __all__ = [
@@ -352,7 +352,7 @@ def truth_terms_arcsec(truth: Mapping[str, Any] | None) -> dict[str, float]:
 
 
 def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
-                     out_dir: str | Path | None = None, renderer: FigureProcess | None = None
+                     out_dir: str | Path | None = None, renderer: SecondDrawer | None = None
                      ) -> tuple[Path, list[FigureFile]]:
     """Figures (``DIR/figures/``) and ``DIR/report.html`` of a run; returns both. The
     figures are drawn by ``renderer`` when given (:mod:`antsim.rendering`), else here."""

@@ -12,7 +12,7 @@ import json
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import simpy
@@ -43,10 +43,17 @@ class RunResult:
     out_dir: Path | None = None
     #: the gain curve and opacity (controller.gaincurve.Calibration), set by write_outputs
     calibration: object = None
+    #: the tipping scans the controller made (controller.tipping), for the calibration
+    tippings: list = field(default_factory=list)
 
     @property
     def n_scans(self) -> int:
         return len({r["scan"] for r in self.rows})
+
+    def portable(self) -> RunResult:
+        """This result without the simpy world and control program (which cannot be
+        pickled): all that the outputs of a run need, to send to another process."""
+        return replace(self, program=None, world=None)
 
 
 class _TimeLabeller:
@@ -138,7 +145,8 @@ def simulate(scenario: Scenario, seed: int | None = None, model: PointingModel |
     check_scenario(scenario, program.observer, program.targets)
     env.run(until=env.process(program.run(env)))
     return RunResult(scenario=scenario, seed=seed, model=model, rows=rows, truth=world.truth(),
-                     program=program, world=world, wall_s=time.perf_counter() - t0)
+                     program=program, world=world, wall_s=time.perf_counter() - t0,
+                     tippings=list(getattr(program, "tippings", ())))
 
 
 def check_scenario(scenario: Scenario, observer=None, targets=None) -> None:

@@ -1,8 +1,8 @@
-"""A run's figures drawn in forked processes (antsim.rendering): the same files, byte for
-byte, as drawn in this process, also when the figures of the recordings are begun before
-the fits; both drawing processes draw; a process that fails or dies
-leaves the figures to this process with a warning; a killed or interrupted command leaves no
-figure process behind; no process while another thread runs.
+"""A run's outputs written by a forked process (antsim.rendering): the same files, byte for
+byte, as written in this process; the second drawer draws the figures of the recordings
+before the fits and shares the rest (both processes draw, each figure once); a process that
+fails or dies leaves the outputs to this process with a warning; a killed or interrupted
+command leaves no process behind; no process while another thread runs.
 
 The checks run in a fresh Python process (tests/data/rendering_checks.py): a fork copies
 only the calling thread, and this one may have threads left by earlier tests, so the module
@@ -47,57 +47,64 @@ def test_a_fresh_process_may_fork(found):
     assert found["available"] is True
 
 
-def test_forked_figures_are_the_same_files_as_in_process(found):
+def test_the_process_writes_the_same_files_as_this_one(found):
+    """Fits, tables, model, gain curve, figures and report: byte-identical (the fits made in
+    the forked process are the same numbers), and the same summary line."""
     same = found["same"]
-    assert same["n"] == [10, 10]
-    assert same["bytes"] and same["titles"] and same["captions"]
-    assert len(same["folders"]) == 1 and same["folders"][0].endswith("there")
-    assert same["warnings"] == []  # drawn there, not by the fallback here
+    assert {"fit.json", "fit_variants.json", "fit.txt", "model.dat", "report.html",
+            "figures/fig1_sky.png", "figures/fig10_fit_rms.png"} <= set(same["files"])
+    assert same["bytes"] and same["summary"]
+    assert same["warnings"] == []  # written there, not by the fallback here
 
 
-def test_begun_figures_are_drawn_before_the_fits_and_kept(found):
-    """The figures of the recordings alone are drawn as soon as the campaign ends; begun
-    with other options they are drawn again (the files always match this process's)."""
+def test_the_figures_of_the_recordings_are_drawn_before_the_fits(found):
     begun = found["begun"]
     assert begun["before_fits"]
-    assert begun["bytes"] and begun["titles"] and begun["other_bytes"]
-    assert begun["warnings"] == []
+    assert begun["bytes"] and begun["order"]
 
 
-def test_both_processes_draw_each_figure_once_in_order(found):
+def test_figures_other_than_those_begun_are_refused(found):
+    assert found["other"] == "the figures asked for are not those of the run begun"
+
+
+def test_both_processes_draw_each_figure_once(found):
     drawers = found["drawers"]
-    assert drawers["n_jobs"] == drawers["n_files"] == 10
-    assert len(drawers["pids"]) == 2
-    assert drawers["order"]
+    assert drawers["n_files"] == 10
+    assert len(drawers["pids"]) == 2 and drawers["this_pid"] in drawers["pids"]
+    assert drawers["bytes"]
 
 
-def test_a_failing_figure_process_leaves_the_figures_to_this_one(found):
-    """The process answers with its error; this process warns and draws the figures itself,
-    which raises the same error where a user sees its traceback."""
+def test_a_dead_second_drawer_is_an_error(found):
+    assert found["dead_drawer"] == "the second drawing process ended without an answer"
+
+
+def test_a_failing_output_process_leaves_the_outputs_to_this_one(found):
+    """The process answers with its error; this process warns and writes the outputs
+    itself, which raises the same error where a user sees its traceback."""
     failing = found["failing"]
-    assert failing["raised"] is not None and "no_such_option" in failing["raised"]
+    assert failing["raised"] is not None
     assert len(failing["warnings"]) == 1
     assert failing["warnings"][0].startswith(
-        "drawing the figures here: the figure process failed: TypeError")
+        "writing the outputs here: the output process failed: " + failing["raised"])
     assert failing["alive"] is False
 
 
-def test_a_killed_figure_process_leaves_the_figures_to_this_one(found):
+def test_a_killed_output_process_leaves_the_outputs_to_this_one(found):
     killed = found["killed"]
     assert killed["bytes"]
     assert len(killed["warnings"]) == 1
     assert "ended without an answer" in killed["warnings"][0]
 
 
-def test_the_figure_process_ends_with_its_command(found):
+def test_the_output_process_ends_with_its_command(found):
     """Killed with SIGKILL (as tests/test_campaign.py does) or interrupted with Ctrl-C, the
-    command leaves no figure process behind, and the figure process prints nothing."""
+    command leaves no output process behind, and the output process prints nothing."""
     for how, outcome in found["orphans"].items():
         assert outcome["ended"], how
         assert outcome["stderr"] == "", (how, outcome["stderr"])
 
 
-def test_no_figure_process_while_another_thread_runs(found):
+def test_no_output_process_while_another_thread_runs(found):
     assert found["with_thread"] is True
     assert found["after_thread"] is True
 

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 from controller.errors import InputError
 
 if TYPE_CHECKING:
-    from antsim.rendering import FigureProcess
+    from antsim.rendering import OutputProcess
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -31,20 +31,20 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    renderer = None
+    writer = None
     if not args.no_report:
-        from antsim.rendering import FigureProcess
+        from antsim.rendering import OutputProcess
 
-        # first thing: its matplotlib imports overlap the campaign, on the other core
-        renderer = FigureProcess.start()
+        # first thing: its imports (matplotlib, scipy) overlap the campaign, on the other core
+        writer = OutputProcess.start()
     try:
-        return _run(args, renderer)
+        return _run(args, writer)
     finally:
-        if renderer is not None:
-            renderer.close()
+        if writer is not None:
+            writer.close()
 
 
-def _run(args: argparse.Namespace, renderer: FigureProcess | None) -> int:
+def _run(args: argparse.Namespace, writer: OutputProcess | None) -> int:
     from antsim.runner import run_campaign
     from antsim.scenario import load_scenario
 
@@ -69,12 +69,11 @@ def _run(args: argparse.Namespace, renderer: FigureProcess | None) -> int:
                          "use --resume to continue that run, or another directory")
     result = run_campaign(scenario, out, seed=args.seed, model=model, resume=args.resume,
                           show_progress=args.progress)
-    if renderer is not None:  # the figures of the recordings alone, drawn while we fit
-        from antsim.rendering import recording_figure_options
+    if writer is not None:  # fits, files and figures in the process that imported them
+        summary = writer.write_outputs(result)
+    else:
+        from antsim.outputs import write_outputs
 
-        renderer.begin(result.rows, out / "figures", **recording_figure_options(result))
-    from antsim.outputs import write_outputs
-
-    summary = write_outputs(result, report=not args.no_report, renderer=renderer)
+        summary = write_outputs(result, report=not args.no_report)
     print(summary, file=sys.stdout)
     return 0

@@ -16,14 +16,20 @@ import sys
 import threading
 import time
 import warnings
+from dataclasses import replace
+from functools import wraps
 from pathlib import Path
 
 from antsim import figures, rendering
-from antsim.outputs import run_fits
+from antsim.outputs import run_fits, write_outputs
 from antsim.runner import simulate
 from antsim.scenario import load_scenario
 
-OPTIONS = {"name": "short", "el_limit_deg": 10.0, "reference_rms": figures.REPORT_TABLE2_ARCSEC}
+
+def tree_bytes(root: Path) -> dict[str, str]:
+    """Every file under ``root`` by its relative path, as hex."""
+    return {str(p.relative_to(root)): p.read_bytes().hex()
+            for p in sorted(root.rglob("*")) if p.is_file()}
 
 
 def file_bytes(files) -> dict[str, str]:
@@ -33,7 +39,7 @@ def file_bytes(files) -> dict[str, str]:
 COMMAND = """
 import sys, time
 from antsim import rendering
-process = rendering.FigureProcess.start()
+process = rendering.OutputProcess.start()
 print(process._process.pid, flush=True)
 try:
     time.sleep(120)
@@ -52,13 +58,13 @@ def ended(pid: int) -> bool:
 
 
 def command_ends(sig: int) -> dict:
-    """Start a command that holds a figure process, send it ``sig`` (SIGINT to its process
+    """Start a command that holds an output process, send it ``sig`` (SIGINT to its process
     group, as a terminal's Ctrl-C; SIGKILL to the command alone, as tests/test_campaign.py
-    does), and say whether the figure process ended within 10 s and what was printed."""
+    does), and say whether the output process ended within 10 s and what was printed."""
     command = subprocess.Popen([sys.executable, "-c", COMMAND], stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True, start_new_session=True)
     pid = int(command.stdout.readline())
-    time.sleep(0.5)  # the figure process is importing matplotlib now
+    time.sleep(0.5)  # the output process is importing matplotlib now
     if sig == signal.SIGINT:
         os.killpg(command.pid, sig)
     else:
@@ -73,92 +79,122 @@ def command_ends(sig: int) -> dict:
     return {"ended": True, "stderr": command.stderr.read()}
 
 
+def in_dir(result, out: Path):
+    out.mkdir(parents=True)
+    return replace(result, out_dir=out)
+
+
+def pid_tagging(func):
+    """``func`` (a figure function) leaving the pid of the process that drew beside the PNG."""
+
+    @wraps(func)
+    def tagged(*args, **kwargs):
+        drawn = func(*args, **kwargs)
+        drawn.path.with_suffix(".pid").write_text(str(os.getpid()))
+        return drawn
+
+    return tagged
+
+
 def main() -> None:
     scenario, out = Path(sys.argv[1]), Path(sys.argv[2])
     result = simulate(load_scenario(scenario))
-    fits = run_fits(result)
-    rows = result.rows
     found: dict = {"available": rendering.rendering_available()}
 
-    # the same files, titles and captions as drawn here, and no fallback warning
-    here = figures.run_figures(rows, fits, out / "here", **OPTIONS)
+    # the same files (fits, tables, model, figures, report) as written here, no warning
+    here = in_dir(result, out / "here")
+    summary_here = write_outputs(here, report=True)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        there = rendering.FigureProcess.start().run_figures(rows, fits, out / "there",
-                                                            **OPTIONS)
+        summary_there = rendering.OutputProcess.start().write_outputs(
+            in_dir(result, out / "there"))
+    same_files = tree_bytes(out / "here") == tree_bytes(out / "there")
     found["same"] = {
-        "n": [len(here), len(there)],
-        "bytes": file_bytes(here) == file_bytes(there),
-        "titles": [f.title for f in here] == [f.title for f in there],
-        "captions": [f.caption for f in here] == [f.caption for f in there],
-        "folders": sorted({str(Path(f.path).parent) for f in there}),
+        "files": sorted(tree_bytes(out / "there")),
+        "bytes": same_files,
+        "summary": summary_here.replace("/here/", "/there/") == summary_there,
         "warnings": [str(w.message) for w in caught],
     }
 
-    # begun before the fits: the figures of the recordings alone are there before the
-    # fits are sent, and the files are the same; begun with other options: drawn again
-    process = rendering.FigureProcess.start()
-    early = {"name": OPTIONS["name"], "el_limit_deg": OPTIONS["el_limit_deg"]}
-    process.begin(rows, out / "begun", **early)
-    first = [out / "begun" / "fig1_sky.png", out / "begun" / "fig2_total_errors.png"]
-    deadline = time.monotonic() + 60.0
-    while not all(p.exists() for p in first) and time.monotonic() < deadline:
-        time.sleep(0.05)
-    before_fits = all(p.exists() for p in first)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        begun = process.run_figures(rows, fits, out / "begun", **OPTIONS)
-    process = rendering.FigureProcess.start()
-    process.begin(rows, out / "other", **{**early, "name": "another name"})
-    other = process.run_figures(rows, fits, out / "other", **OPTIONS)
-    found["begun"] = {"before_fits": before_fits, "bytes": file_bytes(begun) == file_bytes(here),
-                      "titles": [f.title for f in begun] == [f.title for f in here],
-                      "other_bytes": file_bytes(other) == file_bytes(here),
-                      "warnings": [str(w.message) for w in caught]}
+    # the second drawer draws the figures of the recordings before the fits are given
+    fits = run_fits(result)
+    begun = in_dir(result, out / "begun")
+    with rendering.SecondDrawer(begun) as drawer:
+        first = [out / "begun" / "figures" / name
+                 for name in ("fig1_sky.png", "fig2_total_errors.png")]
+        deadline = time.monotonic() + 60.0
+        while not all(p.exists() for p in first) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        before_fits = all(p.exists() for p in first)
+        options = {"truth_arcsec": None, **rendering.recording_figure_options(begun)}
+        drawn = drawer.run_figures(begun.rows, fits, out / "begun" / "figures", **options)
+    reference = figures.run_figures(result.rows, fits, out / "reference", **options)
+    found["begun"] = {"before_fits": before_fits,
+                      "bytes": file_bytes(drawn) == file_bytes(reference),
+                      "order": [f.path.name for f in drawn] == [f.path.name for f in reference]}
 
-    # both drawing processes draw: each figure leaves the pid of its drawer beside it
-    jobs = figures.run_figure_jobs(rows, fits, out / "pids", **OPTIONS)
+    # other figures than those begun: refused (a programming error, not a silent redraw)
+    with rendering.SecondDrawer(in_dir(result, out / "other")) as drawer:
+        try:
+            drawer.run_figures(result.rows, fits, out / "other" / "figures",
+                               **{**options, "name": "another name"})
+            found["other"] = None
+        except RuntimeError as err:
+            found["other"] = str(err)
 
-    def tagged(job):
-        def call():
-            drawn = job()
-            drawn.path.with_suffix(".pid").write_text(str(os.getpid()))
-            return drawn
-        call.func = job.func  # the cost table is keyed by the figure function
-        return call
-
-    drawn = rendering.draw_in_two([tagged(j) for j in jobs])
+    # both processes draw, each figure once: each leaves the pid of its drawer beside it
+    original = {name: getattr(figures, name) for name in rendering._COST}
+    for name, func in original.items():
+        setattr(figures, name, pid_tagging(func))
+    try:
+        with rendering.SecondDrawer(in_dir(result, out / "pids")) as drawer:
+            drawn = drawer.run_figures(result.rows, fits, out / "pids" / "figures", **options)
+    finally:
+        for name, func in original.items():
+            setattr(figures, name, func)
     found["drawers"] = {
-        "n_jobs": len(jobs), "n_files": len({str(f.path) for f in drawn}),
+        "n_files": len({str(f.path) for f in drawn}),
         "pids": sorted({f.path.with_suffix(".pid").read_text() for f in drawn}),
-        "order": [f.path.name for f in drawn] == [Path(f.path).name for f in here],
+        "this_pid": str(os.getpid()),
+        "bytes": file_bytes(drawn) == file_bytes(reference),
     }
 
-    # a request the process cannot draw: it answers with the error, this process warns and
-    # draws the figures itself, which raises the same error here
-    process = rendering.FigureProcess.start()
+    # the second drawer killed: an error naming it, and no process left
+    with rendering.SecondDrawer(in_dir(result, out / "dead_drawer")) as drawer:
+        os.kill(drawer.pid, signal.SIGKILL)
+        try:
+            drawer.run_figures(result.rows, fits, out / "dead_drawer" / "figures", **options)
+            found["dead_drawer"] = None
+        except RuntimeError as err:
+            found["dead_drawer"] = str(err)
+
+    # outputs the process cannot write (the directory is a file): it answers with the error,
+    # this process warns and writes them itself, which raises the same error here
+    blocked = out / "blocked"
+    blocked.write_text("not a directory")
+    process = rendering.OutputProcess.start()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            process.run_figures(rows, fits, out / "failing", no_such_option=1)
+            process.write_outputs(replace(result, out_dir=blocked))
             raised = None
-        except TypeError as err:
-            raised = f"TypeError: {err}"
+        except OSError as err:
+            raised = type(err).__name__
     found["failing"] = {"raised": raised, "warnings": [str(w.message) for w in caught],
                         "alive": process._process.is_alive()}
 
-    # a process killed before it answers: the figures are drawn here, the same files
-    process = rendering.FigureProcess.start()
+    # a process killed before it answers: the outputs are written here, the same files
+    process = rendering.OutputProcess.start()
     os.kill(process._process.pid, signal.SIGKILL)
     process._process.join()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        files = process.run_figures(rows, fits, out / "killed", **OPTIONS)
-    found["killed"] = {"bytes": file_bytes(files) == file_bytes(here),
+        process.write_outputs(in_dir(result, out / "killed"))
+    found["killed"] = {"bytes": tree_bytes(out / "killed") == tree_bytes(out / "here"),
                        "warnings": [str(w.message) for w in caught]}
 
     # the command killed (SIGKILL) or interrupted (Ctrl-C reaches its whole process group):
-    # its figure process ends too, and says nothing
+    # its output process ends too, and says nothing
     found["orphans"] = {name: command_ends(sig) for name, sig in
                         (("killed", signal.SIGKILL), ("interrupted", signal.SIGINT))}
 
@@ -167,7 +203,7 @@ def main() -> None:
     other = threading.Thread(target=stop.wait)
     other.start()
     try:
-        found["with_thread"] = rendering.FigureProcess.start() is None
+        found["with_thread"] = rendering.OutputProcess.start() is None
     finally:
         stop.set()
         other.join()
