@@ -94,6 +94,9 @@ class History:
     el_deg: list[float] = field(default_factory=list)
     #: whether ``t_s`` never decreased, so that :meth:`recent` may bisect it
     in_time_order: bool = field(default=True, repr=False)
+    #: the time of each name's latest entry (a search back through the history took as
+    #: long as the history for a source not seen for long)
+    _latest: dict[str, float] = field(default_factory=dict, repr=False)
 
     def add(self, t_s: float, name: str, az_deg: float, el_deg: float) -> None:
         if self.t_s and t_s < self.t_s[-1]:
@@ -102,12 +105,11 @@ class History:
         self.names.append(name)
         self.az_deg.append(az_deg)
         self.el_deg.append(el_deg)
+        self._latest[name] = t_s
 
     def last_time(self, name: str) -> float | None:
-        for t, n in zip(reversed(self.t_s), reversed(self.names), strict=True):
-            if n == name:
-                return t
-        return None
+        """The time of ``name``'s latest entry (the last added), None if it has none."""
+        return self._latest.get(name)
 
     def recent(self, t_s: float, memory_s: float) -> range | list[int]:
         """Indices of the observations with ``t_s - t <= memory_s``. Bisected, because a scan
