@@ -93,10 +93,14 @@ class History:
     az_deg: list[float] = field(default_factory=list)
     el_deg: list[float] = field(default_factory=list)
     #: whether ``t_s`` never decreased, so that :meth:`recent` may bisect it
-    in_time_order: bool = field(default=True, repr=False)
+    in_time_order: bool = field(init=False, repr=False)
     #: the time of each name's latest entry (a search back through the history took as
     #: long as the history for a source not seen for long)
-    _latest: dict[str, float] = field(default_factory=dict, repr=False)
+    _latest: dict[str, float] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        self.in_time_order = all(a <= b for a, b in zip(self.t_s, self.t_s[1:], strict=False))
+        self._latest = dict(zip(self.names, self.t_s, strict=True))
 
     def add(self, t_s: float, name: str, az_deg: float, el_deg: float) -> None:
         if self.t_s and t_s < self.t_s[-1]:

@@ -196,10 +196,15 @@ def test_recent_history_is_the_same_as_scanning_it_all():
     assert not history.in_time_order
     assert list(history.recent(now, memory_s)) == [
         i for i, t in enumerate(history.t_s) if now - t <= memory_s]
-    # each source's last time is that of its latest entry (not the largest time)
+    # each source's last time is that of its latest entry (not the largest time), also in
+    # a history made from lists
+    copy = History(list(history.t_s), list(history.names), list(history.az_deg),
+                   list(history.el_deg))
+    assert not copy.in_time_order
     for name in ("a", "b", "c", "never"):
         latest = [t for t, n in zip(history.t_s, history.names, strict=True) if n == name]
-        assert history.last_time(name) == (latest[-1] if latest else None)
+        assert history.last_time(name) == copy.last_time(name) == (
+            latest[-1] if latest else None)
 
 
 def test_night_window_keeps_the_sun_down(ghigo):
