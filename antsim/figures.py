@@ -459,7 +459,8 @@ def amplitude_figure(el_deg, amp_k, source, path: str | Path, *, good=None,
         ax_rel.set_title("(b) relative gain and the report's curve", fontsize=9)
         for ax in (ax_abs, ax_rel):
             ax.set_xlim(0.0, 90.0)
-            ax.legend(loc="lower right", fontsize=7)
+            if ax.get_legend_handles_labels()[0]:  # none without the strong sources
+                ax.legend(loc="lower right", fontsize=7)
         caption = ("The amplitude of the two strongest sources against elevation. The 45-ft's "
                    "gain is flat above 30\N{DEGREE SIGN} and falls to 95% at 20\N{DEGREE SIGN} "
                    "and 90% at 10\N{DEGREE SIGN} (1990 report, section V; black line). The "

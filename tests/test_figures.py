@@ -189,6 +189,20 @@ def test_comparison_figure_for_plans(tmp_path):
                                   formats=("png", "gif"))
 
 
+def test_amplitude_figure_without_the_strong_sources(tmp_path):
+    """A run that never observed Cas A or Cyg A (the 140-ft's and BIMA's scenarios): the
+    figure says so, draws no empty legend and warns nothing."""
+    import warnings
+
+    el = np.array([20.0, 40.0, 60.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        drawn = figures.amplitude_figure(el, np.array([1.0, 1.1, 1.05]),
+                                         np.array(["3C 84", "3C 84", "3C 286"]),
+                                         tmp_path / "fig4.png")
+    assert_sane_png(drawn.path)
+
+
 def test_amplitude_figure_follows_the_report_gain_curve(short_run):
     """Fig. 4's premise: the strong sources' amplitudes, normalised above 30 deg, follow the
     section V curve. Tolerances: the median deviation within 2% (pointing errors during the
