@@ -98,6 +98,7 @@ class SecondDrawer:
         self.counter = ctx.Value("i", 0)
         fits_in, self._fits_out = ctx.Pipe(duplex=False)  # this process -> the copy
         self._drawn_in, drawn_out = ctx.Pipe(duplex=False)  # the copy -> this process
+        self._parent = os.getpid()
         self.pid = os.fork()
         if self.pid == 0:  # the copy: draw, send what it drew, leave without exit hooks
             status = 1
@@ -105,7 +106,7 @@ class SecondDrawer:
                 self._fits_out.close()
                 self._drawn_in.close()
                 try:
-                    drawn = self._take(lambda: self._jobs_from(fits_in))
+                    drawn = self._take(lambda: self._jobs_from(fits_in), in_copy=True)
                     drawn_out.send(("ok", drawn))
                     status = 0
                 except BaseException as err:
@@ -114,6 +115,7 @@ class SecondDrawer:
                 os._exit(status)
         fits_in.close()
         drawn_out.close()
+        _second_drawers.add(self.pid)
 
     def _jobs_from(self, fits_in) -> list | None:
         """The copy's figure jobs, once this process has sent the fits (None: it never
@@ -126,14 +128,17 @@ class SecondDrawer:
             return None
         return figures.run_figure_jobs(self.rows, fits, self.out_dir, **options)
 
-    def _take(self, get_jobs) -> dict[int, Any]:
+    def _take(self, get_jobs, in_copy: bool = False) -> dict[int, Any]:
         """Draw figures, each the next not yet taken by either process: first those of the
-        recordings alone, then, with the jobs ``get_jobs()`` gives, the others."""
+        recordings alone, then, with the jobs ``get_jobs()`` gives, the others. The copy
+        stops when the process it was forked from has gone (killed without its handler)."""
         done: dict[int, Any] = {}
         order: list[int] | None = None
         jobs: list | None = None
         n_early = len(self.early)
         while True:
+            if in_copy and os.getppid() != self._parent:
+                os._exit(1)
             with self.counter.get_lock():
                 k = self.counter.value
                 self.counter.value = k + 1
@@ -194,6 +199,20 @@ class SecondDrawer:
         self._fits_out.close()  # a copy still waiting for the fits sees EOF and ends
         self._drawn_in.close()
         os.waitpid(self.pid, 0)
+        _second_drawers.discard(self.pid)
+
+
+#: the pids of this process's second drawers, stopped with it (:func:`_stop`)
+_second_drawers: set[int] = set()
+
+
+def _stop(signum: int, frame) -> None:
+    """SIGTERM in the output process (the command stops it: interrupted, or failed): its
+    second drawer goes with it, at once, not after the figures it has in hand."""
+    for pid in _second_drawers:
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, signal.SIGKILL)
+    os._exit(128 + signum)
 
 
 def _serve(conn, parent_end) -> None:
@@ -205,6 +224,7 @@ def _serve(conn, parent_end) -> None:
     parent_end.close()
     # Ctrl-C reaches the whole process group: the command handles it and ends this process
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _stop)
     from . import figures, outputs, report  # noqa: F401  (imported while the command simulates)
 
     figures.warm_up()  # neither drawing process pays it

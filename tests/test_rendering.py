@@ -104,6 +104,16 @@ def test_the_output_process_ends_with_its_command(found):
         assert outcome["stderr"] == "", (how, outcome["stderr"])
 
 
+def test_an_interrupted_command_stops_both_drawing_processes(found):
+    """Ctrl-C while the output process and its second drawer draw (a figure there takes a
+    minute): the command ends with status 130 and no process of it is left 10 s later (the
+    output process, stopped by the command, stops its drawer)."""
+    outcome = found["interrupted_drawing"]
+    assert outcome["drawing"]
+    assert outcome["status"] == 130
+    assert outcome["left"] == 0
+
+
 def test_no_output_process_while_another_thread_runs(found):
     assert found["with_thread"] is True
     assert found["after_thread"] is True

@@ -48,6 +48,67 @@ except KeyboardInterrupt:
 """
 
 
+DRAWING_COMMAND = """
+import sys, time
+from pathlib import Path
+from antsim import figures, rendering
+from antsim.runner import run_campaign
+from antsim.scenario import load_scenario
+
+scenario, out = sys.argv[1], Path(sys.argv[2])
+
+def slow(*args, **kwargs):  # a figure that takes a minute, so that Ctrl-C comes during it
+    (out / "drawing").write_text("")
+    time.sleep(60)
+
+for name in rendering._COST:
+    setattr(figures, name, slow)
+process = rendering.OutputProcess.start()
+result = run_campaign(load_scenario(scenario), out / "run", show_progress=False)
+print(process._process.pid, flush=True)
+try:
+    process.write_outputs(result)
+except KeyboardInterrupt:
+    sys.exit(130)
+"""
+
+
+def group_alive(pgid: int) -> list[int]:
+    """Processes (not zombies) of process group ``pgid``."""
+    alive = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except (FileNotFoundError, ProcessLookupError, IndexError):
+            continue
+        if fields[0] != "Z" and int(fields[2]) == pgid:
+            alive.append(int(stat.parent.name))
+    return alive
+
+
+def interrupted_while_drawing(scenario: Path, out: Path) -> dict:
+    """Ctrl-C while the output process and its second drawer draw: every process of the
+    command's group ends within 10 s (a figure here takes a minute)."""
+    out.mkdir()
+    command = subprocess.Popen([sys.executable, "-c", DRAWING_COMMAND, str(scenario), str(out)],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               start_new_session=True)
+    command.stdout.readline()  # the campaign is done, the outputs asked for
+    deadline = time.monotonic() + 60.0
+    while not (out / "drawing").exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    drawing = (out / "drawing").exists()
+    os.killpg(command.pid, signal.SIGINT)
+    command.wait(timeout=30)
+    deadline = time.monotonic() + 10.0
+    while group_alive(command.pid) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    left = group_alive(command.pid)
+    for pid in left:
+        os.kill(pid, signal.SIGKILL)
+    return {"drawing": drawing, "left": len(left), "status": command.returncode}
+
+
 def ended(pid: int) -> bool:
     """Gone, or a zombie waiting for its (new) parent to reap it."""
     try:
@@ -197,6 +258,9 @@ def main() -> None:
     # its output process ends too, and says nothing
     found["orphans"] = {name: command_ends(sig) for name, sig in
                         (("killed", signal.SIGKILL), ("interrupted", signal.SIGINT))}
+
+    # Ctrl-C while both processes draw: the second drawer goes with the output process
+    found["interrupted_drawing"] = interrupted_while_drawing(scenario, out / "interrupted")
 
     # with another thread running there is no process
     stop = threading.Event()
