@@ -4,7 +4,9 @@
 
 Prints the 24-hour campaign of ``scenarios/ghigo1990.toml`` (target: at most 1 s, i.e.
 86,400 times faster than real time), a 30-day campaign (cost should grow linearly with the
-duration), and the whole ``antsim run`` command with Python start-up (target: under 3 s).
+duration: its cost per day against the 24-hour one, and the wall time per simulated day in
+each third of it), and the whole ``antsim run`` command with Python start-up (target: under
+3 s).
 """
 
 from __future__ import annotations
@@ -17,6 +19,8 @@ import tempfile
 import time
 from dataclasses import replace
 from pathlib import Path
+
+import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -43,6 +47,19 @@ def spread(times: list[float]) -> str:
     return f" (min {min(times):.2f}, max {max(times):.2f} over {len(times)} runs)"
 
 
+def thirds(t0: float, day_marks: list[float]) -> str:
+    """The wall time per simulated day in each third of a long campaign: a cost that grew
+    with the campaign's length would show as a rising sequence (within one run, so the
+    machine's hour-to-hour speed does not enter)."""
+    per_day = np.diff([t0, *day_marks])
+    if per_day.size < 3:
+        return "  (too few days for thirds)"
+    parts = np.array_split(per_day, 3)
+    means = ", ".join(f"{p.mean():.2f}" for p in parts)
+    return (f"  wall time per simulated day, first/middle/last third: {means} s "
+            f"(last / first = {parts[-1].mean() / parts[0].mean():.2f})")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--days", type=float, default=30.0)
@@ -62,11 +79,20 @@ def main() -> None:
     long_s = args.days * 86400.0
     long = replace(base, duration_s=long_s, controller=replace(base.controller,
                                                                 duration_s=long_s))
-    (long_t,), long_scans = campaign_seconds(long, 1)
+    day_marks: list[float] = []
+
+    def mark_days(t_s: float) -> None:
+        while t_s >= 86400.0 * (len(day_marks) + 1):
+            day_marks.append(time.perf_counter())
+
+    t0 = time.perf_counter()
+    long_scans = simulate(long, seed=long.seed, progress=mark_days).n_scans
+    long_t = time.perf_counter() - t0
     per_day = long_t / args.days
     print(f"{args.days:g}-day campaign: {long_t:.1f} s wall ({long_scans} scans), "
           f"{per_day:.2f} s per day = {per_day / day_s:.2f}x the 24-hour cost per day "
           f"(1.00 = linear)")
+    print(thirds(t0, day_marks))
 
     with tempfile.TemporaryDirectory() as tmp:
         cmd = [sys.executable, "-m", "antsim", "run", str(ROOT / "scenarios" / "ghigo1990.toml"),
