@@ -73,16 +73,22 @@ except KeyboardInterrupt:
 """
 
 
+def stat_fields(pid: int | str) -> list[str] | None:
+    """The fields of ``/proc/PID/stat`` after the command name (state first, then ppid,
+    pgid, ...), None for a process that is gone."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except (FileNotFoundError, ProcessLookupError, IndexError):
+        return None
+
+
 def group_alive(pgid: int) -> list[int]:
     """Processes (not zombies) of process group ``pgid``."""
     alive = []
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
-        except (FileNotFoundError, ProcessLookupError, IndexError):
-            continue
-        if fields[0] != "Z" and int(fields[2]) == pgid:
-            alive.append(int(stat.parent.name))
+    for entry in Path("/proc").glob("[0-9]*"):
+        fields = stat_fields(entry.name)
+        if fields is not None and fields[0] != "Z" and int(fields[2]) == pgid:
+            alive.append(int(entry.name))
     return alive
 
 
@@ -111,11 +117,8 @@ def interrupted_while_drawing(scenario: Path, out: Path) -> dict:
 
 def ended(pid: int) -> bool:
     """Gone, or a zombie waiting for its (new) parent to reap it."""
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except (FileNotFoundError, ProcessLookupError, IndexError):
-        return True
-    return state == "Z"
+    fields = stat_fields(pid)
+    return fields is None or fields[0] == "Z"
 
 
 def command_ends(sig: int) -> dict:
