@@ -5,15 +5,15 @@ After the campaign, ``antsim run`` fits the recordings (importing the fitter: sc
 the fits, tables and model, and draws ten figures, which cost more than the 24-hour campaign
 itself. :meth:`OutputProcess.start` forks a process as the command starts; while this
 process simulates on the other core, it imports matplotlib, the fitter and
-:mod:`antsim.outputs`, and draws a first figure to nothing (:func:`antsim.figures.warm_up`),
+:mod:`antsim.run.outputs`, and draws a first figure to nothing (:func:`antsim.figures.run.warm_up`),
 then waits. :meth:`OutputProcess.write_outputs` sends it the run's result as soon as the
 campaign ends. It forks once more at once (:class:`SecondDrawer`): the copy draws the
-figures of the recordings alone (:func:`antsim.figures.recording_figure_jobs`) while the
-process fits and writes the files of :func:`antsim.outputs.write_outputs`; then the two draw
-the rest of :func:`antsim.figures.run_figure_jobs` between them, the costliest first, each
+figures of the recordings alone (:func:`antsim.figures.run.recording_figure_jobs`) while the
+process fits and writes the files of :func:`antsim.run.outputs.write_outputs`; then the two draw
+the rest of :func:`antsim.figures.run.run_figure_jobs` between them, the costliest first, each
 taking the next one not yet taken. The command waits for the summary line.
 
-The files are byte-identical to those of :func:`antsim.outputs.write_outputs` in this process
+The files are byte-identical to those of :func:`antsim.run.outputs.write_outputs` in this process
 (the same code on the same inputs; each figure is drawn with matplotlib's style reset,
 whatever process draws it). Off Linux, on one core, or with another thread running there is
 no process and the caller writes the outputs itself; if the process fails,
@@ -48,8 +48,8 @@ _COST = {"histogram_figure": 3.0, "pointing_errors_figure": 2.4, "amplitude_figu
 
 def recording_figure_options(result) -> dict[str, Any]:
     """The options of a run's figures of the recordings alone
-    (:func:`antsim.figures.recording_figure_jobs`): the scenario's name for the titles and
-    its scheduler's elevation limit. ``result``: an :class:`antsim.runner.RunResult`.
+    (:func:`antsim.figures.run.recording_figure_jobs`): the scenario's name for the titles and
+    its scheduler's elevation limit. ``result``: an :class:`antsim.run.runner.RunResult`.
     One function for the report and :class:`SecondDrawer`, which must agree on them."""
     scenario = result.scenario
     return {"name": scenario.name,
@@ -76,18 +76,18 @@ def draw_order(jobs: list, first: int = 0) -> list[int]:
 
 class SecondDrawer:
     """In the output process: a forked copy of it that draws the figures of the recordings
-    alone (:func:`antsim.figures.recording_figure_jobs`) at once, while this process fits,
+    alone (:func:`antsim.figures.run.recording_figure_jobs`) at once, while this process fits,
     then shares the other figures with it in :meth:`run_figures` (each process takes the next
     figure not yet taken). Use as a context manager: leaving it ends the copy.
 
-    ``result``: the :class:`antsim.runner.RunResult` whose figures go to
+    ``result``: the :class:`antsim.run.runner.RunResult` whose figures go to
     ``result.out_dir / "figures"``.
     """
 
     def __init__(self, result) -> None:
         import multiprocessing
 
-        from . import figures
+        from .figures import run as figures
 
         ctx = multiprocessing.get_context("fork")
         self.rows = result.rows
@@ -120,7 +120,7 @@ class SecondDrawer:
     def _jobs_from(self, fits_in) -> list | None:
         """The copy's figure jobs, once this process has sent the fits (None: it never
         will, having failed before)."""
-        from . import figures
+        from .figures import run as figures
 
         try:
             fits, options = pickle.loads(fits_in.recv_bytes())
@@ -156,9 +156,9 @@ class SecondDrawer:
 
     def run_figures(self, rows, fits: Mapping[str, Any], out_dir: str | Path,
                     **options: Any) -> list:
-        """:func:`antsim.figures.run_figures` drawn by this process and the copy; for the
+        """:func:`antsim.figures.run.run_figures` drawn by this process and the copy; for the
         run this drawer was made for (anything else is a programming error)."""
-        from . import figures
+        from .figures import run as figures
 
         early = {k: options.get(k) for k in self.early_options}
         if str(out_dir) != self.out_dir or early != self.early_options or rows is not self.rows:
@@ -225,7 +225,8 @@ def _serve(conn, parent_end) -> None:
     # Ctrl-C reaches the whole process group: the command handles it and ends this process
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, _stop)
-    from . import figures, outputs, report  # noqa: F401  (imported while the command simulates)
+    from .figures import run as figures
+    from .run import outputs, report  # noqa: F401  (imported while the command simulates)
 
     figures.warm_up()  # neither drawing process pays it
     try:
@@ -259,15 +260,15 @@ class OutputProcess:
         return cls() if rendering_available() else None
 
     def write_outputs(self, result) -> str:
-        """:func:`antsim.outputs.write_outputs` of ``result`` (an
-        :class:`antsim.runner.RunResult`) with the report, written by the process (once: it
+        """:func:`antsim.run.outputs.write_outputs` of ``result`` (an
+        :class:`antsim.run.runner.RunResult`) with the report, written by the process (once: it
         ends after); its summary. If the process fails, a warning, and they are written
         here."""
         try:
             return self._ask(("outputs", result.portable()))
         except RuntimeError as err:
             warnings.warn(f"writing the outputs here: {err}", RuntimeWarning, stacklevel=2)
-            from .outputs import write_outputs
+            from .run.outputs import write_outputs
 
             return write_outputs(result, report=True)
 

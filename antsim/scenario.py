@@ -20,8 +20,11 @@ from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
-from controller.astro import Site
-from controller.config import (
+from controller.astro.ephemeris import Site
+from controller.errors import InputError
+from controller.pointing.model import NAMED_MODELS, PointingModel
+from controller.pointing.terms import TermError, get_term
+from controller.program.config import (
     CatalogSource,
     ControllerConfig,
     GainCurveConfig,
@@ -32,20 +35,17 @@ from controller.config import (
     SkyConfig,
     TippingConfig,
 )
-from controller.errors import InputError
-from controller.gaincurve import HARMONIC_NAMES
-from controller.model import NAMED_MODELS, PointingModel
-from controller.terms import TermError, get_term
+from controller.scans.gaincurve import HARMONIC_NAMES
 
-from .atmosphere import AtmosphereConfig
-from .beam import BeamConfig
-from .camera import CameraConfig, synthetic_stars
-from .effects import EFFECTS
-from .mount import AxisConfig, MountConfig
-from .receiver import ChannelConfig, ReceiverConfig
-from .sky import SourceConfig
 from .tomlcheck import Table, load_toml
-from .weather import WeatherConfig
+from .world.atmosphere import AtmosphereConfig
+from .world.beam import BeamConfig
+from .world.camera import CameraConfig, synthetic_stars
+from .world.effects import EFFECTS
+from .world.mount import AxisConfig, MountConfig
+from .world.receiver import ChannelConfig, ReceiverConfig
+from .world.sky import SourceConfig
+from .world.weather import WeatherConfig
 
 __all__ = ["EffectSpec", "Scenario", "load_scenario"]
 
@@ -93,7 +93,7 @@ class Scenario:
         """The same scenario with another pointing model in use by the controller (on an
         equatorial mount the model's term names are re-bound to equatorial terms)."""
         if self.mount.kind == "equatorial":
-            from controller.equatorial import equatorial_model
+            from controller.pointing.equatorial import equatorial_model
 
             model = equatorial_model(model.names, self.site.latitude_deg,
                                      list(model.values_arcsec), model.name)
@@ -332,7 +332,7 @@ def _source(t: Table) -> SourceConfig:
 def _model(t: Table, default: str, base: Path, mount: MountConfig | None = None,
            site: Site | None = None) -> PointingModel:
     """A pointing model from ``model`` (named, or a .mod/.json file) and ``terms``; on an
-    equatorial mount from TPOINT's equatorial terms (:mod:`controller.equatorial`)."""
+    equatorial mount from TPOINT's equatorial terms (:mod:`controller.pointing.equatorial`)."""
     spec = t.string("model", default)
     unit = t.string("units", "arcsec", choices=tuple(UNIT_ARCSEC))
     scale = UNIT_ARCSEC[unit]
@@ -340,7 +340,11 @@ def _model(t: Table, default: str, base: Path, mount: MountConfig | None = None,
     values: dict[str, float] = {}
     equatorial = mount is not None and mount.kind == "equatorial"
     if equatorial:
-        from controller.equatorial import EQUATORIAL_MODELS, equatorial_model, equatorial_term
+        from controller.pointing.equatorial import (
+            EQUATORIAL_MODELS,
+            equatorial_model,
+            equatorial_term,
+        )
     for key in values_table:
         try:
             term = (equatorial_term(key, site.latitude_deg) if equatorial else get_term(key))
@@ -368,7 +372,7 @@ def _model(t: Table, default: str, base: Path, mount: MountConfig | None = None,
 
 
 def _model_file(t: Table, spec: str, base: Path) -> PointingModel:
-    from controller.modelio import load_model
+    from controller.pointing.modelio import load_model
 
     path = Path(spec)
     if not path.is_absolute():
@@ -503,7 +507,7 @@ def _fit_spec(t: Table, mount: MountConfig | None = None,
     lookup = get_term
     named = NAMED_MODELS
     if mount is not None and mount.kind == "equatorial":
-        from controller.equatorial import EQUATORIAL_MODELS, equatorial_term
+        from controller.pointing.equatorial import EQUATORIAL_MODELS, equatorial_term
 
         named = EQUATORIAL_MODELS
 

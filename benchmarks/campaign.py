@@ -25,7 +25,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from antsim.runner import simulate  # noqa: E402
+from antsim.run.runner import simulate  # noqa: E402
 from antsim.scenario import load_scenario  # noqa: E402
 
 

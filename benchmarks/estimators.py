@@ -5,7 +5,7 @@
 For each true offset (0 .. 5 arcmin) and S/N (= A / sigma per point, 10 .. 1000) it simulates
 N five-point scans with white Gaussian noise on each point (amplitude 1 K on a constant 30 K
 baseline, integrations every 20 s), reduces them with Clark's method and the least-squares
-fit (:mod:`controller.reduction`) and prints, per estimator:
+fit (:mod:`controller.scans.reduction`) and prints, per estimator:
 
 - std(offset) / CRB for the constant-baseline bound and the linear-in-time bound (the LSQ
   model's own bound); std and bias over the scans with a defined offset, all flags ignored,
@@ -33,7 +33,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 # Imported after the path set-up so that the script runs from a source checkout.
-from controller.reduction import (
+from controller.scans.reduction import (
     ESTIMATORS,
     FWHM_PER_SIGMA,
     OFFSETS_N,

@@ -38,8 +38,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from antsim.outputs import run_fits  # noqa: E402
-from antsim.runner import simulate  # noqa: E402
+from antsim.run.outputs import run_fits  # noqa: E402
+from antsim.run.runner import simulate  # noqa: E402
 from antsim.scenario import Scenario, load_scenario  # noqa: E402
 
 

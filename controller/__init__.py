@@ -3,9 +3,9 @@
 It drives an antenna only through :mod:`controller.protocol` and never imports ``antsim``.
 """
 
-from . import _offline  # noqa: F401  (astropy IERS auto-download off before any astropy use)
+from .astro import offline as _offline  # noqa: F401  (astropy IERS auto-download off before any astropy use)
 from .errors import InputError
-from .model import NAMED_MODELS, PointingModel
-from .terms import Term, get_term
+from .pointing.model import NAMED_MODELS, PointingModel
+from .pointing.terms import Term, get_term
 
 __all__ = ["NAMED_MODELS", "InputError", "PointingModel", "Term", "get_term"]

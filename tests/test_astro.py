@@ -32,8 +32,8 @@ from astropy.utils import iers
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from controller import astro
-from controller.astro import (
+from controller.astro import ephemeris as astro
+from controller.astro.ephemeris import (
     GHIGO1990_SOURCES,
     GREEN_BANK_45FT,
     Ephemeris,
@@ -494,7 +494,7 @@ def test_building_an_ephemeris_never_touches_the_network(monkeypatch):
     assert attempts, "the network trap did not fire; this test would prove nothing"
     attempts.clear()
 
-    assert iers.conf.auto_download is False  # set by controller._offline
+    assert iers.conf.auto_download is False  # set by controller.astro.offline
     # forget the loaded IERS tables so that building re-opens them under the trap
     monkeypatch.setattr(iers.IERS_Auto, "iers_table", None)
     monkeypatch.setattr(iers.IERS_B, "iers_table", None)
@@ -511,7 +511,7 @@ def test_import_is_light():
     ``import controller`` already loads (its IERS set-up brings astropy.time and erfa)."""
     code = (
         "import sys, time; import controller; before = set(sys.modules); "
-        "start = time.perf_counter(); import controller.astro; "
+        "start = time.perf_counter(); import controller.astro.ephemeris; "
         "cost = time.perf_counter() - start; added = set(sys.modules) - before; "
         "print(sorted(m for m in sys.modules if m.split('.')[0] == 'scipy' "
         "or m.startswith('astropy.coordinates'))); "

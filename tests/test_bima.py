@@ -11,15 +11,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from antsim.bima import exact_errors_arcsec, memo23_study
 from antsim.cli import main as cli
+from antsim.studies.memo23 import exact_errors_arcsec, memo23_study
 from controller.interferometry import (
     SPEED_OF_LIGHT_M_S,
     axis_offset_delay_s,
     axis_offset_path_m,
 )
-from controller.model import NAMED_MODELS, PointingModel
-from controller.optical import BIMA_TERMS, tilt_collimation_equivalents
+from controller.pointing.model import NAMED_MODELS, PointingModel
+from controller.program.optical import BIMA_TERMS, tilt_collimation_equivalents
 from controller.units import ARCSEC_PER_RAD
 
 REPO = Path(__file__).resolve().parents[1]
@@ -119,7 +119,7 @@ def test_axis_offset_delay_is_d_cos_el():
 
 # --------------------------------------------------------------------------- the camera
 def test_camera_reads_the_pointing_offset_exactly_without_noise():
-    from antsim.runner import simulate
+    from antsim.run.runner import simulate
     from antsim.scenario import load_scenario
     from controller.protocol import CameraAntenna
 
@@ -145,7 +145,7 @@ def test_camera_reads_the_pointing_offset_exactly_without_noise():
 
 
 def test_synthetic_stars_cover_the_sky():
-    from antsim.camera import synthetic_stars
+    from antsim.world.camera import synthetic_stars
 
     stars = synthetic_stars(120, -30.0)
     dec = np.array([s[2] for s in stars])
@@ -187,7 +187,7 @@ def test_bima_run_recovers_every_injected_term(bima_run):
 
 
 def test_bima_recordings_are_night_star_offsets(bima_run):
-    from controller.recordings import read_recordings
+    from controller.program.recordings import read_recordings
 
     table = read_recordings(bima_run / "recordings.ecsv")
     assert table.meta["method"] == "optical"

@@ -14,12 +14,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from antsim.atmosphere import AtmosphereConfig
-from antsim.runner import run_campaign, simulate
+from antsim.run.runner import run_campaign, simulate
 from antsim.scenario import load_scenario
-from controller.config import SkyConfig
-from controller.model import PointingModel
-from controller.recordings import COLUMN_NAMES, read_pointing_data, read_recordings
+from antsim.world.atmosphere import AtmosphereConfig
+from controller.pointing.model import PointingModel
+from controller.program.config import SkyConfig
+from controller.program.recordings import COLUMN_NAMES, read_pointing_data, read_recordings
 
 ROOT = Path(__file__).resolve().parents[1]
 GHIGO = ROOT / "scenarios" / "ghigo1990.toml"
@@ -179,7 +179,7 @@ def test_recent_history_is_the_same_as_scanning_it_all():
     """The spread policy's memory is bisected and each source's last time kept (a month's
     history made the scans quadratic); they must give exactly what scanning the history
     gives, boundaries included."""
-    from controller.scheduler import History
+    from controller.program.scheduler import History
 
     rng = np.random.default_rng(5)
     memory_s = 6 * 3600.0
@@ -279,7 +279,7 @@ def test_resume_after_a_torn_write_is_byte_identical(ghigo, tmp_path):
 
 
 def test_resume_refuses_another_runs_file(ghigo, tmp_path):
-    from controller.recordings import ResumeMismatchError
+    from controller.program.recordings import ResumeMismatchError
 
     sc = replace(ghigo, duration_s=1 * 3600.0,
                  controller=replace(ghigo.controller, duration_s=1 * 3600.0))

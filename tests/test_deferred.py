@@ -2,7 +2,7 @@
 of integrations computed one by one.
 
 The simulated antenna computes an integration's samples when its powers are first read, all
-not-yet-read integrations of one track together (:meth:`antsim.world.World.sample_blocks`).
+not-yet-read integrations of one track together (:meth:`antsim.world.world.World.sample_blocks`).
 These tests hold the pieces to "the same values as one at a time": the Ornstein-Uhlenbeck
 processes, the receiver and the tracking jitter in blocks against sequential calls, the
 block fixed point against the exact fixed point, and whole integrations read at once
@@ -20,13 +20,13 @@ import numpy as np
 import pytest
 import simpy
 
-import antsim.world as world_module
-from antsim.effects import PointingState
-from antsim.effects.base import BLOCK_FIELDS
-from antsim.effects.thermal import OUProcess
-from antsim.receiver import Receiver, ReceiverConfig
+import antsim.world.world as world_module
 from antsim.scenario import load_scenario
-from antsim.world import World
+from antsim.world.effects import PointingState
+from antsim.world.effects.base import BLOCK_FIELDS
+from antsim.world.effects.thermal import OUProcess
+from antsim.world.receiver import Receiver, ReceiverConfig
+from antsim.world.world import World
 from tests.conftest import source_trajectory
 
 #: the block computations reorder floating-point sums (a batched matrix product), nothing
@@ -227,7 +227,7 @@ def test_default_block_errors_ask_once_per_instant_with_or_without_members():
     for a World's block (fields (K,)), and with a member axis (fields (K, 1), directions
     (K, members)) one number per integration and the directions per member, its answers
     broadcast to (K, members)."""
-    from antsim.effects import Effect
+    from antsim.world.effects import Effect
 
     class Tilted(Effect):  # math.sin: a number per instant, as a World gives
         name = "tilted"

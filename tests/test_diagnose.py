@@ -19,8 +19,8 @@ from antsim.diagnose import diagnose, load_observations
 from antsim.diagnose.candidates import CANDIDATES, candidate, source_rates_arcsec_s
 from antsim.diagnose.data import Observations
 from antsim.diagnose.problem import term_columns
-from antsim.effects import EFFECTS
-from antsim.effects.harmonics import HARMONIC_EFFECTS, AzimuthTrack2A
+from antsim.world.effects import EFFECTS
+from antsim.world.effects.harmonics import HARMONIC_EFFECTS, AzimuthTrack2A
 from controller.units import RAD_PER_ARCSEC
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
@@ -71,7 +71,7 @@ def test_harmonic_effect_amplitude_and_phase_round_trip():
     amp, phase = AzimuthTrack2A.amplitude_phase(coeff["HESA2"], coeff["HECA2"])
     assert (amp, phase) == pytest.approx((6.0, 30.0))
     # the effect's error is minus its correction a sin(2 A_S + phase) (indicated - true)
-    from antsim.effects.base import PointingState
+    from antsim.world.effects.base import PointingState
 
     st = PointingState(t_s=0.0, az_rad=0.4, el_rad=0.7)
     d_az, d_el = e.pointing_error(st)
@@ -94,7 +94,7 @@ def test_harmonic_effects_are_the_documented_sinusoid(name, phase_deg):
     """The error of every harmonic effect is minus a sin(nX + phase), X the South-based
     azimuth A_S = A_N - 180 deg or the elevation, in dA or dE: whatever the term library's
     sign convention, and the inverse amplitude_phase gives the parameters back."""
-    from antsim.effects.base import PointingState
+    from antsim.world.effects.base import PointingState
 
     axis, n, arg = HARMONIC_PHYSICS[name]
     cls = EFFECTS[name]
@@ -148,7 +148,7 @@ def test_new_effects_load_from_a_scenario(ghigo_text, write_scenario):
 
 
 def test_temperature_drift_lags_the_air():
-    from antsim.effects.drifts import structure_temperature_c
+    from antsim.world.effects.drifts import structure_temperature_c
 
     t = np.arange(0.0, 2 * 86400.0, 60.0)
     air = 5.0 + 5.0 * np.sin(2 * math.pi * t / 86400.0)
@@ -164,7 +164,7 @@ def test_temperature_drift_lags_the_air():
 
 def test_clock_regressor_is_the_apparent_motion_of_the_source():
     """dA/dt and dE/dt from (A, E, latitude) agree with the ephemeris to 0.1%."""
-    from controller.astro import Ephemeris, FixedSource, Site
+    from controller.astro.ephemeris import Ephemeris, FixedSource, Site
 
     site = Site(38.43, -79.84, 800.0)
     src = FixedSource("x", 80.0, 30.0, "icrs")
@@ -221,7 +221,7 @@ def test_a_term_the_model_mimics_is_refused_in_tpoints_words():
 
 # ------------------------------------------------------------------------------ command line
 def test_diagnose_command_on_tpoint_data_json(tmp_path, capsys):
-    from controller.tpoint import RunParameters, TPointData, write_tpoint
+    from controller.pointing.tpoint import RunParameters, TPointData, write_tpoint
 
     obs = synthetic(extra={"HASA2": 1.5}, seed=7)
     az_raw = np.degrees(obs.az_rad + np.radians(obs.xel_arcsec / 3600.0) / np.cos(obs.el_rad))
@@ -339,7 +339,7 @@ def test_shared_schedule_baseline_is_the_full_simulation(tmp_path):
     few ms, offsets within 0.2" rms (measured 0.03": the weather's wander moves a full run's
     refraction and timing slightly) against a scatter of ~50"."""
     from antsim.diagnose.fastsim import shared_schedule_columns
-    from antsim.runner import simulate
+    from antsim.run.runner import simulate
     from antsim.scenario import load_scenario
 
     root = Path(__file__).resolve().parents[1]

@@ -19,7 +19,7 @@ from antsim.cli import main as cli
 from antsim.diagnose import diagnose
 from antsim.diagnose.baseline import SimulatedBaseline
 from antsim.diagnose.data import from_rows
-from antsim.runner import recording_meta, run_campaign, simulate
+from antsim.run.runner import recording_meta, run_campaign, simulate
 from antsim.scenario import EffectSpec, load_scenario
 from tests.conftest import edit_text
 

@@ -24,14 +24,14 @@ import numpy as np
 import pytest
 import simpy
 
-from antsim.effects import EFFECTS, PointingState
-from antsim.effects.optics import ExactTiltCollimation
-from antsim.effects.thermal import GRID_STEP_S
-from antsim.runner import simulate
+from antsim.run.runner import simulate
 from antsim.scenario import EffectSpec, load_scenario
-from antsim.world import World
-from controller.astro import sunset_times_s
-from controller.model import PointingModel
+from antsim.world.effects import EFFECTS, PointingState
+from antsim.world.effects.optics import ExactTiltCollimation
+from antsim.world.effects.thermal import GRID_STEP_S
+from antsim.world.world import World
+from controller.astro.ephemeris import sunset_times_s
+from controller.pointing.model import PointingModel
 
 ARCSEC = math.pi / 648000.0
 FOUR_LN2 = 4.0 * math.log(2.0)

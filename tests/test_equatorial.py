@@ -23,16 +23,16 @@ import numpy as np
 import pytest
 
 from antsim.cli import main as cli
-from controller.equatorial import (
+from controller.astro.frames import MountFrame, altaz_to_hadec, hadec_to_altaz
+from controller.pointing.equatorial import (
     EQUATORIAL_MODELS,
     equatorial_model,
     equatorial_term,
     is_equatorial_term,
 )
-from controller.fitting import PointingData, fit_model
-from controller.frames import MountFrame, altaz_to_hadec, hadec_to_altaz
-from controller.model import PointingModel
-from controller.terms import TermError
+from controller.pointing.fitting import PointingData, fit_model
+from controller.pointing.model import PointingModel
+from controller.pointing.terms import TermError
 from controller.units import ARCSEC_PER_RAD
 
 REPO = Path(__file__).resolve().parents[1]
@@ -169,10 +169,10 @@ def test_noise_free_equatorial_campaign_recovers_the_model(tmp_path):
     # where the row (and this comparison) is referenced, while the error changes with hour
     # angle and elevation: up to ~1% of the 20-30" offsets the old model in use leaves, most
     # at low elevation (0.3" seen at 13 deg); constant terms are recovered to 0.02"
-    from antsim.atmosphere import AtmosphereConfig
-    from antsim.runner import simulate
+    from antsim.run.runner import simulate
     from antsim.scenario import load_scenario
-    from controller.variants import VARIANTS, columns, pointing_data, variant_mask
+    from antsim.world.atmosphere import AtmosphereConfig
+    from controller.pointing.variants import VARIANTS, columns, pointing_data, variant_mask
 
     sc = load_scenario(_scenario(4990))
     channels = tuple(replace(c, gain_fluctuation=0.0) for c in sc.receiver.channels)
@@ -245,7 +245,7 @@ def test_crane_run_measures_opacity_and_gain_curve(crane_run):
 
 
 def test_crane_recordings_carry_hour_angle_and_declination(crane_run):
-    from controller.recordings import read_recordings
+    from controller.program.recordings import read_recordings
 
     _, out = crane_run
     table = read_recordings(out / "recordings.ecsv")
@@ -259,8 +259,8 @@ def test_crane_recordings_carry_hour_angle_and_declination(crane_run):
 def test_fitted_model_files_load_back_for_the_closed_loop(crane_run):
     # antsim run --model DIR/model.dat (or fit.json) on an equatorial scenario
     from antsim.scenario import load_scenario
-    from controller.equatorial import load_equatorial_model
     from controller.errors import InputError
+    from controller.pointing.equatorial import load_equatorial_model
 
     freq, out = crane_run
     fit = json.loads((out / "fit.json").read_text())

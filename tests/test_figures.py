@@ -15,12 +15,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from antsim import figures
-from antsim.outputs import run_fits
-from antsim.runner import simulate
+from antsim.figures import run as figures
+from antsim.run.outputs import run_fits
+from antsim.run.runner import simulate
 from antsim.scenario import load_scenario
-from controller.fitting import fit_model
-from controller.variants import VARIANTS, columns, pointing_data, variant_mask
+from controller.pointing.fitting import fit_model
+from controller.pointing.variants import VARIANTS, columns, pointing_data, variant_mask
 
 #: a figure below this many bytes is an empty canvas or a lone title (an 800x600 PNG holding
 #: only axes and a title compresses to ~8 kB); above the upper bound it would bloat the
@@ -128,7 +128,7 @@ def test_user_style_does_not_leak_in_or_out(tmp_path):
 
 def test_pyplot_is_never_imported(tmp_path):
     """The figures use the Agg canvas directly: no pyplot, no GUI backend, no global state."""
-    code = ("import sys; from antsim import figures; "
+    code = ("import sys; from antsim.figures import run as figures; "
             "figures.sky_distribution_figure([1.0], [45.0], sys.argv[1]); "
             "print('matplotlib.pyplot' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code, str(tmp_path / "probe.png")],

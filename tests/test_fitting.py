@@ -18,11 +18,11 @@ import numpy as np
 import pytest
 
 from antsim.cli import main as cli_main
-from controller import fitting
-from controller.fitting import PointingData, fit_model
-from controller.model import PointingModel
-from controller.terms import KATPOINT_EQUIVALENTS, TermError
-from controller.tpoint import read_tpoint
+from controller.pointing import fitting
+from controller.pointing.fitting import PointingData, fit_model
+from controller.pointing.model import PointingModel
+from controller.pointing.terms import KATPOINT_EQUIVALENTS, TermError
+from controller.pointing.tpoint import read_tpoint
 from controller.units import ARCSEC_PER_RAD
 
 REPO = Path(__file__).resolve().parents[1]
@@ -538,9 +538,9 @@ def _write_ecsv(path: Path, data: PointingData) -> None:
 
 
 def test_cli_reads_ecsv_recordings(tmp_path, capsys):
-    recordings = pytest.importorskip("controller.recordings")
+    recordings = pytest.importorskip("controller.program.recordings")
     if not hasattr(recordings, "read_pointing_data"):
-        pytest.skip("controller.recordings has no read_pointing_data yet")
+        pytest.skip("controller.program.recordings has no read_pointing_data yet")
     rng = np.random.default_rng(14)
     data = synthetic(ghigo_truth(), rng, 120)
     path = tmp_path / "recordings.dat"  # the name does not matter: the content does
@@ -556,7 +556,7 @@ def test_cli_reads_ecsv_recordings(tmp_path, capsys):
 def test_cli_says_when_the_recordings_module_is_missing(tmp_path, capsys, monkeypatch):
     path = tmp_path / "recordings.ecsv"
     path.write_text("# %ECSV 1.0\n# ---\n")
-    monkeypatch.setitem(sys.modules, "controller.recordings", None)
+    monkeypatch.setitem(sys.modules, "controller.program.recordings", None)
     assert cli_main(["fit", str(path)]) == 2
     assert "ECSV support arrives with the recordings module" in capsys.readouterr().err
 
@@ -807,7 +807,7 @@ def test_jackknife_dof_is_the_same_on_the_one_observation_fast_path():
 
 
 def test_t_scaled_sigma_is_unbounded_at_two_or_fewer_degrees_of_freedom():
-    from controller.jackknife import JackknifeResult
+    from controller.pointing.jackknife import JackknifeResult
 
     result = JackknifeResult(np.array([2.0, 1.0, np.nan]), np.array([10.0, 1.5, np.nan]), 5)
     scaled = result.sigma_t_scaled

@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 
 from antsim.cli import main as cli
-from antsim.effects import EFFECTS, PointingState
-from controller.fitting import PointingData, fit_model
-from controller.model import NAMED_MODELS, PointingModel
-from controller.terms import get_term
+from antsim.world.effects import EFFECTS, PointingState
+from controller.pointing.fitting import PointingData, fit_model
+from controller.pointing.model import NAMED_MODELS, PointingModel
+from controller.pointing.terms import get_term
 from controller.units import ARCSEC_PER_RAD, RAD_PER_ARCSEC
 
 REPO = Path(__file__).resolve().parents[1]
@@ -91,7 +91,7 @@ def test_the_feed_box_turns_through_the_protocol(quiet_path):
     import simpy
 
     from antsim.scenario import load_scenario
-    from antsim.world import World
+    from antsim.world.world import World
     from controller.protocol import FeedAntenna
 
     scenario = load_scenario(quiet_path)
@@ -139,7 +139,7 @@ def test_fomalont_run_recovers_every_injected_term(fomalont_run):
 
 
 def test_fomalont_recordings_record_the_feed_angles(fomalont_run):
-    from controller.recordings import read_recordings
+    from controller.program.recordings import read_recordings
 
     table = read_recordings(fomalont_run / "recordings.ecsv")
     assert table.meta["feed_angles_deg"] == [0.0, 60.0, 120.0, 180.0, 240.0, 300.0]

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from controller.gaincurve import (
+from controller.scans.gaincurve import (
     HARMONIC_NAMES,
     calibrate,
     corrected_amplitudes,
@@ -24,7 +24,7 @@ from controller.gaincurve import (
     harmonic_basis,
     piecewise_gain,
 )
-from controller.tipping import airmass, fit_opacity
+from controller.scans.tipping import airmass, fit_opacity
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -106,7 +106,7 @@ def test_opacity_fit_finds_the_right_basin():
 # --------------------------------------------------------------------------- the 1990 report
 @pytest.fixture(scope="module")
 def ghigo_calibration():
-    from antsim.runner import simulate
+    from antsim.run.runner import simulate
     from antsim.scenario import load_scenario
 
     scenario = load_scenario(REPO / "scenarios" / "ghigo1990.toml")
@@ -132,7 +132,7 @@ def test_report_gain_curve_recovered_from_cas_a_and_cyg_a(ghigo_calibration):
 
 
 def test_figure_4_draws_the_fitted_curve(ghigo_calibration, tmp_path):
-    from antsim.figures import amplitude_figure
+    from antsim.figures.run import amplitude_figure
 
     _, result, cal = ghigo_calibration
     avg = [r for r in result.rows if r["polarization"] == "AVG"]

@@ -23,9 +23,9 @@ import numpy as np
 import pytest
 import simpy
 
-from antsim.mount import AxisConfig, Mount, MountConfig
 from antsim.scenario import load_scenario
-from antsim.world import World
+from antsim.world.mount import AxisConfig, Mount, MountConfig
+from antsim.world.world import World
 from controller.protocol import AntennaError
 
 CONFIG = MountConfig(kind="altaz", az=AxisConfig(1.5, 0.5, -90.0, 450.0),

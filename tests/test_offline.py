@@ -1,4 +1,4 @@
-"""The IERS table cache of controller._offline: same table, rebuilt when damaged."""
+"""The IERS table cache of controller.astro.offline: same table, rebuilt when damaged."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ SCRIPT = """
 import numpy as np
 from astropy.time import Time
 from astropy.utils import iers
-import controller._offline as offline
+import controller.astro.offline as offline
 offline.use_cached_eop_table()
 t = Time(np.linspace(47000.0, 61000.0, 7), format="mjd")
 print(type(iers.earth_orientation_table.get()).__name__,

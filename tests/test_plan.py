@@ -15,8 +15,6 @@ import numpy as np
 import pytest
 
 from antsim.cli import main as cli_main
-from antsim.effects import PointingState
-from antsim.effects.thermal import OUProcess
 from antsim.plan.planfile import load_plan
 from antsim.plan.study import run_plan
 from antsim.plan.vectorized import (
@@ -26,8 +24,10 @@ from antsim.plan.vectorized import (
     quiet_scenario,
     record_schedule,
 )
-from antsim.runner import simulate
+from antsim.run.runner import simulate
 from antsim.scenario import load_scenario
+from antsim.world.effects import PointingState
+from antsim.world.effects.thermal import OUProcess
 from controller.errors import InputError
 
 PLAN = """name = "short"
@@ -65,7 +65,7 @@ def short_engine(tmp_path_factory, short_ghigo_text):
     """The shared schedule and member engine of the 3-hour scenario."""
     import simpy
 
-    from antsim.world import World
+    from antsim.world.world import World
 
     path = tmp_path_factory.mktemp("short") / "short.toml"
     path.write_text(short_ghigo_text, encoding="utf-8")
@@ -243,8 +243,8 @@ def test_effects_without_a_member_axis_make_the_schedule_unshareable(short_engin
     """An effect that answers one member but not a block of members (its block errors do
     not broadcast to (integrations, members)) is named as the reason the schedule cannot
     be shared (the members are then simulated in full, as for a cold start below)."""
-    from antsim.effects import EFFECTS, Effect
     from antsim.scenario import EffectSpec
+    from antsim.world.effects import EFFECTS, Effect
 
     class OneMemberOnly(Effect):
         name = "one_member_only"

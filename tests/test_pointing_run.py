@@ -9,11 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from antsim.outputs import run_fits, write_outputs
-from antsim.runner import run_campaign, simulate
+from antsim.run.outputs import run_fits, write_outputs
+from antsim.run.runner import run_campaign, simulate
 from antsim.scenario import load_scenario
-from controller.model import PointingModel
-from controller.modelio import load_model
+from controller.pointing.model import PointingModel
+from controller.pointing.modelio import load_model
 
 ROOT = Path(__file__).resolve().parents[1]
 GHIGO = ROOT / "scenarios" / "ghigo1990.toml"

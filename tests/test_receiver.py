@@ -31,9 +31,9 @@ import pytest
 import simpy
 from scipy import stats
 
-from antsim.atmosphere import AtmosphereConfig
 from antsim.scenario import load_scenario
-from antsim.world import World
+from antsim.world.atmosphere import AtmosphereConfig
+from antsim.world.world import World
 
 FOUR_LN2 = 4.0 * math.log(2.0)
 N_REPEAT = 400
@@ -336,7 +336,7 @@ def test_xl_noise_is_above_xr(repeated):
 
 
 def test_sky_emission_rises_with_airmass():
-    from antsim.atmosphere import Atmosphere
+    from antsim.world.atmosphere import Atmosphere
 
     atm = Atmosphere(AtmosphereConfig(zenith_opacity=0.01, temperature_k=265.0))
     el = np.radians([90.0, 30.0, 10.0])

@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from antsim.outputs import run_fits
-from antsim.runner import simulate
+from antsim.run.outputs import run_fits
+from antsim.run.runner import simulate
 from antsim.scenario import load_scenario
 
 GHIGO = Path(__file__).resolve().parents[1] / "scenarios" / "ghigo1990.toml"

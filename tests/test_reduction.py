@@ -14,8 +14,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from controller import reduction
-from controller.reduction import (
+from controller.scans import reduction
+from controller.scans.reduction import (
     ESTIMATORS,
     FWHM_PER_SIGMA,
     OFFSETS_N,

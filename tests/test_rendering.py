@@ -121,6 +121,6 @@ def test_no_output_process_while_another_thread_runs(found):
 
 def test_cost_table_names_real_figure_functions():
     """A renamed figure function would silently lose its place in the drawing order."""
-    from antsim import figures
+    from antsim.figures import run as figures
 
     assert all(callable(getattr(figures, name, None)) for name in rendering._COST)

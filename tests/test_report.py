@@ -19,7 +19,7 @@ import pytest
 from test_figures import assert_sane_png, png_stats
 
 from antsim.cli import main
-from antsim.report import (
+from antsim.run.report import (
     CONTENT_SECURITY_POLICY,
     Figure,
     Paragraph,

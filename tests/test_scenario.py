@@ -16,7 +16,7 @@ import sys
 import pytest
 
 from antsim.cli import main
-from antsim.runner import simulate
+from antsim.run.runner import simulate
 from antsim.scenario import load_scenario
 
 

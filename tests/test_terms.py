@@ -16,8 +16,8 @@ from astropy import units as u
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from controller.model import NAMED_MODELS, PointingModel
-from controller.terms import (
+from controller.pointing.model import NAMED_MODELS, PointingModel
+from controller.pointing.terms import (
     GHIGO_EQUIVALENTS,
     KATPOINT_EQUIVALENTS,
     TermError,
@@ -178,8 +178,8 @@ def test_auxtel_refit_reproduces_tpoint_harmonic_signs():
     if not path.exists():
         pytest.skip("real data auxtel_20200315.dat not present (../shared/data/real is not in "
                     "a fresh clone)")
-    from controller.fitting import fit_model
-    from controller.tpoint import read_tpoint
+    from controller.pointing.fitting import fit_model
+    from controller.pointing.tpoint import read_tpoint
 
     data = read_tpoint(path).pointing_data()
     result = fit_model(data, tuple(TPOINT_AUXTEL), robust=False, name="auxtel_fauto22")

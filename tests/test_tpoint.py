@@ -17,8 +17,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from controller.errors import InputError
-from controller.model import PointingModel
-from controller.tpoint import (
+from controller.pointing.model import PointingModel
+from controller.pointing.tpoint import (
     RunParameters,
     TPointData,
     TPointModel,
@@ -451,7 +451,7 @@ def test_sniff_format_refuses_unknown_content(tmp_path, text):
 
 
 def test_model_file_from_a_fit(tmp_path):
-    from controller.fitting import fit_model
+    from controller.pointing.fitting import fit_model
 
     data = read_tpoint(DATA / "masked.dat").pointing_data(include_masked=True)
     result = fit_model(data, ["IA", "IE", "P2"], robust=False)

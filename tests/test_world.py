@@ -29,10 +29,10 @@ import numpy as np
 import pytest
 import simpy
 
-from antsim.effects import PointingState
 from antsim.scenario import load_scenario
-from antsim.world import SimulatedAntenna, World
-from controller.model import PointingModel
+from antsim.world.effects import PointingState
+from antsim.world.world import SimulatedAntenna, World
+from controller.pointing.model import PointingModel
 from controller.protocol import Antenna
 
 ARCSEC = math.pi / 648000.0  # radians per arcsec
@@ -229,7 +229,7 @@ def test_simulated_antenna_is_a_protocol_antenna(quiet):
 def test_first_order_filter_is_lfilter_bit_for_bit():
     from scipy.signal import lfilter
 
-    from antsim.effects.thermal import first_order_filter
+    from antsim.world.effects.thermal import first_order_filter
 
     rng = np.random.default_rng(4)
     x = rng.standard_normal(500)
@@ -242,7 +242,7 @@ def test_first_order_filter_is_lfilter_bit_for_bit():
 
 
 def test_scalar_interpolator_is_np_interp_bit_for_bit():
-    from antsim.effects.thermal import ScalarInterpolator
+    from antsim.world.effects.thermal import ScalarInterpolator
 
     rng = np.random.default_rng(8)
     grid = np.arange(-600.0, 6000.0, 60.0)

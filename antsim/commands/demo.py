@@ -104,21 +104,21 @@ class _Story:
         return self.chapters[-1]
 
     def say(self, chapter: Chapter, text: str) -> None:
-        from antsim.report import Paragraph
+        from antsim.run.report import Paragraph
 
         chapter.blocks.append(Paragraph(text))
         self.echo(textwrap.fill(text, width=92))
         self.echo("")
 
     def command(self, chapter: Chapter, text: str) -> None:
-        from antsim.report import Preformatted
+        from antsim.run.report import Preformatted
 
         chapter.blocks.append(Preformatted(text, caption="Try it yourself"))
         self.echo("  $ " + text.replace("\n", "\n  $ "))
         self.echo("")
 
     def figure(self, chapter: Chapter, figure) -> None:
-        from antsim.report import Figure
+        from antsim.run.report import Figure
 
         chapter.blocks.append(Figure.of(figure))
         self.echo(f"  [figure: {figure.path}]")
@@ -139,7 +139,7 @@ def _edit(text: str, old: str, new: str, where: str) -> str:
 def run_demo(out: Path, scenario_path: Path,
              echo: Callable[[str], None] = print) -> dict[str, Any]:
     """Tell the story into ``out``; returns the numbers a test or a teacher may want."""
-    from antsim.report import Section, write_report
+    from antsim.run.report import Section, write_report
     from antsim.scenario import load_scenario
 
     t0 = time.perf_counter()
@@ -206,11 +206,11 @@ class _RecordingAntenna:
 
 
 def _trace(label: str, scan: list) -> Any:
-    """A :class:`~antsim.figures.ScanTrace` (sky offsets, power above the baseline of the
+    """A :class:`~antsim.figures.run.ScanTrace` (sky offsets, power above the baseline of the
     mean of both channels) from the recorded integrations of one cross scan."""
     import numpy as np
 
-    from antsim.figures import ScanTrace
+    from antsim.figures.run import ScanTrace
 
     half = len(scan) // 2
     axes = []
@@ -232,10 +232,10 @@ def _trace(label: str, scan: list) -> Any:
 def _cold_start(story: _Story, scenario, figdir: Path) -> dict[str, Any]:
     import simpy
 
-    from antsim.figures import scan_trace_figure
-    from antsim.world import World
-    from controller.model import PointingModel
-    from controller.program import ControlProgram
+    from antsim.figures.run import scan_trace_figure
+    from antsim.world.world import World
+    from controller.pointing.model import PointingModel
+    from controller.program.campaign import ControlProgram
     from controller.protocol import AntennaError
 
     ch = story.chapter("1. A cold start: the antenna misses")
@@ -309,8 +309,8 @@ def _cold_start(story: _Story, scenario, figdir: Path) -> dict[str, Any]:
 # 2. the first campaign, 3. the fit
 # ---------------------------------------------------------------------------------------------
 def _campaign(scenario, out: Path, seed: int, model, report: bool):
-    from antsim.outputs import run_fits, write_outputs
-    from antsim.runner import run_campaign
+    from antsim.run.outputs import run_fits, write_outputs
+    from antsim.run.runner import run_campaign
 
     result = run_campaign(scenario, out, seed=seed, model=model, show_progress=False)
     write_outputs(result, report=report)
@@ -320,8 +320,8 @@ def _campaign(scenario, out: Path, seed: int, model, report: bool):
 def _first_campaign(story: _Story, scenario, scenario_path: Path, out: Path):
     import numpy as np
 
-    from antsim.report import Figure
-    from controller.model import PointingModel
+    from antsim.run.report import Figure
+    from controller.pointing.model import PointingModel
 
     ch = story.chapter("2. The first campaign: 24 hours of cross scans")
     story.say(ch, (
@@ -374,7 +374,7 @@ def _pulls(fit, truth: dict[str, float]) -> dict[str, float]:
 
 
 def _the_fit(story: _Story, result, fits, out: Path) -> dict[str, Any]:
-    from antsim.report import Figure, fit_summary_table, truth_pull_table, truth_terms_arcsec
+    from antsim.run.report import Figure, fit_summary_table, truth_pull_table, truth_terms_arcsec
 
     ch = story.chapter("3. The fit: ten numbers that describe the mount")
     fit = fits["A"]
@@ -433,10 +433,10 @@ def _closed_loop(story: _Story, base_text: str, scenario_path: Path, out: Path, 
                  figdir: Path) -> dict[str, Any]:
     import numpy as np
 
-    from antsim.figures import histogram_figure
-    from antsim.report import truth_terms_arcsec
+    from antsim.figures.run import histogram_figure
+    from antsim.run.report import truth_terms_arcsec
     from antsim.scenario import load_scenario
-    from controller.modelio import load_model
+    from controller.pointing.modelio import load_model
 
     ch = story.chapter("4. Closing the loop: observing with the fitted model")
     model_path = out / "1-first-campaign" / "model.dat"
@@ -548,12 +548,12 @@ def _hidden_effect(story: _Story, base_text: str, scenario_path: Path, out: Path
                    figdir: Path, reference_rms_arcsec: float) -> dict[str, Any]:
     import numpy as np
 
-    from antsim.figures import before_after_figures, pointing_errors_figure
+    from antsim.figures.run import before_after_figures, pointing_errors_figure
     from antsim.scenario import load_scenario
-    from controller.fitting import fit_model
-    from controller.modelio import load_model
-    from controller.terms import TermError, get_term
-    from controller.variants import VARIANTS, columns, pointing_data, variant_mask
+    from controller.pointing.fitting import fit_model
+    from controller.pointing.modelio import load_model
+    from controller.pointing.terms import TermError, get_term
+    from controller.pointing.variants import VARIANTS, columns, pointing_data, variant_mask
 
     ch = story.chapter("5. A hidden effect: what the model does not know")
     block = (f"\n# demo chapter 5: the hidden effect, an uneven azimuth track\n"

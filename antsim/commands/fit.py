@@ -1,9 +1,9 @@
 """`antsim fit RECORDINGS`: fit a pointing model to recordings or a TPOINT data file.
 
 The file's format is detected by content: ECSV recordings from ``antsim run`` (read through
-:func:`controller.recordings.read_pointing_data`) or TPOINT pointing data. Bad input (missing
-file, malformed line, unknown term) ends as one line on stderr and exit status 2. Recordings
-of an equatorial mount (metadata ``mount: equatorial``) are fitted in hour angle and
+:func:`controller.program.recordings.read_pointing_data`) or TPOINT pointing data. Bad input
+(missing file, malformed line, unknown term) ends as one line on stderr and exit status 2.
+Recordings of an equatorial mount (metadata ``mount: equatorial``) are fitted in hour angle and
 declination with TPOINT's equatorial terms (default model ``crane11``).
 """
 
@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 
 from controller.errors import InputError
-from controller.model import NAMED_MODELS
+from controller.pointing.model import NAMED_MODELS
 
 #: default model per input format: TPOINT users start from TPOINT's eight physical terms;
 #: antsim's own recordings come from the 45-ft, whose model is Ghigo's ten terms.
@@ -47,7 +47,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def _terms_from_option(text: str) -> tuple[str, ...]:
-    from controller.terms import is_term_name
+    from controller.pointing.terms import is_term_name
 
     names = [t.strip().upper() for t in text.split(",")]
     if not text.strip() or any(not n for n in names):
@@ -72,7 +72,7 @@ def _terms_from_model(spec: str) -> tuple[tuple[str, ...], str]:
         raise InputError("command line", "--model", spec,
                          "is neither a named model nor an existing .mod file",
                          f"named models: {', '.join(sorted(NAMED_MODELS))}")
-    from controller.tpoint import read_mod, sniff_format
+    from controller.pointing.tpoint import read_mod, sniff_format
 
     if sniff_format(path) != "mod":
         raise InputError(str(path), "--model", spec, "is not a TPOINT .mod model file")
@@ -82,23 +82,23 @@ def _terms_from_model(spec: str) -> tuple[tuple[str, ...], str]:
 
 def _read_data(path: Path, fmt: str, include_masked: bool):
     if fmt == "tpoint":
-        from controller.tpoint import read_tpoint
+        from controller.pointing.tpoint import read_tpoint
 
         return read_tpoint(path).pointing_data(include_masked=include_masked)
     try:
-        recordings = importlib.import_module("controller.recordings")
+        recordings = importlib.import_module("controller.program.recordings")
     except ModuleNotFoundError as err:
-        if err.name != "controller.recordings":
+        if err.name != "controller.program.recordings":
             raise
         raise InputError(str(path), "format", "ECSV",
                          "ECSV support arrives with the recordings module "
-                         "(controller.recordings), which is not installed yet") from None
+                         "(controller.program.recordings), which is not installed yet") from None
     return recordings.read_pointing_data(path)
 
 
 def main(args: argparse.Namespace) -> int:
-    from controller.fitting import fit_model
-    from controller.tpoint import sniff_format
+    from controller.pointing.fitting import fit_model
+    from controller.pointing.tpoint import sniff_format
 
     path = Path(args.recordings)
     fmt = sniff_format(path)
@@ -132,7 +132,7 @@ def main(args: argparse.Namespace) -> int:
 def _equatorial_site(path: Path) -> float | None:
     """The site latitude (deg) of recordings made on an equatorial mount, else None."""
     try:
-        recordings = importlib.import_module("controller.recordings")
+        recordings = importlib.import_module("controller.program.recordings")
     except ModuleNotFoundError:
         return None  # _read_data says what is missing
     meta = recordings.read_recordings(path).meta
@@ -143,8 +143,8 @@ def _equatorial_site(path: Path) -> float | None:
 
 def _equatorial_terms(args: argparse.Namespace, latitude_deg: float):
     """Equatorial terms from ``--terms`` or a named equatorial ``--model`` (crane11)."""
-    from controller.equatorial import EQUATORIAL_MODELS, equatorial_terms
-    from controller.terms import TermError
+    from controller.pointing.equatorial import EQUATORIAL_MODELS, equatorial_terms
+    from controller.pointing.terms import TermError
 
     if args.terms is not None:
         names = [t.strip().upper() for t in args.terms.split(",")]

@@ -67,7 +67,7 @@ def main(args: argparse.Namespace) -> int:
     doc = result.to_json()
     text = result.text()
     if out is not None:
-        from antsim.plan.plots import plan_figures
+        from antsim.figures.plan import plan_figures
 
         out.mkdir(parents=True, exist_ok=True)
         (out / "plan.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")

@@ -45,7 +45,7 @@ def main(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace, writer: OutputProcess | None) -> int:
-    from antsim.runner import run_campaign
+    from antsim.run.runner import run_campaign
     from antsim.scenario import load_scenario
 
     if args.seed is not None and args.seed < 0:
@@ -53,11 +53,11 @@ def _run(args: argparse.Namespace, writer: OutputProcess | None) -> int:
     scenario = load_scenario(args.scenario)
     model = None
     if args.model is not None and scenario.mount.kind == "equatorial":
-        from controller.equatorial import load_equatorial_model
+        from controller.pointing.equatorial import load_equatorial_model
 
         model = load_equatorial_model(args.model, scenario.site.latitude_deg)
     elif args.model is not None:
-        from controller.modelio import load_model
+        from controller.pointing.modelio import load_model
 
         model = load_model(args.model)
     out = Path(args.out)
@@ -72,7 +72,7 @@ def _run(args: argparse.Namespace, writer: OutputProcess | None) -> int:
     if writer is not None:  # fits, files and figures in the process that imported them
         summary = writer.write_outputs(result)
     else:
-        from antsim.outputs import write_outputs
+        from antsim.run.outputs import write_outputs
 
         summary = write_outputs(result, report=not args.no_report)
     print(summary, file=sys.stdout)

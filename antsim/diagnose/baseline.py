@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from controller.errors import InputError
-from controller.model import NAMED_MODELS, PointingModel
+from controller.pointing.model import NAMED_MODELS, PointingModel
 
 from .._version import __version__
 from .data import Observations, from_columns, from_rows
@@ -65,13 +65,13 @@ class BaselineSpec:
 
 def parse_model_option(spec: str) -> tuple[tuple[str, ...], str]:
     """``--model``: a named model, a ``.mod``/JSON model file, or comma-separated terms."""
-    from controller.terms import is_term_name
+    from controller.pointing.terms import is_term_name
 
     if spec in NAMED_MODELS:
         return NAMED_MODELS[spec], f"the named model {spec}"
     path = Path(spec)
     if path.is_file():
-        from controller.modelio import load_model
+        from controller.pointing.modelio import load_model
 
         model = load_model(path)
         return model.names, f"the terms of {path}"
@@ -123,7 +123,7 @@ def resolve_baseline(obs: Observations, scenario=None, model: str | None = None)
 
 
 def _needs_feed_angle(name: str) -> bool:
-    from controller.terms import TermError, get_term
+    from controller.pointing.terms import TermError, get_term
 
     try:
         term = get_term(name)
@@ -164,7 +164,7 @@ class SimProducts:
 
 
 def _products(obs: Observations, terms: Sequence[str]) -> SimProducts:
-    from controller.fitting import PointingData, fit_model
+    from controller.pointing.fitting import PointingData, fit_model
 
     good = obs.good
     data = PointingData(obs.az_rad[good], obs.el_rad[good], obs.xel_arcsec[good],
@@ -187,7 +187,7 @@ def _products(obs: Observations, terms: Sequence[str]) -> SimProducts:
 def _simulate_rows(args):
     """Worker: one baseline simulation (top level so that a process pool can run it)."""
     scenario, seed = args
-    from ..runner import recording_meta, simulate
+    from antsim.run.runner import recording_meta, simulate
 
     result = simulate(scenario, seed)
     return result.rows, recording_meta(scenario, seed, result.model)
@@ -206,8 +206,8 @@ def code_fingerprint() -> str:
 
         h = hashlib.sha256()
         roots = [Path(__file__).resolve().parents[1], Path(controller.__file__).resolve().parent]
-        skip_dirs = {"diagnose", "commands", "plan"}
-        skip_files = {"figures.py", "report.py", "outputs.py", "cli.py", "__main__.py"}
+        skip_dirs = {"diagnose", "commands", "plan", "figures"}
+        skip_files = {"report.py", "outputs.py", "cli.py", "__main__.py"}
         for root in roots:
             for path in sorted(root.rglob("*.py")):
                 rel = path.relative_to(root).parts

@@ -184,7 +184,7 @@ class Harness:
     def _reference(self) -> None:
         """A null recording of the scenario: its scans, predicted noise and the tests'
         degrees of freedom and trials set the thresholds."""
-        from ..runner import recording_meta, simulate
+        from antsim.run.runner import recording_meta, simulate
 
         seed = CASE_SEED_BASE - 1
         res = simulate(self.scenario, seed)
@@ -281,7 +281,8 @@ class Harness:
         return c, params, factor, thr
 
     def run_case(self, index: int, seed: int) -> BlindCase:
-        from ..runner import recording_meta, simulate
+        from antsim.run.runner import recording_meta, simulate
+
         from ..scenario import EffectSpec
 
         t0 = time.perf_counter()
@@ -305,9 +306,9 @@ class Harness:
 def _absorb_linear(scenario, params: dict[str, Any]):
     """The controller's model in use with the linear part of a large exact tilt added (an
     observatory would already have fitted it; without it the scans miss the source)."""
-    from controller.model import PointingModel
+    from antsim.world.effects.optics import ExactTiltCollimation
+    from controller.pointing.model import PointingModel
 
-    from ..effects.optics import ExactTiltCollimation
     from .problem import _lstsq, term_columns
 
     model = scenario.controller.model
@@ -341,7 +342,7 @@ def _jsonable(params: dict[str, Any]) -> dict[str, Any]:
 
 def hidden_components(c: Candidate, params: dict[str, Any]) -> dict[str, float]:
     """TPOINT coefficients of a hidden harmonic effect."""
-    from antsim.effects import EFFECTS
+    from antsim.world.effects import EFFECTS
 
     if c.effect and c.effect != "terms":
         eff = EFFECTS[c.effect](**params)

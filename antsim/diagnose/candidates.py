@@ -147,7 +147,7 @@ def sun_el_grid_deg(obs: Observations, t_grid: np.ndarray) -> np.ndarray:
         try:
             from astropy.time import Time, TimeDelta
 
-            from controller.astro import Ephemeris, Site
+            from controller.astro.ephemeris import Ephemeris, Site
 
             site = Site(float(meta["latitude_deg"]), float(meta["longitude_deg"]),
                         float(meta.get("height_m", 0.0)))
@@ -543,7 +543,7 @@ class SunsetCandidate(_LaggedCandidate):
             10800.0, 14400.0, 18000.0)
 
     def __init__(self):
-        from antsim.effects.thermal import SunsetDrift
+        from antsim.world.effects.thermal import SunsetDrift
 
         self.explanation = SunsetDrift.explanation + " (Fomalont 1973: 1' in the 4 h after " \
                                                       "sunset)"
@@ -554,7 +554,7 @@ class SunsetCandidate(_LaggedCandidate):
             obs.sun_el_deg is not None or "epoch_utc" in obs.meta) and np.ptp(obs.t_s) > 4 * 3600
 
     def level(self, obs: Observations, tau_s: float) -> np.ndarray:
-        from antsim.effects.thermal import relax
+        from antsim.world.effects.thermal import relax
 
         t = _grid(obs)
         key = (obs_key(obs), round(tau_s, 3))
@@ -640,7 +640,7 @@ class TemperatureCandidate(_LaggedCandidate):
             21600.0)
 
     def __init__(self):
-        from antsim.effects.drifts import TemperatureDrift
+        from antsim.world.effects.drifts import TemperatureDrift
 
         self.explanation = TemperatureDrift.explanation
         self._cache: dict[tuple, tuple[np.ndarray, float]] = {}
@@ -650,7 +650,7 @@ class TemperatureCandidate(_LaggedCandidate):
             float(np.nanstd(obs.air_temp_c)) > 0.3
 
     def structure(self, obs: Observations, tau_s: float) -> tuple[np.ndarray, float]:
-        from antsim.effects.drifts import structure_temperature_c
+        from antsim.world.effects.drifts import structure_temperature_c
 
         key = (obs_key(obs), round(tau_s, 3))
         if key not in self._cache:
@@ -744,7 +744,7 @@ class ClockCandidate(Candidate):
     needs = ("time", "latitude")
 
     def __init__(self):
-        from antsim.effects.dynamics import ClockError
+        from antsim.world.effects.dynamics import ClockError
 
         self.explanation = ClockError.explanation
 
@@ -794,7 +794,7 @@ class ServoLagCandidate(Candidate):
                        "offset")
 
     def __init__(self):
-        from antsim.effects.dynamics import ServoLag
+        from antsim.world.effects.dynamics import ServoLag
 
         self.explanation = ServoLag.explanation
 
@@ -822,7 +822,7 @@ class BacklashCandidate(Candidate):
                        "that IA and IE absorb; the slew direction does not reach the offsets")
 
     def __init__(self):
-        from antsim.effects.dynamics import Backlash
+        from antsim.world.effects.dynamics import Backlash
 
         self.explanation = Backlash.explanation
 
@@ -854,7 +854,7 @@ class SourceCandidate(Candidate):
     MIN_SCANS = 4
 
     def __init__(self):
-        from antsim.effects.optics import SourceStructure
+        from antsim.world.effects.optics import SourceStructure
 
         self.explanation = SourceStructure.explanation
 
@@ -938,7 +938,7 @@ class ExactTiltCandidate(Candidate):
               (1, 1, 0), (1, -1, 0))
 
     def __init__(self):
-        from antsim.effects.optics import ExactTiltCollimation
+        from antsim.world.effects.optics import ExactTiltCollimation
 
         self.explanation = ExactTiltCollimation.explanation
 
@@ -951,7 +951,7 @@ class ExactTiltCandidate(Candidate):
     def error(self, obs: Observations, theta: Sequence[float]) -> np.ndarray:
         """Error (2n,) arcsec of an exact tilt (north, east components) and collimation,
         arcmin."""
-        from antsim.effects.optics import ExactTiltCollimation
+        from antsim.world.effects.optics import ExactTiltCollimation
 
         tn, te, c = (float(v) for v in theta)
         eff = ExactTiltCollimation(tilt_arcmin=math.hypot(tn, te),
@@ -1071,7 +1071,7 @@ class FeedOffsetCandidate(Candidate):
     amplitude_param = "offset_arcsec"
 
     def __init__(self):
-        from antsim.effects.harmonics import FeedOffset
+        from antsim.world.effects.harmonics import FeedOffset
 
         self.explanation = FeedOffset.explanation
         self.blind_exclusion = ("with the 45-ft's fixed feed the feed offset is a constant "
@@ -1108,7 +1108,7 @@ class SquintCandidate(Candidate):
     needs = ("pol_xel_arcsec",)
 
     def __init__(self):
-        from antsim.effects.optics import PolarizationSquint
+        from antsim.world.effects.optics import PolarizationSquint
 
         self.explanation = PolarizationSquint.explanation
 
@@ -1178,7 +1178,7 @@ class BeamWidthCandidate(Candidate):
     needs = ("width_xel_arcmin",)
 
     def __init__(self):
-        from antsim.effects.optics import BeamWidthError
+        from antsim.world.effects.optics import BeamWidthError
 
         self.explanation = BeamWidthError.explanation
 
@@ -1240,7 +1240,7 @@ class BeamWidthCandidate(Candidate):
 # The library
 # ---------------------------------------------------------------------------------------------
 def _harmonic(name: str, title: str, signature: str) -> TermsCandidate:
-    from antsim.effects import EFFECTS
+    from antsim.world.effects import EFFECTS
 
     cls = EFFECTS[name]
     return TermsCandidate(name, (cls.sin_term, cls.cos_term), title, signature,

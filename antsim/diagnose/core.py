@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from controller.model import PointingModel
+from controller.pointing.model import PointingModel
 
 from .baseline import (
     BaselineSpec,
@@ -294,7 +294,7 @@ def daily_air_curve(scenario):
     """The scenario's deterministic daily air-temperature curve (C) at campaign times (s)."""
     from astropy.time import Time
 
-    from ..weather import WeatherModel
+    from antsim.world.weather import WeatherModel
 
     hours = (Time(scenario.epoch_utc, scale="utc").mjd % 1.0) * 24.0
     model = WeatherModel(scenario.weather, hours, scenario.site.longitude_deg,
@@ -338,8 +338,8 @@ def _channel_where(step: Step) -> str:
 def fit_variants_before_after(diag: Diagnosis) -> dict[str, Any]:
     """Fit D (day, Sun above 0 deg) and E (night, Sun below -12 deg) of the 1990 report on
     the baseline terms, before and after removing the findings' fitted signatures."""
-    from controller.fitting import PointingData, fit_model
-    from controller.scheduler import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
+    from controller.pointing.fitting import PointingData, fit_model
+    from controller.program.scheduler import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 
     obs = diag.obs
     if obs.sun_el_deg is None:

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from controller.errors import InputError
-from controller.model import PointingModel
+from controller.pointing.model import PointingModel
 
 __all__ = ["Observations", "load_observations"]
 
@@ -170,7 +170,7 @@ def from_columns(cols: Mapping[str, np.ndarray], meta: Mapping[str, Any] | None 
 
 def from_rows(rows: Sequence[Mapping[str, Any]], meta: Mapping[str, Any] | None = None,
               path: str = "<memory>") -> Observations:
-    """Observations from the row dicts :func:`antsim.runner.simulate` returns."""
+    """Observations from the row dicts :func:`antsim.run.runner.simulate` returns."""
     if not rows:
         raise InputError(path, "rows", 0, "there are no recorded scans")
     names = rows[0].keys()
@@ -210,7 +210,7 @@ def _model_from_meta(meta: Mapping[str, Any]) -> PointingModel | None:
 
 def from_tpoint(path: str | Path, include_masked: bool = False) -> Observations:
     """Observations from a TPOINT pointing data file (no time, source or weather columns)."""
-    from controller.tpoint import read_tpoint
+    from controller.pointing.tpoint import read_tpoint
 
     data = read_tpoint(path)
     pd = data.pointing_data(include_masked=include_masked)
@@ -228,7 +228,7 @@ def from_tpoint(path: str | Path, include_masked: bool = False) -> Observations:
 
 def load_observations(path: str | Path) -> Observations:
     """Recordings (``.ecsv``) or TPOINT data, detected by content; InputError if neither."""
-    from controller.tpoint import sniff_format
+    from controller.pointing.tpoint import sniff_format
 
     path = Path(path)
     if not path.exists():
@@ -240,7 +240,7 @@ def load_observations(path: str | Path) -> Observations:
                          "pass a model with --model")
     if fmt == "tpoint":
         return from_tpoint(path)
-    from controller.recordings import read_recordings
+    from controller.program.recordings import read_recordings
 
     table = read_recordings(path)
     mount = table.meta.get("mount", "altaz")

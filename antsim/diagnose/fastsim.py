@@ -18,7 +18,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from controller.program import FWHM_PER_SIGMA
+from controller.program.campaign import FWHM_PER_SIGMA
 
 __all__ = ["shared_schedule_columns"]
 
@@ -31,10 +31,11 @@ def shared_schedule_columns(scenario, seeds: Sequence[int], jobs: int = 1
     (:mod:`antsim.plan.streaming`; same numbers)."""
     import simpy
 
+    from antsim.world.world import World
+
     from ..plan.schedule import REFERENCE_SEED, quiet_scenario, record_schedule
     from ..plan.streaming import stream_available, stream_members, take
     from ..plan.vectorized import MemberEngine
-    from ..world import World
 
     if not seeds:
         return {}

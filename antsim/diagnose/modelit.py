@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from controller.fitting import PointingData, fit_model
+from controller.pointing.fitting import PointingData, fit_model
 
 from .candidates import TermsCandidate
 from .core import Diagnosis, Finding, _plain
@@ -41,7 +41,7 @@ def _effect_params(finding: Finding, scenario=None) -> tuple[str, dict[str, Any]
     if isinstance(c, TermsCandidate):
         terms = dict(p.get("terms_arcsec", {}))
         if c.effect != "terms" and c.pair:
-            from antsim.effects import EFFECTS
+            from antsim.world.effects import EFFECTS
 
             cls = EFFECTS[c.effect]
             s = terms.get(cls.sin_term, 0.0)
@@ -68,8 +68,8 @@ def _effect_params(finding: Finding, scenario=None) -> tuple[str, dict[str, Any]
 
 def effect_specs(diag: Diagnosis, scenario=None):
     """EffectSpec of every finding that has a simulator effect."""
-    from antsim.effects import EFFECTS
     from antsim.scenario import EffectSpec
+    from antsim.world.effects import EFFECTS
 
     specs = []
     for f in diag.findings:
@@ -233,7 +233,7 @@ def plots(diag: Diagnosis, out_dir: Path) -> list[str]:
     """Before/after residual plots into ``out_dir``; returns the file names written."""
     before, after, data, after_data = _before_after_fits(diag)
     try:
-        from antsim.figures import before_after_figures
+        from antsim.figures.run import before_after_figures
     except ImportError:
         before_after_figures = None
     if before_after_figures is not None:
@@ -252,8 +252,8 @@ def plots(diag: Diagnosis, out_dir: Path) -> list[str]:
 def write_outputs(diag: Diagnosis, out_dir: str | Path, scenario=None, resim: int = 0,
                   cache_dir=None, use_cache: bool = True, jobs: int = 1) -> dict[str, Any]:
     """Write the report, the updated model and scenario, plots; optionally re-simulate."""
-    from controller.modelio import model_to_json
-    from controller.tpoint import TPointModel, write_mod
+    from controller.pointing.modelio import model_to_json
+    from controller.pointing.tpoint import TPointModel, write_mod
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

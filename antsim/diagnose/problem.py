@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from controller.model import PointingModel
+from controller.pointing.model import PointingModel
 
 from . import pvalues
 from .data import Observations

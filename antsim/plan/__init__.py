@@ -12,5 +12,5 @@ Modules:
 * :mod:`~antsim.plan.ensemble`: tasks and engines (this process, a local pool, Dask);
 * :mod:`~antsim.plan.study`: running a plan, its JSON document and tables;
 * :mod:`~antsim.plan.answers`: how long, which sources, which terms cannot be separated;
-* :mod:`~antsim.plan.plots`: the comparison figures.
+* :mod:`~antsim.figures.plan`: the comparison figures.
 """

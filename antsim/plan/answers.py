@@ -27,8 +27,8 @@ from typing import Any
 import numpy as np
 
 from controller.errors import InputError
-from controller.model import PointingModel
-from controller.scheduler import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
+from controller.pointing.model import PointingModel
+from controller.program.scheduler import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 
 from .ensemble import Executor, Job, task_noise, task_record
 from .fisher import predict
@@ -198,7 +198,7 @@ def answer_sources(q: SourcesQuestion, plan: Plan, vr, executor: Executor) -> di
 def sources_shortlist(q: SourcesQuestion, vr) -> dict[str, Any]:
     """The source lists worth predicting exactly: the best ``q.candidates`` by the proxy,
     and the list as planned (each with its scenario, or None and why if infeasible)."""
-    from controller.program import plan_targets
+    from controller.program.campaign import plan_targets
 
     base = vr.scenario
     sched = base.controller.scheduler
@@ -260,7 +260,7 @@ def sources_shortlist(q: SourcesQuestion, vr) -> dict[str, Any]:
     planned = tuple(catalogue)
     if planned not in shortlist:
         shortlist.append(planned)
-    from ..runner import check_scenario
+    from antsim.run.runner import check_scenario
 
     items = []
     for subset in shortlist:

@@ -83,7 +83,7 @@ def engine_for(job: Job) -> MemberEngine:
     if engine is None:
         import simpy
 
-        from ..world import World
+        from antsim.world.world import World
 
         reference = World(job.quiet, simpy.Environment(), REFERENCE_SEED)
         engine = MemberEngine(job.scenario, job.shared, reference, job.terms, job.fit_name)

@@ -8,10 +8,10 @@ the measured offsets (arcsec^2); for independent offsets of equal variance s^2 i
 inverse Fisher information s^2 B (the JSON keeps the name ``sigma_fisher_arcsec``).
 
 ``C`` is predicted, scan by scan, by propagating each source of noise through the linear
-response of the controller's own estimator (:func:`controller.scan.reduce_sources`, finite
+response of the controller's own estimator (:func:`controller.scans.scan.reduce_sources`, finite
 differences at the noise-free powers; for white noise this is the Cramer-Rao bound of
-:func:`controller.reduction.cramer_rao_offset_arcmin` where the estimator reaches it) and
-through the beam (the world's :meth:`~antsim.world.World.sample_blocks`, nudged):
+:func:`controller.scans.reduction.cramer_rao_offset_arcmin` where the estimator reaches it) and
+through the beam (the world's :meth:`~antsim.world.world.World.sample_blocks`, nudged):
 
 * receiver: gain fluctuations (Ornstein-Uhlenbeck of each channel: the exact covariance of
   the integration means, correlated between the five points of an axis and between scans)
@@ -45,9 +45,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from controller.model import PointingModel
+from antsim.world.effects.tracking import TrackingJitter
+from controller.pointing.model import PointingModel
 
-from ..effects.tracking import TrackingJitter
 from .vectorized import MemberEngine, SharedSchedule
 
 __all__ = ["NoiseModel", "Prediction", "noise_model", "predict"]
@@ -320,7 +320,7 @@ def noise_model(engine: MemberEngine, plan_seed: int, n_thermal: int = 256) -> N
 
 def engine_reduce(engine: MemberEngine, power, std, times):
     """The controller's reduction of arbitrary (..., 5) arrays of one variant."""
-    from controller.scan import reduce_sources
+    from controller.scans.scan import reduce_sources
 
     return reduce_sources(power, std, np.broadcast_to(times, power.shape),
                           engine.scenario.controller.scan, engine.scan_widths, 0)

@@ -36,8 +36,8 @@ from pathlib import Path
 from typing import Any
 
 from controller.errors import InputError
-from controller.model import NAMED_MODELS, PointingModel
-from controller.terms import TermError, get_term
+from controller.pointing.model import NAMED_MODELS, PointingModel
+from controller.pointing.terms import TermError, get_term
 
 from ..scenario import ESTIMATORS, Scenario, load_scenario
 from ..tomlcheck import Table, load_toml
@@ -334,7 +334,7 @@ def make_variant(base: Scenario, spec: VariantSpec, where: str = "plan") -> Scen
                              fit_model_name=spec.fit_model if spec.fit_model in NAMED_MODELS
                              else "custom")
     scenario = replace(scenario, controller=controller)
-    from ..runner import check_scenario
+    from antsim.run.runner import check_scenario
 
     try:
         check_scenario(scenario)
@@ -371,7 +371,7 @@ def _model(spec: VariantSpec, base: Scenario, where: str, err) -> PointingModel:
     if not path.exists():
         raise err("model", text, "neither scenario, none, truth, a named model nor a file",
                   f"named models: {', '.join(sorted(NAMED_MODELS))}")
-    from controller.modelio import load_model
+    from controller.pointing.modelio import load_model
 
     return load_model(path)
 

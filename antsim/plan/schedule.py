@@ -18,11 +18,12 @@ from typing import Any
 
 import numpy as np
 
-from ..effects import PointingState
-from ..receiver import ChannelConfig
-from ..runner import RunResult, simulate
+from antsim.run.runner import RunResult, simulate
+from antsim.world.effects import PointingState
+from antsim.world.receiver import ChannelConfig
+from antsim.world.world import World
+
 from ..scenario import EffectSpec, Scenario
-from ..world import World
 
 __all__ = ["QUIET_BANDWIDTH_MHZ", "QUIET_PARAMS", "REFERENCE_SEED", "SharedSchedule",
            "quiet_scenario", "record_schedule"]

@@ -189,7 +189,8 @@ def stream_members(stream: ScheduleStream, scenario: Scenario,
     Raises RuntimeError if the stream fails or the members cannot follow it."""
     import simpy
 
-    from ..world import World
+    from antsim.world.world import World
+
     from .vectorized import MemberEngine, SharedSchedule
 
     quiet = stream.quiet

@@ -8,23 +8,23 @@ antenna's recorder attached and keeps, per integration, the sample times, the en
 per sample, the antenna's state at the middle and the true paths of the sources near the beam.
 
 :class:`MemberEngine` then re-simulates only what is random, for a block of members at once,
-through the world's own physics (:meth:`antsim.world.World.sample_blocks` with a member axis, a
-scan's integrations at a time):
+through the world's own physics (:meth:`antsim.world.world.World.sample_blocks` with a member axis,
+a scan's integrations at a time):
 
 * shared (from the quiet run): schedule, encoder commands, source paths (ephemeris and
   refraction), beam, atmosphere, and every effect whose realisation draws no random numbers
   (geometry, sunset drift, squint, ...: an instance started once);
-* per member, drawn from the member's own seed exactly as a :class:`~antsim.world.World` would
+* per member, drawn from the member's own seed exactly as a :class:`~antsim.world.world.World` would
   draw them (same component generators, same order): the receiver's gain fluctuations and
   radiometer noise, the tracking jitter and its gusts, the random parts of the thermal model
   (cloud modulation, lateral forcing) and the weather's wander that drives it; each as one
   array with a member axis (the OU processes and the thermal grids carry it);
 * vectorized across members: the pointing solve, the beam response, the sky emission, the
-  receiver, then :func:`controller.scan.reduce_sources` on every scan of every member at once;
-  each member is then fitted with :func:`controller.fitting.fit_model` as fit A.
+  receiver, then :func:`controller.scans.scan.reduce_sources` on every scan of every member at once;
+  each member is then fitted with :func:`controller.pointing.fitting.fit_model` as fit A.
 
 Where the physics does not allow a shared schedule the member is simulated in full
-(:func:`antsim.runner.simulate`) instead: a member one of whose scans the controller would not
+(:func:`antsim.run.runner.simulate`) instead: a member one of whose scans the controller would not
 detect (a gust, a low S/N: with searching enabled it searches, which changes every later time
 and adopts a correction); whole variants when the deterministic run itself searched (a cold
 start: where the controller points then depends on the noise), when the running correction
@@ -45,19 +45,19 @@ from typing import Any
 
 import numpy as np
 
-from controller.fitting import fit_model
-from controller.scan import channel_average, reduce_sources
+from antsim.run.runner import simulate
+from antsim.world.effects import EFFECTS, PointingState
+from antsim.world.effects.base import BLOCK_FIELDS
+from antsim.world.effects.thermal import OUProcess
+from antsim.world.effects.tracking import TrackingJitter
+from antsim.world.receiver import Receiver
+from antsim.world.world import World, component_rng, weather_model
+from controller.pointing.fitting import fit_model
+from controller.pointing.variants import VARIANTS, pointing_data, variant_mask
+from controller.scans.scan import channel_average, reduce_sources
 from controller.units import ARCSEC_PER_RAD
-from controller.variants import VARIANTS, pointing_data, variant_mask
 
-from ..effects import EFFECTS, PointingState
-from ..effects.base import BLOCK_FIELDS
-from ..effects.thermal import OUProcess
-from ..effects.tracking import TrackingJitter
-from ..receiver import Receiver
-from ..runner import simulate
 from ..scenario import EffectSpec, Scenario
-from ..world import World, component_rng, weather_model
 from .schedule import (
     QUIET_PARAMS,
     SharedSchedule,
@@ -594,6 +594,6 @@ def full_member(scenario: Scenario, member: int, seed: int, terms: Sequence[str]
 
 
 def _columns(rows: list[dict]) -> dict[str, np.ndarray]:
-    from controller.variants import columns
+    from controller.pointing.variants import columns
 
     return columns(rows)

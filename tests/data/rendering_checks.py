@@ -20,9 +20,10 @@ from dataclasses import replace
 from functools import wraps
 from pathlib import Path
 
-from antsim import figures, rendering
-from antsim.outputs import run_fits, write_outputs
-from antsim.runner import simulate
+from antsim import rendering
+from antsim.figures import run as figures
+from antsim.run.outputs import run_fits, write_outputs
+from antsim.run.runner import simulate
 from antsim.scenario import load_scenario
 
 

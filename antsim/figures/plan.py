@@ -1,0 +1,98 @@
+"""Figures comparing a plan's variants, written by ``antsim plan --out DIR``.
+
+Grouped bars per term and variant come from :func:`antsim.figures.run.comparison_figure` (the
+project's variant-comparison API); the duration answers' sigma-against-time curves are drawn
+here with matplotlib's object API on an Agg canvas (no pyplot, no global state, PNG metadata
+without dates: same inputs, same bytes).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+__all__ = ["plan_figures"]
+
+DPI = 100
+
+
+def plan_figures(doc: dict[str, Any], out_dir: str | Path) -> list[Path]:
+    """Write the figures of a plan document (``antsim plan --json``) into ``out_dir``."""
+    from .run import comparison_figure
+
+    out = Path(out_dir)
+    written: list[Path] = []
+    plans = doc["plans"]
+
+    def series(key: str) -> dict[str, dict[str, float]]:
+        return {p["name"]: {t: v[key] for t, v in p["terms"].items() if v[key] is not None}
+                for p in plans}
+
+    written.append(comparison_figure(
+        series("sigma_fisher_arcsec"), out / "sigma_predicted.png",
+        title="Predicted sigma of each term (Fisher: design + noise model)",
+        ylabel="sigma (arcsec)", log=True).path)
+    written.append(comparison_figure(
+        series("sigma_mc_arcsec"), out / "sigma_monte_carlo.png",
+        title="Monte Carlo sigma of each term (scatter of the fits)",
+        ylabel="sigma (arcsec)", log=True).path)
+    ratio = {p["name"]: {t: v["sigma_mc_arcsec"] / v["sigma_fisher_arcsec"]
+                         for t, v in p["terms"].items()
+                         if v["sigma_mc_arcsec"] and v["sigma_fisher_arcsec"]}
+             for p in plans}
+    written.append(comparison_figure(
+        ratio, out / "sigma_mc_over_predicted.png",
+        title="Monte Carlo sigma / predicted sigma (1 = agreement)", ylabel="ratio",
+        caption="Sampling error of the Monte Carlo sigma: about 1/sqrt(2N).").path)
+    written.append(comparison_figure(
+        series("bias_arcsec"), out / "bias.png",
+        title="Bias of each term (mean fit minus truth)", ylabel="bias (arcsec)",
+        caption="Deterministic errors (mean thermal, source structure) bias the terms the "
+                "same way in every campaign; more time does not remove them.").path)
+    for k, a in enumerate(doc.get("answers", {}).get("duration", [])):
+        written.append(_duration_figure(a, out / f"duration_{k + 1}.png"))
+    for k, a in enumerate(doc.get("answers", {}).get("sources", [])):
+        checked = [c for c in a["checked"] if c.get("feasible")]
+        if checked:
+            terms = a["terms"] or list(checked[0]["sigma_arcsec"])
+            values = {", ".join(c["sources"]): {t: c["sigma_arcsec"][t] for t in terms}
+                      for c in checked}
+            written.append(comparison_figure(
+                values, out / f"sources_{k + 1}.png",
+                title=f"Predicted sigma for source lists ({a['based_on']})",
+                ylabel="sigma (arcsec)", log=True).path)
+    return written
+
+
+def _duration_figure(answer: dict[str, Any], path: Path) -> Path:
+    """Predicted sigma of the question's terms against the number of hours, days or nights."""
+    import matplotlib
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    with matplotlib.rc_context():
+        matplotlib.rcdefaults()
+        fig = Figure(figsize=(7.0, 4.2), dpi=DPI)
+        FigureCanvasAgg(fig)
+        ax = fig.add_axes((0.11, 0.13, 0.85, 0.74))
+        curve = answer["curve"]
+        x = [c["count"] for c in curve]
+        for term in answer["terms"]:
+            ax.plot(x, [c["sigma_arcsec"][term] for c in curve], marker="o", ms=3, label=term)
+        ax.axhline(answer["target_arcsec"], color="k", ls="--", lw=1,
+                   label=f"target {answer['target_arcsec']:g}\"")
+        if answer["reached"]:
+            ax.axvline(answer["answer"]["count"], color="tab:red", lw=1,
+                       label=f"answer: {answer['answer']['count']} {answer['unit']}s")
+        if x and max(x) / max(min(x), 1) > 5:
+            ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel(f"{answer['unit']}s of '{answer['based_on']}'")
+        ax.set_ylabel("predicted sigma (arcsec)")
+        ax.grid(True, alpha=0.35)
+        ax.legend(fontsize=8)
+        fig.suptitle(f"How long for {', '.join(answer['terms'])} to reach "
+                     f"{answer['target_arcsec']:g}\"", fontsize=11)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, format="png", dpi=DPI, metadata={"Software": "antsim"})
+    return path

@@ -1,0 +1,109 @@
+"""Files written after a campaign: the fits, their tables, the fitted model.
+
+``fit.json`` (fit A, in the ``antsim fit --json`` schema), ``fit_variants.json`` (fits A-F),
+``fit.txt`` (tables in the style of the 1990 report's Tables 2 and 3) and ``model.dat`` (fit
+A as a TPOINT ``.mod`` file, usable as ``antsim run --model DIR/model.dat``). Where there are
+calibrators (:func:`controller.scans.gaincurve.calibrate`), ``gaincurve.json``: the zenith opacity
+(tipping scans or the scans' own off-source powers) and the fitted gain curve.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from controller.pointing.fitting import FitResult
+from controller.pointing.tpoint import TPointModel, write_mod
+from controller.pointing.variants import VARIANTS, fit_variants
+
+from .runner import RunResult
+
+if TYPE_CHECKING:
+    from antsim.rendering import SecondDrawer
+
+__all__ = ["fit_tables", "run_fits", "write_outputs"]
+
+
+def run_fits(result: RunResult) -> dict[str, FitResult | None]:
+    """Fits A-F of a run's recordings with the terms its controller fits."""
+    terms, name = result.scenario.controller.fit_spec()
+    return fit_variants(result.rows, terms, name=name)
+
+
+def _fmt(value: float, spec: str) -> str:
+    return format(value, spec) if value is not None and math.isfinite(value) else "-"
+
+
+def fit_tables(fits: dict[str, FitResult | None], title: str) -> str:
+    """Text tables in the style of the report's Table 2 (rms per fit) and Table 3 (terms)."""
+    lines = [title, "", "Table 2. Residuals of the fits (arcsec)", "",
+             f"{'fit':<4}{'data':<48}{'N':>5}{'used':>6}{'xel rms':>9}{'el rms':>8}"
+             f"{'sky rms':>9}"]
+    for v in VARIANTS:
+        fit = fits.get(v.name)
+        if fit is None:
+            lines.append(f"{v.name:<4}{v.description:<48}{'(too few observations)':>30}")
+            continue
+        lines.append(f"{v.name:<4}{v.description:<48}{fit.n_input:>5}{fit.n_used:>6}"
+                     f"{fit.xel_rms_arcsec:>9.1f}{fit.el_rms_arcsec:>8.1f}"
+                     f"{fit.sky_rms_arcsec:>9.1f}")
+    present = [v.name for v in VARIANTS if fits.get(v.name) is not None]
+    if present:
+        names = fits[present[0]].names
+        lines += ["", "Table 3. Coefficients (arcmin); sigma of fit A in parentheses", "",
+                  f"{'term':<8}" + "".join(f"{'fit ' + p:>10}" for p in present)
+                  + f"{'sigma A':>10}"]
+        for j, term in enumerate(names):
+            row = f"{term:<8}"
+            for p in present:
+                row += f"{_fmt(fits[p].values_arcsec[j] / 60.0, '+.3f'):>10}"
+            sigma = fits["A"].sigma_arcsec[j] / 60.0 if fits.get("A") is not None else math.nan
+            row += f"{'(' + _fmt(sigma, '.3f') + ')':>10}"
+            lines.append(row)
+    warnings = fits["A"].warnings if fits.get("A") is not None else ()
+    lines += [""] + [f"fit A: {w}" for w in warnings]
+    return "\n".join(lines).rstrip() + "\n"
+
+
+def write_outputs(result: RunResult, report: bool = True,
+                  renderer: SecondDrawer | None = None) -> str:
+    """Write the products of a run into its output directory; return a short summary.
+    With ``report`` also the figures (``figures/``) and ``report.html`` (antsim.report),
+    the figures drawn by ``renderer`` when given (:mod:`antsim.rendering`)."""
+    out = Path(result.out_dir)
+    fits = run_fits(result)
+    doc = {k: (v.to_json() if v is not None else None) for k, v in fits.items()}
+    fit_a = fits.get("A")
+    (out / "fit_variants.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+    if fit_a is not None:
+        (out / "fit.json").write_text(json.dumps(fit_a.to_json(), indent=2) + "\n",
+                                      encoding="utf-8")
+        caption = f"{result.scenario.name} seed {result.seed}: fit A"
+        write_mod(TPointModel.from_fit(fit_a, caption=caption), out / "model.dat")
+    from controller.scans.gaincurve import calibrate
+
+    result.calibration = calibrate(result.rows, result.scenario.controller, result.tippings)
+    if result.calibration is not None:
+        (out / "gaincurve.json").write_text(
+            json.dumps(result.calibration.to_json(), indent=2) + "\n", encoding="utf-8")
+    what = "star offsets" if result.scenario.controller.method == "optical" else "cross scans"
+    title = (f"{result.scenario.name}, seed {result.seed}: {result.n_scans} {what}, "
+             f"model in use {result.model.name}")
+    (out / "fit.txt").write_text(fit_tables(fits, title), encoding="utf-8")
+    good = sum(1 for r in result.rows if r["polarization"] == "AVG" and r["good"])
+    summary = (f"{result.scenario.name}: {result.n_scans} {what} ({good} good) in "
+               f"{result.scenario.duration_s / 3600:.1f} h, seed {result.seed}")
+    if fit_a is not None:
+        summary += (f"; fit A: {fit_a.n_used} points, xel rms {fit_a.xel_rms_arcsec:.1f}\", "
+                    f"el rms {fit_a.el_rms_arcsec:.1f}\"")
+    written = "recordings.ecsv truth.json fit.json fit_variants.json fit.txt model.dat"
+    if result.calibration is not None:
+        written += " gaincurve.json"
+    if report:
+        from .report import write_run_report
+
+        _, figures = write_run_report(result, fits, out, renderer=renderer)
+        written += f" report.html figures/ ({len(figures)} figures)"
+    return summary + f"\nwrote {out}/: {written}"

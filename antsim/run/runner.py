@@ -1,0 +1,221 @@
+"""Running a campaign: world and control program in one simpy environment.
+
+:func:`simulate` runs a scenario and returns the rows the controller recorded (in memory);
+:func:`run_campaign` does the same while writing ``recordings.ecsv`` scan by scan (resumable)
+and ``truth.json`` into an output directory. Same scenario and seed give the same bytes.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import simpy
+
+from antsim._version import __version__
+from antsim.scenario import Scenario
+from antsim.world.world import World
+from controller.pointing.model import PointingModel
+from controller.program.campaign import ControlProgram
+from controller.program.recordings import RecordingWriter, recording_columns
+
+__all__ = ["RunResult", "check_scenario", "recording_meta", "run_campaign", "simulate"]
+
+
+@dataclass
+class RunResult:
+    """What a campaign produced."""
+
+    scenario: Scenario
+    seed: int
+    model: PointingModel
+    rows: list[dict] = field(default_factory=list)
+    truth: dict = field(default_factory=dict)
+    program: ControlProgram | None = None
+    world: World | None = None
+    wall_s: float = 0.0
+    out_dir: Path | None = None
+    #: the gain curve and opacity (controller.gaincurve.Calibration), set by write_outputs
+    calibration: object = None
+    #: the tipping scans the controller made (controller.tipping), for the calibration
+    tippings: list = field(default_factory=list)
+
+    @property
+    def n_scans(self) -> int:
+        return len({r["scan"] for r in self.rows})
+
+    def portable(self) -> RunResult:
+        """This result without the simpy world and control program (which cannot be
+        pickled): all that the outputs of a run need, to send to another process."""
+        return replace(self, program=None, world=None)
+
+
+class _TimeLabeller:
+    """UTC ISO labels for campaign seconds, without astropy per row (leap seconds checked)."""
+
+    def __init__(self, epoch_utc: str, duration_s: float):
+        from astropy.time import Time, TimeDelta
+
+        epoch = Time(epoch_utc, scale="utc")
+        end = epoch + TimeDelta(duration_s, format="sec")
+        # A leap second inside the campaign would shift naive datetime arithmetic by 1 s;
+        # fall back to astropy then (rare; 1990-02 has none).
+        self.leap = abs(((end.tai.mjd - end.mjd) - (epoch.tai.mjd - epoch.mjd)) * 86400.0) > 0.5
+        self.epoch = epoch
+        self.epoch_dt = epoch.to_datetime()
+
+    def __call__(self, t_s: float) -> str:
+        if self.leap:
+            from astropy.time import TimeDelta
+
+            return (self.epoch + TimeDelta(t_s, format="sec")).isot
+        return (self.epoch_dt + dt.timedelta(seconds=t_s)).isoformat(timespec="milliseconds")
+
+
+def recording_meta(scenario: Scenario, seed: int, model: PointingModel) -> dict:
+    """Metadata of ``recordings.ecsv`` (DESIGN section 4)."""
+    c = scenario.controller
+    site = scenario.site
+    return {
+        "scenario": scenario.name,
+        "seed": int(seed),
+        "software": f"antsim {__version__}",
+        "site": {"name": site.name, "latitude_deg": site.latitude_deg,
+                 "longitude_deg": site.longitude_deg, "height_m": site.height_m},
+        "epoch_utc": scenario.epoch_utc,
+        "duration_s": scenario.duration_s,
+        "beam_hpbw_arcmin": c.scan.hpbw_arcmin,
+        "step_arcmin": c.scan.step_arcmin,
+        "integration_s": c.scan.integration_s,
+        "estimator": c.scan.estimator,
+        "refraction": c.refraction,
+        "frequency_ghz": c.frequency_ghz,
+        "model": {"name": model.name, "terms_arcsec": model.as_dict()},
+        "sign_convention": "xel/el: correction to apply (indicated minus true); total "
+                           "pointing error = measured + model + applied",
+        **({"mount": c.mount} if c.mount != "altaz" else {}),
+        **({"method": c.method} if c.method != "five_point" else {}),
+        **({"feed_angles_deg": list(c.feed_angles_deg)} if c.feed_angles_deg else {}),
+        **({"reduction_width_arcmin": {s.name: c.reduction_width_arcmin(s.name)
+                                       for s in c.sources}}
+           if c.scan.use_source_size else {}),
+        **({"sky_subtracted": {"zenith_opacity": c.sky.zenith_opacity,
+                               "t_atm_k": c.sky.t_atm_k}} if c.sky is not None else {}),
+    }
+
+
+def simulate(scenario: Scenario, seed: int | None = None, model: PointingModel | None = None,
+             sink: Callable[[list[dict]], None] | None = None,
+             progress: Callable[[float], None] | None = None,
+             on_world: Callable[[World], None] | None = None) -> RunResult:
+    """Run the campaign in memory; ``sink`` also receives each scan's rows as they complete;
+    ``on_world`` is called with the world before the campaign starts (e.g. to attach the
+    antenna's recorder, as ``antsim.plan`` does)."""
+    seed = scenario.seed if seed is None else int(seed)
+    if model is not None:
+        scenario = scenario.with_controller_model(model)
+    model = scenario.controller.model
+    t0 = time.perf_counter()
+    env = simpy.Environment()
+    world = World(scenario, env, seed)
+    if on_world is not None:
+        on_world(world)
+    labeller = _TimeLabeller(scenario.epoch_utc, scenario.duration_s)
+    rows: list[dict] = []
+
+    def collect(scan_rows: list[dict]) -> None:
+        for row in scan_rows:
+            row["time"] = labeller(row["t_s"])
+        rows.extend(scan_rows)
+        if sink:
+            sink(scan_rows)
+
+    program_class: type[ControlProgram] = ControlProgram
+    if scenario.controller.method == "optical":
+        from controller.program.optical import OpticalPointingProgram
+
+        program_class = OpticalPointingProgram
+    program = program_class(scenario.controller, world.antenna, sink=collect, progress=progress)
+    check_scenario(scenario, program.observer, program.targets)
+    env.run(until=env.process(program.run(env)))
+    return RunResult(scenario=scenario, seed=seed, model=model, rows=rows, truth=world.truth(),
+                     program=program, world=world, wall_s=time.perf_counter() - t0,
+                     tippings=list(getattr(program, "tippings", ())))
+
+
+def check_scenario(scenario: Scenario, observer=None, targets=None) -> None:
+    """Checks that need the sky, made before anything runs or is written: a catalogue source
+    that never rises above the elevation limit at this site, or a source the scheduler is told
+    to observe that is never inside the elevation window during the campaign."""
+    from controller.errors import InputError
+    from controller.program.campaign import plan_targets
+    from controller.program.scheduler import never_rises, never_visible
+
+    if observer is None:
+        observer, targets = plan_targets(scenario.controller)
+    sched = scenario.controller.scheduler
+    names = [s.name for s in scenario.sources]
+    low = never_rises(observer, targets, scenario.site.latitude_deg, sched.elevation_min_deg)
+    if low:
+        name = low[0].name
+        i = names.index(name)
+        raise InputError(scenario.path, f"sources[{i}].dec", scenario.sources[i].dec_deg,
+                         f"{name} never rises above controller.scheduler.elevation_min_deg = "
+                         f"{sched.elevation_min_deg:g} deg at latitude "
+                         f"{scenario.site.latitude_deg:g}",
+                         "remove it, or list the observable ones in "
+                         "controller.scheduler.sources")
+    if sched.sources:
+        missing = never_visible(observer, targets, sched, scenario.duration_s)
+        if missing:
+            raise InputError(scenario.path, "controller.scheduler.sources", missing[0].name,
+                             f"never between {sched.elevation_min_deg:g} and "
+                             f"{sched.elevation_max_deg:g} deg elevation during the campaign",
+                             "remove it or lengthen the campaign")
+
+
+def run_campaign(scenario: Scenario, out_dir: str | Path, seed: int | None = None,
+                 model: PointingModel | None = None, resume: bool = False,
+                 show_progress: bool | None = None) -> RunResult:
+    """Simulate into ``out_dir``: recordings.ecsv (scan by scan) and truth.json."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    seed = scenario.seed if seed is None else int(seed)
+    use_model = model if model is not None else scenario.controller.model
+    meta = recording_meta(scenario, seed, use_model)
+    check_scenario(scenario)  # refuse before anything is written
+    progress, close_bar = _progress(scenario.duration_s, show_progress)
+    columns = recording_columns(scenario.controller.mount,
+                                bool(scenario.controller.feed_angles_deg))
+    with RecordingWriter(out / "recordings.ecsv", meta, resume=resume,
+                         columns=columns) as writer:
+        try:
+            result = simulate(scenario, seed, model, sink=writer.write_scan, progress=progress)
+        finally:
+            close_bar()
+    result.out_dir = out
+    (out / "truth.json").write_text(json.dumps(result.truth, indent=2) + "\n", encoding="utf-8")
+    return result
+
+
+def _progress(total_s: float, show: bool | None):
+    """A tqdm bar over campaign hours on a terminal; nothing otherwise."""
+    if show is None:
+        show = sys.stderr.isatty()
+    if not show:
+        return None, lambda: None
+    from tqdm import tqdm
+
+    bar = tqdm(total=round(total_s / 3600.0, 2), unit="h", desc="campaign", leave=False,
+               bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total:.1f} h")
+
+    def update(t_s: float) -> None:
+        bar.n = round(min(t_s, total_s) / 3600.0, 2)
+        bar.refresh()
+
+    return update, bar.close

@@ -1,0 +1,1 @@
+"""(docstring follows in a later commit)"""

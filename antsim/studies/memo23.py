@@ -1,0 +1,91 @@
+"""BIMA memo 23's study: how well the linear equations fit an exact tilt and collimation.
+
+Wright (1992) generated pointing data with a large azimuth-axis tilt (6') and collimation
+(9'), computed exactly with rotations (his equations (3) and (4); here
+:class:`antsim.world.effects.optics.ExactTiltCollimation`), fitted the linear 7 + 7 term equations
+(1) and (2) (``bima14``) and showed where they fail: the residuals grow near azimuth 90 deg
+and elevation 90 deg (with the tilt towards azimuth 90: assumption, the memo's direction was
+not available), and shrink to about 1" rms with a 1' tilt or 5' of collimation.
+:func:`memo23_study` repeats it on a grid of positions (noise-free, plain least squares);
+``benchmarks/bima_study.py`` prints the memo's quantities.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from antsim.world.effects.optics import ExactTiltCollimation
+from controller.pointing.fitting import FitResult, PointingData, fit_model
+from controller.program.optical import BIMA_TERMS
+from controller.units import ARCSEC_PER_RAD
+
+__all__ = ["StudyResult", "exact_errors_arcsec", "memo23_study"]
+
+
+def exact_errors_arcsec(tilt_arcmin: float, collimation_arcmin: float, tilt_az_deg: float,
+                        az_rad: np.ndarray, el_rad: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Exact pointing error (indicated minus true) of a tilt and a collimation at true
+    positions (rad): cross-elevation dA cos E and elevation, arcsec."""
+    effect = ExactTiltCollimation(tilt_arcmin=tilt_arcmin, tilt_az_deg=tilt_az_deg,
+                                  collimation_arcmin=collimation_arcmin)
+    az_enc, el_enc = effect.encoder_from_true(az_rad, el_rad)
+    d_az = (az_enc - az_rad + math.pi) % (2 * math.pi) - math.pi
+    return d_az * np.cos(el_rad) * ARCSEC_PER_RAD, (el_enc - el_rad) * ARCSEC_PER_RAD
+
+
+@dataclass(frozen=True)
+class StudyResult:
+    """The fit of the linear equations to exact errors on a grid, and where it fails."""
+
+    tilt_arcmin: float
+    collimation_arcmin: float
+    tilt_az_deg: float
+    az_deg: np.ndarray
+    el_deg: np.ndarray
+    fit: FitResult
+
+    @property
+    def residual_arcsec(self) -> np.ndarray:
+        """Total residual sqrt(xel^2 + el^2) per grid point (arcsec)."""
+        return np.hypot(self.fit.residual_xel_arcsec, self.fit.residual_el_arcsec)
+
+    @property
+    def sky_rms_arcsec(self) -> float:
+        return self.fit.sky_rms_arcsec
+
+    def rms_by(self, which: str, lo: float = -math.inf, hi: float = math.inf,
+               el_min_deg: float = -math.inf) -> dict[float, float]:
+        """Sky rms (arcsec) of the residuals in each distinct ``which`` ("az" or "el") value,
+        for points with elevation >= ``el_min_deg``."""
+        key = self.az_deg if which == "az" else self.el_deg
+        r2 = self.residual_arcsec ** 2
+        out = {}
+        for v in np.unique(key):
+            sel = (key == v) & (self.el_deg >= el_min_deg) & (key >= lo) & (key <= hi)
+            if sel.any():
+                out[float(v)] = math.sqrt(float(r2[sel].mean()))
+        return out
+
+    def worst(self) -> tuple[float, float, float]:
+        """(azimuth deg, elevation deg, residual arcsec) of the largest residual."""
+        k = int(np.argmax(self.residual_arcsec))
+        return float(self.az_deg[k]), float(self.el_deg[k]), float(self.residual_arcsec[k])
+
+
+def memo23_study(tilt_arcmin: float = 6.0, collimation_arcmin: float = 9.0,
+                 tilt_az_deg: float = 90.0, az_step_deg: float = 10.0,
+                 el_min_deg: float = 10.0, el_max_deg: float = 85.0,
+                 el_step_deg: float = 5.0) -> StudyResult:
+    """Fit the memo's linear equations to exact tilt + collimation errors on an az/el grid
+    (plain least squares, no noise) and return the fit with the grid."""
+    az = np.arange(0.0, 360.0, az_step_deg)
+    el = np.arange(el_min_deg, el_max_deg + 1e-9, el_step_deg)
+    az_g, el_g = (a.ravel() for a in np.meshgrid(az, el))
+    xel, d_el = exact_errors_arcsec(tilt_arcmin, collimation_arcmin, tilt_az_deg,
+                                    np.radians(az_g), np.radians(el_g))
+    data = PointingData(np.radians(az_g), np.radians(el_g), xel, d_el)
+    fit = fit_model(data, BIMA_TERMS, robust=False, name="bima14")
+    return StudyResult(tilt_arcmin, collimation_arcmin, tilt_az_deg, az_g, el_g, fit)

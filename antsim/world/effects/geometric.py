@@ -1,0 +1,71 @@
+"""Geometric pointing errors expressed by linear pointing-model terms."""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+from controller.pointing.model import PointingModel
+from controller.pointing.terms import TermError, get_term
+
+from .base import Effect, Param, PointingState
+
+__all__ = ["GeometricEffect", "TermsEffect"]
+
+
+class GeometricEffect(Effect):
+    """Mount geometry as a pointing model: the encoders read true + ``model.offset``.
+
+    The model is evaluated at the true position (the convention TPOINT fits use), so the
+    controller's fitted model of the same terms reproduces it exactly.
+    """
+
+    name: ClassVar[str] = "geometric"
+    explanation: ClassVar[str] = (
+        "fixed mechanical misalignments of the mount: encoder zero points, collimation, "
+        "axis non-perpendicularity and tilt, gravitational sag"
+    )
+
+    def __init__(self, model: PointingModel):
+        self.model = model
+        self.p = {"model": model.name, "terms_arcsec": model.as_dict()}
+
+    @property
+    def terms(self) -> tuple[str, ...]:  # type: ignore[override]
+        return self.model.names
+
+    def pointing_error(self, state: PointingState) -> tuple[float, float]:
+        if self.model.needs_feed:  # feed terms (HSCF...) turn with the feed angle
+            return self.model.offset_scalar_rad(state.az_rad, state.el_rad,
+                                                state.feed_angle_rad)
+        return self.model.offset_scalar_rad(state.az_rad, state.el_rad)
+
+    block_error = pointing_error  # offset_scalar_rad is elementwise on arrays
+
+
+class TermsEffect(GeometricEffect):
+    """Extra geometric terms by name, e.g. ``HESA2 = 6.0`` (arcsec, TPOINT sign)."""
+
+    name: ClassVar[str] = "terms"
+    explanation: ClassVar[str] = "additional geometric terms given by their TPOINT names"
+    PARAMS: ClassVar[dict[str, Param]] = {}
+
+    def __init__(self, terms_arcsec: dict[str, float] | None = None, **named: Any):
+        values = dict(terms_arcsec or {})
+        values.update(named)
+        super().__init__(PointingModel(list(values), list(values.values()), name="terms"))
+
+    @classmethod
+    def from_table(cls, table):
+        values = {}
+        for key in table:
+            if key == "effect":
+                continue
+            try:
+                get_term(key)
+            except TermError as err:
+                raise table.error(key, table.raw(key), "not a pointing term", str(err)) from None
+            values[key.upper()] = table.number(key)
+        if not values:
+            raise table.error("effect", "terms", "lists no terms", "add e.g. HESA2 = 6.0 (arcsec)")
+        table.finish()
+        return cls(values)

@@ -1,0 +1,175 @@
+"""Effects of the optics and the sources: squint, beam width, structure, refraction, tilt."""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar
+
+import numpy as np
+
+from controller.units import RAD_PER_ARCMIN, RAD_PER_ARCSEC
+
+from .base import Effect, Param, PointingState
+
+__all__ = ["BeamWidthError", "ExactTiltCollimation", "PolarizationSquint", "RefractionAnomaly",
+           "SourceStructure"]
+
+
+class PolarizationSquint(Effect):
+    """Right and left circular beams point apart by ``separation_arcsec`` at ``angle_deg``
+    (0: cross-elevation, 90: elevation); the average of the two is on axis."""
+
+    name: ClassVar[str] = "polarization_squint"
+    explanation: ClassVar[str] = (
+        "an offset feed makes the right- and left-circular beams point to opposite sides of "
+        "the axis; XR and XL then disagree by a constant amount"
+    )
+    PARAMS: ClassVar[dict[str, Param]] = {
+        "separation_arcsec": Param(0.0, "XR beam minus XL beam separation (arcsec)"),
+        "angle_deg": Param(0.0, "direction of the separation, 0 = +xel, 90 = +el"),
+    }
+
+    def beam_offset(self, channel: str, state: PointingState) -> tuple[float, float]:
+        half = 0.5 * self.p["separation_arcsec"] * RAD_PER_ARCSEC
+        sign = {"XR": 1.0, "XL": -1.0}.get(channel, 0.0)
+        angle = math.radians(self.p["angle_deg"])
+        return sign * half * math.cos(angle), sign * half * math.sin(angle)
+
+
+class BeamWidthError(Effect):
+    """The true beam is ``scale`` times wider than the controller assumes."""
+
+    name: ClassVar[str] = "beam_width"
+    explanation: ClassVar[str] = (
+        "the beam is wider (or narrower) than the reduction assumes, so every measured "
+        "offset is scaled by the same factor"
+    )
+    PARAMS: ClassVar[dict[str, Param]] = {
+        "scale": Param(1.0, "true HPBW / nominal HPBW", min=0.5, max=2.0),
+    }
+
+    def start(self, world, rng: np.random.Generator) -> None:
+        world.beam.hpbw_arcmin = world.beam.config.hpbw_arcmin * self.p["scale"]
+
+
+class SourceStructure(Effect):
+    """Sources larger than the scenario says, or with their centroid off the catalogue
+    position: offsets scaled and shifted, residuals clustered by source."""
+
+    name: ClassVar[str] = "source_structure"
+    explanation: ClassVar[str] = (
+        "an extended or double source is not a point: its measured offsets are scaled "
+        "down by theta_b^2/(theta_b^2+theta_s^2) and its centroid may lie off the "
+        "catalogue position"
+    )
+    PARAMS: ClassVar[dict[str, Param]] = {
+        "source": Param("", "name of the source", kind="string"),
+        "size_arcmin": Param(0.0, "Gaussian FWHM of the source (arcmin)", min=0.0, max=60.0),
+        "xel_arcsec": Param(0.0, "centroid offset from the catalogue, cross-elevation"),
+        "el_arcsec": Param(0.0, "centroid offset from the catalogue, elevation"),
+    }
+
+    def start(self, world, rng: np.random.Generator) -> None:
+        try:
+            i = world.sky.index(self.p["source"])
+        except ValueError:
+            raise ValueError(f"source_structure: unknown source {self.p['source']!r}") from None
+        world.sky.size_arcmin[i] = self.p["size_arcmin"]
+        world.sky.position_offset_arcsec[i] = (self.p["xel_arcsec"], self.p["el_arcsec"])
+
+
+class RefractionAnomaly(Effect):
+    """Refraction actually present differs from the formula by a factor ``scale``."""
+
+    name: ClassVar[str] = "refraction_anomaly"
+    terms: ClassVar[tuple[str, ...]] = ("TX",)
+    explanation: ClassVar[str] = (
+        "the refraction the controller corrects differs from the refraction present (wrong "
+        "humidity or pressure, or an inadequate formula): a cot E residual in elevation"
+    )
+    PARAMS: ClassVar[dict[str, Param]] = {
+        "scale": Param(1.0, "true refraction / formula refraction", min=0.0, max=3.0),
+    }
+
+    def start(self, world, rng: np.random.Generator) -> None:
+        world.sky.refraction_scale = self.p["scale"]
+
+
+class ExactTiltCollimation(Effect):
+    """Exact (not small-angle) azimuth-axis tilt and collimation (BIMA memo 23, eqs. 3-4).
+
+    The azimuth axis is tilted by ``tilt_arcmin`` towards azimuth ``tilt_az_deg`` and the beam
+    is off the plane perpendicular to the elevation axis by ``collimation_arcmin``. The error is
+    computed with rotations, so it stays right near the zenith and near azimuth 90 deg where
+    the linear TPOINT terms (AN, AW, CA) fail for large angles. For small angles it equals
+    AN = -tilt cos(tilt_az), AW = tilt sin(tilt_az), CA = -collimation (tested).
+    """
+
+    name: ClassVar[str] = "exact_tilt_collimation"
+    terms: ClassVar[tuple[str, ...]] = ("AN", "AW", "CA")
+    explanation: ClassVar[str] = (
+        "a large tilt of the azimuth axis or a large collimation error: the small-angle "
+        "model fails near the zenith and near azimuth 90 deg"
+    )
+    PARAMS: ClassVar[dict[str, Param]] = {
+        "tilt_arcmin": Param(0.0, "tilt of the azimuth axis (arcmin)", min=0.0),
+        "tilt_az_deg": Param(0.0, "azimuth towards which the axis tilts (deg, N = 0)"),
+        "collimation_arcmin": Param(0.0, "collimation error (arcmin)"),
+    }
+
+    def coefficients(self) -> dict[str, float]:
+        """Small-angle equivalents (arcsec, TPOINT's sign) in TPOINT's terms (AN, AW, CA) and
+        in the BIMA memo's separate azimuth and elevation tilt terms (HSSASE, HECA, HSCASE,
+        HESA): what a linear fit of either model should recover."""
+        from controller.program.optical import tilt_collimation_equivalents
+
+        tilt_arcsec = self.p["tilt_arcmin"] * 60.0
+        phi = math.radians(self.p["tilt_az_deg"])
+        linear = {"AN": -tilt_arcsec * math.cos(phi), "AW": tilt_arcsec * math.sin(phi),
+                  "CA": -self.p["collimation_arcmin"] * 60.0}
+        return {**linear, **tilt_collimation_equivalents(**self.params())}
+
+    def truth(self) -> dict[str, Any]:
+        return {**super().truth(), "coefficients_arcsec": self.coefficients()}
+
+    def encoder_from_true(self, az_rad, el_rad):
+        """Encoder (indicated) azimuth and elevation that put the beam on the true direction."""
+        az = np.asarray(az_rad, dtype=float)
+        el = np.asarray(el_rad, dtype=float)
+        # true direction as a unit vector (x north, y east, z up)
+        v = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+        tilt = self.p["tilt_arcmin"] * RAD_PER_ARCMIN
+        phi = math.radians(self.p["tilt_az_deg"])
+        # the mount's frame: rotate by -tilt about the horizontal axis perpendicular to phi
+        axis = np.array([-math.sin(phi), math.cos(phi), 0.0])
+        v_mount = _rotate(v, axis, -tilt)
+        x, y, z = v_mount
+        el_m = np.arcsin(np.clip(z, -1.0, 1.0))
+        az_m = np.arctan2(y, x)
+        # collimation c: the beam lies at angle c from the plane perpendicular to the
+        # elevation axis; pointing at elevation-axis-plane angle: sin(el_beam) relation
+        c = self.p["collimation_arcmin"] * RAD_PER_ARCMIN
+        # beam direction in mount frame for encoders (A, E): the elevation axis is
+        # horizontal along azimuth A + 90; beam = cos c * (in-plane direction at E) +
+        # sin c * (along the elevation axis). Invert exactly:
+        sin_e = np.clip(np.sin(el_m) / math.cos(c), -1.0, 1.0)
+        el_enc = np.arcsin(sin_e)
+        # azimuth offset of the beam from the in-plane azimuth: tan(da) = sin c / (cos c cos E)
+        da = np.arctan2(math.sin(c), math.cos(c) * np.cos(el_enc))
+        az_enc = az_m - da
+        return az_enc % (2 * math.pi), el_enc
+
+    def pointing_error(self, state: PointingState) -> tuple[float, float]:
+        az_enc, el_enc = self.encoder_from_true(state.az_rad, state.el_rad)
+        d_az = (float(az_enc) - state.az_rad + math.pi) % (2 * math.pi) - math.pi
+        return d_az, float(el_enc) - state.el_rad
+
+
+def _rotate(v: np.ndarray, axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rodrigues rotation of vectors ``v`` (3, ...) about unit ``axis`` by ``angle``."""
+    k = axis.reshape(3, *([1] * (v.ndim - 1)))
+    cos_a, sin_a = math.cos(angle), math.sin(angle)
+    cross = np.stack([k[1] * v[2] - k[2] * v[1], k[2] * v[0] - k[0] * v[2],
+                      k[0] * v[1] - k[1] * v[0]])
+    dot = (k * v).sum(axis=0)
+    return v * cos_a + cross * sin_a + k * dot * (1 - cos_a)

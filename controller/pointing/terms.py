@@ -1,0 +1,461 @@
+"""Pointing-model terms: the TPOINT vocabulary, Ghigo's W1..W10 and katpoint's P1..P22.
+
+Every term is linear in its coefficient. ``Term.basis(az_rad, el_rad)`` returns the
+*correction* per unit coefficient in TPOINT's sign convention,
+
+    true (observed) = raw (indicated, encoder) + correction,
+
+as ``(dA, dE)`` in radians per radian of coefficient, evaluated at the observed (true)
+position. Azimuth arguments are North-based (N = 0, E = 90 deg) everywhere in this package.
+
+Two facts fix the signs (both are tested):
+
+* TPOINT evaluates its basic terms with its own South-based azimuth ``A_S = A_N - 180 deg``.
+  Only then does a fit of ``../shared/data/real/mmt_20210821_k_and_e.dat`` reproduce
+  TPOINT's published AN = +2.495" and AW = -10.335" (with North-based azimuth both flip).
+  The harmonic generator has its own azimuth and result signs (below).
+* Ghigo (1990) and katpoint write the opposite quantity, "indicated minus true", which is
+  minus the TPOINT correction. Their basis functions are therefore negated here, so that a
+  fitted coefficient equals the number those sources print.
+
+Ghigo's W1..W10: the report's own equations were not available to us (see
+``docs/assumptions.md``). They are reconstructed as five azimuth and five elevation terms of
+the kind an NRAO model of 1990 fitted independently, keeping what the issues state: W4 is the
+gravitational sag (cos E in elevation) and W6, 12.24', is the elevation zero offset::
+
+    dA = W1 + W2 sec E + W3 tan E + W9 sin A tan E + W10 cos A tan E
+    dE = W4 cos E + W5 cot E + W6 + W7 cos A + W8 sin A      (indicated - true)
+
+The harmonic generator follows TPOINT: ``H`` + result letter (A: azimuth, E: elevation,
+S: left-right on the sky = dA cos E, Z: zenith distance) + one or two factors, each ``S`` or
+``C`` (sine, cosine) of ``A``, ``E`` or ``Z`` with an optional integer multiplier. Its signs
+are TPOINT's own, fixed by TPOINT's FAUTO fit of ``../shared/data/real/auxtel_20200315.dat``
+(22 terms, ten of them harmonics with results A, E and S and arguments up to 7A; tested):
+
+* the azimuth of a harmonic is ``A_H = 180 deg - A_S = -A_N`` (mod 360 deg), not ``A_S``;
+* an ``A`` or ``S`` result is minus the harmonic, as TPOINT's IA and CA are: ``HACA2`` is
+  dA = -c cos 2A_H, ``HSCA5CE8`` is dA cos E = -c cos 5A_H cos 8E;
+* an ``E`` result is plus it (``HESA2`` is dE = +c sin 2A_H = -c sin 2A_N) and a ``Z`` result
+  is dZ = +c f, i.e. dE = -c f.
+
+Within the conventions "argument +-A_S + k 180 deg, one sign per result letter" this is the
+only one that reproduces the signs of all ten of TPOINT's harmonic coefficients on that file
+(HACA2, HASA7, HESACE, HESA2, HESA3, HSCA5CE8, HSSA6CE6, HSCE3, HSSE8, HSCE8); the earlier
+``A_S`` with every result ``+c f`` flipped six of them (HACA2, HASA7, HESA2, HSCE3, HSSE8,
+HSCE8). Written with the South-based azimuth of AN and AW, the once-per-turn terms are
+dE = +HESA sin A_S, dE = -HECA cos A_S, dA = -HASA sin A_S, dA = +HACA cos A_S; with the
+North-based one, sin kA_H = -sin kA_N and cos kA_H = +cos kA_N. No ``Z`` harmonic was in
+that fit: its sign (dE = -c f) is the natural reading of a zenith-distance result, not
+evidence.
+
+Beyond TPOINT, the argument ``F`` is the feed (rotator) angle of a feed box turned during a
+campaign (Fomalont 1973's feed terms). TPOINT has no such argument; for consistency the
+result signs follow the same rule, so ``HSCF`` is dA cos E = -c cos F and ``HECF`` is
+dE = +c cos F (the feed angle itself is used as it is, not negated). Terms with an ``F``
+factor need the feed angle (``feed_rad``) wherever they are evaluated.
+
+Extension for other mounts (:mod:`controller.pointing.equatorial`): a factor's argument may also be
+a hashable callable ``(lon_rad, lat_rad) -> array`` of the two coordinates the terms are
+evaluated at (for an equatorial model: hour angle and declination, passed in place of azimuth
+and elevation), e.g. the elevation that TPOINT's equatorial TX needs. Names never produce
+such factors: terms with them are built by hand and state their own signs; were one built
+as a harmonic, the same result rule would apply (A and S results minus, E plus). The
+equatorial harmonic generator (``HHSH``, ``HDCD``... in :mod:`controller.pointing.equatorial`) is a
+separate one, with every result ``+c f``: no TPOINT fit with equatorial harmonics was
+available to test it against.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "GHIGO_EQUIVALENTS",
+    "KATPOINT_EQUIVALENTS",
+    "Term",
+    "TermError",
+    "combine_arrays",
+    "combine_scalar",
+    "evaluate_basis",
+    "get_term",
+    "harmonic_factors",
+    "is_term_name",
+]
+
+# A term is a sum of components; each component is sign * product of factors, landing in
+# dA (axis "A"), dE (axis "E") or left-right on the sky (axis "S": dA cos E). A factor is
+# (function, argument, multiplier): functions sin cos tan sec cot lin csc; arguments
+# "AS" (TPOINT's South-based azimuth A_N - pi, of its basic terms AN, AW...), "AH" (the
+# azimuth of TPOINT's harmonic generator, pi - A_S = -A_N), "AN" (North-based azimuth), "E"
+# (elevation), "Z" (zenith distance), "F" (feed angle) or a hashable callable (see the module
+# docstring). Models evaluate each distinct factor once (see ``evaluate_basis``).
+Factor = tuple[str, str, int]
+Component = tuple[str, float, tuple[Factor, ...]]
+
+
+class TermError(KeyError):
+    """An unknown term name."""
+
+    def __str__(self) -> str:  # KeyError quotes its message; a user should read plain text
+        return str(self.args[0])
+
+
+@dataclass(frozen=True)
+class Term:
+    """One linear pointing term.
+
+    ``kind`` is ``"angle"`` for coefficients that are angles (value in arcsec) or
+    ``"scale"`` for dimensionless scale factors (katpoint P9, P12; their ``value_arcsec`` is
+    the error at one radian of the argument).
+    """
+
+    name: str
+    description: str
+    components: tuple[Component, ...] = field(repr=False)
+    kind: str = "angle"
+
+    def basis(self, az_rad, el_rad) -> tuple[np.ndarray, np.ndarray]:
+        """TPOINT-sign correction (dA, dE) per unit coefficient, radians per radian."""
+        az, el = np.broadcast_arrays(np.asarray(az_rad, dtype=float),
+                                     np.asarray(el_rad, dtype=float))
+        basis_az, basis_el = evaluate_basis((self,), az.reshape(-1), el.reshape(-1))
+        return basis_az[:, 0].reshape(az.shape), basis_el[:, 0].reshape(az.shape)
+
+
+def _argument(arg, az: np.ndarray, el: np.ndarray, feed=None) -> np.ndarray:
+    if callable(arg):
+        return arg(az, el)
+    if arg == "F":
+        return _feed(feed)
+    if arg == "AS":
+        return az - math.pi
+    if arg == "AH":
+        return -az
+    if arg == "AN":
+        return az
+    if arg == "E":
+        return el
+    return 0.5 * math.pi - el  # "Z"
+
+
+_FUNCTIONS = {
+    "sin": np.sin,
+    "cos": np.cos,
+    "tan": np.tan,
+    "sec": lambda x: 1.0 / np.cos(x),
+    "cot": lambda x: 1.0 / np.tan(x),
+    "lin": lambda x: x,
+    "csc": lambda x: 1.0 / np.sin(x),
+}
+
+
+def _feed(feed):
+    if feed is None:
+        raise ValueError("a term with a feed-angle factor (F) needs the feed angle: give "
+                         "feed_rad (the recordings' feed_angle_deg column)")
+    return feed
+
+
+def evaluate_basis(terms: Sequence[Term], az_rad: np.ndarray,
+                   el_rad: np.ndarray, feed_rad=None) -> tuple[np.ndarray, np.ndarray]:
+    """TPOINT-sign correction basis of ``terms`` at 1-D arrays of points: two (N, M) arrays.
+    ``feed_rad``: feed angle(s) (rad), needed only by terms with an ``F`` factor."""
+    n = az_rad.shape[0]
+    basis_az = np.zeros((n, len(terms)))
+    basis_el = np.zeros((n, len(terms)))
+    cache: dict[Factor, np.ndarray] = {}
+    sec_el = None
+    for j, term in enumerate(terms):
+        for axis, sign, factors in term.components:
+            value = None
+            for factor in factors:
+                arr = cache.get(factor)
+                if arr is None:
+                    func, arg, mult = factor
+                    x = _argument(arg, az_rad, el_rad, feed_rad)
+                    arr = _FUNCTIONS[func](x if mult == 1 else mult * x)
+                    cache[factor] = arr
+                value = arr if value is None else value * arr
+            if value is None:
+                value = 1.0
+            if axis == "A":
+                basis_az[:, j] += sign * value
+            elif axis == "E":
+                basis_el[:, j] += sign * value
+            else:  # "S": left-right on the sky, dA = value / cos E
+                if sec_el is None:
+                    sec_el = 1.0 / np.cos(el_rad)
+                basis_az[:, j] += sign * value * sec_el
+    return basis_az, basis_el
+
+
+_MATH = {"sin": math.sin, "cos": math.cos, "tan": math.tan,
+         "sec": lambda x: 1.0 / math.cos(x), "cot": lambda x: 1.0 / math.tan(x),
+         "lin": lambda x: x, "csc": lambda x: 1.0 / math.sin(x)}
+
+
+def _argument_scalar(arg, az: float, el: float, feed=None) -> float:
+    if callable(arg):
+        return float(arg(az, el))
+    if arg == "F":
+        return _feed(feed)
+    if arg == "AS":
+        return az - math.pi
+    if arg == "AH":
+        return -az
+    if arg == "AN":
+        return az
+    if arg == "E":
+        return el
+    return 0.5 * math.pi - el
+
+
+def combine_scalar(terms: Sequence[Term], coeffs: Sequence[float], az_rad: float,
+                   el_rad: float, feed_rad: float | None = None) -> tuple[float, float]:
+    """``sum_j coeffs[j] * basis_j`` at one point, with plain floats (fast for scalars)."""
+    return _combine(terms, coeffs, az_rad, el_rad, feed_rad, _MATH, _argument_scalar, math.cos)
+
+
+def combine_arrays(terms: Sequence[Term], coeffs: Sequence[float], az_rad: np.ndarray,
+                   el_rad: np.ndarray, feed_rad=None) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`combine_scalar` on arrays of any (common) shape, element by element: no basis
+    matrix (the fast path for a few points, e.g. an ensemble's members at one instant)."""
+    az, el = np.broadcast_arrays(np.asarray(az_rad, dtype=float), np.asarray(el_rad, dtype=float))
+    total_az, total_el = _combine(terms, coeffs, az, el, feed_rad, _FUNCTIONS, _argument, np.cos)
+    return total_az + np.zeros(az.shape), total_el + np.zeros(az.shape)
+
+
+def _combine(terms, coeffs, az, el, feed, functions, argument, cos):
+    cache: dict[Factor, Any] = {}
+    total_az = total_el = 0.0
+    for term, coeff in zip(terms, coeffs, strict=True):
+        if coeff == 0.0:
+            continue
+        for axis, sign, factors in term.components:
+            value = sign * coeff
+            for factor in factors:
+                f = cache.get(factor)
+                if f is None:
+                    func, arg, mult = factor
+                    f = functions[func](mult * argument(arg, az, el, feed))
+                    cache[factor] = f
+                value = value * f
+            if axis == "A":
+                total_az = total_az + value
+            elif axis == "E":
+                total_el = total_el + value
+            else:
+                total_az = total_az + value / cos(el)
+    return total_az, total_el
+
+
+def _t(name, desc, *components, kind="angle") -> Term:
+    return Term(name, desc, tuple((ax, float(sg), tuple(fs)) for ax, sg, fs in components), kind)
+
+
+SIN_AS, COS_AS = ("sin", "AS", 1), ("cos", "AS", 1)
+SIN_AN, COS_AN = ("sin", "AN", 1), ("cos", "AN", 1)
+TAN_E, SEC_E, COT_E = ("tan", "E", 1), ("sec", "E", 1), ("cot", "E", 1)
+SIN_E, COS_E = ("sin", "E", 1), ("cos", "E", 1)
+
+
+# ---------------------------------------------------------------------------------------------
+# TPOINT's basic terms (alt-az mount)
+# ---------------------------------------------------------------------------------------------
+def _tpoint_terms() -> dict[str, Term]:
+    terms = [
+        _t("IA", "azimuth index (encoder zero): dA = -IA", ("A", -1, ())),
+        _t("IE", "elevation index (encoder zero): dE = +IE", ("E", 1, ())),
+        _t("CA", "collimation, left-right: dA = -CA sec E", ("A", -1, (SEC_E,))),
+        _t("NPAE", "az/el axis non-perpendicularity: dA = -NPAE tan E", ("A", -1, (TAN_E,))),
+        _t("AN", "azimuth axis tilt, north-south: dA = -AN sin A tan E, dE = -AN cos A",
+           ("A", -1, (SIN_AS, TAN_E)), ("E", -1, (COS_AS,))),
+        _t("AW", "azimuth axis tilt, east-west: dA = -AW cos A tan E, dE = +AW sin A",
+           ("A", -1, (COS_AS, TAN_E)), ("E", 1, (SIN_AS,))),
+        _t("TF", "tube flexure (gravitational sag), cos E law: dE = -TF cos E",
+           ("E", -1, (COS_E,))),
+        _t("TX", "tube flexure / refraction error, cot E law: dE = -TX cot E",
+           ("E", -1, (COT_E,))),
+        _t("ACEC", "azimuth centering error, cos component: dA = +ACEC cos A",
+           ("A", 1, (COS_AS,))),
+        _t("ACES", "azimuth centering error, sin component: dA = +ACES sin A",
+           ("A", 1, (SIN_AS,))),
+        _t("ECEC", "elevation centering error, cos component: dE = +ECEC cos E",
+           ("E", 1, (COS_E,))),
+        _t("ECES", "elevation centering error, sin component: dE = +ECES sin E",
+           ("E", 1, (SIN_E,))),
+    ]
+    return {t.name: t for t in terms}
+
+
+# ---------------------------------------------------------------------------------------------
+# TPOINT harmonic generator
+# ---------------------------------------------------------------------------------------------
+_HARMONIC = re.compile(r"^H([AESZ])([SC])([AEZF])(\d*)(?:([SC])([AEZF])(\d*))?$")
+
+#: result letter -> (axis, sign): TPOINT's dA and dA cos E results are minus the harmonic
+#: (as its IA and CA are), dE is plus it and dZ = -dE (see the module docstring)
+_HARMONIC_RESULT = {"A": ("A", -1), "E": ("E", 1), "S": ("S", -1), "Z": ("E", -1)}
+
+
+def harmonic_factors(f1: str, a1: str, n1: str, f2: str | None, a2: str | None,
+                     n2: str | None) -> list[tuple[str, str, int]] | None:
+    """The (S/C, argument letter, multiplier) factors of a harmonic name's regex groups (a
+    missing multiplier is 1); ``None`` for a zero multiplier. Shared by the alt-az and the
+    equatorial (:mod:`controller.pointing.equatorial`) generators."""
+    raw = [(f1, a1, int(n1) if n1 else 1)]
+    if f2:
+        raw.append((f2, a2, int(n2) if n2 else 1))
+    return None if any(n == 0 for _, _, n in raw) else raw
+
+
+def _harmonic(name: str) -> Term | None:
+    m = _HARMONIC.match(name)
+    if not m:
+        return None
+    result, *groups = m.groups()
+    raw = harmonic_factors(*groups)
+    if raw is None:
+        return None
+    factors = tuple(
+        ("sin" if f == "S" else "cos", "AH" if a == "A" else a, n) for f, a, n in raw
+    )
+    axis, sign = _HARMONIC_RESULT[result]
+    words = {"A": "dA = -", "E": "dE = ", "S": "dA cos E = -", "Z": "dZ = "}
+    desc = " * ".join(f"{'sin' if f == 'S' else 'cos'}({'' if n == 1 else n}"
+                      f"{'A_H' if a == 'A' else a})" for f, a, n in raw)
+    if any(a == "A" for _, a, _ in raw):
+        desc += ", A_H = -A_N"
+    return _t(name, f"harmonic: {words[result]}{name} {desc}", (axis, sign, factors))
+
+
+# ---------------------------------------------------------------------------------------------
+# Ghigo (1990) W1..W10: indicated - true, North-based azimuth (see module docstring); the
+# TPOINT correction is the negative, hence the minus signs below.
+# ---------------------------------------------------------------------------------------------
+def _ghigo_terms() -> dict[str, Term]:
+    terms = [
+        _t("W1", "azimuth encoder zero: dA = W1", ("A", -1, ())),
+        _t("W2", "collimation: dA = W2 sec E", ("A", -1, (SEC_E,))),
+        _t("W3", "az/el axis non-perpendicularity: dA = W3 tan E", ("A", -1, (TAN_E,))),
+        _t("W4", "gravitational sag: dE = W4 cos E", ("E", -1, (COS_E,))),
+        _t("W5", "refraction error: dE = W5 cot E", ("E", -1, (COT_E,))),
+        _t("W6", "elevation encoder zero: dE = W6", ("E", -1, ())),
+        _t("W7", "azimuth axis tilt seen in elevation: dE = W7 cos A", ("E", -1, (COS_AN,))),
+        _t("W8", "azimuth axis tilt seen in elevation: dE = W8 sin A", ("E", -1, (SIN_AN,))),
+        _t("W9", "azimuth axis tilt seen in azimuth: dA = W9 sin A tan E",
+           ("A", -1, (SIN_AN, TAN_E))),
+        _t("W10", "azimuth axis tilt seen in azimuth: dA = W10 cos A tan E",
+           ("A", -1, (COS_AN, TAN_E))),
+    ]
+    return {t.name: t for t in terms}
+
+
+# ---------------------------------------------------------------------------------------------
+# katpoint P1..P22 (katpoint.PointingModel.offset: indicated - true, North-based azimuth);
+# negated like Ghigo's.
+# ---------------------------------------------------------------------------------------------
+def _katpoint_terms() -> dict[str, Term]:
+    def kp(name, desc, *components, kind="angle"):
+        flipped = tuple((ax, -sg, fs) for ax, sg, fs in components)
+        return _t(name, f"katpoint {name}: {desc}", *flipped, kind=kind)
+
+    terms = [
+        kp("P1", "az offset: daz = P1", ("A", 1, ())),
+        kp("P2", "az gravitational sag (unused by katpoint for alt-az)"),
+        kp("P3", "left-right axis skew: daz = P3 tan E", ("A", 1, (TAN_E,))),
+        kp("P4", "collimation: daz = -P4 sec E", ("A", -1, (SEC_E,))),
+        kp("P5", "tilt out: daz = P5 sin A tan E, del = P5 cos A",
+           ("A", 1, (SIN_AN, TAN_E)), ("E", 1, (COS_AN,))),
+        kp("P6", "tilt over: daz = -P6 cos A tan E, del = P6 sin A",
+           ("A", -1, (COS_AN, TAN_E)), ("E", 1, (SIN_AN,))),
+        kp("P7", "el offset: del = P7", ("E", 1, ())),
+        kp("P8", "gravity sag: del = P8 cos E", ("E", 1, (COS_E,))),
+        kp("P9", "el excess scale: del = P9 E", ("E", 1, (("lin", "E", 1),)), kind="scale"),
+        kp("P10", "cos E in del, redundant with P8 (unused by katpoint)"),
+        kp("P11", "asymmetric sag: del = P11 sin E", ("E", 1, (SIN_E,))),
+        kp("P12", "az excess scale: daz = P12 A", ("A", 1, (("lin", "AN", 1),)), kind="scale"),
+        kp("P13", "az centering: daz = P13 cos A", ("A", 1, (COS_AN,))),
+        kp("P14", "az centering: daz = P14 sin A", ("A", 1, (SIN_AN,))),
+        kp("P15", "el nod twice per turn: del = P15 cos 2A", ("E", 1, (("cos", "AN", 2),))),
+        kp("P16", "el nod twice per turn: del = P16 sin 2A", ("E", 1, (("sin", "AN", 2),))),
+        kp("P17", "az encoder tilt: daz = P17 cos 2A", ("A", 1, (("cos", "AN", 2),))),
+        kp("P18", "az encoder tilt: daz = P18 sin 2A", ("A", 1, (("sin", "AN", 2),))),
+        kp("P19", "el encoder scale distortion: del = P19 cos 8E", ("E", 1, (("cos", "E", 8),))),
+        kp("P20", "el encoder scale distortion: del = P20 sin 8E", ("E", 1, (("sin", "E", 8),))),
+        kp("P21", "el nod once per turn: del = P21 cos A", ("E", 1, (COS_AN,))),
+        kp("P22", "el nod once per turn: del = P22 sin A", ("E", 1, (SIN_AN,))),
+    ]
+    return {t.name: t for t in terms}
+
+
+_FIXED: dict[str, Term] = {**_tpoint_terms(), **_ghigo_terms(), **_katpoint_terms()}
+
+#: Where Ghigo's W terms coincide with TPOINT's: W = sign * TPOINT coefficient (tested).
+GHIGO_EQUIVALENTS: dict[str, tuple[str, float]] = {
+    "W1": ("IA", 1.0),
+    "W2": ("CA", 1.0),
+    "W3": ("NPAE", 1.0),
+    "W4": ("TF", 1.0),
+    "W5": ("TX", 1.0),
+    "W6": ("IE", -1.0),
+    "W7": ("HECA", -1.0),
+    "W8": ("HESA", 1.0),
+    "W9": ("HSSASE", -1.0),
+    "W10": ("HSCASE", 1.0),
+}
+
+#: Where katpoint's P terms coincide with TPOINT's: P = sign * TPOINT coefficient (tested).
+#: P5/P6 are the azimuth-axis tilt and equal -AN/+AW in both axes at once. P2 and P10 are
+#: unused by katpoint; P9 and P12 are scale factors with no TPOINT twin here.
+KATPOINT_EQUIVALENTS: dict[str, tuple[str, float]] = {
+    "P1": ("IA", 1.0),
+    "P3": ("NPAE", 1.0),
+    "P4": ("CA", -1.0),
+    "P5": ("AN", -1.0),
+    "P6": ("AW", 1.0),
+    "P7": ("IE", -1.0),
+    "P8": ("TF", 1.0),
+    "P11": ("HESE", -1.0),
+    "P13": ("HACA", 1.0),
+    "P14": ("HASA", -1.0),
+    "P15": ("HECA2", -1.0),
+    "P16": ("HESA2", 1.0),
+    "P17": ("HACA2", 1.0),
+    "P18": ("HASA2", -1.0),
+    "P19": ("HECE8", -1.0),
+    "P20": ("HESE8", -1.0),
+    "P21": ("HECA", -1.0),
+    "P22": ("HESA", 1.0),
+}
+
+
+@lru_cache(maxsize=512)
+def get_term(name: str) -> Term:
+    """The term called ``name`` (TPOINT name, harmonic, W1..W10 or P1..P22)."""
+    key = name.strip().upper()
+    if key in _FIXED:
+        return _FIXED[key]
+    term = _harmonic(key)
+    if term is None:
+        raise TermError(
+            f"unknown pointing term {name!r}: use a TPOINT name (IA IE CA NPAE AN AW TF TX "
+            "ACEC ACES ECEC ECES), a harmonic such as HESA2 or HSCA2CE, W1..W10 or P1..P22"
+        )
+    return term
+
+
+def is_term_name(name: str) -> bool:
+    """Whether ``name`` names a known term."""
+    try:
+        get_term(name)
+    except TermError:
+        return False
+    return True

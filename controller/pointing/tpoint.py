@@ -1,0 +1,801 @@
+"""TPOINT file formats: pointing data files and ``.mod`` model files.
+
+Pointing data (TPOINT's ``INDAT`` input), as in ``../shared/data/real/*.dat``::
+
+    ! comment lines, anywhere; "!" also starts a trailing comment
+    Caption line (free text)
+    : ALTAZ                      option records (ALTAZ, EQUAT, NODA, ROTNL, ROTNR, ...)
+    : ROTNR
+    -30 14 40.2 2020 3 15 12.0 741 2608 0.4 0.55 0.0065
+                                 run parameters: latitude d m s (sign on the degrees), then
+                                 optionally date y m d, temperature C, pressure mB, height m,
+                                 relative humidity 0-1, wavelength micron, lapse rate K/m
+    154.5139233 46.1577658 154.4096955 46.2199866 314.4605341
+                                 A_obs E_obs A_raw E_raw [rotator], degrees
+    ; 357.56 17.95 357.49 18.04 masked observation: read, flagged, not fitted by default
+    END
+
+Azimuth in these files counts from SOUTH (S = 0, E = 90) as TPOINT does; the reader converts
+it to this package's North-based azimuth (N = 0, E = 90) and the writer converts back. That is
+the only place the conversion happens. "obs" is the true (catalogue, observed) position and
+"raw" the indicated (encoder) one, so the pointing error "indicated minus true" is raw - obs.
+
+Sexagesimal records: TPOINT's original record format (the JCMT's ``.pnt`` files, "TPOINT input
+version 1") gives catalogue and telescope RA/Dec as ``h m s  +d m s  h m s  +d m s`` followed
+by the sidereal time ``h m`` and optional further fields. They are parsed (``coordinates ==
+"radec"``) but cannot be fitted with the alt-az term set: that needs an astrometric reduction
+to Az/El first. Sexagesimal Az/El records are not a TPOINT format we found documented and are
+rejected with a clear message.
+
+Model files (TPOINT ``OUTMOD``/``INMOD``), as read by RTS2 and LibDegorasSLR::
+
+    Caption line
+    T   80   0.932   0.0000   0.0000     method, observations, sky RMS, refraction A, B
+      IA      +1209.2612     1.28477      flags (2 chars), name, value and sigma (arcsec)
+    & HESA2     -11.8900     1.98200      "&": term applied in parallel with the previous one
+     =IE          +0.0000                 "=": fixed term, no sigma
+    END
+
+Every malformed line raises :class:`~controller.errors.InputError` naming ``file:line``, the
+field and the value.
+"""
+
+from __future__ import annotations
+
+import datetime
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+
+from controller.errors import InputError
+from controller.units import RAD_PER_DEG
+
+from .model import PointingModel
+from .terms import TermError, get_term
+
+__all__ = [
+    "RunParameters",
+    "TPointData",
+    "TPointModel",
+    "format_mod",
+    "format_tpoint",
+    "parse_mod",
+    "parse_tpoint",
+    "read_mod",
+    "read_tpoint",
+    "sniff_format",
+    "write_mod",
+    "write_tpoint",
+]
+
+Format = Literal["tpoint", "ecsv", "mod"]
+
+_NUMBER = re.compile(r"^[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?$")
+_ROTATOR_OPTIONS = ("ROTNL", "ROTNR")
+_RUN_FIELDS = (
+    ("temperature_c", "temperature (C)"),
+    ("pressure_mb", "pressure (mB)"),
+    ("height_m", "height (m)"),
+    ("humidity", "relative humidity (0-1)"),
+    ("wavelength_um", "wavelength (micron)"),
+    ("lapse_rate_k_per_m", "lapse rate (K/m)"),
+)
+
+
+# ---------------------------------------------------------------------------------------------
+# Small parsing helpers
+# ---------------------------------------------------------------------------------------------
+def _strip_comment(line: str) -> str:
+    """Text before a "!" comment, stripped."""
+    return line.split("!", 1)[0].strip()
+
+
+def _number(token: str, where: str, field_name: str) -> float:
+    if not _NUMBER.match(token):
+        raise InputError(where, field_name, token, "is not a number")
+    return float(token)
+
+
+def _integer(token: str, where: str, field_name: str) -> int:
+    if not re.fullmatch(r"[+-]?\d+", token):
+        raise InputError(where, field_name, token, "is not a whole number")
+    return int(token)
+
+
+def _sexagesimal(tokens: Sequence[str], where: str, field_name: str, limit: float) -> float:
+    """``[sign]d m s`` (three tokens) to a decimal value; the sign is read from the text so
+    that ``-00 30 00`` is negative. ``limit`` bounds the magnitude (90 deg, 24 h)."""
+    text = " ".join(tokens)
+    whole = _integer(tokens[0], where, field_name)
+    minutes = _number(tokens[1], where, field_name)
+    seconds = _number(tokens[2], where, field_name)
+    if tokens[1].startswith(("+", "-")) or tokens[2].startswith(("+", "-")):
+        raise InputError(where, field_name, text, "minutes and seconds cannot carry a sign")
+    if not (minutes < 60 and seconds < 60):
+        raise InputError(where, field_name, text, "minutes and seconds must be below 60")
+    value = abs(whole) + minutes / 60.0 + seconds / 3600.0
+    if value > limit:
+        raise InputError(where, field_name, text, f"is beyond {limit:g}")
+    return -value if tokens[0].startswith("-") else value
+
+
+def _format_sexagesimal(value: float, places: int, *, signed: bool) -> str:
+    """``+dd mm ss.ss`` (or ``hh mm ss.sss`` unsigned) with ``places`` decimals of seconds."""
+    sign = "-" if value < 0 or (value == 0 and math.copysign(1, value) < 0) else "+"
+    scale = 10**places
+    total = round(abs(value) * 3600 * scale)  # integer units of the last printed digit
+    whole, rest = divmod(total, 3600 * scale)
+    minutes, sec_units = divmod(rest, 60 * scale)
+    seconds = f"{sec_units // scale:02d}" + (f".{sec_units % scale:0{places}d}" if places else "")
+    text = f"{whole:02d} {minutes:02d} {seconds}"
+    return (sign + text) if signed else text
+
+
+# ---------------------------------------------------------------------------------------------
+# Pointing data
+# ---------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class RunParameters:
+    """TPOINT's run-parameters record. Fields after the latitude are ``None`` when absent."""
+
+    latitude_deg: float
+    date: datetime.date | None = None
+    temperature_c: float | None = None
+    pressure_mb: float | None = None
+    height_m: float | None = None
+    humidity: float | None = None
+    wavelength_um: float | None = None
+    lapse_rate_k_per_m: float | None = None
+    extra: tuple[str, ...] = ()
+
+    def format(self) -> str:
+        """The record as TPOINT writes it (latitude to 0.01")."""
+        parts = [_format_sexagesimal(self.latitude_deg, 2, signed=True)]
+        values = [getattr(self, name) for name, _ in _RUN_FIELDS]
+        if self.date is not None or any(v is not None for v in values) or self.extra:
+            if self.date is None:
+                raise ValueError("a run record with weather fields needs its date")
+            parts.append(f"{self.date.year} {self.date.month} {self.date.day}")
+        last = max((i for i, v in enumerate(values) if v is not None), default=-1)
+        if self.extra:
+            last = len(values) - 1
+        for i in range(last + 1):
+            if values[i] is None:
+                raise ValueError(
+                    f"run record field {_RUN_FIELDS[i][1]} is missing before later ones"
+                )
+            parts.append(f"{values[i]:.10g}")
+        parts.extend(self.extra)
+        return " ".join(parts)
+
+
+def _parse_run(content: str, where: str) -> RunParameters:
+    tokens = content.split()
+    hint = ("the run-parameters record (latitude d m s, date, weather) follows the caption "
+            "and options")
+    if len(tokens) < 3:
+        raise InputError(where, "run parameters", content, "needs at least the latitude d m s",
+                         hint)
+    try:
+        latitude = _sexagesimal(tokens[:3], where, "latitude", 90.0)
+    except InputError as err:
+        raise InputError(err.where, err.field, err.value, err.problem, hint) from None
+    date = None
+    rest = tokens[3:]
+    if rest:
+        if len(rest) < 3:
+            raise InputError(where, "date", " ".join(rest), "needs year, month and day")
+        y, mo, d = (_integer(t, where, "date") for t in rest[:3])
+        try:
+            date = datetime.date(y, mo, d)
+        except ValueError as err:
+            raise InputError(where, "date", " ".join(rest[:3]), str(err)) from None
+        rest = rest[3:]
+    values: dict[str, float] = {}
+    for (name, label), token in zip(_RUN_FIELDS, rest, strict=False):
+        values[name] = _number(token, where, label)
+    extra = tuple(rest[len(_RUN_FIELDS):])
+    checks = {
+        "temperature_c": (-100.0, 100.0),
+        "pressure_mb": (0.0, 1200.0),
+        "height_m": (-500.0, 10000.0),
+        "humidity": (0.0, 1.0),
+        "wavelength_um": (1e-6, 1e9),
+        "lapse_rate_k_per_m": (0.0, 0.1),
+    }
+    for (name, label), _token in zip(_RUN_FIELDS, rest, strict=False):
+        lo, hi = checks[name]
+        if not lo <= values[name] <= hi:
+            raise InputError(where, label, values[name], f"must lie between {lo:g} and {hi:g}")
+    return RunParameters(latitude, date, extra=extra, **values)
+
+
+@dataclass(frozen=True, eq=False)
+class TPointData:
+    """A TPOINT pointing data file.
+
+    ``coordinates`` says what the four position columns hold:
+
+    * ``"azel"`` (decimal records in an ``: ALTAZ`` file): azimuth North-based (converted
+      from the file's South-based azimuth) and elevation, degrees; ``rotator_deg`` holds the
+      fifth column when present (NaN where absent);
+    * ``"radec"`` (sexagesimal records): right ascension (hours converted to degrees) and
+      declination, with ``lst_hours`` the sidereal time (NaN if absent);
+    * ``"decimal"`` (decimal records in a file without ``: ALTAZ``): the two coordinates as
+      written, degrees, not converted.
+
+    ``obs`` is the true (catalogue) position and ``raw`` the indicated (encoder) one. Masked
+    (``;``) observations are kept with ``masked`` true; ``line_numbers`` are 1-based.
+    """
+
+    caption: str
+    options: tuple[str, ...]
+    run: RunParameters
+    coordinates: Literal["azel", "radec", "decimal"]
+    lon_obs_deg: np.ndarray
+    lat_obs_deg: np.ndarray
+    lon_raw_deg: np.ndarray
+    lat_raw_deg: np.ndarray
+    rotator_deg: np.ndarray
+    lst_hours: np.ndarray
+    masked: np.ndarray
+    line_numbers: np.ndarray
+    extra_fields: tuple[tuple[str, ...], ...] = ()
+    source: str = "<memory>"
+    has_end: bool = True
+    comments: tuple[str, ...] = field(default=())
+
+    def __len__(self) -> int:
+        return int(self.lon_obs_deg.size)
+
+    @classmethod
+    def from_azel(
+        cls,
+        caption: str,
+        run: RunParameters,
+        az_obs_deg,
+        el_obs_deg,
+        az_raw_deg,
+        el_raw_deg,
+        rotator_deg=None,
+        masked=None,
+        options: Sequence[str] = ("ALTAZ",),
+    ) -> TPointData:
+        """Alt-az data from North-based azimuths and elevations (degrees), e.g. to export
+        simulated observations to TPOINT. ``options`` must include ``ALTAZ``."""
+        opts = tuple(" ".join(o.split()).upper() for o in options)
+        if "ALTAZ" not in [o.split()[0] for o in opts if o.split()]:
+            raise ValueError("alt-az data need the ALTAZ option")
+        if "\n" in caption or not caption.strip():
+            raise ValueError("the caption must be one non-empty line")
+        cols = [np.array(v, dtype=float).reshape(-1)
+                for v in (az_obs_deg, el_obs_deg, az_raw_deg, el_raw_deg)]
+        n = cols[0].size
+        if any(c.size != n for c in cols):
+            raise ValueError("az/el arrays differ in length")
+        rot = (np.full(n, np.nan) if rotator_deg is None
+               else np.array(rotator_deg, dtype=float).reshape(-1))
+        mask = np.zeros(n, bool) if masked is None else np.array(masked, dtype=bool).reshape(-1)
+        if rot.size != n or mask.size != n:
+            raise ValueError("rotator/masked arrays differ in length from the positions")
+        if not all(np.isfinite(c).all() for c in cols):
+            raise ValueError("positions must be finite")
+        if (np.abs(cols[1]) > 90).any() or (np.abs(cols[3]) > 90).any():
+            raise ValueError("elevations must lie within -90..90 deg")
+        cols[0] = cols[0] % 360.0
+        cols[2] = cols[2] % 360.0
+        arrays = [*cols, rot, np.full(n, np.nan), mask, np.zeros(n, int)]
+        for a in arrays:
+            a.setflags(write=False)
+        return cls(caption.strip(), opts, run, "azel", *arrays,
+                   extra_fields=((),) * n)
+
+    # -- views with the alt-az names ----------------------------------------------------------
+    def _azel(self, array: np.ndarray, what: str) -> np.ndarray:
+        if self.coordinates != "azel":
+            raise InputError(self.source, "coordinates", self.coordinates,
+                             f"{what} exists only for alt-az (': ALTAZ') decimal records")
+        return array
+
+    @property
+    def az_obs_deg(self) -> np.ndarray:
+        """True azimuth, North-based, degrees."""
+        return self._azel(self.lon_obs_deg, "az_obs_deg")
+
+    @property
+    def el_obs_deg(self) -> np.ndarray:
+        return self._azel(self.lat_obs_deg, "el_obs_deg")
+
+    @property
+    def az_raw_deg(self) -> np.ndarray:
+        """Indicated (encoder) azimuth, North-based, degrees."""
+        return self._azel(self.lon_raw_deg, "az_raw_deg")
+
+    @property
+    def el_raw_deg(self) -> np.ndarray:
+        return self._azel(self.lat_raw_deg, "el_raw_deg")
+
+    @property
+    def mount(self) -> str:
+        """``"ALTAZ"``, ``"EQUAT"`` or another mount option; TPOINT assumes EQUAT if none."""
+        for option in self.options:
+            word = option.split()[0].upper() if option.split() else ""
+            if word in ("ALTAZ", "EQUAT", "GIMBAL"):
+                return word
+        return "EQUAT"
+
+    @property
+    def has_rotator(self) -> bool:
+        return bool(np.isfinite(self.rotator_deg).any())
+
+    def pointing_data(self, include_masked: bool = False):
+        """The observations as :class:`~controller.pointing.fitting.PointingData`.
+
+        Pointing error = raw - obs ("indicated minus true"): dA wrapped to +-180 deg, then
+        ``xel = dA cos E_obs``, both in arcsec. Masked observations are left out unless
+        ``include_masked``. Equatorial data raise :class:`InputError`: the alt-az term set
+        does not support them yet.
+        """
+        from .fitting import PointingData
+
+        if self.coordinates != "azel":
+            kind = "equatorial (RA/Dec)" if self.coordinates == "radec" else "non-alt-az"
+            raise InputError(
+                self.source, "mount", self.mount,
+                f"{kind} data are not supported by the alt-az term set yet",
+                "only ': ALTAZ' files with decimal Az/El records can be fitted",
+            )
+        keep = np.ones(len(self), dtype=bool) if include_masked else ~self.masked
+        az_obs = self.lon_obs_deg[keep]
+        el_obs = self.lat_obs_deg[keep]
+        d_az = (self.lon_raw_deg[keep] - az_obs + 180.0) % 360.0 - 180.0
+        d_el = self.lat_raw_deg[keep] - el_obs
+        el_rad = el_obs * RAD_PER_DEG
+        return PointingData(
+            az_rad=az_obs * RAD_PER_DEG,
+            el_rad=el_rad,
+            xel_arcsec=d_az * 3600.0 * np.cos(el_rad),
+            el_arcsec=d_el * 3600.0,
+        )
+
+
+def _classify_record(tokens: list[str]) -> str:
+    if len(tokens) in (4, 5):
+        return "decimal"
+    if len(tokens) >= 12:
+        return "sexagesimal"
+    return "bad"
+
+
+def parse_tpoint(text: str, source: str = "<string>") -> TPointData:
+    """Parse the text of a TPOINT pointing data file; ``source`` names it in errors."""
+    caption: str | None = None
+    options: list[str] = []
+    comments: list[str] = []
+    run: RunParameters | None = None
+    rows: list[tuple[float, float, float, float, float, float]] = []
+    extras: list[tuple[str, ...]] = []
+    masked: list[bool] = []
+    line_numbers: list[int] = []
+    kind: str | None = None
+    has_end = False
+
+    for line_no, raw_line in enumerate(text.splitlines(), start=1):
+        where = f"{source}:{line_no}"
+        stripped = raw_line.strip()
+        if stripped.startswith("!"):
+            if caption is None:
+                comments.append(stripped[1:].strip())
+            continue
+        if caption is None:
+            if stripped:
+                caption = stripped
+            continue
+        content = _strip_comment(raw_line)
+        if not content:
+            continue
+        if content.startswith(":"):
+            option = " ".join(content[1:].split())
+            if not option:
+                raise InputError(where, "option", content, "is empty")
+            if run is not None:
+                raise InputError(where, "option", option,
+                                 "option records must come before the run-parameters record")
+            options.append(option.upper())
+            continue
+        if run is None:
+            run = _parse_run(content, where)
+            continue
+        if content.upper() == "END":
+            has_end = True
+            break
+        is_masked = content.startswith(";")
+        if is_masked:
+            content = content[1:].strip()
+            if not content:
+                raise InputError(where, "observation", raw_line.strip(),
+                                 "a ';' (masked observation) line needs an observation")
+        tokens = content.split()
+        record = _classify_record(tokens)
+        if record == "bad":
+            raise InputError(
+                where, "observation", content,
+                f"has {len(tokens)} fields; expected 4 or 5 decimal-degree fields "
+                "(A_obs E_obs A_raw E_raw [rotator]) or a sexagesimal RA/Dec record",
+            )
+        if kind is None:
+            kind = record
+        elif kind != record:
+            raise InputError(where, "observation", content,
+                             f"is a {record} record in a file of {kind} records")
+        if record == "decimal":
+            values = [_number(t, where, name) for t, name in
+                      zip(tokens, ("A_obs", "E_obs", "A_raw", "E_raw", "rotator"), strict=False)]
+            for value, name in ((values[1], "E_obs"), (values[3], "E_raw")):
+                if not -90.0 <= value <= 90.0:
+                    raise InputError(where, name, value, "elevation must lie within -90..90 deg")
+            rotator = values[4] if len(values) == 5 else math.nan
+            rows.append((values[0], values[1], values[2], values[3], rotator, math.nan))
+            extras.append(())
+        else:
+            for i in (0, 1, 3, 4, 6, 7, 9, 10):  # hours, degrees and minutes are whole
+                if not re.fullmatch(r"[+-]?\d+", tokens[i]):
+                    raise InputError(
+                        where, "observation", content,
+                        "is neither 4-5 decimal-degree fields nor a sexagesimal RA/Dec record "
+                        "(h m s +d m s h m s +d m s [lst h m]); sexagesimal Az/El is not a "
+                        "TPOINT format",
+                    )
+            ra_obs = _sexagesimal(tokens[0:3], where, "RA_obs", 24.0) * 15.0
+            dec_obs = _sexagesimal(tokens[3:6], where, "Dec_obs", 90.0)
+            ra_raw = _sexagesimal(tokens[6:9], where, "RA_raw", 24.0) * 15.0
+            dec_raw = _sexagesimal(tokens[9:12], where, "Dec_raw", 90.0)
+            for value, token, name in ((ra_obs, tokens[0], "RA_obs"),
+                                       (ra_raw, tokens[6], "RA_raw")):
+                if token.startswith("-"):
+                    raise InputError(where, name, token, "right ascension cannot be negative")
+                if value >= 360.0:
+                    raise InputError(where, name, token, "right ascension must be below 24 h")
+            lst = math.nan
+            rest = tokens[12:]
+            if len(rest) >= 2 and re.fullmatch(r"\d+", rest[0]) and _NUMBER.match(rest[1]):
+                hours = int(rest[0])
+                minutes = float(rest[1])
+                if hours >= 24 or minutes >= 60:
+                    raise InputError(where, "LST", " ".join(rest[:2]),
+                                     "sidereal time must be below 24 h and minutes below 60")
+                lst = hours + minutes / 60.0
+                rest = rest[2:]
+            rows.append((ra_obs, dec_obs, ra_raw, dec_raw, math.nan, lst))
+            extras.append(tuple(rest))
+        masked.append(is_masked)
+        line_numbers.append(line_no)
+
+    if caption is None:
+        raise InputError(source, "caption", "", "the file is empty: no caption line")
+    if run is None:
+        raise InputError(source, "run parameters", "",
+                         "no run-parameters record (latitude d m s ...) after the caption")
+    coordinates: Literal["azel", "radec", "decimal"]
+    if kind == "sexagesimal":
+        coordinates = "radec"
+    else:
+        first_words = [o.split()[0] for o in options if o.split()]
+        coordinates = "azel" if "ALTAZ" in first_words else "decimal"
+    table = np.array(rows, dtype=float).reshape(-1, 6)
+    if coordinates == "azel":
+        # South-based (TPOINT) to North-based azimuth: the only place this happens.
+        table[:, 0] = (table[:, 0] + 180.0) % 360.0
+        table[:, 2] = (table[:, 2] + 180.0) % 360.0
+    arrays = [np.ascontiguousarray(table[:, i]) for i in range(6)]
+    masked_arr = np.array(masked, dtype=bool)
+    lines_arr = np.array(line_numbers, dtype=int)
+    for a in (*arrays, masked_arr, lines_arr):
+        a.setflags(write=False)
+    return TPointData(
+        caption=caption, options=tuple(options), run=run, coordinates=coordinates,
+        lon_obs_deg=arrays[0], lat_obs_deg=arrays[1], lon_raw_deg=arrays[2],
+        lat_raw_deg=arrays[3], rotator_deg=arrays[4], lst_hours=arrays[5],
+        masked=masked_arr, line_numbers=lines_arr, extra_fields=tuple(extras),
+        source=source, has_end=has_end, comments=tuple(comments),
+    )
+
+
+def _read_text(path: str | Path) -> str:
+    p = Path(path)
+    try:
+        return p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(str(p), "file", str(p), "no such file") from None
+    except IsADirectoryError:
+        raise InputError(str(p), "file", str(p), "is a directory, not a file") from None
+    except UnicodeDecodeError as err:
+        raise InputError(str(p), "file", str(p), f"is not a UTF-8 text file ({err.reason})") \
+            from None
+    except OSError as err:
+        raise InputError(str(p), "file", str(p), err.strerror or str(err)) from None
+
+
+def read_tpoint(path: str | Path) -> TPointData:
+    """Read a TPOINT pointing data file (see the module docstring)."""
+    return parse_tpoint(_read_text(path), source=str(path))
+
+
+def format_tpoint(data: TPointData, decimals: int = 7) -> str:
+    """TPOINT data file text for ``data``; positions printed with ``decimals`` decimals
+    (7 decimals of a degree is 0.36 mas). Azimuth goes back to South-based for alt-az data."""
+    lines = [f"! {c}" if c else "!" for c in data.comments]
+    lines.append(data.caption)
+    lines += [f": {o}" for o in data.options]
+    lines.append(data.run.format())
+    n = len(data)
+    for i in range(n):
+        prefix = "; " if data.masked[i] else ""
+        if data.coordinates == "radec":
+            fields = [
+                _format_sexagesimal(data.lon_obs_deg[i] / 15.0, 3, signed=False),
+                _format_sexagesimal(data.lat_obs_deg[i], 2, signed=True),
+                _format_sexagesimal(data.lon_raw_deg[i] / 15.0, 3, signed=False),
+                _format_sexagesimal(data.lat_raw_deg[i], 2, signed=True),
+            ]
+            lst = data.lst_hours[i]
+            if math.isfinite(lst):
+                hours = int(lst)
+                fields.append(f"{hours:02d} {(lst - hours) * 60.0:.5f}")
+            fields.extend(data.extra_fields[i] if data.extra_fields else ())
+            lines.append(prefix + "  ".join(fields))
+            continue
+        lon_obs, lon_raw = data.lon_obs_deg[i], data.lon_raw_deg[i]
+        if data.coordinates == "azel":
+            lon_obs = (lon_obs - 180.0) % 360.0
+            lon_raw = (lon_raw - 180.0) % 360.0
+        values = [lon_obs, data.lat_obs_deg[i], lon_raw, data.lat_raw_deg[i]]
+        if math.isfinite(data.rotator_deg[i]):
+            values.append(data.rotator_deg[i])
+        lines.append(prefix + " ".join(f"{v:.{decimals}f}" for v in values))
+    lines.append("END")
+    return "\n".join(lines) + "\n"
+
+
+def write_tpoint(data: TPointData, path: str | Path, decimals: int = 7) -> None:
+    """Write ``data`` as a TPOINT pointing data file."""
+    Path(path).write_text(format_tpoint(data, decimals), encoding="utf-8")
+
+
+# ---------------------------------------------------------------------------------------------
+# Model files
+# ---------------------------------------------------------------------------------------------
+_DEFAULT_PARAMETERS = ("T", "0", "0.000", "0.0000", "0.0000")
+
+
+class TPointModel(PointingModel):
+    """A :class:`~controller.pointing.model.PointingModel` with what a TPOINT ``.mod`` file adds.
+
+    It *is* a ``PointingModel`` (``read_mod`` results can be used wherever a model is
+    expected); on top it carries, per term, ``sigma_arcsec`` (NaN where the file gives none),
+    ``fixed`` ("=" flag) and ``parallel`` ("&" flag), and for the file the ``caption`` and
+    the second record ``parameters`` kept verbatim (RTS2 reads it as method, number of
+    observations, sky RMS, refraction constants A and B; ``None`` when a hand-written file
+    leaves it out). The model's ``name`` defaults to the caption.
+    """
+
+    sigma_arcsec: np.ndarray
+    fixed: tuple[bool, ...]
+    parallel: tuple[bool, ...]
+    caption: str
+    parameters: tuple[str, ...] | None
+
+    def __init__(
+        self,
+        terms=(),
+        values_arcsec=None,
+        name: str | None = None,
+        *,
+        sigma_arcsec: Sequence[float | None] | None = None,
+        fixed: Sequence[bool] | None = None,
+        parallel: Sequence[bool] | None = None,
+        caption: str | None = None,
+        parameters: tuple[str, ...] | None = _DEFAULT_PARAMETERS,
+    ):
+        super().__init__(terms, values_arcsec, name or caption)
+        m = len(self.terms)
+        if sigma_arcsec is None:
+            sigmas = np.full(m, np.nan)
+        else:
+            sigmas = np.array([np.nan if v is None else float(v) for v in sigma_arcsec])
+            if sigmas.size != m:
+                raise ValueError(f"{sigmas.size} sigmas for {m} terms")
+        sigmas.setflags(write=False)
+        flags = {}
+        for label, given in (("fixed", fixed), ("parallel", parallel)):
+            values = (False,) * m if given is None else tuple(bool(v) for v in given)
+            if len(values) != m:
+                raise ValueError(f"{len(values)} {label} flags for {m} terms")
+            flags[label] = values
+        object.__setattr__(self, "sigma_arcsec", sigmas)
+        object.__setattr__(self, "fixed", flags["fixed"])
+        object.__setattr__(self, "parallel", flags["parallel"])
+        object.__setattr__(self, "caption", caption if caption is not None else self.name)
+        object.__setattr__(self, "parameters", None if parameters is None else tuple(parameters))
+
+    @classmethod
+    def from_model(
+        cls,
+        model: PointingModel,
+        sigma_arcsec: Sequence[float] | None = None,
+        *,
+        caption: str | None = None,
+        n_obs: int = 0,
+        sky_rms_arcsec: float = 0.0,
+    ) -> TPointModel:
+        """``model`` with sigmas (NaN = none) and the parameters record filled in."""
+        rms = sky_rms_arcsec if math.isfinite(sky_rms_arcsec) else 0.0
+        params = ("T", str(int(n_obs)), f"{rms:.3f}", "0.0000", "0.0000")
+        return cls(model.terms, model.values_arcsec, model.name, sigma_arcsec=sigma_arcsec,
+                   caption=caption or model.name, parameters=params)
+
+    @classmethod
+    def from_fit(cls, result, caption: str | None = None) -> TPointModel:
+        """The model of a :class:`~controller.pointing.fitting.FitResult` with its sigmas."""
+        return cls.from_model(result.model, result.sigma_arcsec, caption=caption,
+                              n_obs=result.n_used, sky_rms_arcsec=result.sky_rms_arcsec)
+
+    def to_pointing_model(self, name: str | None = None) -> PointingModel:
+        """A plain :class:`~controller.pointing.model.PointingModel` with the same terms and
+        values."""
+        return PointingModel(self.terms, self.values_arcsec, name or self.name)
+
+
+_TERM_LINE = re.compile(
+    r"^(?P<flags>[\s&=]*)(?P<name>[A-Za-z][A-Za-z0-9]*)(?P<rest>(?=[\s+-]|$).*)$"
+)
+
+
+def _is_term_line(content: str) -> bool:
+    m = _TERM_LINE.match(content)
+    if not m:
+        return False
+    try:
+        get_term(m.group("name"))
+    except TermError:
+        return False
+    return True
+
+
+def parse_mod(text: str, source: str = "<string>") -> TPointModel:
+    """Parse the text of a TPOINT ``.mod`` model file."""
+    caption: str | None = None
+    parameters: tuple[str, ...] | None = None
+    names: list[str] = []
+    values: list[float] = []
+    sigmas: list[float | None] = []
+    fixed: list[bool] = []
+    parallel: list[bool] = []
+    seen: dict[str, int] = {}
+    expect_parameters = True
+    for line_no, raw_line in enumerate(text.splitlines(), start=1):
+        where = f"{source}:{line_no}"
+        if caption is None:
+            if raw_line.strip() and not raw_line.strip().startswith("!"):
+                caption = raw_line.strip()
+            continue
+        content = _strip_comment(raw_line)
+        if not content:
+            continue
+        if content.upper() == "END":
+            break
+        tokens = content.split()
+        if expect_parameters:
+            expect_parameters = False
+            if not _is_term_line(content):
+                if not re.fullmatch(r"[A-Za-z]+", tokens[0]) or not all(
+                    _NUMBER.match(t) for t in tokens[1:]
+                ):
+                    raise InputError(where, "parameters", content,
+                                     "expected the model parameters record "
+                                     "(method, observations, sky RMS, refraction A, B)")
+                parameters = tuple(tokens)
+                continue
+        m = _TERM_LINE.match(raw_line.split("!", 1)[0].rstrip())
+        if not m:
+            raise InputError(where, "term", content, "is not a term line (name value [sigma])")
+        flags, name, rest = m.group("flags"), m.group("name").upper(), m.group("rest").split()
+        try:
+            get_term(name)
+        except TermError:
+            raise InputError(where, "term", name, "unknown pointing term",
+                             "use TPOINT names (IA IE CA NPAE AN AW TF TX ...), harmonics "
+                             "such as HESA2, W1..W10 or P1..P22") from None
+        if name in seen:
+            raise InputError(where, "term", name, f"already given on line {seen[name]}")
+        if not 1 <= len(rest) <= 2:
+            raise InputError(where, name, " ".join(rest) or content,
+                             "expected a value in arcsec and optionally its sigma")
+        value = _number(rest[0], where, f"{name} value")
+        sigma = _number(rest[1], where, f"{name} sigma") if len(rest) == 2 else None
+        if sigma is not None and sigma < 0:
+            raise InputError(where, f"{name} sigma", rest[1], "a sigma cannot be negative")
+        seen[name] = line_no
+        names.append(name)
+        values.append(value)
+        sigmas.append(sigma)
+        fixed.append("=" in flags)
+        parallel.append("&" in flags)
+    if caption is None:
+        raise InputError(source, "caption", "", "the file is empty: no caption line")
+    return TPointModel(names, values, sigma_arcsec=sigmas, fixed=fixed, parallel=parallel,
+                       caption=caption, parameters=parameters)
+
+
+def read_mod(path: str | Path) -> TPointModel:
+    """Read a TPOINT ``.mod`` model file (a :class:`TPointModel`, hence a PointingModel)."""
+    return parse_mod(_read_text(path), source=str(path))
+
+
+def format_mod(model: PointingModel) -> str:
+    """``.mod`` text: 2 flag columns, name in 8, value F10.4 with sign, sigma F12.5.
+
+    A plain ``PointingModel`` is written with its name as caption and no sigmas; use
+    :meth:`TPointModel.from_fit` to write a fit's sigmas.
+    """
+    if not isinstance(model, TPointModel):
+        model = TPointModel.from_model(model)
+    lines = [model.caption or model.name]
+    if model.parameters is not None:
+        lines.append("  ".join(model.parameters))
+    for i, term in enumerate(model.terms):
+        flags = ("&" if model.parallel[i] else " ") + ("=" if model.fixed[i] else " ")
+        # The explicit sign keeps an 8-character name such as HSCA5CE8 apart from its value.
+        line = f"{flags}{term.name:<8}{model.values_arcsec[i]:+10.4f}"
+        if math.isfinite(model.sigma_arcsec[i]):
+            line += f"{model.sigma_arcsec[i]:12.5f}"
+        lines.append(line)
+    lines.append("END")
+    return "\n".join(lines) + "\n"
+
+
+def write_mod(model: PointingModel, path: str | Path) -> None:
+    """Write ``model`` (a :class:`TPointModel` or any PointingModel) as a ``.mod`` file."""
+    Path(path).write_text(format_mod(model), encoding="utf-8")
+
+
+# ---------------------------------------------------------------------------------------------
+# Format detection
+# ---------------------------------------------------------------------------------------------
+def sniff_format(path: str | Path) -> Format:
+    """``"ecsv"``, ``"tpoint"`` (pointing data) or ``"mod"`` (model), judged by content.
+
+    ECSV files start with ``# %ECSV``. Otherwise the record after the caption decides: an
+    option (``:``) or a run-parameters record of numbers means pointing data; a word followed
+    by numbers (the model parameters record) or a term line means a model file.
+    """
+    text = _read_text(path)
+    if text.lstrip("\ufeff").startswith("# %ECSV"):
+        return "ecsv"
+    caption_seen = False
+    second: str | None = None
+    for line in text.splitlines():
+        stripped = line.strip()
+        if not stripped or stripped.startswith("!"):
+            continue
+        if not caption_seen:
+            caption_seen = True
+            continue
+        second = _strip_comment(stripped)
+        if second:
+            break
+    if not second:
+        raise InputError(str(path), "file", str(path),
+                         "is too short to be TPOINT data, a .mod model or ECSV recordings")
+    tokens = second.split()
+    if second.startswith(":") or all(_NUMBER.match(t) for t in tokens):
+        return "tpoint"
+    if re.fullmatch(r"[A-Za-z&=]\S*", tokens[0]):
+        return "mod"
+    raise InputError(str(path), "file", str(path),
+                     "is neither TPOINT pointing data, a TPOINT .mod model nor ECSV recordings")

@@ -1,0 +1,282 @@
+"""Recordings: one ECSV row per reduced cross scan and polarization, written as scans complete.
+
+The header (column names, units, types, descriptions and the run's metadata: scenario, seed,
+software version, site, beam, step, integration time, the pointing model in use) is written
+once; each scan's rows are then appended with a single ``write`` system call, so a run killed
+at any moment leaves a file that reads back with every completed scan (a partial last line
+is ignored by :func:`read_recordings`). Resuming replays the deterministic run, checks that
+the rows it regenerates equal the ones on disk, and appends the rest: the result is
+byte-identical to an uninterrupted run.
+
+Sign convention: ``xel_arcmin``/``el_arcmin`` are the measured corrections to apply (source
+minus beam), "indicated minus true" like the model's offset; the total pointing error is
+measured + model in use + applied correction (columns ``model_*`` and ``applied_*``).
+
+Columns beyond the 1990 set are added only where they apply (:func:`recording_columns`):
+``ha_deg``/``dec_deg`` for an equatorial mount, whose ``xel_*``/``el_*`` offsets are then
+cross-declination (dH cos Dec) and declination; ``feed_angle_deg`` when the feed is turned.
+Optical pointing rows (a TV camera on stars) fill the radio-only columns with NaN.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from controller.errors import InputError
+
+__all__ = [
+    "COLUMNS",
+    "EXTRA_COLUMNS",
+    "RecordingWriter",
+    "ResumeMismatchError",
+    "read_pointing_data",
+    "read_recordings",
+    "recording_columns",
+]
+
+
+@dataclass(frozen=True)
+class Column:
+    name: str
+    dtype: str
+    unit: str | None
+    description: str
+
+
+_POS = ("m4", "m1", "0", "p1", "p4")
+
+COLUMNS: tuple[Column, ...] = (
+    Column("scan", "int64", None, "scan number in the campaign"),
+    Column("time", "str", None, "UTC at the middle of the scan (ISO)"),
+    Column("t_s", "float64", "s", "seconds since the campaign epoch (antenna clock)"),
+    Column("source", "str", None, "source name"),
+    Column("polarization", "str", None, "XR, XL or AVG (mean of XR and XL powers)"),
+    Column("az_deg", "float64", "deg", "observed azimuth of the source (N=0, E=90)"),
+    Column("el_deg", "float64", "deg", "observed (refracted) elevation of the source"),
+    Column("cmd_az_deg", "float64", "deg", "commanded encoder azimuth at the pattern centre"),
+    Column("cmd_el_deg", "float64", "deg", "commanded encoder elevation at the pattern centre"),
+    Column("model_xel_arcmin", "float64", "arcmin", "pointing model in use, cross-elevation"),
+    Column("model_el_arcmin", "float64", "arcmin", "pointing model in use, elevation"),
+    Column("applied_xel_arcmin", "float64", "arcmin", "controller's extra correction, xel"),
+    Column("applied_el_arcmin", "float64", "arcmin", "controller's extra correction, el"),
+    Column("xel_arcmin", "float64", "arcmin", "measured correction to apply, cross-elevation"),
+    Column("el_arcmin", "float64", "arcmin", "measured correction to apply, elevation"),
+    Column("xel_sigma_arcmin", "float64", "arcmin", "formal error of xel_arcmin"),
+    Column("el_sigma_arcmin", "float64", "arcmin", "formal error of el_arcmin"),
+    Column("xel_amp_k", "float64", "K", "amplitude of the azimuth scan"),
+    Column("el_amp_k", "float64", "K", "amplitude of the elevation scan"),
+    Column("xel_snr", "float64", None, "S/N of the azimuth scan, A / stddev(P)"),
+    Column("el_snr", "float64", None, "S/N of the elevation scan, A / stddev(P)"),
+    Column("xel_std_k", "float64", "K", "stddev of the total-power samples, azimuth scan"),
+    Column("el_std_k", "float64", "K", "stddev of the total-power samples, elevation scan"),
+    Column("xel_width_arcmin", "float64", "arcmin", "beam FWHM from the inner points, az scan"),
+    Column("el_width_arcmin", "float64", "arcmin", "beam FWHM from the inner points, el scan"),
+    Column("xel_flags", "int64", None, "quality flags of the azimuth scan (bit mask)"),
+    Column("el_flags", "int64", None, "quality flags of the elevation scan (bit mask)"),
+    Column("good", "bool", None, "both axes reduced without flags"),
+    Column("air_temp_c", "float64", "deg_C", "air temperature (weather sensor)"),
+    Column("pressure_hpa", "float64", "hPa", "air pressure (weather sensor)"),
+    Column("humidity", "float64", None, "relative humidity 0..1 (weather sensor)"),
+    Column("wind_m_s", "float64", "m / s", "wind speed (weather sensor)"),
+    Column("sun_el_deg", "float64", "deg", "elevation of the Sun"),
+    Column("slew_az", "int64", None, "direction of the last slew in azimuth (+1/-1/0)"),
+    Column("slew_el", "int64", None, "direction of the last slew in elevation (+1/-1/0)"),
+    *(Column(f"p_az_{p}", "float64", "K", f"total power, azimuth scan, position {p}")
+      for p in _POS),
+    *(Column(f"p_el_{p}", "float64", "K", f"total power, elevation scan, position {p}")
+      for p in _POS),
+)
+COLUMN_NAMES = tuple(c.name for c in COLUMNS)
+
+#: columns written only where they apply (see :func:`recording_columns`)
+EXTRA_COLUMNS: dict[str, Column] = {c.name: c for c in (
+    Column("ha_deg", "float64", "deg", "observed hour angle (equatorial mount; West positive)"),
+    Column("dec_deg", "float64", "deg", "observed declination (equatorial mount)"),
+    Column("feed_angle_deg", "float64", "deg", "feed (feed-box rotation) angle of the scan"),
+)}
+
+
+def recording_columns(mount: str = "altaz", feed: bool = False) -> tuple[Column, ...]:
+    """The columns of a campaign's recordings: the 1990 set, plus hour angle and declination
+    on an equatorial mount and the feed angle when the feed is turned."""
+    extra: list[str] = []
+    if mount == "equatorial":
+        extra += ["ha_deg", "dec_deg"]
+    if feed:
+        extra.append("feed_angle_deg")
+    return COLUMNS + tuple(EXTRA_COLUMNS[n] for n in extra)
+
+
+class ResumeMismatchError(RuntimeError):
+    """The regenerated rows differ from those on disk: the file is not this run's."""
+
+
+def _format(value: Any, dtype: str) -> str:
+    if dtype == "str":
+        text = str(value)
+        if not text or any(ch in text for ch in ' "\t#'):
+            return '"' + text.replace('"', '""') + '"'
+        return text
+    if dtype == "bool":
+        return "True" if value else "False"
+    if dtype == "int64":
+        return str(int(value))
+    value = float(value)
+    if math.isnan(value):
+        return "nan"
+    return repr(value)
+
+
+def header_text(meta: dict[str, Any], columns: Sequence[Column] = COLUMNS) -> str:
+    """The ECSV header (with the column-name line) for the given metadata."""
+    from astropy.table import Table
+
+    table = Table(meta=meta)
+    for col in columns:
+        dtype = "U1" if col.dtype == "str" else col.dtype
+        table.add_column(np.zeros(0, dtype=dtype), name=col.name)
+        table[col.name].unit = col.unit
+        table[col.name].description = col.description
+    buf = io.StringIO()
+    table.write(buf, format="ascii.ecsv")
+    text = buf.getvalue()
+    # astropy writes an empty table's string columns with the dtype it sees; declare str
+    return text
+
+
+class RecordingWriter:
+    """Appends rows to ``recordings.ecsv``; with ``resume`` verifies and skips existing rows."""
+
+    def __init__(self, path: str | Path, meta: dict[str, Any], resume: bool = False,
+                 columns: Sequence[Column] = COLUMNS):
+        self.path = Path(path)
+        self.columns = tuple(columns)
+        self.header = header_text(meta, self.columns)
+        self._existing: list[str] = []
+        self._cursor = 0
+        self.rows_written = 0
+        if resume and self.path.exists():
+            text = self.path.read_text(encoding="utf-8")
+            complete = text[: text.rfind("\n") + 1]
+            if not complete.startswith(self.header):
+                raise InputError(str(self.path), "header", "(recorded header)",
+                                 "was not written by this scenario, seed and model",
+                                 "run without --resume into a new directory")
+            self._existing = complete[len(self.header):].splitlines(keepends=True)
+            # keep only the complete part on disk; a torn last line is discarded
+            with open(self.path, "r+b") as fh:
+                fh.truncate(len(complete.encode("utf-8")))
+            self._fd = os.open(self.path, os.O_WRONLY | os.O_APPEND)
+        else:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+            os.write(self._fd, self.header.encode("utf-8"))
+
+    @property
+    def existing_rows(self) -> int:
+        return len(self._existing)
+
+    def format_rows(self, rows: Sequence[dict[str, Any]]) -> list[str]:
+        lines = []
+        for row in rows:
+            missing = [c.name for c in self.columns if c.name not in row]
+            if missing:
+                raise KeyError(f"recording row lacks column(s) {missing}")
+            lines.append(" ".join(_format(row[c.name], c.dtype) for c in self.columns) + "\n")
+        return lines
+
+    def write_scan(self, rows: Sequence[dict[str, Any]]) -> None:
+        """Append one scan's rows with a single write (or verify them when replaying)."""
+        lines = self.format_rows(rows)
+        fresh = []
+        for line in lines:
+            if self._cursor < len(self._existing):
+                if self._existing[self._cursor] != line:
+                    raise ResumeMismatchError(
+                        f"{self.path}: row {self._cursor + 1} differs from the replayed run; "
+                        "the file was made with other settings")
+                self._cursor += 1
+            else:
+                fresh.append(line)
+        if fresh:
+            os.write(self._fd, "".join(fresh).encode("utf-8"))
+            self.rows_written += len(fresh)
+
+    def close(self) -> None:
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
+
+    def __enter__(self) -> RecordingWriter:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def read_recordings(path: str | Path):
+    """Read a recordings file into an astropy Table, ignoring a torn last line."""
+    from astropy.table import Table
+
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(str(path), "file", str(path), "no such file") from None
+    if not text.startswith("# %ECSV"):
+        raise InputError(str(path), "format", text[:20], "not an ECSV file")
+    text = text[: text.rfind("\n") + 1]
+    try:
+        table = Table.read(text, format="ascii.ecsv")
+    except Exception as err:  # astropy raises many types for malformed ECSV
+        raise InputError(str(path), "ECSV", type(err).__name__,
+                         f"cannot be parsed: {err}") from None
+    missing = [c for c in ("az_deg", "el_deg", "xel_arcmin", "el_arcmin", "polarization")
+               if c not in table.colnames]
+    if missing:
+        raise InputError(str(path), "columns", missing, "required columns are missing")
+    return table
+
+
+def total_errors_arcsec(table) -> tuple[np.ndarray, np.ndarray]:
+    """Total pointing error (indicated - true), xel and el in arcsec, per row:
+    measured correction + model in use + applied correction."""
+    xel = (np.asarray(table["xel_arcmin"], dtype=float)
+           + np.asarray(table["model_xel_arcmin"], dtype=float)
+           + np.asarray(table["applied_xel_arcmin"], dtype=float)) * 60.0
+    el = (np.asarray(table["el_arcmin"], dtype=float)
+          + np.asarray(table["model_el_arcmin"], dtype=float)
+          + np.asarray(table["applied_el_arcmin"], dtype=float)) * 60.0
+    return xel, el
+
+
+def read_pointing_data(path: str | Path, polarization: str = "AVG", good_only: bool = True):
+    """Recordings as :class:`controller.pointing.fitting.PointingData` of total pointing errors."""
+    from controller.pointing.fitting import PointingData
+
+    table = read_recordings(path)
+    mask = np.asarray(table["polarization"]) == polarization
+    if good_only and "good" in table.colnames:
+        mask &= np.asarray(table["good"], dtype=bool)
+    sel = table[mask]
+    if len(sel) == 0:
+        raise InputError(str(path), "polarization", polarization,
+                         "no usable rows for this polarization")
+    xel, el = total_errors_arcsec(sel)
+    lon, lat = ("ha_deg", "dec_deg") if "ha_deg" in sel.colnames else ("az_deg", "el_deg")
+    return PointingData(
+        az_rad=np.radians(np.asarray(sel[lon], dtype=float)),
+        el_rad=np.radians(np.asarray(sel[lat], dtype=float)),
+        xel_arcsec=xel,
+        el_arcsec=el,
+        feed_rad=(np.radians(np.asarray(sel["feed_angle_deg"], dtype=float))
+                  if "feed_angle_deg" in sel.colnames else None),
+    )
