@@ -13,6 +13,7 @@ import os
 import re
 import shutil
 import subprocess
+import warnings
 from pathlib import Path
 
 import pytest
@@ -116,6 +117,17 @@ def test_report_lists_the_software_versions_and_the_scenario(ghigo_run):
     for package, version in versions.items():
         assert f"<td>{package}</td><td>{version}</td>" in html
     assert "W6 = 12.24" in html  # the scenario text is there
+
+
+def test_writing_the_outputs_warns_nothing(tmp_path):
+    """The fits, files, figures and report are written in the command's own process, with
+    no warning on the way (matplotlib's, numpy's, ...: they would reach the user's stderr).
+    Ported from the test of the forked output process, removed with it."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert main(["run", str(QUIET), "--out", str(tmp_path / "quiet"), "--no-progress"]) == 0
+    assert [str(w.message) for w in caught] == []
+    assert (tmp_path / "quiet" / "report.html").exists()
 
 
 def test_same_run_twice_gives_identical_figures_and_report(ghigo_run, tmp_path):

@@ -5,12 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from controller.errors import InputError
-
-if TYPE_CHECKING:
-    from antsim.rendering import OutputProcess
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -31,20 +27,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    writer = None
-    if not args.no_report:
-        from antsim.rendering import OutputProcess
-
-        # first thing: its imports (matplotlib, scipy) overlap the campaign, on the other core
-        writer = OutputProcess.start()
-    try:
-        return _run(args, writer)
-    finally:
-        if writer is not None:
-            writer.close()
-
-
-def _run(args: argparse.Namespace, writer: OutputProcess | None) -> int:
+    from antsim.run.outputs import write_outputs
     from antsim.run.runner import run_campaign
     from antsim.scenario import load_scenario
 
@@ -69,11 +52,6 @@ def _run(args: argparse.Namespace, writer: OutputProcess | None) -> int:
                          "use --resume to continue that run, or another directory")
     result = run_campaign(scenario, out, seed=args.seed, model=model, resume=args.resume,
                           show_progress=args.progress)
-    if writer is not None:  # fits, files and figures in the process that imported them
-        summary = writer.write_outputs(result)
-    else:
-        from antsim.run.outputs import write_outputs
-
-        summary = write_outputs(result, report=not args.no_report)
+    summary = write_outputs(result, report=not args.no_report)
     print(summary, file=sys.stdout)
     return 0

@@ -30,7 +30,6 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -53,14 +52,11 @@ __all__ = [
     "comparison_figure",
     "histogram_figure",
     "pointing_errors_figure",
-    "recording_figure_jobs",
     "residual_quiver_figure",
     "residual_time_figure",
-    "run_figure_jobs",
     "run_figures",
     "scan_trace_figure",
     "sky_distribution_figure",
-    "warm_up",
 ]
 
 #: resolution of every PNG (dots per inch); figure sizes are given in inches
@@ -154,23 +150,6 @@ class _Canvas:
 
     def __exit__(self, *exc) -> None:
         self._rc.__exit__(*exc)
-
-
-def warm_up() -> None:
-    """Draw a small figure and encode it, to nothing: loads the fonts, the text layout and
-    the PNG encoder, a fifth of a second that the first figure otherwise pays. Changes no
-    later figure."""
-    import io
-
-    with _Canvas(2.0, 1.5) as fig:
-        ax = fig.subplots()
-        ax.plot([0.0, 1.0], [0.0, 1.0], "o-", label="line")
-        ax.set_title("title", fontsize=9)
-        ax.set_xlabel("x")
-        ax.legend(fontsize=7)
-        fig.suptitle("warm-up", fontsize=11, fontweight="bold")
-        fig.savefig(io.BytesIO(), format="png", dpi=FIG_DPI, metadata=_PNG_METADATA,
-                    pil_kwargs={"compress_level": _PNG_COMPRESS_LEVEL})
 
 
 def _save(fig, path: Path, formats: Sequence[str]) -> tuple[Path, tuple[Path, ...]]:
@@ -835,38 +814,53 @@ def scan_trace_figure(traces: Sequence[ScanTrace], path: str | Path, *, hpbw_arc
 # ---------------------------------------------------------------------------------------------
 # all figures of a run
 # ---------------------------------------------------------------------------------------------
-def run_figures(rows, fits: Mapping[str, FitResult | None], out_dir: str | Path,
-                **options: Any) -> list[FigureFile]:
-    """The figures of one run into ``out_dir``: see the module docstring.
+def run_figures(rows, fits: Mapping[str, FitResult | None], out_dir: str | Path, *,
+                truth_arcsec: Mapping[str, float] | None = None, name: str = "",
+                start_label: str = "", el_limit_deg: float | None = None,
+                reference_rms: Mapping[str, tuple[float, float]] | None = None,
+                gain_curve: Sequence[tuple[float, float]] = REPORT_GAIN_CURVE,
+                formats: Sequence[str] = ("png",), gain_fit=None) -> list[FigureFile]:
+    """The figures of one run into ``out_dir``, in the report's order: see the module
+    docstring.
 
     ``rows``: the recordings (row dicts or an astropy Table); ``fits``: fits A-F as from
     :func:`antsim.run.outputs.run_fits` (None for a variant with too few observations; the
-    figures that need fit A are left out when it is None); ``options``: those of
-    :func:`run_figure_jobs`.
+    figures that need fit A are left out when it is None); ``truth_arcsec``: the injected
+    coefficients by term name, if known; ``name``: prefixed to the titles;
+    ``el_limit_deg``: the scheduler's elevation limit, drawn on the sky; ``reference_rms``:
+    ``{fit: (xel, el)}`` published rms (arcsec) drawn beside the run's; ``gain_fit``: the
+    run's fitted elevation gain curve, drawn on Fig. 4.
     """
-    return [job() for job in run_figure_jobs(rows, fits, out_dir, **options)]
-
-
-def recording_figure_jobs(rows, out_dir: str | Path, *, name: str = "",
-                          el_limit_deg: float | None = None,
-                          formats: Sequence[str] = ("png",)) -> list[partial[FigureFile]]:
-    """The first figures of :func:`run_figure_jobs`, those drawn from the recordings alone
-    (Fig. 1, Fig. 2a-d), with the options they take: they can be drawn before the fits."""
-    return _recording_jobs(_Observations.from_rows(rows, "AVG"), Path(out_dir), name,
-                           el_limit_deg, formats)
-
-
-def _recording_jobs(obs: _Observations, out: Path, name: str, el_limit_deg: float | None,
-                    formats: Sequence[str]) -> list[partial[FigureFile]]:
+    out = Path(out_dir)
     prefix = f"{name}: " if name else ""
+    obs = _Observations.from_rows(rows, "AVG")
+    files = _recording_figures(obs, out, prefix, el_limit_deg, formats)
+    fit_a = fits.get("A")
+    if fit_a is not None:
+        data, sun = _fit_a_data(rows)
+        files.append(_residuals_figure(fit_a, data, sun, out, prefix, formats))
+    files.append(amplitude_figure(
+        obs.el_deg, obs.amp_k, obs.source, out / "fig4_amplitude.png", good=obs.good,
+        gain_curve=gain_curve, title=f"Fig. 4  {prefix}amplitude against elevation, strong "
+        "sources", formats=formats, fitted=gain_fit))
+    if fit_a is not None:
+        files += _fit_a_figures(fit_a, data, sun, out, prefix, start_label, formats)
+        present = {k: v for k, v in fits.items() if v is not None}
+        files += _fits_figures(present, out, prefix, truth_arcsec, reference_rms, formats)
+    return files
+
+
+def _recording_figures(obs: _Observations, out: Path, prefix: str,
+                       el_limit_deg: float | None, formats: Sequence[str]) -> list[FigureFile]:
+    """Fig. 1 and Fig. 2a-d: what the recordings alone show."""
     defined = np.isfinite(obs.xel_arcsec) & np.isfinite(obs.el_arcsec)
     return [
-        partial(sky_distribution_figure, obs.az_deg, obs.el_deg, out / "fig1_sky.png",
-                source=obs.source, good=obs.good, el_limit_deg=el_limit_deg,
-                title=f"Fig. 1  {prefix}sky distribution of the observations",
-                formats=formats),
-        partial(
-            pointing_errors_figure, obs.az_deg[defined], obs.el_deg[defined],
+        sky_distribution_figure(
+            obs.az_deg, obs.el_deg, out / "fig1_sky.png", source=obs.source, good=obs.good,
+            el_limit_deg=el_limit_deg,
+            title=f"Fig. 1  {prefix}sky distribution of the observations", formats=formats),
+        pointing_errors_figure(
+            obs.az_deg[defined], obs.el_deg[defined],
             obs.xel_arcsec[defined], obs.el_arcsec[defined], out / "fig2_total_errors.png",
             sun_el_deg=obs.sun_el_deg[defined], rejected=~obs.good[defined],
             rejected_label="flagged by the reduction",
@@ -880,96 +874,84 @@ def _recording_jobs(obs: _Observations, out: Path, name: str, el_limit_deg: floa
     ]
 
 
-def run_figure_jobs(rows, fits: Mapping[str, FitResult | None], out_dir: str | Path, *,
-                    truth_arcsec: Mapping[str, float] | None = None, name: str = "",
-                    start_label: str = "", el_limit_deg: float | None = None,
-                    reference_rms: Mapping[str, tuple[float, float]] | None = None,
-                    gain_curve: Sequence[tuple[float, float]] = REPORT_GAIN_CURVE,
-                    formats: Sequence[str] = ("png",), gain_fit=None
-                    ) -> list[partial[FigureFile]]:
-    """The figures of :func:`run_figures`, each a call that draws and writes it, in the
-    report's order (independent of each other: :mod:`antsim.rendering` runs them in two
-    processes), starting with :func:`recording_figure_jobs`.
+def _residuals_figure(fit_a: FitResult, data: PointingData, sun: np.ndarray, out: Path,
+                      prefix: str, formats: Sequence[str]) -> FigureFile:
+    """Fig. 3a-d: the residuals after fit A."""
+    return pointing_errors_figure(
+        np.degrees(data.az_rad), np.degrees(data.el_rad),
+        fit_a.residual_xel_arcsec, fit_a.residual_el_arcsec, out / "fig3_residuals.png",
+        sun_el_deg=sun,
+        rejected=~np.asarray(fit_a.used, bool), what="residual",
+        title=f"Fig. 3a-d  {prefix}residuals after fit A against elevation and azimuth",
+        caption=f"What fit A ({fit_a.model.name}, {fit_a.n_used} of {fit_a.n_input} "
+                "scans) leaves unexplained, against elevation and azimuth. Red crosses are "
+                "the scans the robust fit rejected. The black line is the mean in bins: "
+                "where it leaves zero, the model misses a term with that signature.",
+        formats=formats)
 
-    ``truth_arcsec``: the injected coefficients by term name, if known; ``name``: prefixed
-    to the titles; ``reference_rms``: ``{fit: (xel, el)}`` published rms (arcsec) drawn
-    beside the run's.
-    """
-    out = Path(out_dir)
-    prefix = f"{name}: " if name else ""
-    obs = _Observations.from_rows(rows, "AVG")
-    jobs = _recording_jobs(obs, out, name, el_limit_deg, formats)
-    jobs.append(
-        partial(amplitude_figure, obs.el_deg, obs.amp_k, obs.source, out / "fig4_amplitude.png",
-                good=obs.good, gain_curve=gain_curve,
-                title=f"Fig. 4  {prefix}amplitude against elevation, strong sources",
-                formats=formats, fitted=gain_fit))
-    fit_a = fits.get("A")
-    if fit_a is not None:
-        data, sun = _fit_a_data(rows)
-        rejected = ~np.asarray(fit_a.used, bool)
-        jobs.insert(2, partial(
-            pointing_errors_figure, np.degrees(data.az_rad), np.degrees(data.el_rad),
-            fit_a.residual_xel_arcsec, fit_a.residual_el_arcsec, out / "fig3_residuals.png",
-            sun_el_deg=sun,
-            rejected=rejected, what="residual",
-            title=f"Fig. 3a-d  {prefix}residuals after fit A against elevation and azimuth",
-            caption=f"What fit A ({fit_a.model.name}, {fit_a.n_used} of {fit_a.n_input} "
-                    "scans) leaves unexplained, against elevation and azimuth. Red crosses are "
-                    "the scans the robust fit rejected. The black line is the mean in bins: "
-                    "where it leaves zero, the model misses a term with that signature.",
-            formats=formats))
-        jobs.append(partial(
-            residual_quiver_figure, data, fit_a, out / "fig5_residual_quiver.png",
-            title=f"{prefix}residuals after fit A on the sky", formats=formats))
-        used = np.asarray(fit_a.used, bool)
-        series = {"used": (fit_a.residual_xel_arcsec[used], fit_a.residual_el_arcsec[used])}
-        if (~used).any():
-            series["rejected"] = (fit_a.residual_xel_arcsec[~used],
-                                  fit_a.residual_el_arcsec[~used])
-        jobs.append(partial(
-            histogram_figure, series, out / "fig6_residual_histograms.png",
+
+def _fit_a_figures(fit_a: FitResult, data: PointingData, sun: np.ndarray, out: Path,
+                   prefix: str, start_label: str, formats: Sequence[str]) -> list[FigureFile]:
+    """Fit A's residuals on the sky, as histograms and against time."""
+    used = np.asarray(fit_a.used, bool)
+    series = {"used": (fit_a.residual_xel_arcsec[used], fit_a.residual_el_arcsec[used])}
+    if (~used).any():
+        series["rejected"] = (fit_a.residual_xel_arcsec[~used],
+                              fit_a.residual_el_arcsec[~used])
+    return [
+        residual_quiver_figure(
+            data, fit_a, out / "fig5_residual_quiver.png",
+            title=f"{prefix}residuals after fit A on the sky", formats=formats),
+        histogram_figure(
+            series, out / "fig6_residual_histograms.png",
             title=f"{prefix}histograms of the residuals after fit A",
             caption="The residuals of the scans fit A used, with the normal curve of the same "
                     "rms; the scans the robust fit rejected are drawn separately. Long tails "
-                    "beyond the curve are outliers (gusts, bad scans).", formats=formats))
-        jobs.append(partial(
-            residual_time_figure, fit_a, data, out / "fig7_residuals_time.png", sun_el_deg=sun,
+                    "beyond the curve are outliers (gusts, bad scans).", formats=formats),
+        residual_time_figure(
+            fit_a, data, out / "fig7_residuals_time.png", sun_el_deg=sun,
             start_label=start_label, title=f"{prefix}residuals after fit A against time",
-            formats=formats))
-        present = {k: v for k, v in fits.items() if v is not None}
-        jobs.append(partial(
-            coefficients_figure, present, out / "fig8_coefficients.png",
-            truth_arcsec=truth_arcsec,
+            formats=formats),
+    ]
+
+
+def _fits_figures(present: Mapping[str, FitResult], out: Path, prefix: str,
+                  truth_arcsec: Mapping[str, float] | None,
+                  reference_rms: Mapping[str, tuple[float, float]] | None,
+                  formats: Sequence[str]) -> list[FigureFile]:
+    """Fits A-F side by side: coefficients, TPOINT sigmas and residual rms (Table 2)."""
+    sigmas = {f"fit {k}": dict(zip(v.names, (float(s) for s in v.sigma_arcsec),
+                                   strict=True)) for k, v in present.items()}
+    rms: dict[str, dict[str, float]] = {
+        "xel rms": {k: v.xel_rms_arcsec for k, v in present.items()}}
+    if reference_rms:
+        rms["xel rms, 1990 report"] = {k: v[0] for k, v in reference_rms.items()
+                                       if k in present}
+    rms["el rms"] = {k: v.el_rms_arcsec for k, v in present.items()}
+    if reference_rms:
+        rms["el rms, 1990 report"] = {k: v[1] for k, v in reference_rms.items()
+                                      if k in present}
+    return [
+        coefficients_figure(
+            present, out / "fig8_coefficients.png", truth_arcsec=truth_arcsec,
             title=f"{prefix}coefficients of fits A-F"
                   + (" minus the injected truth" if truth_arcsec else " minus fit A"),
-            formats=formats))
-        sigmas = {f"fit {k}": dict(zip(v.names, (float(s) for s in v.sigma_arcsec),
-                                       strict=True)) for k, v in present.items()}
-        jobs.append(partial(
-            comparison_figure, sigmas, out / "fig9_term_sigmas.png", log=True, xlabel="term",
+            formats=formats),
+        comparison_figure(
+            sigmas, out / "fig9_term_sigmas.png", log=True, xlabel="term",
             title=f"{prefix}TPOINT sigma of each term, fits A-F",
             ylabel="sigma (arcsec, log scale)",
             caption="The formal (TPOINT) uncertainty of each coefficient in each fit: fewer "
                     "points (fits D, E) or a narrower spread on the sky make it larger; "
                     "strongly correlated terms (e.g. W1, W2, W3) are the least determined.",
-            formats=formats))
-        rms: dict[str, dict[str, float]] = {
-            "xel rms": {k: v.xel_rms_arcsec for k, v in present.items()}}
-        if reference_rms:
-            rms["xel rms, 1990 report"] = {k: v[0] for k, v in reference_rms.items()
-                                           if k in present}
-        rms["el rms"] = {k: v.el_rms_arcsec for k, v in present.items()}
-        if reference_rms:
-            rms["el rms, 1990 report"] = {k: v[1] for k, v in reference_rms.items()
-                                          if k in present}
-        jobs.append(partial(
-            comparison_figure, rms, out / "fig10_fit_rms.png",
+            formats=formats),
+        comparison_figure(
+            rms, out / "fig10_fit_rms.png",
             title=f"{prefix}rms of the residuals, fits A-F",
             xlabel="fit (Table 2: A all, B XR, C XL, D day, E night, F unfiltered)",
             ylabel="rms (arcsec)",
             caption="Table 2 as a chart: the rms of the cross-elevation and elevation "
                     "residuals of each fit" + (", beside the 1990 report's values"
                                                if reference_rms else "") + ".",
-            formats=formats))
-    return jobs
+            formats=formats),
+    ]

@@ -12,16 +12,12 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from controller.pointing.fitting import FitResult
 from controller.pointing.tpoint import TPointModel, write_mod
 from controller.pointing.variants import VARIANTS, fit_variants
 
 from .runner import RunResult
-
-if TYPE_CHECKING:
-    from antsim.rendering import SecondDrawer
 
 __all__ = ["fit_tables", "run_fits", "write_outputs"]
 
@@ -67,11 +63,10 @@ def fit_tables(fits: dict[str, FitResult | None], title: str) -> str:
     return "\n".join(lines).rstrip() + "\n"
 
 
-def write_outputs(result: RunResult, report: bool = True,
-                  renderer: SecondDrawer | None = None) -> str:
+def write_outputs(result: RunResult, report: bool = True) -> str:
     """Write the products of a run into its output directory; return a short summary.
-    With ``report`` also the figures (``figures/``) and ``report.html`` (antsim.report),
-    the figures drawn by ``renderer`` when given (:mod:`antsim.rendering`)."""
+    With ``report`` also the figures (``figures/``) and ``report.html``
+    (:mod:`antsim.run.report`)."""
     out = Path(result.out_dir)
     fits = run_fits(result)
     doc = {k: (v.to_json() if v is not None else None) for k, v in fits.items()}
@@ -104,6 +99,6 @@ def write_outputs(result: RunResult, report: bool = True,
     if report:
         from .report import write_run_report
 
-        _, figures = write_run_report(result, fits, out, renderer=renderer)
+        _, figures = write_run_report(result, fits, out)
         written += f" report.html figures/ ({len(figures)} figures)"
     return summary + f"\nwrote {out}/: {written}"

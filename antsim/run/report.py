@@ -32,7 +32,6 @@ from controller.pointing.variants import VARIANTS
 
 if TYPE_CHECKING:
     from antsim.figures.run import FigureFile
-    from antsim.rendering import SecondDrawer
 
     from .runner import RunResult
 
@@ -352,21 +351,18 @@ def truth_terms_arcsec(truth: Mapping[str, Any] | None) -> dict[str, float]:
 
 
 def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
-                     out_dir: str | Path | None = None, renderer: SecondDrawer | None = None
-                     ) -> tuple[Path, list[FigureFile]]:
-    """Figures (``DIR/figures/``) and ``DIR/report.html`` of a run; returns both. The
-    figures are drawn by ``renderer`` when given (:mod:`antsim.rendering`), else here."""
+                     out_dir: str | Path | None = None) -> tuple[Path, list[FigureFile]]:
+    """Figures (``DIR/figures/``) and ``DIR/report.html`` of a run; returns both."""
     from antsim.figures.run import REPORT_TABLE2_ARCSEC, run_figures
-    from antsim.rendering import recording_figure_options
 
     out = Path(out_dir if out_dir is not None else result.out_dir)
     scenario = result.scenario
     truth = truth_terms_arcsec(result.truth)
     reference = REPORT_TABLE2_ARCSEC if scenario.name == "ghigo1990" else None
-    draw = renderer.run_figures if renderer is not None else run_figures
-    figures = draw(result.rows, fits, out / "figures", truth_arcsec=truth or None,
-                   start_label=f"UTC {scenario.epoch_utc}", reference_rms=reference,
-                   gain_fit=_elevation_gain_fit(result), **recording_figure_options(result))
+    figures = run_figures(result.rows, fits, out / "figures", truth_arcsec=truth or None,
+                          name=scenario.name, start_label=f"UTC {scenario.epoch_utc}",
+                          el_limit_deg=scenario.controller.scheduler.elevation_min_deg,
+                          reference_rms=reference, gain_fit=_elevation_gain_fit(result))
     good = sum(1 for r in result.rows if r["polarization"] == "AVG" and r["good"])
     fit_a = fits.get("A")
     summary = (f"{scenario.description or scenario.name}. Campaign of "

@@ -12,7 +12,7 @@ import json
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import simpy
@@ -48,11 +48,6 @@ class RunResult:
     @property
     def n_scans(self) -> int:
         return len({r["scan"] for r in self.rows})
-
-    def portable(self) -> RunResult:
-        """This result without the simpy world and control program (which cannot be
-        pickled): all that the outputs of a run need, to send to another process."""
-        return replace(self, program=None, world=None)
 
 
 class _TimeLabeller:
