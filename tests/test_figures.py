@@ -16,6 +16,8 @@ import numpy as np
 import pytest
 
 from antsim.figures import run as figures
+from antsim.figures.charts import comparison_figure
+from antsim.figures.diagnose import before_after_figures
 from antsim.run.outputs import run_fits
 from antsim.run.runner import simulate
 from antsim.scenario import load_scenario
@@ -157,7 +159,7 @@ def test_before_after_figures(short_run, tmp_path):
     before = fit_model(data, [n for n in after.names if n != "W6"], robust=True)
     # without W6 (12') the other elevation terms absorb most of it, not all
     assert before.sky_rms_arcsec > 1.5 * after.sky_rms_arcsec
-    files = figures.before_after_figures(before, after, data, tmp_path, "diag",
+    files = before_after_figures(before, after, data, tmp_path, "diag",
                                          before_name="without W6", after_name="with W6")
     assert [f.path.name for f in files] == ["diag_residuals.png", "diag_histograms.png",
                                             "diag_quiver.png"]
@@ -172,20 +174,20 @@ def test_before_after_refuses_mismatched_data(short_run, tmp_path):
     data = _fit_a_data(result)
     shorter = data.select(np.arange(len(data)) > 0)
     with pytest.raises(ValueError, match="pass the PointingData the fit was made from"):
-        figures.before_after_figures(fits["A"], fits["A"], shorter, tmp_path)
+        before_after_figures(fits["A"], fits["A"], shorter, tmp_path)
 
 
 def test_comparison_figure_for_plans(tmp_path):
     values = {"plan night only": {"W1": 40.0, "W6": 12.0, "W9": 6.0},
               "plan 24 h": {"W1": 30.0, "W6": 9.0, "W9": float("nan")},
               "plan day": {"W1": 50.0, "W6": 0.0}}
-    f = figures.comparison_figure(values, tmp_path / "plans.png", title="sigma per term",
+    f = comparison_figure(values, tmp_path / "plans.png", title="sigma per term",
                                   ylabel="sigma (arcsec)", xlabel="term", log=True)
     assert_sane_png(f.path)
     with pytest.raises(ValueError, match="at least one series"):
-        figures.comparison_figure({}, tmp_path / "x.png", title="t", ylabel="y")
+        comparison_figure({}, tmp_path / "x.png", title="t", ylabel="y")
     with pytest.raises(ValueError, match="unknown figure format"):
-        figures.comparison_figure(values, tmp_path / "y.png", title="t", ylabel="y",
+        comparison_figure(values, tmp_path / "y.png", title="t", ylabel="y",
                                   formats=("png", "gif"))
 
 

@@ -206,11 +206,11 @@ class _RecordingAntenna:
 
 
 def _trace(label: str, scan: list) -> Any:
-    """A :class:`~antsim.figures.run.ScanTrace` (sky offsets, power above the baseline of the
+    """A :class:`~antsim.figures.demo.ScanTrace` (sky offsets, power above the baseline of the
     mean of both channels) from the recorded integrations of one cross scan."""
     import numpy as np
 
-    from antsim.figures.run import ScanTrace
+    from antsim.figures.demo import ScanTrace
 
     half = len(scan) // 2
     axes = []
@@ -232,7 +232,7 @@ def _trace(label: str, scan: list) -> Any:
 def _cold_start(story: _Story, scenario, figdir: Path) -> dict[str, Any]:
     import simpy
 
-    from antsim.figures.run import scan_trace_figure
+    from antsim.figures.demo import scan_trace_figure
     from antsim.world.world import World
     from controller.pointing.model import PointingModel
     from controller.program.campaign import ControlProgram
@@ -433,7 +433,7 @@ def _closed_loop(story: _Story, base_text: str, scenario_path: Path, out: Path, 
                  figdir: Path) -> dict[str, Any]:
     import numpy as np
 
-    from antsim.figures.run import histogram_figure
+    from antsim.figures.charts import histogram_figure
     from antsim.run.report import truth_terms_arcsec
     from antsim.scenario import load_scenario
     from controller.pointing.modelio import load_model
@@ -548,7 +548,8 @@ def _hidden_effect(story: _Story, base_text: str, scenario_path: Path, out: Path
                    figdir: Path, reference_rms_arcsec: float) -> dict[str, Any]:
     import numpy as np
 
-    from antsim.figures.run import before_after_figures, pointing_errors_figure
+    from antsim.figures.charts import pointing_errors_figure
+    from antsim.figures.diagnose import before_after_figures
     from antsim.scenario import load_scenario
     from controller.pointing.fitting import fit_model
     from controller.pointing.modelio import load_model

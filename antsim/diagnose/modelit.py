@@ -233,7 +233,7 @@ def plots(diag: Diagnosis, out_dir: Path) -> list[str]:
     """Before/after residual plots into ``out_dir``; returns the file names written."""
     before, after, data, after_data = _before_after_fits(diag)
     try:
-        from antsim.figures.run import before_after_figures
+        from antsim.figures.diagnose import before_after_figures
     except ImportError:
         before_after_figures = None
     if before_after_figures is not None:

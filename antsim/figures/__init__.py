@@ -1,1 +1,15 @@
-"""(docstring follows in a later commit)"""
+"""Figures, by the page that shows them.
+
+* :mod:`.style`: what every figure shares (the canvas with the project's pinned style, saving
+  without timestamps, colours, small helpers): same inputs, same bytes;
+* :mod:`.charts`: figure types several pages draw (errors against elevation and azimuth,
+  residual arrows on the sky, histograms, grouped bars);
+* :mod:`.run`: the run report's Figs. 1-10 (``antsim run``);
+* :mod:`.diagnose`: residuals before and after a finding (``antsim diagnose --out``);
+* :mod:`.plan`: the plan's comparisons (``antsim plan --out``);
+* :mod:`.demo`: the teaching walk-through's cross scans (``antsim demo``).
+
+May import: :mod:`controller` (the fit results and recordings they draw) and matplotlib
+(inside the drawing, so that importing a page stays cheap). Figures are drawn from values,
+never from a simulation: nothing here imports the rest of :mod:`antsim`.
+"""

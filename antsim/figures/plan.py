@@ -1,6 +1,6 @@
 """Figures comparing a plan's variants, written by ``antsim plan --out DIR``.
 
-Grouped bars per term and variant come from :func:`antsim.figures.run.comparison_figure` (the
+Grouped bars per term and variant come from :func:`antsim.figures.charts.comparison_figure` (the
 project's variant-comparison API); the duration answers' sigma-against-time curves are drawn
 here with matplotlib's object API on an Agg canvas (no pyplot, no global state, PNG metadata
 without dates: same inputs, same bytes).
@@ -18,7 +18,7 @@ DPI = 100
 
 def plan_figures(doc: dict[str, Any], out_dir: str | Path) -> list[Path]:
     """Write the figures of a plan document (``antsim plan --json``) into ``out_dir``."""
-    from .run import comparison_figure
+    from .charts import comparison_figure
 
     out = Path(out_dir)
     written: list[Path] = []

@@ -31,7 +31,7 @@ from controller.pointing.fitting import FitResult
 from controller.pointing.variants import VARIANTS
 
 if TYPE_CHECKING:
-    from antsim.figures.run import FigureFile
+    from antsim.figures.style import FigureFile
 
     from .runner import RunResult
 
@@ -99,7 +99,7 @@ class Figure:
 
     @classmethod
     def of(cls, figure: FigureFile) -> Figure:
-        """The block of a :class:`antsim.figures.run.FigureFile`."""
+        """The block of a :class:`antsim.figures.style.FigureFile`."""
         return cls(Path(figure.path), figure.title, figure.caption)
 
 

@@ -1,0 +1,263 @@
+"""Figure types more than one page draws: errors against elevation and azimuth, residual
+arrows on the sky, histograms, grouped bars.
+
+Conventions: errors and residuals are "indicated minus true" (the sign of the recordings'
+corrections and of :class:`controller.pointing.fitting.PointingData`), cross-elevation =
+dA cos E, arcsec unless a label says otherwise; azimuth North = 0, East = 90 deg.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from controller.pointing.fitting import FitResult, PointingData
+
+from .style import (
+    REJECT_COLOR,
+    SERIES_COLORS,
+    Canvas,
+    FigureFile,
+    binned_mean,
+    day_night_groups,
+    figure_file,
+    rms,
+)
+
+__all__ = ["check_fit_data", "comparison_figure", "error_panels", "histogram_figure",
+           "pointing_errors_figure", "quiver", "residual_quiver_figure", "sky_axes"]
+
+
+# ---------------------------------------------------------------------------------------------
+# errors or residuals against elevation and azimuth (Figs. 2 and 3 of a run)
+# ---------------------------------------------------------------------------------------------
+def error_panels(axes, az_deg, el_deg, xel, el, *, sun_el_deg=None, rejected=None,
+                  what: str = "error", letters: str = "abcd", binned: bool = True,
+                  rejected_label: str = "rejected by the fit") -> None:
+    """Four panels: xel and el (arcsec) against elevation and against azimuth (deg)."""
+    az_deg = np.asarray(az_deg, float)
+    el_deg = np.asarray(el_deg, float)
+    rejected = (np.zeros(az_deg.shape, bool) if rejected is None
+                else np.asarray(rejected, bool))
+    groups = ([("observations", np.ones(az_deg.shape, bool), SERIES_COLORS[0])]
+              if sun_el_deg is None else day_night_groups(sun_el_deg))
+    panels = [
+        (axes[0], el_deg, xel, "elevation (deg)", f"cross-elevation {what} (arcsec)",
+         (0.0, 90.0)),
+        (axes[1], el_deg, el, "elevation (deg)", f"elevation {what} (arcsec)", (0.0, 90.0)),
+        (axes[2], az_deg, xel, "azimuth (deg, N = 0, E = 90)",
+         f"cross-elevation {what} (arcsec)", (0.0, 360.0)),
+        (axes[3], az_deg, el, "azimuth (deg, N = 0, E = 90)", f"elevation {what} (arcsec)",
+         (0.0, 360.0)),
+    ]
+    for k, (ax, x, y, xlabel, ylabel, xlim) in enumerate(panels):
+        y = np.asarray(y, float)
+        for label, sel, color in groups:
+            keep = sel & ~rejected
+            if keep.any():
+                ax.scatter(x[keep], y[keep], s=9, color=color, alpha=0.8, lw=0,
+                           label=f"{label} ({int(keep.sum())})")
+        if rejected.any():
+            ax.scatter(x[rejected], y[rejected], s=28, marker="x", color=REJECT_COLOR,
+                       lw=1.2, label=f"{rejected_label} ({int(rejected.sum())})")
+        if binned and (~rejected).sum() >= 6:
+            edges = np.linspace(xlim[0], xlim[1], 10 if xlim[1] <= 90 else 13)
+            cx, my, ey = binned_mean(x[~rejected], y[~rejected], edges)
+            if cx.size:
+                ax.errorbar(cx, my, yerr=ey, color="k", lw=1.2, capsize=2, marker="s", ms=3,
+                            label="binned mean \N{PLUS-MINUS SIGN} s.e.")
+        ax.axhline(0.0, color="k", lw=0.6)
+        ax.set_xlim(*xlim)
+        if xlim[1] > 90:
+            ax.set_xticks(np.arange(0, 361, 45))
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(ylabel)
+        used_y = y[~rejected]
+        ax.set_title(f"({letters[k]}) rms {rms(used_y):.1f}\" over {used_y.size} points",
+                     fontsize=9)
+    axes[0].legend(loc="lower left", fontsize=7, framealpha=0.8)
+
+
+def pointing_errors_figure(az_deg, el_deg, xel_arcsec, el_arcsec, path: str | Path, *,
+                           sun_el_deg=None, rejected=None, what: str = "error",
+                           rejected_label: str = "rejected by the fit",
+                           title: str = "", caption: str = "",
+                           formats: Sequence[str] = ("png",)) -> FigureFile:
+    """Figs. 2a-d / 3a-d: cross-elevation and elevation errors (arcsec, indicated minus
+    true) against elevation and azimuth (deg); points coloured by day/twilight/night when
+    ``sun_el_deg`` is given; ``rejected`` points marked with red crosses; binned means."""
+    title = title or "Total pointing errors against elevation and azimuth"
+    with Canvas(10.0, 8.0) as fig:
+        grid = fig.subplots(2, 2)
+        fig.subplots_adjust(left=0.08, right=0.98, bottom=0.07, top=0.91, hspace=0.32,
+                            wspace=0.22)
+        error_panels(grid.ravel(), az_deg, el_deg, xel_arcsec, el_arcsec,
+                      sun_el_deg=sun_el_deg, rejected=rejected, what=what,
+                      rejected_label=rejected_label)
+        return figure_file(fig, Path(path), title, caption or title, formats)
+
+
+# ---------------------------------------------------------------------------------------------
+# residuals on the sky
+# ---------------------------------------------------------------------------------------------
+#: quiver scale: arcsec of residual per degree of zenith distance on the sky map
+QUIVER_ARCSEC_PER_DEG = 10.0
+
+
+def sky_axes(ax, el_limit_deg: float | None = 10.0) -> None:
+    """Cartesian sky map axes: x = z sin A, y = z cos A (deg), North up, East right."""
+    theta = np.linspace(0.0, 2.0 * math.pi, 181)
+    for zd in (30.0, 60.0, 90.0):
+        ax.plot(zd * np.sin(theta), zd * np.cos(theta), color="0.75", lw=0.7)
+        ax.text(zd * math.sin(math.radians(135)), zd * math.cos(math.radians(135)),
+                f"{90 - zd:g}\N{DEGREE SIGN}", fontsize=7, color="0.4")
+    if el_limit_deg is not None:
+        zl = 90.0 - el_limit_deg
+        ax.plot(zl * np.sin(theta), zl * np.cos(theta), "k--", lw=0.6)
+    for label, a in (("N", 0.0), ("E", 90.0), ("S", 180.0), ("W", 270.0)):
+        ax.text(97.0 * math.sin(math.radians(a)), 97.0 * math.cos(math.radians(a)), label,
+                ha="center", va="center", fontsize=9, fontweight="bold")
+    ax.set_xlim(-102.0, 102.0)
+    ax.set_ylim(-102.0, 102.0)
+    ax.set_aspect("equal")
+    ax.grid(False)
+    ax.set_xticks([])
+    ax.set_yticks([])
+
+
+def quiver(ax, az_deg, el_deg, xel, el, used, *, key: bool = True) -> None:
+    """Arrows of (xel, el) residuals at each position on a :func:`sky_axes` map."""
+    a = np.radians(np.asarray(az_deg, float))
+    zd = 90.0 - np.asarray(el_deg, float)
+    x, y = zd * np.sin(a), zd * np.cos(a)
+    xel = np.asarray(xel, float)
+    el = np.asarray(el, float)
+    # increasing azimuth is (cos A, -sin A) on the map; increasing elevation (-sin A, -cos A)
+    u = xel * np.cos(a) - el * np.sin(a)
+    v = -xel * np.sin(a) - el * np.cos(a)
+    used = np.asarray(used, bool)
+    for sel, color in ((used, "#1f4e9c"), (~used, REJECT_COLOR)):
+        if sel.any():
+            q = ax.quiver(x[sel], y[sel], u[sel], v[sel], color=color, angles="xy",
+                          scale_units="xy", scale=QUIVER_ARCSEC_PER_DEG, width=0.003,
+                          headwidth=3.5)
+            if key and color != REJECT_COLOR:
+                ax.quiverkey(q, 0.86, 0.04, 60.0, "60\"", labelpos="E", coordinates="axes",
+                             fontproperties={"size": 8})
+    ax.scatter(x, y, s=3, color="k", zorder=3)
+
+
+def check_fit_data(fit: FitResult, data: PointingData, name: str) -> None:
+    n = len(np.asarray(fit.residual_xel_arcsec))
+    if n != len(data):
+        raise ValueError(f"{name} has residuals for {n} observations but the pointing data "
+                         f"hold {len(data)}: pass the PointingData the fit was made from")
+
+
+def residual_quiver_figure(data: PointingData, fit: FitResult, path: str | Path, *,
+                           title: str = "", formats: Sequence[str] = ("png",)) -> FigureFile:
+    """The residuals of ``fit`` as arrows on a map of the sky (North up, East right, zenith
+    at the centre; 60" of residual = 6 deg of zenith distance); rejected points in red."""
+    check_fit_data(fit, data, "fit")
+    title = title or "Residuals after the fit on the sky"
+    with Canvas(7.5, 7.5) as fig:
+        ax = fig.add_axes((0.03, 0.03, 0.94, 0.88))
+        sky_axes(ax)
+        quiver(ax, np.degrees(data.az_rad), np.degrees(data.el_rad), fit.residual_xel_arcsec,
+                fit.residual_el_arcsec, fit.used)
+        ax.text(-100.0, -100.0, f"{fit.n_used} used (blue), {fit.n_rejected} rejected (red)\n"
+                f"sky rms {fit.sky_rms_arcsec:.1f}\"", fontsize=8, va="bottom")
+        caption = ("Each arrow is one scan's residual after the fit (indicated minus true: "
+                   "cross-elevation along increasing azimuth, elevation towards the zenith), "
+                   f"drawn at the position observed; 60\" of residual is drawn as "
+                   f"{60 / QUIVER_ARCSEC_PER_DEG:g}\N{DEGREE SIGN} on the map. Random noise "
+                   "points every way; arrows that agree with their neighbours are a term the "
+                   "model lacks.")
+        return figure_file(fig, Path(path), title, caption, formats)
+
+
+# ---------------------------------------------------------------------------------------------
+# histograms and grouped bars
+# ---------------------------------------------------------------------------------------------
+def histogram_figure(series: Mapping[str, tuple[Any, Any]], path: str | Path, *,
+                     title: str = "", caption: str = "", bin_arcsec: float = 10.0,
+                     gaussian: bool = True,
+                     formats: Sequence[str] = ("png",)) -> FigureFile:
+    """Histograms of cross-elevation and elevation values (arcsec) for each named series
+    ``{label: (xel, el)}``, with the rms in the legend and, if ``gaussian``, the normal
+    curve of the first series' rms."""
+    if not series:
+        raise ValueError("histogram_figure needs at least one series")
+    title = title or "Residual histograms"
+    all_values = np.concatenate([np.concatenate([np.ravel(x), np.ravel(y)])
+                                 for x, y in series.values()]).astype(float)
+    all_values = all_values[np.isfinite(all_values)]
+    top = max(bin_arcsec, float(np.max(np.abs(all_values))) if all_values.size else 1.0)
+    edges = np.arange(-top - bin_arcsec, top + 2 * bin_arcsec, bin_arcsec)
+    edges -= 0.5 * bin_arcsec
+    with Canvas(10.0, 4.4) as fig:
+        axes = fig.subplots(1, 2)
+        fig.subplots_adjust(left=0.07, right=0.98, bottom=0.12, top=0.84, wspace=0.2)
+        for a, (ax, axis_name) in enumerate(zip(axes, ("cross-elevation", "elevation"),
+                                                strict=True)):
+            for k, (label, values) in enumerate(series.items()):
+                v = np.asarray(values[a], float)
+                v = v[np.isfinite(v)]
+                color = SERIES_COLORS[k % len(SERIES_COLORS)]
+                ax.hist(v, bins=edges, histtype="stepfilled" if k == 0 else "step",
+                        alpha=0.45 if k == 0 else 1.0, color=color, lw=1.5,
+                        label=f"{label}: N {v.size}, rms {rms(v):.1f}\"")
+                s = rms(v)
+                if gaussian and k == 0 and v.size > 1 and s > 0:
+                    x = np.linspace(edges[0], edges[-1], 300)
+                    ax.plot(x, v.size * bin_arcsec * np.exp(-0.5 * (x / s) ** 2)
+                            / (s * math.sqrt(2 * math.pi)), "k-", lw=1,
+                            label=f"normal, \N{GREEK SMALL LETTER SIGMA} = {s:.1f}\"")
+            ax.set_xlabel(f"{axis_name} (arcsec)")
+            ax.set_ylabel(f"number per {bin_arcsec:g}\" bin")
+            ax.set_title(f"({'ab'[a]}) {axis_name}", fontsize=9)
+            ax.legend(loc="upper right", fontsize=7)
+        return figure_file(fig, Path(path), title, caption or title, formats)
+
+
+def comparison_figure(values: Mapping[str, Mapping[str, float]], path: str | Path, *,
+                      title: str, ylabel: str, xlabel: str = "", caption: str = "",
+                      log: bool = False,
+                      formats: Sequence[str] = ("png",)) -> FigureFile:
+    """A grouped bar chart of ``{series: {category: value}}``: one group per category (in
+    first-seen order), one bar per series, e.g. the sigma of each term (category) for each
+    plan or fit variant (series). Missing or non-finite values leave a gap."""
+    if not values:
+        raise ValueError("comparison_figure needs at least one series")
+    categories: list[str] = list(dict.fromkeys(c for s in values.values() for c in s))
+    if not categories:
+        raise ValueError("comparison_figure: the series have no categories")
+    n = len(values)
+    width = 0.8 / n
+    with Canvas(10.0, 4.8) as fig:
+        ax = fig.add_axes((0.08, 0.12, 0.90, 0.70))
+        x0 = np.arange(len(categories), dtype=float)
+        for k, (label, series) in enumerate(values.items()):
+            y = np.array([float(series.get(c, math.nan)) for c in categories])
+            ok = np.isfinite(y) & ((y > 0) if log else True)
+            ax.bar(x0[ok] - 0.4 + width * (k + 0.5), y[ok], width=width * 0.92,
+                   color=SERIES_COLORS[k % len(SERIES_COLORS)], label=label)
+        if log:
+            from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+            ax.set_yscale("log")
+            ax.yaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+            ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{v:g}"))
+            ax.yaxis.set_minor_formatter(NullFormatter())
+        ax.set_xticks(x0)
+        ax.set_xticklabels(categories)
+        ax.set_xlim(-0.6, len(categories) - 0.4)
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(ylabel)
+        ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.01), ncol=min(n, 8), fontsize=7,
+                  frameon=False)
+        return figure_file(fig, Path(path), title, caption or title, formats)
