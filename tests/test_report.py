@@ -1,4 +1,4 @@
-"""report.html of ``antsim run`` (antsim.report): every figure written, sane, not blank and
+"""report.html of ``antsim run`` (antsim.run.report): every figure written, sane, not blank and
 embedded byte for byte; the tables match fit.json/truth.json; nothing is requested from the
 network; identical bytes run to run; ``--no-report``; the generic writer escapes and refuses
 bad blocks; and the page opened in a real headless browser (Debian's chromium; skipped when
@@ -20,7 +20,7 @@ import pytest
 from test_figures import assert_sane_png, png_stats
 
 from antsim.cli import main
-from antsim.run.report import (
+from antsim.run.html import (
     CONTENT_SECURITY_POLICY,
     Figure,
     Paragraph,

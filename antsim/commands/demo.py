@@ -104,21 +104,21 @@ class _Story:
         return self.chapters[-1]
 
     def say(self, chapter: Chapter, text: str) -> None:
-        from antsim.run.report import Paragraph
+        from antsim.run.html import Paragraph
 
         chapter.blocks.append(Paragraph(text))
         self.echo(textwrap.fill(text, width=92))
         self.echo("")
 
     def command(self, chapter: Chapter, text: str) -> None:
-        from antsim.run.report import Preformatted
+        from antsim.run.html import Preformatted
 
         chapter.blocks.append(Preformatted(text, caption="Try it yourself"))
         self.echo("  $ " + text.replace("\n", "\n  $ "))
         self.echo("")
 
     def figure(self, chapter: Chapter, figure) -> None:
-        from antsim.run.report import Figure
+        from antsim.run.html import Figure
 
         chapter.blocks.append(Figure.of(figure))
         self.echo(f"  [figure: {figure.path}]")
@@ -139,7 +139,7 @@ def _edit(text: str, old: str, new: str, where: str) -> str:
 def run_demo(out: Path, scenario_path: Path,
              echo: Callable[[str], None] = print) -> dict[str, Any]:
     """Tell the story into ``out``; returns the numbers a test or a teacher may want."""
-    from antsim.run.report import Section, write_report
+    from antsim.run.html import Section, write_report
     from antsim.scenario import load_scenario
 
     t0 = time.perf_counter()
@@ -320,7 +320,7 @@ def _campaign(scenario, out: Path, seed: int, model, report: bool):
 def _first_campaign(story: _Story, scenario, scenario_path: Path, out: Path):
     import numpy as np
 
-    from antsim.run.report import Figure
+    from antsim.run.html import Figure
     from controller.pointing.model import PointingModel
 
     ch = story.chapter("2. The first campaign: 24 hours of cross scans")
@@ -374,7 +374,8 @@ def _pulls(fit, truth: dict[str, float]) -> dict[str, float]:
 
 
 def _the_fit(story: _Story, result, fits, out: Path) -> dict[str, Any]:
-    from antsim.run.report import Figure, fit_summary_table, truth_pull_table, truth_terms_arcsec
+    from antsim.run.html import Figure
+    from antsim.run.report import fit_summary_table, truth_pull_table, truth_terms_arcsec
 
     ch = story.chapter("3. The fit: ten numbers that describe the mount")
     fit = fits["A"]
