@@ -8,6 +8,9 @@ section 5: about 0.91 for Taurus A and Cassiopeia A at 11').
 
 The gain falls at low elevation as the 1990 report's section V describes: flat above
 30 deg, 95% at 20 deg, 90% at 10 deg (linear in between, held below the table).
+
+Where a source lies in the beam's own frame (:func:`tangent_offsets`) is what the beam's
+response and the optical camera (:mod:`antsim.world.camera`) both need.
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Beam", "BeamConfig"]
+__all__ = ["Beam", "BeamConfig", "tangent_offsets"]
 
 FOUR_LN2 = 4.0 * math.log(2.0)
 
@@ -53,3 +56,15 @@ class Beam:
         width2 = self.hpbw_arcmin ** 2 + size_arcmin ** 2
         peak = self.hpbw_arcmin ** 2 / width2
         return peak * np.exp(-FOUR_LN2 * (np.square(xel_arcmin) + np.square(el_arcmin)) / width2)
+
+
+def tangent_offsets(src_lon, src_lat, beam_lon, beam_lat) -> tuple[np.ndarray, np.ndarray]:
+    """Offsets (rad) of a source from the beam in the beam's own frame (orthographic
+    projection: cross-axis and along the latitude-like axis), exact on the sphere. The
+    alt-az scans use ``d_az cos(src_el)`` and ``d_el`` instead, which is exact only along one
+    axis at a time (the error is ~ x^2 tan(el) for an offset x in both axes): fine for scans
+    along azimuth or elevation, not for an equatorial mount's scans, which cross both."""
+    d_lon = src_lon - beam_lon
+    cos_s = np.cos(src_lat)
+    return (cos_s * np.sin(d_lon),
+            np.sin(src_lat) * np.cos(beam_lat) - cos_s * np.sin(beam_lat) * np.cos(d_lon))

@@ -17,16 +17,16 @@ camera's wavelength), for the world and for the controller alike.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from controller.astro.frames import MountFrame
 from controller.units import ARCSEC_PER_RAD
 
-if TYPE_CHECKING:
-    from .effects import PointingState
-    from .world import World
+from .beam import tangent_offsets
+from .effects.base import PointingState
 
 __all__ = ["Camera", "CameraConfig", "synthetic_stars"]
 
@@ -71,20 +71,20 @@ class Camera:
         self.config = config
         self.rng = rng
 
-    def measure(self, world: World, t: np.ndarray, enc_lon: np.ndarray, enc_lat: np.ndarray,
-                state: PointingState, paths, error_prev) -> tuple[tuple[float, float, bool],
-                                                                  tuple]:
+    def measure(self, beam_direction: Callable, frame: MountFrame, t: np.ndarray,
+                enc_lon: np.ndarray, enc_lat: np.ndarray, state: PointingState, paths,
+                error_prev) -> tuple[tuple[float, float, bool], tuple]:
         """Offset (arcsec, mount axes: cross-axis and along the second axis) of the star
         nearest the axis over the exposure with samples ``t``, whether one was in the field,
-        and the slow errors solved (the next fixed point's start)."""
-        from .world import tangent_offsets
-
+        and the slow errors solved (the next fixed point's start). ``beam_direction``: the
+        world's :meth:`~antsim.world.world.World.beam_direction`; ``frame``: its mount's
+        axes."""
         mid = t.size // 2
-        beam_lon, beam_lat, (d_lon, d_lat) = world.beam_direction(t, enc_lon, enc_lat, state,
-                                                                  error_prev)
+        beam_lon, beam_lat, (d_lon, d_lat) = beam_direction(t, enc_lon, enc_lat, state,
+                                                            error_prev)
         best = None
         for _, src_az, src_el in paths:
-            s_lon, s_lat = world.frame.from_altaz(src_az, src_el)
+            s_lon, s_lat = frame.from_altaz(src_az, src_el)
             d_x, d_y = tangent_offsets(s_lon, s_lat, beam_lon, beam_lat)
             sep = float(np.hypot(d_x[mid], d_y[mid]))
             if best is None or sep < best[0]:

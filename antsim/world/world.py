@@ -54,7 +54,8 @@ from controller.protocol import (
 from controller.units import ARCMIN_PER_RAD, RAD_PER_DEG
 
 from .atmosphere import Atmosphere
-from .beam import Beam
+from .beam import Beam, tangent_offsets
+from .camera import Camera
 from .effects import EFFECTS, GeometricEffect, PointingState
 from .effects.base import BLOCK_FIELDS
 from .mount import Mount
@@ -137,8 +138,6 @@ class World:
             self.mount = Mount(env, scenario.mount, 0.0, site.latitude_deg)
         self.camera = None
         if camera is not None:
-            from .camera import Camera
-
             self.camera = Camera(camera, component_rng(self.seed, "camera"))
         self._clock_error = None
         self.geometry = GeometricEffect(scenario.truth_model)
@@ -333,18 +332,6 @@ class World:
         return harmonic_basis(ha, dec) @ np.asarray(harmonics, dtype=float)
 
 
-def tangent_offsets(src_lon, src_lat, beam_lon, beam_lat) -> tuple[np.ndarray, np.ndarray]:
-    """Offsets (rad) of a source from the beam in the beam's own frame (orthographic
-    projection: cross-axis and along the latitude-like axis), exact on the sphere. The
-    alt-az scans use ``d_az cos(src_el)`` and ``d_el`` instead, which is exact only along one
-    axis at a time (the error is ~ x^2 tan(el) for an offset x in both axes): fine for scans
-    along azimuth or elevation, not for an equatorial mount's scans, which cross both."""
-    d_lon = src_lon - beam_lon
-    cos_s = np.cos(src_lat)
-    return (cos_s * np.sin(d_lon),
-            np.sin(src_lat) * np.cos(beam_lat) - cos_s * np.sin(beam_lat) * np.cos(d_lon))
-
-
 def _day():
     from astropy import units as u
 
@@ -474,7 +461,8 @@ class SimulatedAntenna:
                               feed_angle_rad=math.radians(self._feed_angle_deg))
         paths = [(i, *self._source_path(i, t)) for i in self._targets]
         (xel, el, found), self._error_prev = world.camera.measure(
-            world, t, enc_lon, enc_lat, state, paths, self._error_prev)
+            world.beam_direction, world.frame, t, enc_lon, enc_lat, state, paths,
+            self._error_prev)
         return OffsetReading(
             t_start_s=float(t_start + (t_clock[0] - t[0])),
             t_end_s=float(t_start + seconds + (t_clock[-1] - t[-1])),
