@@ -32,7 +32,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 # Imported after the path set-up so that the script runs from a source checkout.
-from controller.pointing.fitting import PointingData, fit_model
+from controller.pointing.data import PointingData
+from controller.pointing.fitting import fit_model
 from controller.pointing.model import PointingModel
 from controller.units import ARCSEC_PER_RAD
 

@@ -24,13 +24,14 @@ import pytest
 
 from antsim.cli import main as cli
 from controller.astro.frames import MountFrame, altaz_to_hadec, hadec_to_altaz
+from controller.pointing.data import PointingData
 from controller.pointing.equatorial import (
     EQUATORIAL_MODELS,
     equatorial_model,
     equatorial_term,
     is_equatorial_term,
 )
-from controller.pointing.fitting import PointingData, fit_model
+from controller.pointing.fitting import fit_model
 from controller.pointing.model import PointingModel
 from controller.pointing.terms import TermError
 from controller.units import ARCSEC_PER_RAD

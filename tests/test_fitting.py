@@ -18,8 +18,9 @@ import numpy as np
 import pytest
 
 from antsim.cli import main as cli_main
-from controller.pointing import fitting
-from controller.pointing.fitting import PointingData, fit_model
+from controller.pointing import solvers as fitting
+from controller.pointing.data import PointingData
+from controller.pointing.fitting import fit_model
 from controller.pointing.model import PointingModel
 from controller.pointing.terms import KATPOINT_EQUIVALENTS, TermError
 from controller.pointing.tpoint import read_tpoint

@@ -17,7 +17,8 @@ import pytest
 
 from antsim.cli import main as cli
 from antsim.world.effects import EFFECTS, PointingState
-from controller.pointing.fitting import PointingData, fit_model
+from controller.pointing.data import PointingData
+from controller.pointing.fitting import fit_model
 from controller.pointing.model import NAMED_MODELS, PointingModel
 from controller.pointing.terms import get_term
 from controller.units import ARCSEC_PER_RAD, RAD_PER_ARCSEC

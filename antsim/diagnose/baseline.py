@@ -164,7 +164,8 @@ class SimProducts:
 
 
 def _products(obs: Observations, terms: Sequence[str]) -> SimProducts:
-    from controller.pointing.fitting import PointingData, fit_model
+    from controller.pointing.data import PointingData
+    from controller.pointing.fitting import fit_model
 
     good = obs.good
     data = PointingData(obs.az_rad[good], obs.el_rad[good], obs.xel_arcsec[good],

@@ -338,7 +338,8 @@ def _channel_where(step: Step) -> str:
 def fit_variants_before_after(diag: Diagnosis) -> dict[str, Any]:
     """Fit D (day, Sun above 0 deg) and E (night, Sun below -12 deg) of the 1990 report on
     the baseline terms, before and after removing the findings' fitted signatures."""
-    from controller.pointing.fitting import PointingData, fit_model
+    from controller.pointing.data import PointingData
+    from controller.pointing.fitting import fit_model
     from controller.program.scheduler import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 
     obs = diag.obs

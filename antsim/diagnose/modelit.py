@@ -24,7 +24,8 @@ from typing import Any
 
 import numpy as np
 
-from controller.pointing.fitting import PointingData, fit_model
+from controller.pointing.data import PointingData
+from controller.pointing.fitting import fit_model
 
 from .candidates import TermsCandidate
 from .core import Diagnosis, Finding, _plain

@@ -2,7 +2,7 @@
 arrows on the sky, histograms, grouped bars.
 
 Conventions: errors and residuals are "indicated minus true" (the sign of the recordings'
-corrections and of :class:`controller.pointing.fitting.PointingData`), cross-elevation =
+corrections and of :class:`controller.pointing.data.PointingData`), cross-elevation =
 dA cos E, arcsec unless a label says otherwise; azimuth North = 0, East = 90 deg.
 """
 
@@ -15,7 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from controller.pointing.fitting import FitResult, PointingData
+from controller.pointing.data import PointingData
+from controller.pointing.result import FitResult
 
 from .style import (
     REJECT_COLOR,

@@ -7,7 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from controller.pointing.fitting import FitResult, PointingData
+from controller.pointing.data import PointingData
+from controller.pointing.result import FitResult
 
 from .charts import (
     QUIVER_ARCSEC_PER_DEG,

@@ -11,7 +11,7 @@ marked; the coefficients of fits A-F against the truth; the coefficient sigmas a
 of every fit. Figures other pages draw too are in :mod:`antsim.figures.charts`.
 
 Conventions: errors and residuals are "indicated minus true" (the sign of the recordings'
-corrections and of :class:`controller.pointing.fitting.PointingData`), cross-elevation =
+corrections and of :class:`controller.pointing.data.PointingData`), cross-elevation =
 dA cos E, arcsec unless a label says otherwise; azimuth North = 0, East = 90 deg.
 """
 
@@ -24,7 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from controller.pointing.fitting import FitResult, PointingData
+from controller.pointing.data import PointingData
+from controller.pointing.result import FitResult
 from controller.pointing.variants import VARIANTS, columns, pointing_data, variant_mask
 from controller.program.scheduler import DAY_SUN_MIN_DEG
 

@@ -13,7 +13,7 @@ import json
 import math
 from pathlib import Path
 
-from controller.pointing.fitting import FitResult
+from controller.pointing.result import FitResult
 from controller.pointing.tpoint import TPointModel, write_mod
 from controller.pointing.variants import VARIANTS, fit_variants
 

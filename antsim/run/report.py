@@ -13,7 +13,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from controller.pointing.fitting import FitResult
+from controller.pointing.result import FitResult
 from controller.pointing.variants import VARIANTS
 
 from .html import Block, Figure, Paragraph, Preformatted, Section, Table, write_report

@@ -18,7 +18,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from antsim.world.effects.optics import ExactTiltCollimation
-from controller.pointing.fitting import FitResult, PointingData, fit_model
+from controller.pointing.data import PointingData
+from controller.pointing.fitting import fit_model
+from controller.pointing.result import FitResult
 from controller.program.optical import BIMA_TERMS
 from controller.units import ARCSEC_PER_RAD
 

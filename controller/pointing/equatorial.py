@@ -2,7 +2,7 @@
 
 An equatorial model is an ordinary :class:`~controller.pointing.model.PointingModel` whose terms are
 evaluated at (hour angle, declination) instead of (azimuth, elevation): everything that takes
-``az_rad, el_rad`` (the model, the fitter, :class:`~controller.pointing.fitting.PointingData`) takes
+``az_rad, el_rad`` (the model, the fitter, :class:`~controller.pointing.data.PointingData`) takes
 ``ha_rad, dec_rad`` for it, and cross-axis errors are cross-declination, ``dH cos(dec)``. The
 terms are built here as :class:`~controller.pointing.terms.Term` objects (factors of ``AN`` read the
 hour angle, of ``E`` the declination), bound to the site's latitude phi where TPOINT's formula

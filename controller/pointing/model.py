@@ -2,7 +2,7 @@
 
 Like katpoint's ``PointingModel``: ``offset`` gives what must be added to a requested (true)
 position to obtain the position to command the encoders to, ``apply`` adds it, ``reverse``
-inverts ``apply`` iteratively, and ``fit`` returns a :class:`~controller.pointing.fitting.FitResult`
+inverts ``apply`` iteratively, and ``fit`` returns a :class:`~controller.pointing.result.FitResult`
 without changing the model. Models are immutable; ``with_values`` makes a new one.
 
 Signs: coefficients are stored in each vocabulary's own sign (TPOINT names as TPOINT prints
@@ -19,6 +19,8 @@ import numpy as np
 
 from controller.units import ARCSEC_PER_RAD, RAD_PER_ARCSEC, to_value
 
+from .data import PointingData
+from .robust import fit_terms
 from .terms import Term, combine_arrays, combine_scalar, evaluate_basis, get_term
 
 __all__ = ["NAMED_MODELS", "PointingModel", "named_model_terms"]
@@ -220,12 +222,11 @@ class PointingModel:
         ``d_xel``, ``d_el``: total pointing error, indicated minus true, cross-elevation and
         elevation (Quantity). The model itself is not changed; ``result.model`` is the fit.
         """
-        from .fitting import PointingData, fit_model
-
         data = PointingData(
             az_rad=np.atleast_1d(to_value(az, "rad", "az")),
             el_rad=np.atleast_1d(to_value(el, "rad", "el")),
             xel_arcsec=np.atleast_1d(to_value(d_xel, "arcsec", "d_xel")),
             el_arcsec=np.atleast_1d(to_value(d_el, "arcsec", "d_el")),
         )
-        return fit_model(data, self.names, **options)
+        start = PointingModel(list(self.names), name=options.pop("name", "custom"))
+        return fit_terms(data, start, **options)

@@ -334,14 +334,14 @@ class TPointData:
         return bool(np.isfinite(self.rotator_deg).any())
 
     def pointing_data(self, include_masked: bool = False):
-        """The observations as :class:`~controller.pointing.fitting.PointingData`.
+        """The observations as :class:`~controller.pointing.data.PointingData`.
 
         Pointing error = raw - obs ("indicated minus true"): dA wrapped to +-180 deg, then
         ``xel = dA cos E_obs``, both in arcsec. Masked observations are left out unless
         ``include_masked``. Equatorial data raise :class:`InputError`: the alt-az term set
         does not support them yet.
         """
-        from .fitting import PointingData
+        from .data import PointingData
 
         if self.coordinates != "azel":
             kind = "equatorial (RA/Dec)" if self.coordinates == "radec" else "non-alt-az"
@@ -641,7 +641,7 @@ class TPointModel(PointingModel):
 
     @classmethod
     def from_fit(cls, result, caption: str | None = None) -> TPointModel:
-        """The model of a :class:`~controller.pointing.fitting.FitResult` with its sigmas."""
+        """The model of a :class:`~controller.pointing.result.FitResult` with its sigmas."""
         return cls.from_model(result.model, result.sigma_arcsec, caption=caption,
                               n_obs=result.n_used, sky_rms_arcsec=result.sky_rms_arcsec)
 

@@ -26,7 +26,9 @@ import numpy as np
 
 from controller.program.scheduler import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 
-from .fitting import FitResult, PointingData, fit_model
+from .data import PointingData
+from .fitting import fit_model
+from .result import FitResult
 
 __all__ = ["VARIANTS", "Variant", "columns", "fit_variants", "pointing_data", "variant_mask"]
 

@@ -259,8 +259,8 @@ def total_errors_arcsec(table) -> tuple[np.ndarray, np.ndarray]:
 
 
 def read_pointing_data(path: str | Path, polarization: str = "AVG", good_only: bool = True):
-    """Recordings as :class:`controller.pointing.fitting.PointingData` of total pointing errors."""
-    from controller.pointing.fitting import PointingData
+    """Recordings as :class:`controller.pointing.data.PointingData` of total pointing errors."""
+    from controller.pointing.data import PointingData
 
     table = read_recordings(path)
     mask = np.asarray(table["polarization"]) == polarization
