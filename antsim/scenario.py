@@ -20,7 +20,7 @@ from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
-from controller.astro.ephemeris import Site
+from controller.astro.site import Site
 from controller.errors import InputError
 from controller.pointing.model import NAMED_MODELS, PointingModel
 from controller.pointing.terms import TermError, get_term

@@ -33,20 +33,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from controller.astro import ephemeris as astro
-from controller.astro.ephemeris import (
-    GHIGO1990_SOURCES,
-    GREEN_BANK_45FT,
-    Ephemeris,
-    FixedSource,
-    Site,
-    Weather,
-    dec_dms_to_deg,
-    ra_hms_to_deg,
-    refraction_rad,
-    standard_pressure_hpa,
-    sunrise_times_s,
-    sunset_times_s,
-)
+from controller.astro.ephemeris import Ephemeris
+from controller.astro.refraction import refraction_rad
+from controller.astro.site import GREEN_BANK_45FT, Site, Weather, standard_pressure_hpa
+from controller.astro.sources import GHIGO1990_SOURCES, FixedSource, dec_dms_to_deg, ra_hms_to_deg
+from controller.astro.sun import sunrise_times_s, sunset_times_s
 
 ARCSEC_PER_RAD = 180.0 / math.pi * 3600.0
 DAY_S = 86400.0
@@ -447,7 +438,7 @@ def test_refraction_is_positive_and_falls_with_elevation(el_deg, temperature_c, 
     (lambda: astro.icrs_radec_rad([FixedSource("x", 1.0, 2.0, "fk4", equinox="whenever")]),
      "not a time astropy understands"),
     (lambda: refraction_rad(0.5, RADIO_WEATHER, frequency_ghz=-8.4), "positive number of GHz"),
-    (lambda: refraction_rad(0.5, (10.0, 920.0, 0.5)), "must be a controller.astro.Weather"),
+    (lambda: refraction_rad(0.5, (10.0, 920.0, 0.5)), "must be a controller.astro.site.Weather"),
 ])
 def test_bad_input_raises_value_error_saying_what_to_do(build, message):
     with pytest.raises(ValueError, match=message) as caught:

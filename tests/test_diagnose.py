@@ -164,7 +164,9 @@ def test_temperature_drift_lags_the_air():
 
 def test_clock_regressor_is_the_apparent_motion_of_the_source():
     """dA/dt and dE/dt from (A, E, latitude) agree with the ephemeris to 0.1%."""
-    from controller.astro.ephemeris import Ephemeris, FixedSource, Site
+    from controller.astro.ephemeris import Ephemeris
+    from controller.astro.site import Site
+    from controller.astro.sources import FixedSource
 
     site = Site(38.43, -79.84, 800.0)
     src = FixedSource("x", 80.0, 30.0, "icrs")

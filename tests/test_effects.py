@@ -30,7 +30,7 @@ from antsim.world.effects import EFFECTS, PointingState
 from antsim.world.effects.optics import ExactTiltCollimation
 from antsim.world.effects.thermal import GRID_STEP_S
 from antsim.world.world import World
-from controller.astro.ephemeris import sunset_times_s
+from controller.astro.sun import sunset_times_s
 from controller.pointing.model import PointingModel
 
 ARCSEC = math.pi / 648000.0

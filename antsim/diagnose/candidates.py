@@ -147,7 +147,8 @@ def sun_el_grid_deg(obs: Observations, t_grid: np.ndarray) -> np.ndarray:
         try:
             from astropy.time import Time, TimeDelta
 
-            from controller.astro.ephemeris import Ephemeris, Site
+            from controller.astro.ephemeris import Ephemeris
+            from controller.astro.site import Site
 
             site = Site(float(meta["latitude_deg"]), float(meta["longitude_deg"]),
                         float(meta.get("height_m", 0.0)))

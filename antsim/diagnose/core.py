@@ -338,9 +338,9 @@ def _channel_where(step: Step) -> str:
 def fit_variants_before_after(diag: Diagnosis) -> dict[str, Any]:
     """Fit D (day, Sun above 0 deg) and E (night, Sun below -12 deg) of the 1990 report on
     the baseline terms, before and after removing the findings' fitted signatures."""
+    from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
     from controller.pointing.data import PointingData
     from controller.pointing.fitting import fit_model
-    from controller.program.scheduler import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 
     obs = diag.obs
     if obs.sun_el_deg is None:

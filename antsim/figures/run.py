@@ -24,10 +24,10 @@ from pathlib import Path
 
 import numpy as np
 
+from controller.astro.sun import DAY_SUN_MIN_DEG
 from controller.pointing.data import PointingData
 from controller.pointing.result import FitResult
 from controller.pointing.variants import VARIANTS, columns, pointing_data, variant_mask
-from controller.program.scheduler import DAY_SUN_MIN_DEG
 
 from .charts import (
     check_fit_data,

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from controller.program.scheduler import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
+from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 
 __all__ = ["FIG_DPI", "SERIES_COLORS", "Canvas", "FigureFile", "binned_mean",
            "day_night_groups", "figure_file", "rms"]

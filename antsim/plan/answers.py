@@ -26,9 +26,9 @@ from typing import Any
 
 import numpy as np
 
+from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 from controller.errors import InputError
 from controller.pointing.model import PointingModel
-from controller.program.scheduler import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 
 from .ensemble import Executor, Job, task_noise, task_record
 from .fisher import predict

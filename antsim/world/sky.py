@@ -12,7 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controller.astro.ephemeris import Ephemeris, Weather, refraction_rad
+from controller.astro.ephemeris import Ephemeris
+from controller.astro.refraction import refraction_rad
+from controller.astro.site import Weather
 
 __all__ = ["Sky", "SourceConfig"]
 

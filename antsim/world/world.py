@@ -42,8 +42,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from controller.astro.ephemeris import Ephemeris, FixedSource
+from controller.astro.ephemeris import Ephemeris
 from controller.astro.frames import ALTAZ, MountFrame, altaz_to_hadec
+from controller.astro.sources import FixedSource
 from controller.protocol import (
     AntennaError,
     Integration,

@@ -20,7 +20,6 @@ import numpy as np
 from controller.units import ARCSEC_PER_RAD, RAD_PER_ARCSEC, to_value
 
 from .data import PointingData
-from .robust import fit_terms
 from .terms import Term, combine_arrays, combine_scalar, evaluate_basis, get_term
 
 __all__ = ["NAMED_MODELS", "PointingModel", "named_model_terms"]
@@ -228,5 +227,9 @@ class PointingModel:
             xel_arcsec=np.atleast_1d(to_value(d_xel, "arcsec", "d_xel")),
             el_arcsec=np.atleast_1d(to_value(d_el, "arcsec", "d_el")),
         )
+        # the fitter brings scipy (0.3 s): imported when a model is first fitted, so that
+        # importing a model (every controller and simulator module does) stays cheap
+        from .robust import fit_terms
+
         start = PointingModel(list(self.names), name=options.pop("name", "custom"))
         return fit_terms(data, start, **options)

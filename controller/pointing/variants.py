@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controller.program.scheduler import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
+from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 
 from .data import PointingData
 from .fitting import fit_model

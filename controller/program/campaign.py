@@ -29,8 +29,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from controller.astro.ephemeris import Ephemeris, FixedSource, Site, Weather
+from controller.astro.ephemeris import Ephemeris
 from controller.astro.frames import MountFrame
+from controller.astro.site import Site, Weather
+from controller.astro.sources import FixedSource
 from controller.protocol import Antenna, AntennaError
 from controller.scans.reduction import Flag
 from controller.scans.scan import AXES, RawScan, ReducedScan, cross_scan, reduce_scan

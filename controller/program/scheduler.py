@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from controller.astro.ephemeris import Ephemeris
+from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 
 from .config import SchedulerConfig
 
@@ -36,10 +37,6 @@ __all__ = [
     "never_rises",
     "never_visible",
 ]
-
-#: Sun elevations that separate day and night (deg): civil/nautical twilight in between
-DAY_SUN_MIN_DEG = 0.0
-NIGHT_SUN_MAX_DEG = -12.0
 
 
 @dataclass(frozen=True)

@@ -23,8 +23,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controller.astro.ephemeris import Ephemeris, Weather, refraction_rad
+from controller.astro.ephemeris import Ephemeris
 from controller.astro.frames import MountFrame
+from controller.astro.refraction import refraction_rad
+from controller.astro.site import Weather
 from controller.pointing.model import PointingModel
 from controller.units import DEG_PER_RAD, RAD_PER_ARCMIN
 
