@@ -27,14 +27,11 @@ from controller.pointing.terms import TermError, get_term
 from controller.program.config import (
     CatalogSource,
     ControllerConfig,
-    GainCurveConfig,
     OpticalConfig,
-    ScanConfig,
     SchedulerConfig,
     SearchConfig,
-    SkyConfig,
-    TippingConfig,
 )
+from controller.scans.config import GainCurveConfig, ScanConfig, SkyConfig, TippingConfig
 from controller.scans.gaincurve import HARMONIC_NAMES
 
 from .tomlcheck import Table, load_toml

@@ -18,8 +18,8 @@ from controller.interferometry import (
     axis_offset_delay_s,
     axis_offset_path_m,
 )
+from controller.pointing.bima import BIMA_TERMS, tilt_collimation_equivalents
 from controller.pointing.model import NAMED_MODELS, PointingModel
-from controller.program.optical import BIMA_TERMS, tilt_collimation_equivalents
 from controller.units import ARCSEC_PER_RAD
 
 REPO = Path(__file__).resolve().parents[1]

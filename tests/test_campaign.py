@@ -18,8 +18,8 @@ from antsim.run.runner import run_campaign, simulate
 from antsim.scenario import load_scenario
 from antsim.world.atmosphere import AtmosphereConfig
 from controller.pointing.model import PointingModel
-from controller.program.config import SkyConfig
 from controller.program.recordings import COLUMN_NAMES, read_pointing_data, read_recordings
+from controller.scans.config import SkyConfig
 
 ROOT = Path(__file__).resolve().parents[1]
 GHIGO = ROOT / "scenarios" / "ghigo1990.toml"

@@ -18,10 +18,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from antsim.world.effects.optics import ExactTiltCollimation
+from controller.pointing.bima import BIMA_TERMS
 from controller.pointing.data import PointingData
 from controller.pointing.fitting import fit_model
 from controller.pointing.result import FitResult
-from controller.program.optical import BIMA_TERMS
 from controller.units import ARCSEC_PER_RAD
 
 __all__ = ["StudyResult", "exact_errors_arcsec", "memo23_study"]

@@ -156,7 +156,7 @@ class ControlProgram:
                 self._next_tipping_s = now + self.config.tipping.interval_s
                 tip = yield env.process(tipping_scan(env, self.antenna, self.config.tipping,
                                                      self.frame, self.observer, self.targets,
-                                                     self.config.scheduler))
+                                                     self.config.scheduler.hour_angle_limit_deg))
                 if tip is not None:
                     self.tippings.append(tip)
                 continue

@@ -268,7 +268,7 @@ def calibrate(rows, config, tippings: Sequence = ()) -> Calibration | None:
     if gc is None:
         if config.method != "five_point" or not all(s in names for s in STRONG_SOURCES):
             return None
-        from controller.program.config import GainCurveConfig
+        from .config import GainCurveConfig
 
         gc = GainCurveConfig(sources=STRONG_SOURCES)
     sel = ((cols["polarization"].astype(str) == "AVG") & cols["good"].astype(bool)

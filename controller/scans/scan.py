@@ -13,9 +13,9 @@ from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
-from controller.program.config import ScanConfig
 from controller.protocol import Antenna, Integration
 
+from .config import ScanConfig
 from .reduction import AxisReduction, reduce_clark, reduce_lsq
 
 __all__ = ["AXES", "RawScan", "ReducedScan", "channel_average", "cross_scan", "reduce_powers",

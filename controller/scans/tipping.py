@@ -28,8 +28,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from controller.astro.frames import MountFrame
-from controller.program.config import SchedulerConfig, TippingConfig
 from controller.protocol import Antenna, AntennaError
+
+from .config import TippingConfig
 
 __all__ = ["FixedTrajectory", "OpacityFit", "Tipping", "airmass", "fit_opacity",
            "opacity_from_scans", "tipping_scan"]
@@ -141,7 +142,7 @@ class FixedTrajectory:
 
 
 def _clear_azimuth(config: TippingConfig, frame: MountFrame, observer, t_s: float,
-                   sched: SchedulerConfig) -> float | None:
+                   hour_angle_limit_deg: float | None) -> float | None:
     """The first azimuth (preferred, then +-30 deg steps) whose tipping positions are all
     CLEAR_DEG from every catalogue source and inside an equatorial mount's hour angles."""
     eph = observer.ephemeris
@@ -156,20 +157,21 @@ def _clear_azimuth(config: TippingConfig, frame: MountFrame, observer, t_s: floa
                        * np.cos(src_el)[None, :] * np.cos(az - src_az)[None, :])
             if np.any(cos_sep > math.cos(math.radians(CLEAR_DEG))):
                 continue
-        if not frame.is_altaz and sched.hour_angle_limit_deg is not None:
+        if not frame.is_altaz and hour_angle_limit_deg is not None:
             ha, _ = frame.from_altaz(np.full(el.shape, az), el)
-            if np.any(np.abs(np.degrees(ha)) > sched.hour_angle_limit_deg):
+            if np.any(np.abs(np.degrees(ha)) > hour_angle_limit_deg):
                 continue
         return math.degrees(az)
     return None
 
 
 def tipping_scan(env, antenna: Antenna, config: TippingConfig, frame: MountFrame, observer,
-                 targets: Sequence, sched: SchedulerConfig):
+                 targets: Sequence, hour_angle_limit_deg: float | None):
     """simpy process: total power on blank sky at each of ``config.elevations_deg`` (in that
-    order) at one azimuth; returns a fitted :class:`Tipping`, or None if no clear azimuth."""
+    order) at one azimuth; returns a fitted :class:`Tipping`, or None if no clear azimuth.
+    ``hour_angle_limit_deg``: an equatorial mount's hour-angle limit (the scheduler's)."""
     t0 = antenna.clock_s()
-    az_deg = _clear_azimuth(config, frame, observer, t0, sched)
+    az_deg = _clear_azimuth(config, frame, observer, t0, hour_angle_limit_deg)
     if az_deg is None:
         return None
     tip = Tipping(t_s=t0, az_deg=az_deg)

@@ -121,7 +121,7 @@ class ExactTiltCollimation(Effect):
         """Small-angle equivalents (arcsec, TPOINT's sign) in TPOINT's terms (AN, AW, CA) and
         in the BIMA memo's separate azimuth and elevation tilt terms (HSSASE, HECA, HSCASE,
         HESA): what a linear fit of either model should recover."""
-        from controller.program.optical import tilt_collimation_equivalents
+        from controller.pointing.bima import tilt_collimation_equivalents
 
         tilt_arcsec = self.p["tilt_arcmin"] * 60.0
         phi = math.radians(self.p["tilt_az_deg"])
