@@ -30,8 +30,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 # Imported after the path set-up so that the script runs from a source checkout.
-from antsim.studies.memo23 import memo23_study
-from controller.interferometry import axis_offset_delay_s
+from antsim.studies.memo23 import axis_offset_delay_s, memo23_study
 
 
 def main(argv: list[str] | None = None) -> int:

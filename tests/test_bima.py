@@ -12,11 +12,12 @@ import numpy as np
 import pytest
 
 from antsim.cli import main as cli
-from antsim.studies.memo23 import exact_errors_arcsec, memo23_study
-from controller.interferometry import (
+from antsim.studies.memo23 import (
     SPEED_OF_LIGHT_M_S,
     axis_offset_delay_s,
     axis_offset_path_m,
+    exact_errors_arcsec,
+    memo23_study,
 )
 from controller.pointing.bima import BIMA_TERMS, tilt_collimation_equivalents
 from controller.pointing.model import NAMED_MODELS, PointingModel

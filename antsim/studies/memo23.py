@@ -8,6 +8,15 @@ and elevation 90 deg (with the tilt towards azimuth 90: assumption, the memo's d
 not available), and shrink to about 1" rms with a 1' tilt or 5' of collimation.
 :func:`memo23_study` repeats it on a grid of positions (noise-free, plain least squares);
 ``benchmarks/bima_study.py`` prints the memo's quantities.
+
+The memo also gives the delay of an antenna whose axes do not intersect
+(:func:`axis_offset_delay_s`). When an alt-az antenna's elevation axis is displaced horizontally by
+``D`` from its azimuth axis (towards the direction the antenna points), the point that stays fixed
+as the antenna turns (on the azimuth axis) is not the point that defines the antenna's position in
+the array. The elevation axis lies ``D`` from the azimuth axis along the horizontal direction of
+the source, so a wavefront from elevation E reaches it earlier by the path ``D cos(E)``: an
+extra delay term ``D cos(E) / c`` that depends on elevation alone (Wright 1992 writes it as
+D cos(El)), to be removed from the array's geometric delay model.
 """
 
 from __future__ import annotations
@@ -24,7 +33,8 @@ from controller.pointing.fitting import fit_model
 from controller.pointing.result import FitResult
 from controller.units import ARCSEC_PER_RAD
 
-__all__ = ["StudyResult", "exact_errors_arcsec", "memo23_study"]
+__all__ = ["SPEED_OF_LIGHT_M_S", "StudyResult", "axis_offset_delay_s",
+           "axis_offset_path_m", "exact_errors_arcsec", "memo23_study"]
 
 
 def exact_errors_arcsec(tilt_arcmin: float, collimation_arcmin: float, tilt_az_deg: float,
@@ -91,3 +101,21 @@ def memo23_study(tilt_arcmin: float = 6.0, collimation_arcmin: float = 9.0,
     data = PointingData(np.radians(az_g), np.radians(el_g), xel, d_el)
     fit = fit_model(data, BIMA_TERMS, robust=False, name="bima14")
     return StudyResult(tilt_arcmin, collimation_arcmin, tilt_az_deg, az_g, el_g, fit)
+
+
+# ---------------------------------------------------------------------------------------------
+# the delay of non-intersecting axes
+# ---------------------------------------------------------------------------------------------
+SPEED_OF_LIGHT_M_S = 299792458.0
+
+
+def axis_offset_path_m(offset_m, el_rad) -> np.ndarray:
+    """Path (m) by which the wavefront reaches the elevation axis before the azimuth axis,
+    ``D cos(E)``, for axis offset ``offset_m`` (m, positive: the elevation axis lies towards
+    the pointing direction) at elevation(s) ``el_rad``."""
+    return np.asarray(offset_m, dtype=float) * np.cos(np.asarray(el_rad, dtype=float))
+
+
+def axis_offset_delay_s(offset_m, el_rad) -> np.ndarray:
+    """The delay term ``D cos(E) / c`` (s) of :func:`axis_offset_path_m`."""
+    return axis_offset_path_m(offset_m, el_rad) / SPEED_OF_LIGHT_M_S
