@@ -500,39 +500,70 @@ def _lsq_block(
     sigma_beam: float,
     threshold: float,
 ) -> tuple[np.ndarray, ...]:
-    """LSQ reduction of a flat block of finite scans (scans, 5) -> per-scan output arrays."""
+    """LSQ reduction of a flat block of finite scans (scans, 5) -> per-scan output arrays.
+
+    Steps: the baseline projected out of the data; a start where the profiled fit is best,
+    on a grid over the pattern or at Clark's value; safeguarded Newton to the maximum; the
+    linear parameters and the offset's formal error there; the width check; the flags.
+    """
     offsets = OFFSETS_N * step
     weight = 1.0 / std**2
     basis = _orthonormal_basis(weight, _baseline_columns(model, times, offsets, power.shape))
-    # Data with the baseline projected out: with r orthogonal to the baseline, <r, g> is the
-    # numerator of the profiled amplitude for any centre.
+    profile = _Profile(weight, _outside(power, weight, basis), basis, offsets, sigma_beam)
+    half_range = _LSQ_GRID_STEPS * step
+    start, phi_start, spacing = _grid_start(profile, half_range)
+    start, phi_start = _clark_start(profile, power, std, step, half_range, start, phi_start)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        centre, converged, downhill = _newton_maximum(profile, start, phi_start, spacing,
+                                                      half_range)
+        amplitude, sigma_offset, baseline_curve, den = _at_maximum(profile, power, centre)
+    width, width_bad = _end_point_width(power, std, times, step, sigma_beam)
+    snr = amplitude / _noise_k(std)
+    positive = amplitude > 0.0
+    failed = ~(converged | downhill) | (positive & ~np.isfinite(sigma_offset)) | ~(den > 0.0)
+
+    flags = np.zeros(centre.shape, dtype=np.int64)
+    flags |= np.where(
+        positive & (np.abs(centre) > OUTSIDE_PATTERN_STEPS * step), int(Flag.OUTSIDE_PATTERN), 0
+    )
+    flags |= np.where(~positive, int(Flag.AMPLITUDE_NONPOSITIVE), 0)
+    flags |= np.where(snr < threshold, int(Flag.LOW_SNR), 0)
+    flags |= np.where(positive & width_bad, int(Flag.WIDTH_INCONSISTENT), 0)
+    flags |= np.where(failed, int(Flag.FIT_FAILED), 0)
+    offset = np.where(positive, centre, np.nan)
+    sigma_offset = np.where(positive, sigma_offset, np.nan)
+    width = np.where(positive, width, np.nan)
+    return offset, amplitude, snr, sigma_offset, width, baseline_curve[..., _I_0], flags
+
+
+def _outside(power: np.ndarray, weight: np.ndarray, basis: list[np.ndarray]) -> np.ndarray:
+    """The data with the baseline projected out: with r orthogonal to the baseline,
+    <r, g> is the numerator of the profiled amplitude for any centre."""
     residual = power.copy()
     for e in basis:
         residual = residual - _wdot(weight, power, e)[..., None] * e
+    return residual
 
-    # Coarse grid over the pattern: phi(a) = <r, g_a> / ||g_a outside baseline|| is the
-    # signed square root of the chi^2 reduction; its maximum is the positive-amplitude fit.
-    spacing = sigma_beam / _LSQ_GRID_PER_SIGMA
-    half_range = _LSQ_GRID_STEPS * step
-    n_nodes = round(2.0 * half_range / spacing) + 1
-    grid = np.linspace(-half_range, half_range, n_nodes)
-    spacing = grid[1] - grid[0]
-    g_grid = np.exp(-((offsets[None, :] - grid[:, None]) ** 2) / (2.0 * sigma_beam**2))
-    numerator = (weight * residual) @ g_grid.T
-    denominator = weight @ (g_grid**2).T
-    for e in basis:
-        denominator = denominator - ((weight * e) @ g_grid.T) ** 2
-    phi_grid = numerator / np.sqrt(denominator)
-    best = np.argmax(phi_grid, axis=-1)
-    start = grid[best]
-    phi_start = np.take_along_axis(phi_grid, best[:, None], axis=-1)[:, 0]
 
-    def profile(
-        centre: np.ndarray, rows: slice | np.ndarray = slice(None)
+class _Profile:
+    """The profiled fit of a block of scans as a function of the centre a: phi(a) = <r, g_a> /
+    ||g_a outside the baseline||, the signed square root of the chi^2 reduction (its maximum
+    is the positive-amplitude fit), with r the data outside the baseline."""
+
+    def __init__(self, weight: np.ndarray, residual: np.ndarray, basis: list[np.ndarray],
+                 offsets: np.ndarray, sigma_beam: float):
+        self.weight = weight
+        self.residual = residual
+        self.basis = basis
+        self.offsets = offsets
+        self.sigma_beam = sigma_beam
+
+    def __call__(
+        self, centre: np.ndarray, rows: slice | np.ndarray = slice(None)
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """phi and its first two derivatives in the centre a, for the scans ``rows``."""
-        w, r, es = weight[rows], residual[rows], [e[rows] for e in basis]
-        g, g1, g2 = _gaussian_and_derivatives(offsets, centre, sigma_beam)
+        w, r, es = self.weight[rows], self.residual[rows], [e[rows] for e in self.basis]
+        g, g1, g2 = _gaussian_and_derivatives(self.offsets, centre, self.sigma_beam)
         num, num1, num2 = (_wdot(w, r, v) for v in (g, g1, g2))
         gg, gg1, g1g1, gg2 = (_wdot(w, g, g), _wdot(w, g, g1), _wdot(w, g1, g1), _wdot(w, g, g2))
         for e in es:
@@ -550,98 +581,118 @@ def _lsq_block(
         )
         return phi, phi1, phi2
 
-    # Clark's value as a second starting point where it beats the best node (it can fall
-    # between nodes near a narrow maximum at high S/N).
-    clark_offset = _clark_core(power, std, step, sigma_beam)[0]
+
+def _grid_start(profile: _Profile, half_range: float
+                ) -> tuple[np.ndarray, np.ndarray, float]:
+    """The best node of a coarse grid over the pattern (s/8 apart): start, phi there, and
+    the grid's spacing."""
+    weight, offsets, sigma_beam = profile.weight, profile.offsets, profile.sigma_beam
+    spacing = sigma_beam / _LSQ_GRID_PER_SIGMA
+    n_nodes = round(2.0 * half_range / spacing) + 1
+    grid = np.linspace(-half_range, half_range, n_nodes)
+    spacing = grid[1] - grid[0]
+    g_grid = np.exp(-((offsets[None, :] - grid[:, None]) ** 2) / (2.0 * sigma_beam**2))
+    numerator = (weight * profile.residual) @ g_grid.T
+    denominator = weight @ (g_grid**2).T
+    for e in profile.basis:
+        denominator = denominator - ((weight * e) @ g_grid.T) ** 2
+    phi_grid = numerator / np.sqrt(denominator)
+    best = np.argmax(phi_grid, axis=-1)
+    phi_start = np.take_along_axis(phi_grid, best[:, None], axis=-1)[:, 0]
+    return grid[best], phi_start, spacing
+
+
+def _clark_start(profile: _Profile, power: np.ndarray, std: np.ndarray, step: float,
+                 half_range: float, start: np.ndarray, phi_start: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Clark's value as the start where it beats the best node (it can fall between nodes
+    near a narrow maximum at high S/N); the start and phi there."""
+    clark_offset = _clark_core(power, std, step, profile.sigma_beam)[0]
     usable = np.isfinite(clark_offset) & (np.abs(clark_offset) <= half_range)
     clark_start = np.where(usable, clark_offset, 0.0)
     phi_clark = np.where(usable, profile(clark_start)[0], -np.inf)
     use_clark = phi_clark > phi_start
-    start = np.where(use_clark, clark_start, start)
-    phi_start = np.where(use_clark, phi_clark, phi_start)
+    return np.where(use_clark, clark_start, start), np.where(use_clark, phi_clark, phi_start)
 
-    # Safeguarded Newton (rtsafe) for phi' = 0 inside [start - h, start + h]: Newton where it
-    # stays inside the bracket on a concave phi, bisection otherwise; iterate only on the
-    # scans not yet converged (most take three steps).
+
+def _newton_maximum(profile: _Profile, start: np.ndarray, phi_start: np.ndarray,
+                    spacing: float, half_range: float
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Safeguarded Newton (rtsafe) for phi' = 0 inside [start - h, start + h]: Newton where it
+    stays inside the bracket on a concave phi, bisection otherwise; iterate only on the
+    scans not yet converged (most take three steps). The centre, whether each converged, and
+    where the start was kept because the refinement went downhill."""
     low = np.maximum(start - spacing, -half_range)
     high = np.minimum(start + spacing, half_range)
     centre = start.copy()
-    tolerance = _LSQ_TOLERANCE_SIGMA * sigma_beam
+    tolerance = _LSQ_TOLERANCE_SIGMA * profile.sigma_beam
     converged = np.zeros(centre.shape, dtype=bool)
     active = np.arange(centre.size)
-    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        for _ in range(_LSQ_MAX_ITERATIONS):
-            if active.size == 0:
-                break
-            here = centre[active]
-            _, slope, curvature = profile(here, active)
-            lo = np.where(slope > 0.0, here, low[active])
-            hi = np.where(slope <= 0.0, here, high[active])
-            step_newton = -slope / curvature
-            concave = curvature < 0.0
-            newton = here + step_newton
-            # A Newton step below tolerance ends the search even if roundoff puts it a hair
-            # outside the bracket (bisecting there would jump half a bracket away).
-            small = concave & (np.abs(step_newton) < tolerance)
-            inside = concave & (newton > lo) & (newton < hi)
-            updated = np.where(small | inside, newton, 0.5 * (lo + hi))
-            updated = np.where(slope == 0.0, here, updated)
-            done = small | (hi - lo < tolerance) | (slope == 0.0)
-            centre[active], low[active], high[active] = updated, lo, hi
-            converged[active[done]] = True
-            active = active[~done]
-        phi_end = profile(centre)[0]
-        # Keep the start if the refinement went clearly downhill (cannot happen on a
-        # unimodal bracket; a guard against a non-bracketing start). "Clearly": phi is flat
-        # at its maximum, so a start within 1e-7' of it can win by rounding alone.
-        downhill = ~(phi_end >= phi_start - 1e-10 * np.abs(phi_start))
-        centre = np.where(downhill, start, centre)
+    for _ in range(_LSQ_MAX_ITERATIONS):
+        if active.size == 0:
+            break
+        here = centre[active]
+        _, slope, curvature = profile(here, active)
+        lo = np.where(slope > 0.0, here, low[active])
+        hi = np.where(slope <= 0.0, here, high[active])
+        step_newton = -slope / curvature
+        concave = curvature < 0.0
+        newton = here + step_newton
+        # A Newton step below tolerance ends the search even if roundoff puts it a hair
+        # outside the bracket (bisecting there would jump half a bracket away).
+        small = concave & (np.abs(step_newton) < tolerance)
+        inside = concave & (newton > lo) & (newton < hi)
+        updated = np.where(small | inside, newton, 0.5 * (lo + hi))
+        updated = np.where(slope == 0.0, here, updated)
+        done = small | (hi - lo < tolerance) | (slope == 0.0)
+        centre[active], low[active], high[active] = updated, lo, hi
+        converged[active[done]] = True
+        active = active[~done]
+    phi_end = profile(centre)[0]
+    # Keep the start if the refinement went clearly downhill (cannot happen on a
+    # unimodal bracket; a guard against a non-bracketing start). "Clearly": phi is flat
+    # at its maximum, so a start within 1e-7' of it can win by rounding alone.
+    downhill = ~(phi_end >= phi_start - 1e-10 * np.abs(phi_start))
+    return np.where(downhill, start, centre), converged, downhill
 
-        g, g1, _ = _gaussian_and_derivatives(offsets, centre, sigma_beam)
-        projections = [_wdot(weight, g, e) for e in basis]
-        g_outside = g - sum(c[..., None] * e for c, e in zip(projections, basis, strict=True))
-        den = _wdot(weight, g_outside, g_outside)
-        amplitude = _wdot(weight, residual, g) / den
-        data_on_basis = [_wdot(weight, power, e) for e in basis]
-        baseline_curve = sum(
-            (d - amplitude * c)[..., None] * e
-            for d, c, e in zip(data_on_basis, projections, basis, strict=True)
-        )
-        information = amplitude**2 * _offset_information(weight, basis, g, g1)
-        sigma_offset = 1.0 / np.sqrt(information)
 
-    # Width diagnostic on a baseline that does not depend on the assumed width: the line
-    # through the two +-4D powers in time (level = their mean for a constant baseline), where
-    # the beam is 1.6e-8 of its peak. The fitted baseline would absorb part of a wider
-    # source's wings and pull the estimated width back towards the nominal one.
+def _at_maximum(profile: _Profile, power: np.ndarray, centre: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """At the fitted centre: the amplitude, the offset's formal error (all parameters free),
+    the fitted baseline at the five points, and ||g outside the baseline||^2."""
+    weight, basis = profile.weight, profile.basis
+    g, g1, _ = _gaussian_and_derivatives(profile.offsets, centre, profile.sigma_beam)
+    projections = [_wdot(weight, g, e) for e in basis]
+    g_outside = g - sum(c[..., None] * e for c, e in zip(projections, basis, strict=True))
+    den = _wdot(weight, g_outside, g_outside)
+    amplitude = _wdot(weight, profile.residual, g) / den
+    data_on_basis = [_wdot(weight, power, e) for e in basis]
+    baseline_curve = sum(
+        (d - amplitude * c)[..., None] * e
+        for d, c, e in zip(data_on_basis, projections, basis, strict=True)
+    )
+    information = amplitude**2 * _offset_information(weight, basis, g, g1)
+    return amplitude, 1.0 / np.sqrt(information), baseline_curve, den
+
+
+def _end_point_width(power: np.ndarray, std: np.ndarray, times: np.ndarray | None,
+                     step: float, sigma_beam: float) -> tuple[np.ndarray, np.ndarray]:
+    """Width diagnostic on a baseline that does not depend on the assumed width: the line
+    through the two +-4D powers in time (level = their mean for a constant baseline), where
+    the beam is 1.6e-8 of its peak. The fitted baseline would absorb part of a wider
+    source's wings and pull the estimated width back towards the nominal one."""
     if times is None:
         weight_hi = np.full(power.shape, 0.5)
     else:
         weight_hi = _end_point_weights(times)
     line = power[..., _I_M4, None] * (1.0 - weight_hi) + power[..., _I_P4, None] * weight_hi
-    width, width_bad = _width_check(
+    return _width_check(
         power - line,
         std,
         lambda u: _end_point_adjoint(u, weight_hi),
         step=step,
         sigma_beam=sigma_beam,
     )
-    snr = amplitude / _noise_k(std)
-    positive = amplitude > 0.0
-    failed = ~(converged | downhill) | (positive & ~np.isfinite(sigma_offset)) | ~(den > 0.0)
-
-    flags = np.zeros(centre.shape, dtype=np.int64)
-    flags |= np.where(
-        positive & (np.abs(centre) > OUTSIDE_PATTERN_STEPS * step), int(Flag.OUTSIDE_PATTERN), 0
-    )
-    flags |= np.where(~positive, int(Flag.AMPLITUDE_NONPOSITIVE), 0)
-    flags |= np.where(snr < threshold, int(Flag.LOW_SNR), 0)
-    flags |= np.where(positive & width_bad, int(Flag.WIDTH_INCONSISTENT), 0)
-    flags |= np.where(failed, int(Flag.FIT_FAILED), 0)
-    offset = np.where(positive, centre, np.nan)
-    sigma_offset = np.where(positive, sigma_offset, np.nan)
-    width = np.where(positive, width, np.nan)
-    return offset, amplitude, snr, sigma_offset, width, baseline_curve[..., _I_0], flags
 
 
 def reduce_lsq(
