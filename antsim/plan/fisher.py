@@ -163,12 +163,54 @@ def _ou_mean_cov(t1: np.ndarray, t2: np.ndarray, tau: float) -> np.ndarray:
 
 
 def noise_model(engine: MemberEngine, plan_seed: int, n_thermal: int = 256) -> NoiseModel:
-    """The per-scan offset noise of ``engine``'s variant (see the module docstring)."""
+    """The per-scan offset noise of ``engine``'s variant (see the module docstring), in
+    steps: the noise-free powers and their response to a pointing nudge; the statistics of
+    the receiver and of the tracking jitter per integration; the estimator's gradient at the
+    noise-free powers; the pairs of offsets close enough in time to correlate and their
+    covariance per component; the random slow (thermal) errors, drawn alone."""
     sh = engine.shared
-    sc = engine.scenario
-    channels = sh.channels
-    n_ch = len(channels)
-    # ---- noise-free powers and their response to a pointing nudge (members: 0, +-x, +-e)
+    stats = _integration_statistics(engine)
+    gradient, off, good, notes = _estimator_gradient(engine, stats)
+    scans = np.flatnonzero(good)
+    idx = sh.scan_int[scans]  # (n, 2, 5) integration indices
+    slope_avg = stats.slope.mean(axis=1)  # (integrations, 2) dP_AVG per arcsec
+    response = gradient[scans][..., None] * slope_avg[idx]  # (n, 2, 5, 2)
+    pairs, unit_scan, unit_axis = _unit_pairs(sh, scans, stats)
+    cov = _pair_covariances(sh, stats, pairs, unit_scan, unit_axis, idx, gradient[scans],
+                            response)
+    thermal = _thermal_draws(engine, plan_seed, n_thermal, response, idx)
+    quiet = off[scans, :, 0]
+    return NoiseModel(scans=scans, pairs=pairs, pair_cov=cov, thermal=thermal,
+                      response=response, gradient=gradient[scans], quiet_offsets=quiet,
+                      notes=notes)
+
+
+@dataclass
+class _Statistics:
+    """Per integration (and channel): the noise-free power ``p0`` (K) and its response to
+    the pointing ``slope`` (K/arcsec, xel and el); the receiver's gain fluctuation ``rms_g``
+    and time constant ``tau_g``, radiometer variance per sample ``rad_var``, samples
+    ``n_s``; the tracking jitter's rms ``jit_sd`` (arcsec, xel and el) and time constant
+    ``tau_j``; the gusts' (energy, duration, time grid, profile) or None; and the expected
+    sample std the estimator is given, ``exp_std``."""
+
+    p0: np.ndarray
+    slope: np.ndarray
+    rms_g: np.ndarray
+    tau_g: float
+    rad_var: np.ndarray
+    n_s: np.ndarray
+    jit_sd: np.ndarray
+    tau_j: float
+    gust: tuple | None
+    exp_std: np.ndarray
+
+
+def _integration_statistics(engine: MemberEngine) -> _Statistics:
+    """The noise-free powers, their response to a nudge, the receiver's and the jitter's
+    statistics per integration, and the sample std the estimator expects."""
+    sh = engine.shared
+    # noise-free powers and their response to a pointing nudge (members: 0, +-x, +-e)
     h = NUDGE_ARCSEC / 206264.80624709636
     nx = np.array([0.0, h, -h, 0.0, 0.0])
     ne = np.array([0.0, 0.0, 0.0, h, -h])
@@ -176,12 +218,32 @@ def noise_model(engine: MemberEngine, plan_seed: int, n_thermal: int = 256) -> N
     p0 = power[:, 0, :]  # (integrations, channels)
     slope = np.stack([(power[:, 1] - power[:, 2]), (power[:, 3] - power[:, 4])],
                      axis=-1) / (2 * NUDGE_ARCSEC)  # (integrations, channels, 2) K/arcsec
-    # ---- receiver and jitter statistics per integration
-    rec = sc.receiver
+    rec = engine.scenario.receiver
     rms_g = np.array([rec.gain_fluctuation if c.gain_fluctuation is None else c.gain_fluctuation
                       for c in rec.channels])
     tau_g = rec.gain_timescale_s
     rad_var = p0 ** 2 / (rec.bandwidth_mhz * 1e6 * rec.sample_interval_s)  # per sample
+    jit_sd, tau_j, gust = _jitter_statistics(engine)
+    # expected sample std per integration and channel (the estimator's std_k)
+    n_s = np.array([t.size for t in sh.t])
+    same_g = np.array([_ou_mean_cov(t[None, None], t[None, None], tau_g)[0, 0, 0]
+                       for t in sh.t])
+    same_j = np.array([_ou_mean_cov(t[None, None], t[None, None], tau_j)[0, 0, 0]
+                       for t in sh.t])
+    var_s = (p0 ** 2 * rms_g ** 2 + rad_var
+             + (slope ** 2 * jit_sd[:, None, :] ** 2).sum(axis=-1))
+    var_m = (p0 ** 2 * rms_g ** 2 * same_g[:, None] + rad_var / n_s[:, None]
+             + (slope ** 2 * jit_sd[:, None, :] ** 2).sum(axis=-1) * same_j[:, None])
+    exp_std = np.sqrt(np.clip(n_s[:, None] / np.maximum(n_s[:, None] - 1, 1)
+                              * (var_s - var_m), 1e-30, None))
+    return _Statistics(p0, slope, rms_g, tau_g, rad_var, n_s, jit_sd, tau_j, gust, exp_std)
+
+
+def _jitter_statistics(engine: MemberEngine) -> tuple[np.ndarray, float, tuple | None]:
+    """The tracking jitter's rms per integration (arcsec, xel and el; the effect's own
+    scaling with the wind), its time constant (s), and the gusts' expected energy (rate
+    times amplitude squared), duration, and profile on a time grid (None without gusts)."""
+    sh = engine.shared
     jit = [(i, spec) for kind, i, spec in engine._kinds if kind == "jitter"]
     n_int = sh.n_integrations
     jit_sd = np.zeros((n_int, 2))
@@ -215,20 +277,16 @@ def noise_model(engine: MemberEngine, plan_seed: int, n_thermal: int = 256) -> N
             tau_grid = np.linspace(-1.0, dur + 1.0, 2000)
             profile = probe.gusts_rad(tau_grid)[:, 0]
             gust = (rate * float(spec.params["gust_arcsec"]) ** 2, dur, tau_grid, profile)
-    # ---- expected sample std per integration and channel (the estimator's std_k)
-    n_s = np.array([t.size for t in sh.t])
-    same_g = np.array([_ou_mean_cov(t[None, None], t[None, None], tau_g)[0, 0, 0]
-                       for t in sh.t])
-    same_j = np.array([_ou_mean_cov(t[None, None], t[None, None], tau_j)[0, 0, 0]
-                       for t in sh.t])
-    var_s = (p0 ** 2 * rms_g ** 2 + rad_var
-             + (slope ** 2 * jit_sd[:, None, :] ** 2).sum(axis=-1))
-    var_m = (p0 ** 2 * rms_g ** 2 * same_g[:, None] + rad_var / n_s[:, None]
-             + (slope ** 2 * jit_sd[:, None, :] ** 2).sum(axis=-1) * same_j[:, None])
-    exp_std = np.sqrt(np.clip(n_s[:, None] / np.maximum(n_s[:, None] - 1, 1)
-                              * (var_s - var_m), 1e-30, None))
-    # ---- the estimator's gradient at the noise-free powers, with the expected std
-    p_scan, s_scan, times = engine.scan_powers(p0[:, None, :], exp_std[:, None, :])
+    return jit_sd, tau_j, gust
+
+
+def _estimator_gradient(engine: MemberEngine, stats: _Statistics
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
+    """The controller's estimator at the noise-free powers with the expected std, and its
+    gradient by finite differences (arcsec per K, (scans, axes, 5)); the offsets of every
+    trial (arcsec); which scans enter the design (unflagged at the predicted noise); notes."""
+    sh = engine.shared
+    p_scan, s_scan, times = engine.scan_powers(stats.p0[:, None, :], stats.exp_std[:, None, :])
     p_avg, s_avg, t_avg = p_scan[0, :, :, -1], s_scan[0, :, :, -1], times[0, :, :, -1]
     n_scans = p_avg.shape[0]
     steps = np.concatenate([np.zeros((1, 5)), POWER_STEP_K * np.eye(5),
@@ -240,21 +298,23 @@ def noise_model(engine: MemberEngine, plan_seed: int, n_thermal: int = 256) -> N
     gradient = (off[:, :, 1:6] - off[:, :, 6:11]) / (2 * POWER_STEP_K)  # arcsec per K
     good = (flags == 0).all(axis=1) & sh.columns["good"].astype(bool) \
         & np.isfinite(gradient).all(axis=(1, 2))
-    scans = np.flatnonzero(good)
     notes = []
     if (~good).sum():
         notes.append(f"{int((~good).sum())} of {n_scans} scans left out of the design (the "
                      "reduction flags them at the predicted noise, e.g. S/N < snr_min)")
-    idx = sh.scan_int[scans]  # (n, 2, 5) integration indices
-    slope_avg = slope.mean(axis=1)  # (integrations, 2) dP_AVG per arcsec
-    response = gradient[scans][..., None] * slope_avg[idx]  # (n, 2, 5, 2)
-    # ---- unit pairs within the correlation window
+    return gradient, off, good, notes
+
+
+def _unit_pairs(sh: SharedSchedule, scans: np.ndarray, stats: _Statistics
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The (unit, unit) pairs within the correlation window (a unit is one scan's offset on
+    one axis: the scans' xel units, then their el units), and each unit's scan and axis."""
     n = scans.size
     unit_t = np.concatenate([sh.scan_times[scans, 0].mean(axis=1),
                              sh.scan_times[scans, 1].mean(axis=1)])
     unit_scan = np.concatenate([np.arange(n), np.arange(n)])
     unit_axis = np.concatenate([np.zeros(n, int), np.ones(n, int)])
-    window = WINDOW_TAUS * max(tau_g, tau_j) + 300.0
+    window = WINDOW_TAUS * max(stats.tau_g, stats.tau_j) + 300.0
     order = np.argsort(unit_t, kind="stable")
     pairs = []
     for a_pos, u in enumerate(order):
@@ -262,10 +322,21 @@ def noise_model(engine: MemberEngine, plan_seed: int, n_thermal: int = 256) -> N
         for v in order[a_pos:hi]:
             pairs.append((u, v))
     pairs = np.array(pairs, dtype=np.int64).reshape(-1, 2)
+    return pairs, unit_scan, unit_axis
+
+
+def _pair_covariances(sh: SharedSchedule, stats: _Statistics, pairs: np.ndarray,
+                      unit_scan: np.ndarray, unit_axis: np.ndarray, idx: np.ndarray,
+                      grad_u: np.ndarray, response: np.ndarray) -> dict[str, np.ndarray]:
+    """The covariance of each pair's offsets from the receiver (gain OU per channel and
+    radiometer noise), the jitter's OU and the gusts' expected second moment (arcsec^2)."""
+    p0, rms_g, rad_var, n_s, jit_sd = stats.p0, stats.rms_g, stats.rad_var, stats.n_s, \
+        stats.jit_sd
+    n_ch = len(sh.channels)
+    n = grad_u.shape[0]
     cov = {c: np.zeros(len(pairs)) for c in ("receiver", "jitter", "gusts")}
     samples = np.stack([sh.t[k] for k in idx.reshape(-1)]).reshape(n, 2, 5, -1)
     chunk = 512
-    grad_u = gradient[scans]  # (n, 2, 5)
     for start in range(0, len(pairs), chunk):
         pp = pairs[start:start + chunk]
         su, au = unit_scan[pp[:, 0]], unit_axis[pp[:, 0]]
@@ -274,7 +345,7 @@ def noise_model(engine: MemberEngine, plan_seed: int, n_thermal: int = 256) -> N
         ku, kv = idx[su, au], idx[sv, av]  # (P, 5)
         gu, gv = grad_u[su, au], grad_u[sv, av]
         # receiver: gain OU (per channel) + radiometer (same integration only)
-        kg = _ou_mean_cov(tu, tv, tau_g)
+        kg = _ou_mean_cov(tu, tv, stats.tau_g)
         r = np.zeros_like(kg)
         for c in range(n_ch):
             r += (p0[ku, c][:, :, None] * p0[kv, c][:, None, :] * rms_g[c] ** 2 * kg)
@@ -283,26 +354,41 @@ def noise_model(engine: MemberEngine, plan_seed: int, n_thermal: int = 256) -> N
         r /= n_ch ** 2
         cov["receiver"][start:start + len(pp)] = np.einsum("pi,pij,pj->p", gu, r, gv)
         wu, wv = response[su, au], response[sv, av]  # (P, 5, 2)
-        kj = _ou_mean_cov(tu, tv, tau_j)
+        kj = _ou_mean_cov(tu, tv, stats.tau_j)
         for d in range(2):
             sd_u, sd_v = jit_sd[ku, d], jit_sd[kv, d]
             cov["jitter"][start:start + len(pp)] += np.einsum(
                 "pi,pij,pj->p", wu[..., d] * sd_u, kj, wv[..., d] * sd_v)
-        if gust is not None:
-            energy, dur, tau_grid, profile = gust
-            near = (np.minimum(tu.max(axis=(1, 2)), tv.max(axis=(1, 2)))
-                    - np.maximum(tu.min(axis=(1, 2)), tv.min(axis=(1, 2)))) > -dur
-            for q in np.flatnonzero(near):
-                grid = np.arange(max(tu[q].min(), tv[q].min()) - dur,
-                                 min(tu[q].max(), tv[q].max()) + GUST_STEP_S, GUST_STEP_S)
-                hu = np.interp(tu[q][..., None] - grid, tau_grid, profile, left=0.0,
-                               right=0.0).mean(axis=1)  # (5, G)
-                hv = np.interp(tv[q][..., None] - grid, tau_grid, profile, left=0.0,
-                               right=0.0).mean(axis=1)
-                ov = hu @ hv.T * (GUST_STEP_S * energy)
-                for d in range(2):
-                    cov["gusts"][start + q] += wu[q, :, d] @ ov @ wv[q, :, d]
-    # ---- thermal: random slow errors, drawn alone
+        if stats.gust is not None:
+            _gust_covariances(cov["gusts"], start, stats.gust, tu, tv, wu, wv)
+    return cov
+
+
+def _gust_covariances(out: np.ndarray, start: int, gust: tuple, tu: np.ndarray,
+                      tv: np.ndarray, wu: np.ndarray, wv: np.ndarray) -> None:
+    """Add the gusts' expected second moment of a chunk of pairs (starting at ``start`` in
+    ``out``): the overlap of the gust profile with the two offsets' integrations, for gusts
+    starting on a grid of GUST_STEP_S, times the expected energy."""
+    energy, dur, tau_grid, profile = gust
+    near = (np.minimum(tu.max(axis=(1, 2)), tv.max(axis=(1, 2)))
+            - np.maximum(tu.min(axis=(1, 2)), tv.min(axis=(1, 2)))) > -dur
+    for q in np.flatnonzero(near):
+        grid = np.arange(max(tu[q].min(), tv[q].min()) - dur,
+                         min(tu[q].max(), tv[q].max()) + GUST_STEP_S, GUST_STEP_S)
+        hu = np.interp(tu[q][..., None] - grid, tau_grid, profile, left=0.0,
+                       right=0.0).mean(axis=1)  # (5, G)
+        hv = np.interp(tv[q][..., None] - grid, tau_grid, profile, left=0.0,
+                       right=0.0).mean(axis=1)
+        ov = hu @ hv.T * (GUST_STEP_S * energy)
+        for d in range(2):
+            out[start + q] += wu[q, :, d] @ ov @ wv[q, :, d]
+
+
+def _thermal_draws(engine: MemberEngine, plan_seed: int, n_thermal: int,
+                   response: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """The offsets (draws, units) of ``n_thermal`` independent draws of the random slow
+    errors alone (about their mean), through each scan's response; empty without them."""
+    n = idx.shape[0]
     random_slow = [1 for kind, _, _ in engine._kinds if kind == "member"]
     thermal = np.zeros((0, 2 * n))
     if random_slow and n_thermal > 1:
@@ -312,10 +398,7 @@ def noise_model(engine: MemberEngine, plan_seed: int, n_thermal: int = 256) -> N
         errs = errs - errs.mean(axis=0)
         e_units = np.einsum("uaid,ruaid->rua", response, errs[:, idx, :])  # (draws, n, 2)
         thermal = np.concatenate([e_units[:, :, 0], e_units[:, :, 1]], axis=1)
-    quiet = off[scans, :, 0]
-    return NoiseModel(scans=scans, pairs=pairs, pair_cov=cov, thermal=thermal,
-                      response=response, gradient=gradient[scans], quiet_offsets=quiet,
-                      notes=notes)
+    return thermal
 
 
 def engine_reduce(engine: MemberEngine, power, std, times):
