@@ -256,11 +256,8 @@ def _finding_pool(base: list[str]) -> dict[str, tuple[str, ...]]:
     to 9 cycles per turn, and the two effects DESIGN's signature table gives two orders
     (azimuth encoder runout 1A and 2A, azimuth track unevenness 2A and 3A) as one finding
     each: label -> terms."""
-    from antsim.diagnose.candidates import (
-        CANDIDATES,
-        HarmonicFamilyCandidate,
-        TermsCandidate,
-    )
+    from antsim.diagnose.candidates.library import CANDIDATES
+    from antsim.diagnose.candidates.terms import HarmonicFamilyCandidate, TermsCandidate
 
     pool: dict[str, tuple[str, ...]] = {}
     seen: set[tuple[str, ...]] = set()

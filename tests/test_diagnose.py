@@ -16,7 +16,8 @@ import pytest
 
 from antsim.cli import main as cli
 from antsim.diagnose import diagnose, load_observations
-from antsim.diagnose.candidates import CANDIDATES, candidate, source_rates_arcsec_s
+from antsim.diagnose.candidates.base import source_rates_arcsec_s
+from antsim.diagnose.candidates.library import CANDIDATES, candidate
 from antsim.diagnose.data import Observations
 from antsim.diagnose.problem import term_columns
 from antsim.world.effects import EFFECTS

@@ -56,7 +56,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def _library_text() -> str:
-    from antsim.diagnose.candidates import CANDIDATES
+    from antsim.diagnose.candidates.library import CANDIDATES
 
     lines = []
     for c in CANDIDATES:

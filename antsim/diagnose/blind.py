@@ -36,7 +36,9 @@ import numpy as np
 
 from . import pvalues
 from .baseline import SimulatedBaseline
-from .candidates import CANDIDATES, DISTINGUISH_R, Candidate, TermsCandidate
+from .candidates.base import DISTINGUISH_R, Candidate
+from .candidates.library import CANDIDATES
+from .candidates.terms import TermsCandidate
 from .core import Diagnosis, diagnose
 from .data import from_rows
 from .select import ALPHA

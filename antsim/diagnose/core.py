@@ -18,7 +18,7 @@ from .baseline import (
     resolve_baseline,
     white_prediction,
 )
-from .candidates import TermsCandidate
+from .candidates.terms import TermsCandidate
 from .data import Observations
 from .locate import Location, locate, where_signal
 from .problem import Prediction, Problem, _lstsq, folds_for

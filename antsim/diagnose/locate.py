@@ -55,12 +55,12 @@ class Location:
 
 
 def _hours_since_sunset(obs: Observations) -> np.ndarray | None:
-    from .candidates import _grid, sun_el_grid_deg
+    from .candidates.base import sun_el_grid_deg, time_grid
 
     if not obs.has_time or (obs.sun_el_deg is None and "epoch_utc" not in obs.meta):
         return None
     try:
-        t = _grid(obs)
+        t = time_grid(obs)
         sun = sun_el_grid_deg(obs, t)
     except ValueError:
         return None

@@ -27,7 +27,7 @@ import numpy as np
 from controller.pointing.data import PointingData
 from controller.pointing.fitting import fit_model
 
-from .candidates import TermsCandidate
+from .candidates.terms import TermsCandidate
 from .core import Diagnosis, Finding, _plain
 from .problem import Problem, _lstsq
 

@@ -32,7 +32,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import pvalues
-from .candidates import CANDIDATES, DISTINGUISH_R, Candidate, TestResult
+from .candidates.base import DISTINGUISH_R, Candidate, TestResult
+from .candidates.library import CANDIDATES
 from .problem import Problem, folds_for
 
 __all__ = ["ALPHA", "Selection", "Step", "select", "sigma_from_p"]

@@ -1,0 +1,351 @@
+"""What every candidate is: the base class and its test against the current model, and the
+helpers the families share (time grid, Sun elevations, p-values with the look-elsewhere
+correction). The package docstring says what a candidate knows."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+
+from controller.units import ARCSEC_PER_RAD
+
+from .. import pvalues
+from ..data import Observations
+from ..problem import Problem, _lstsq
+
+__all__ = ["DISTINGUISH_R", "Candidate", "TestResult", "obs_key", "p_value", "periodic_interp",
+           "source_rates_arcsec_s", "stacked", "sun_el_grid_deg", "time_grid", "with_trials"]
+
+SIDEREAL_RATE_RAD_S = 7.2921158553e-5
+GRID_STEP_S = 60.0
+SPINUP_S = 86400.0
+#: a component this close to the span of the model (1 - R^2) is absorbed by it
+ABSORBED_1MR2 = 1e-6
+#: TPOINT's level: a candidate this correlated with the model "cannot reliably be
+#: distinguished" from it
+DISTINGUISH_R = 0.95
+
+
+@dataclass
+class TestResult:
+    """The outcome of testing one candidate against the current model."""
+
+    candidate: Candidate
+    delta_chi2: float
+    dof: int
+    trials: float
+    p: float  # with the candidate's own look-elsewhere correction
+    theta: Any = None
+    columns: np.ndarray | None = None  # raw (2n, q) columns at the best theta
+    comp_names: tuple[str, ...] = ()
+    coef: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    cov: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    params: dict[str, Any] = field(default_factory=dict)
+    amplitude: float = float("nan")
+    amplitude_sigma: float = float("nan")
+    absorbed: tuple[str, ...] = ()
+    r_model: float = 0.0
+    partners: tuple[str, ...] = ()
+    refit: Callable[[np.ndarray], np.ndarray] | None = None
+    note: str = ""
+    mask: np.ndarray | None = None  # the scans this test kept (outliers of model+candidate out)
+    chi2_now: float = float("nan")  # chi^2 of the current model on those scans
+
+    @property
+    def name(self) -> str:
+        return self.candidate.name
+
+    @property
+    def testable(self) -> bool:
+        return self.dof > 0 and np.isfinite(self.delta_chi2)
+
+
+# ---------------------------------------------------------------------------------------------
+# Helpers
+# ---------------------------------------------------------------------------------------------
+def stacked(xel: np.ndarray | None, el: np.ndarray | None, n: int) -> np.ndarray:
+    x = np.zeros(n) if xel is None else np.asarray(xel, float)
+    e = np.zeros(n) if el is None else np.asarray(el, float)
+    return np.concatenate([x, e])
+
+
+def source_rates_arcsec_s(obs: Observations) -> tuple[np.ndarray, np.ndarray]:
+    """Apparent motion of a fixed source at (A, E): (dA/dt cos E, dE/dt), arcsec per s."""
+    phi = obs.latitude_rad
+    a, e = obs.az_rad, obs.el_rad
+    d_e = SIDEREAL_RATE_RAD_S * math.cos(phi) * np.sin(a)
+    d_a = SIDEREAL_RATE_RAD_S * (math.sin(phi) - math.cos(phi) * np.cos(a) * np.tan(e))
+    return d_a * np.cos(e) * ARCSEC_PER_RAD, d_e * ARCSEC_PER_RAD
+
+
+def obs_key(obs: Observations) -> tuple:
+    """A content key for per-observation caches (never ``id``, which Python reuses)."""
+    import hashlib
+
+    h = hashlib.blake2b(digest_size=12)
+    for arr in (obs.t_s, obs.air_temp_c, obs.sun_el_deg, obs.good):
+        if arr is not None:
+            h.update(np.ascontiguousarray(arr).tobytes())
+    h.update(str(sorted(obs.meta.items())).encode())
+    return (obs.n, h.hexdigest(), obs.air_daily_c is not None)
+
+
+def time_grid(obs: Observations) -> np.ndarray:
+    end = float(np.nanmax(obs.t_s)) if obs.n else 0.0
+    return np.arange(-SPINUP_S, end + 2 * GRID_STEP_S, GRID_STEP_S)
+
+
+def periodic_interp(t_grid: np.ndarray, t: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Interpolate samples (t, v) onto the grid; before the first sample use the values a
+    day later (the daily cycle repeats), else hold the first value."""
+    order = np.argsort(t)
+    t, v = t[order], v[order]
+    out = np.interp(t_grid, t, v)
+    early = t_grid < t[0]
+    shifted = t_grid[early] + 86400.0
+    inside = shifted <= t[-1]
+    vals = np.interp(shifted, t, v)
+    out[early] = np.where(inside, vals, v[0])
+    return out
+
+
+_SUN_CACHE: dict[tuple, np.ndarray] = {}
+
+
+def sun_el_grid_deg(obs: Observations, t_grid: np.ndarray) -> np.ndarray:
+    """Sun elevation (deg) on the grid: from the site and epoch when the recordings name them
+    (ephemeris), else from the recorded Sun elevations (a day repeats)."""
+    meta = obs.meta
+    key = (meta.get("epoch_utc"), meta.get("latitude_deg"), meta.get("longitude_deg"),
+           float(t_grid[0]), float(t_grid[-1]), t_grid.size)
+    if key in _SUN_CACHE:
+        return _SUN_CACHE[key]
+    if len(_SUN_CACHE) > 64:
+        _SUN_CACHE.clear()
+    out = None
+    if all(k in meta for k in ("epoch_utc", "latitude_deg", "longitude_deg")):
+        try:
+            from astropy.time import Time, TimeDelta
+
+            from controller.astro.ephemeris import Ephemeris
+            from controller.astro.site import Site
+
+            site = Site(float(meta["latitude_deg"]), float(meta["longitude_deg"]),
+                        float(meta.get("height_m", 0.0)))
+            epoch = Time(str(meta["epoch_utc"]), scale="utc") + TimeDelta(t_grid[0],
+                                                                           format="sec")
+            eph = Ephemeris(site, epoch, float(t_grid[-1] - t_grid[0]) + 60.0, ())
+            out = np.degrees(eph.sun_altaz_rad(t_grid - t_grid[0])[1])
+        except Exception:  # no usable ephemeris: fall back on the recorded column
+            out = None
+    if out is None:
+        if obs.sun_el_deg is None:
+            raise ValueError("no Sun elevations")
+        ok = np.isfinite(obs.sun_el_deg)
+        out = periodic_interp(t_grid, obs.t_s[ok], obs.sun_el_deg[ok])
+    _SUN_CACHE[key] = out
+    return out
+
+
+def _nyholt_trials(cols: np.ndarray) -> float:
+    """Effective number of independent tests among correlated 1-column tests (Nyholt 2004)."""
+    m = cols.shape[1]
+    if m <= 1:
+        return 1.0
+    norms = np.linalg.norm(cols, axis=0)
+    ok = norms > 0
+    c = cols[:, ok] / norms[ok]
+    lam = np.linalg.eigvalsh(c.T @ c)
+    m = int(ok.sum())
+    return float(max(1.0, 1.0 + (m - 1) * (1.0 - np.var(lam, ddof=1) / m))) if m > 1 else 1.0
+
+
+def with_trials(p: float, trials: float) -> float:
+    """Probability that the best of ``trials`` independent tests reaches p (Sidak)."""
+    if trials <= 1.0:
+        return float(p)
+    if p < 1e-12:
+        return float(min(1.0, trials * p))
+    return float(min(1.0, -np.expm1(trials * np.log1p(-min(p, 1.0 - 1e-16)))))
+
+
+def p_value(problem: Problem, dchi2: float, q: int, current_chi2: float | None = None,
+            used: np.ndarray | None = None) -> float:
+    if q <= 0:
+        return 1.0
+    if problem.pred.known_noise:
+        return float(pvalues.chi2_sf(dchi2, q))
+    n_used = int((problem.used if used is None else used).sum())
+    m = problem.current_columns().shape[1]
+    dof = 2 * n_used - m - q
+    if dof <= 0:
+        return 1.0
+    if current_chi2 is None:
+        current_chi2 = problem.fit_current().chi2
+    rest = max(current_chi2 - dchi2, 1e-12)
+    return float(pvalues.f_sf((dchi2 / q) / (rest / dof), q, dof))
+
+
+# ---------------------------------------------------------------------------------------------
+# The base class
+# ---------------------------------------------------------------------------------------------
+class Candidate:
+    """Base class; see the module docstring."""
+
+    name: str = ""
+    effect: str | None = None  # simulator effect (antsim.effects.EFFECTS) or None
+    title: str = ""
+    terms: tuple[str, ...] = ()
+    signature: str = ""
+    explanation: str = ""
+    params_doc: ClassVar[dict[str, str]] = {}
+    kind: str = "offsets"
+    needs: tuple[str, ...] = ()
+    amplitude_param: str = ""
+    #: why the blind harness must not draw it (None: it may)
+    blind_exclusion: str | None = None
+    needs_simulation: bool = False
+
+    def applicable(self, obs: Observations, known_noise: bool) -> bool:
+        if self.needs_simulation and not known_noise:
+            return False
+        for need in self.needs:
+            if need == "time":
+                if not obs.has_time:
+                    return False
+            elif need == "latitude":
+                if not np.isfinite(obs.latitude_rad):
+                    return False
+            elif not obs.has(need):
+                return False
+        return True
+
+    # -- offsets candidates -------------------------------------------------------------------
+    def columns(self, obs: Observations, theta: Any = None) -> tuple[np.ndarray, tuple[str, ...]]:
+        raise NotImplementedError
+
+    def thetas(self, obs: Observations) -> list[Any]:
+        return [None]
+
+    def params_from(self, obs: Observations, theta: Any, coef: np.ndarray, cov: np.ndarray,
+                    names: tuple[str, ...]) -> tuple[dict[str, Any], float, float]:
+        """Effect parameters, amplitude and its sigma from the fitted coefficients."""
+        values = dict(zip(names, map(float, coef), strict=True))
+        sig = np.sqrt(np.clip(np.diag(cov), 0, None)) if cov.size else np.zeros(0)
+        amp = float(np.hypot.reduce(coef)) if coef.size else float("nan")
+        amp_sig = float(np.sqrt(np.sum((coef * sig) ** 2)) / amp) if amp > 0 else float("nan")
+        return values, amp, amp_sig
+
+    def test(self, problem: Problem, perp, z_perp: np.ndarray, chi2_now: float) -> TestResult:
+        """Best chi^2 decrease over the candidate's nonlinear parameters (if any)."""
+        obs = problem.obs
+        best = None
+        grid_cols = []
+        for theta in self.thetas(obs):
+            cols, names = self.columns(obs, theta)
+            res = self._linear(problem, perp, z_perp, cols, names, theta)
+            if cols.shape[1] == 1:
+                grid_cols.append(perp(problem.cand(cols))[:, 0])
+            if best is None or res.delta_chi2 > best.delta_chi2:
+                best = res
+        assert best is not None
+        best = self.refine(problem, perp, z_perp, best)
+        best.trials = _nyholt_trials(np.column_stack(grid_cols)) if len(grid_cols) > 1 else 1.0
+        best.p = with_trials(p_value(problem, best.delta_chi2, best.dof, best.chi2_now,
+                                     best.mask), best.trials)
+        if best.dof > 0:
+            self._finish(problem, best)
+        return best
+
+    def refine(self, problem: Problem, perp, z_perp, best: TestResult) -> TestResult:
+        return best
+
+    def _linear(self, problem: Problem, perp, z_perp, cols: np.ndarray,
+                names: tuple[str, ...], theta: Any) -> TestResult:
+        """chi^2 decrease from adding raw ``cols`` (scaled here by the offset scale), on the
+        scans a model with the candidate keeps."""
+        raw = cols
+        cols = problem.cand(cols)
+        mask = problem.mask_for(np.column_stack([problem.current_columns(), cols]))
+        perp, z_perp = problem.perp_for(mask)
+        xp = perp(cols)
+        # degeneracy with the model is a property of the signature itself (before the
+        # per-source offset scale): judge absorption and correlation on the raw columns
+        full = np.linalg.norm(problem.T(raw, mask), axis=0)
+        left = np.linalg.norm(perp(raw), axis=0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            one_minus_r2 = np.where(full > 0, (left / full) ** 2, 0.0)
+        keep = one_minus_r2 > ABSORBED_1MR2
+        absorbed = tuple(n for n, k in zip(names, keep, strict=True) if not k)
+        if not keep.any():
+            return TestResult(self, 0.0, 0, 1.0, 1.0, theta, cols, names, absorbed=absorbed,
+                              mask=mask)
+        xk = xp[:, keep]
+        coef, cov = _lstsq(xk, z_perp)
+        fitted = xk @ coef
+        r = np.sqrt(np.clip(1.0 - one_minus_r2[keep], 0.0, 1.0))
+        return TestResult(self, float(fitted @ fitted), int(keep.sum()), 1.0, 1.0, theta,
+                          cols[:, keep], tuple(n for n, k in zip(names, keep, strict=True)
+                                                if k), coef, cov, absorbed=absorbed,
+                          r_model=float(r.max()), mask=mask,
+                          chi2_now=float(z_perp @ z_perp))
+
+    def _finish(self, problem: Problem, res: TestResult) -> None:
+        """Parameters, and the model terms the candidate is most correlated with."""
+        if problem.pred.known_noise:
+            cov = res.cov
+        else:
+            cov = res.cov  # whitened units: the per-axis scale is already the noise
+        res.params, res.amplitude, res.amplitude_sigma = self.params_from(
+            problem.obs, res.theta, res.coef, cov, res.comp_names)
+        if res.columns is not None and res.columns.size and res.r_model > 0.5:
+            a = problem.T(problem.current_columns(), res.mask)
+            x = problem.T(res.columns, res.mask)
+            beta, _ = _lstsq(a, x)
+            contrib = np.abs(beta) * np.linalg.norm(a, axis=0)[:, None]
+            weight = contrib.max(axis=1)
+            order = np.argsort(weight)[::-1]
+            names = problem.current_names
+            top = [names[i] for i in order[:3] if weight[i] > 0.2 * weight[order[0]]]
+            res.partners = tuple(top)
+
+    # -- blind harness ------------------------------------------------------------------------
+    def draw_shape(self, rng: np.random.Generator, obs: Observations) -> dict[str, Any]:
+        """Random shape parameters (everything except the amplitude)."""
+        return {}
+
+    def unit_signal(self, obs: Observations, shape: dict[str, Any]) -> np.ndarray:
+        """Error (2n,) of the effect at unit amplitude with the given shape."""
+        raise NotImplementedError
+
+    def effect_params(self, shape: dict[str, Any], amplitude: float) -> dict[str, Any]:
+        raise NotImplementedError
+
+    def nonlinear_part(self, obs: Observations, signal: np.ndarray) -> np.ndarray:
+        """The part of a unit signal that is the candidate's own (default: all of it)."""
+        return signal
+
+    def signal_power(self, amplitude_ratio: float) -> float:
+        """How the signal scales with the amplitude (1: linear)."""
+        return amplitude_ratio
+
+    def hidden_amplitude(self, params: dict[str, Any]) -> float:
+        return float(params.get(self.amplitude_param, float("nan")))
+
+    def label(self, theta: Any) -> str:
+        """The name the blind harness scores (families add their order)."""
+        return self.name
+
+    def hidden_label(self, params: dict[str, Any]) -> str:
+        return self.name
+
+    def describe(self) -> dict[str, Any]:
+        """The library row as plain data (for ``--list`` and the report)."""
+        return {"effect": self.effect or self.name, "candidate": self.name, "title": self.title,
+                "terms": list(self.terms), "signature": self.signature,
+                "parameters": dict(self.params_doc), "explanation": self.explanation,
+                "blind": self.blind_exclusion or "drawn"}

@@ -1,0 +1,387 @@
+"""Candidates of the optics and the sources: a source's structure, an exact (large) tilt
+and collimation, polarization squint, a beam width error.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import ClassVar
+
+import numpy as np
+from scipy import optimize
+
+from controller.units import ARCSEC_PER_RAD
+
+from .. import pvalues
+from ..data import Observations
+from ..problem import _lstsq, term_columns
+from .base import (
+    Candidate,
+    TestResult,
+    p_value,
+    stacked,
+    with_trials,
+)
+
+__all__ = ['BeamWidthCandidate', 'ExactTiltCandidate', 'SourceCandidate', 'SquintCandidate']
+
+
+class SourceCandidate(Candidate):
+    name = "source_structure"
+    effect = "source_structure"
+    title = "source structure (one source's centroid off its catalogue position)"
+    signature = "residuals clustered by source: one source's offsets shifted by a constant"
+    params_doc: ClassVar[dict[str, str]] = {
+        "source": "the source", "xel_arcsec": "centroid offset, cross-elevation",
+        "el_arcsec": "centroid offset, elevation",
+        "size_arcmin": "Gaussian FWHM of the source from its measured widths"}
+    amplitude_param = "offset_arcsec"
+    needs = ("source",)
+    MIN_SCANS = 4
+
+    def __init__(self):
+        from antsim.world.effects.optics import SourceStructure
+
+        self.explanation = SourceStructure.explanation
+
+    def thetas(self, obs):
+        names, counts = np.unique(obs.source[obs.good], return_counts=True)
+        return [str(s) for s, c in zip(names, counts, strict=True) if c >= self.MIN_SCANS]
+
+    def applicable(self, obs, known_noise):
+        return super().applicable(obs, known_noise) and len(self.thetas(obs)) >= 2
+
+    def columns(self, obs, theta=None):
+        ind = (obs.source == theta).astype(float)
+        return np.column_stack([stacked(ind, None, obs.n), stacked(None, ind, obs.n)]), \
+            ("xel_arcsec", "el_arcsec")
+
+    def test(self, problem, perp, z_perp, chi2_now):
+        res = super().test(problem, perp, z_perp, chi2_now)
+        res.trials = float(len(self.thetas(problem.obs)))
+        res.p = with_trials(p_value(problem, res.delta_chi2, res.dof, res.chi2_now, res.mask),
+                            res.trials)
+        return res
+
+    def params_from(self, obs, theta, coef, cov, names):
+        values = dict(zip(names, map(float, coef), strict=True))
+        x, e = values.get("xel_arcsec", 0.0), values.get("el_arcsec", 0.0)
+        amp = math.hypot(x, e)
+        g = np.array([x, e])[: len(coef)] / amp if amp > 0 else np.zeros(len(coef))
+        sig = float(np.sqrt(g @ cov @ g)) if amp > 0 else float("nan")
+        out = {"source": theta, "xel_arcsec": x, "el_arcsec": e, "offset_arcsec": amp}
+        if obs.width_xel_arcmin is not None and "beam_hpbw_arcmin" in obs.meta:
+            sel = obs.good & (obs.source == theta)
+            w = np.nanmean(np.concatenate([obs.width_xel_arcmin[sel], obs.width_el_arcmin[sel]]))
+            hp = float(obs.meta["beam_hpbw_arcmin"])
+            out["size_arcmin"] = float(math.sqrt(max(w * w - hp * hp, 0.0)))
+        return out, amp, sig
+
+    def draw_shape(self, rng, obs):
+        names = self.thetas(obs)
+        return {"source": str(rng.choice(names)),
+                "angle_deg": float(rng.uniform(0.0, 360.0))}
+
+    def unit_signal(self, obs, shape):
+        cols, _ = self.columns(obs, shape["source"])
+        a = math.radians(shape["angle_deg"])
+        return cols @ np.array([math.cos(a), math.sin(a)])
+
+    def effect_params(self, shape, amplitude):
+        a = math.radians(shape["angle_deg"])
+        return {"source": shape["source"], "xel_arcsec": float(amplitude * math.cos(a)),
+                "el_arcsec": float(amplitude * math.sin(a))}
+
+    def hidden_amplitude(self, params):
+        return math.hypot(params.get("xel_arcsec", 0.0), params.get("el_arcsec", 0.0))
+
+    def effect_from_params(self, params):
+        return {"source": params["source"], "xel_arcsec": params["xel_arcsec"],
+                "el_arcsec": params["el_arcsec"]}
+
+
+class ExactTiltCandidate(Candidate):
+    name = "exact_tilt_collimation"
+    effect = "exact_tilt_collimation"
+    title = "large tilt or collimation: the small-angle model fails"
+    terms = ("AN", "AW", "CA")
+    signature = ("second-order residuals of a large azimuth-axis tilt or collimation error "
+                 "(BIMA memo 23, eqs. 3-4), growing as tan E near the zenith and largest "
+                 "near azimuth 90 deg; the linear part is absorbed by AN, AW and CA")
+    params_doc: ClassVar[dict[str, str]] = {"tilt_arcmin": "tilt of the azimuth axis (arcmin)",
+                  "tilt_az_deg": "azimuth towards which the axis tilts (deg, N = 0)",
+                  "collimation_arcmin": "collimation error (arcmin)"}
+    amplitude_param = "tilt_arcmin"
+    blind_exclusion = ("its signature is quadratic in the tilt: at 3-10 times its detection "
+                       "threshold (tilts of 45-80' on the 45-ft's schedule) the second-order "
+                       "errors reach 4-12' near the zenith, beyond what a five-point scan "
+                       "with 7' steps measures; it is proven separately at 25-40' "
+                       "(tests/test_diagnose_sim.py, benchmarks/blind.py --tilt)")
+    #: the chi^2 decrease of this 3-parameter even (quadratic) family is referred to chi^2_6,
+    #: the dimension of the space of quadratic forms its signature spans (conservative)
+    REFERENCE_DOF = 6
+    STARTS = ((1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (0, 1, 1), (1, 0, -1), (0, 1, -1),
+              (1, 1, 0), (1, -1, 0))
+
+    def __init__(self):
+        from antsim.world.effects.optics import ExactTiltCollimation
+
+        self.explanation = ExactTiltCollimation.explanation
+
+    @staticmethod
+    def linear_terms(theta: Sequence[float]) -> np.ndarray:
+        """AN, AW, CA (arcsec) of the small-angle limit (ExactTiltCollimation's docstring)."""
+        tn, te, c = (float(v) * 60.0 for v in theta)
+        return np.array([-tn, te, -c])
+
+    def error(self, obs: Observations, theta: Sequence[float]) -> np.ndarray:
+        """Error (2n,) arcsec of an exact tilt (north, east components) and collimation,
+        arcmin."""
+        from antsim.world.effects.optics import ExactTiltCollimation
+
+        tn, te, c = (float(v) for v in theta)
+        eff = ExactTiltCollimation(tilt_arcmin=math.hypot(tn, te),
+                                   tilt_az_deg=math.degrees(math.atan2(te, tn)),
+                                   collimation_arcmin=c)
+        az_enc, el_enc = eff.encoder_from_true(obs.az_rad, obs.el_rad)
+        d_az = (az_enc - obs.az_rad + math.pi) % (2 * math.pi) - math.pi
+        return stacked(d_az * np.cos(obs.el_rad) * ARCSEC_PER_RAD,
+                     (el_enc - obs.el_rad) * ARCSEC_PER_RAD, obs.n)
+
+    def test(self, problem, perp, z_perp, chi2_now):
+        obs = problem.obs
+        perp, z_perp = problem.perp_for(problem.used)
+        f2 = np.concatenate([problem.f, problem.f])
+        lin_cols = term_columns(("AN", "AW", "CA"), obs)
+
+        def err(theta):
+            # the model in use carries the linear part (else the scans would miss the
+            # source): the recordings show the linear part whole and the rest scaled by
+            # each source's offset scale
+            raw = self.error(obs, theta)
+            lin = lin_cols @ self.linear_terms(theta)
+            return lin + f2 * (raw - lin)
+
+        def resid(theta):
+            return z_perp - perp(err(theta)[:, None])[:, 0]
+
+        base = float(z_perp @ z_perp)
+        best_x, best_c = np.zeros(3), base
+        for start in self.STARTS:
+            for scale in (40.0,):
+                x0 = np.array(start, float) * scale
+                try:
+                    sol = optimize.least_squares(resid, x0, method="lm", x_scale=30.0,
+                                                 max_nfev=200)
+                except ValueError:
+                    continue
+                cost = float(sol.fun @ sol.fun)
+                if cost < best_c:
+                    best_c, best_x = cost, sol.x
+        dchi2 = max(base - best_c, 0.0)
+        # covariance from the Jacobian at the optimum
+        h = 0.5
+        jac = np.column_stack([
+            perp(((err(best_x + h * e) - err(best_x - h * e)) / (2 * h))[:, None])[:, 0]
+            for e in np.eye(3)])
+        _, cov = _lstsq(jac, z_perp)
+        cols = err(best_x)[:, None]
+        res = TestResult(self, dchi2, self.REFERENCE_DOF, 1.0, 1.0, tuple(best_x), cols,
+                         ("exact",), np.array([1.0]), cov, mask=problem.used.copy(),
+                         chi2_now=base)
+        res.p = p_value(problem, dchi2, self.REFERENCE_DOF, base)
+        # correlation of the nonlinear part (the error minus its best linear AN/AW/CA fit)
+        lin = term_columns(("AN", "AW", "CA"), obs)
+        beta, _ = _lstsq(lin, cols[:, 0])
+        quad = (cols[:, 0] - lin @ beta)[:, None]
+        xp = perp(quad)
+        full = np.linalg.norm(problem.T(quad))
+        res.r_model = float(math.sqrt(max(0.0, 1 - (np.linalg.norm(xp) / full) ** 2))) \
+            if full > 0 else 1.0
+        res.params, res.amplitude, res.amplitude_sigma = self.params_from(
+            obs, res.theta, res.coef, cov, res.comp_names)
+        return res
+
+    def params_from(self, obs, theta, coef, cov, names):
+        tn, te, c = theta
+        tilt = math.hypot(tn, te)
+        g = np.array([tn, te, 0.0]) / tilt if tilt > 0 else np.zeros(3)
+        sig = float(np.sqrt(g @ cov @ g)) if tilt > 0 else float("nan")
+        return ({"tilt_arcmin": tilt, "tilt_az_deg": math.degrees(math.atan2(te, tn)) % 360.0,
+                 "collimation_arcmin": float(c),
+                 "collimation_sigma_arcmin": float(math.sqrt(max(cov[2, 2], 0.0))),
+                 "note": "the signature is even: (tilt, collimation) and their negatives "
+                         "fit equally"}, tilt, sig)
+
+    def draw_shape(self, rng, obs):
+        v = rng.standard_normal(3)
+        v[2] *= 0.5
+        v /= np.linalg.norm(v)
+        return {"direction": tuple(float(x) for x in v)}
+
+    def unit_signal(self, obs, shape):
+        # the signature is quadratic: the signal at 30' along the direction, per 30'^2
+        d = np.array(shape["direction"])
+        return self.error(obs, 30.0 * d)
+
+    def signal_power(self, amplitude_ratio):
+        return amplitude_ratio**2
+
+    def nonlinear_part(self, obs, signal):
+        lin = term_columns(("AN", "AW", "CA"), obs)
+        beta, _ = _lstsq(lin, signal)
+        return signal - lin @ beta
+
+    def effect_params(self, shape, amplitude):
+        tn, te, c = (amplitude * x for x in shape["direction"])
+        return {"tilt_arcmin": float(math.hypot(tn, te)),
+                "tilt_az_deg": float(math.degrees(math.atan2(te, tn)) % 360.0),
+                "collimation_arcmin": float(c)}
+
+    def hidden_amplitude(self, params):
+        return float(params["tilt_arcmin"])
+
+    def effect_from_params(self, params):
+        return {k: params[k] for k in ("tilt_arcmin", "tilt_az_deg", "collimation_arcmin")}
+
+
+class SquintCandidate(Candidate):
+    name = "polarization_squint"
+    effect = "polarization_squint"
+    title = "polarization beam squint"
+    kind = "channel"
+    signature = "XR and XL offsets differ by a constant vector; their average is unaffected"
+    params_doc: ClassVar[dict[str, str]] = {
+        "separation_arcsec": "XR beam minus XL beam separation (arcsec)",
+        "angle_deg": "direction of the separation, 0 = +xel, 90 = +el"}
+    amplitude_param = "separation_arcsec"
+    needs = ("pol_xel_arcsec",)
+
+    def __init__(self):
+        from antsim.world.effects.optics import PolarizationSquint
+
+        self.explanation = PolarizationSquint.explanation
+
+    def test(self, problem, perp=None, z_perp=None, chi2_now=None):
+        obs, pred = problem.obs, problem.pred
+        d = np.column_stack([obs.pol_xel_arcsec, obs.pol_el_arcsec]) - pred.pol_mean
+        ok = problem.valid & np.isfinite(d).all(axis=1)
+        if ok.sum() < 3:
+            return TestResult(self, 0.0, 0, 1.0, 1.0)
+        d = d[ok]
+        f = problem.f[ok][:, None]
+        if pred.pol_sig is not None and pred.known_noise:
+            sig = pred.pol_sig[ok]
+        else:
+            sig = np.tile(np.std(d, axis=0, ddof=1), (d.shape[0], 1))
+        # reject gross outliers (4 sigma about the median)
+        z = np.abs(d - np.median(d, axis=0)) / sig
+        keep = (z <= 4.0).all(axis=1)
+        d, sig, f = d[keep], sig[keep], f[keep]
+        # each scan shows the separation scaled by its source's offset scale
+        w = 1.0 / sig**2
+        mean = (w * f * d).sum(axis=0) / (w * f * f).sum(axis=0)
+        var = 1.0 / (w * f * f).sum(axis=0)
+        dchi2 = float(np.sum(mean**2 / var))
+        if pred.known_noise:
+            p = float(pvalues.chi2_sf(dchi2, 2))
+        else:
+            p = float(pvalues.f_sf(dchi2 / 2.0, 2, max(d.shape[0] - 1, 1)))
+        # XR minus XL measured corrections are minus the beam separation
+        sep = -mean
+        amp = float(math.hypot(*sep))
+        g = sep / amp if amp > 0 else np.zeros(2)
+        amp_sig = float(np.sqrt(np.sum(g**2 * var)))
+        params = {"separation_arcsec": amp,
+                  "angle_deg": math.degrees(math.atan2(sep[1], sep[0])) % 360.0,
+                  "xr_minus_xl_xel_arcsec": float(mean[0]), "xr_minus_xl_el_arcsec": float(mean[1])}
+        return TestResult(self, dchi2, 2, 1.0, p, params=params, amplitude=amp,
+                          amplitude_sigma=amp_sig, coef=mean, cov=np.diag(var))
+
+    def draw_shape(self, rng, obs):
+        return {"angle_deg": float(rng.uniform(0.0, 360.0))}
+
+    def threshold_sigma(self, pred, used) -> float:
+        """sigma of the separation estimate (arcsec) for the detection threshold."""
+        sig = pred.pol_sig[used]
+        w = (1.0 / sig**2).sum(axis=0)
+        return float(np.sqrt(np.mean(1.0 / w)))
+
+    def effect_params(self, shape, amplitude):
+        return {"separation_arcsec": float(amplitude), "angle_deg": shape["angle_deg"]}
+
+    def effect_from_params(self, params):
+        return {"separation_arcsec": params["separation_arcsec"],
+                "angle_deg": params["angle_deg"]}
+
+
+class BeamWidthCandidate(Candidate):
+    name = "beam_width"
+    effect = "beam_width"
+    title = "wrong beam width"
+    kind = "channel"
+    signature = ("measured beam widths differ from those the simulation predicts by one "
+                 "factor, and every offset is scaled by its inverse square")
+    params_doc: ClassVar[dict[str, str]] = {"scale": "true HPBW / nominal HPBW"}
+    amplitude_param = "scale"
+    needs_simulation = True
+    needs = ("width_xel_arcmin",)
+
+    def __init__(self):
+        from antsim.world.effects.optics import BeamWidthError
+
+        self.explanation = BeamWidthError.explanation
+
+    def applicable(self, obs, known_noise):
+        return super().applicable(obs, known_noise) and "beam_hpbw_arcmin" in obs.meta
+
+    def _stats(self, problem):
+        obs, pred = problem.obs, problem.pred
+        w = np.column_stack([obs.width_xel_arcmin, obs.width_el_arcmin])
+        ok = problem.used & np.isfinite(w).all(axis=1) & np.isfinite(pred.width_mean).all(axis=1)
+        hp = float(obs.meta["beam_hpbw_arcmin"])
+        # w^2 - w_pred^2 = hpbw^2 (f^2 - 1) for every source (sizes add in quadrature)
+        d = (w[ok] ** 2 - pred.width_mean[ok] ** 2) / hp**2
+        sig = 2.0 * pred.width_mean[ok] * pred.width_sig[ok] / hp**2
+        return d.reshape(-1), sig.reshape(-1)
+
+    def test(self, problem, perp=None, z_perp=None, chi2_now=None):
+        d, sig = self._stats(problem)
+        if d.size < 3:
+            return TestResult(self, 0.0, 0, 1.0, 1.0)
+        good = np.isfinite(d) & np.isfinite(sig) & (sig > 0)
+        d, sig = d[good], sig[good]
+        if d.size < 3:
+            return TestResult(self, 0.0, 0, 1.0, 1.0)
+        z = np.abs(d - np.median(d)) / sig
+        keep = z <= 4.0
+        d, sig = d[keep], sig[keep]
+        w = 1.0 / sig**2
+        mean = float((w * d).sum() / w.sum())
+        var = float(1.0 / w.sum())
+        dchi2 = mean * mean / var
+        p = float(pvalues.chi2_sf(dchi2, 1))
+        scale = math.sqrt(max(1.0 + mean, 1e-6))
+        sig_scale = 0.5 * math.sqrt(var) / scale
+        return TestResult(self, dchi2, 1, 1.0, p, params={"scale": scale}, amplitude=scale,
+                          amplitude_sigma=sig_scale, coef=np.array([mean]),
+                          cov=np.array([[var]]))
+
+    def draw_shape(self, rng, obs):
+        return {"sign": float(rng.choice([-1.0, 1.0]))}
+
+    def threshold_sigma(self, pred, used) -> float:
+        """sigma of (scale - 1) for the detection threshold."""
+        sig = 2.0 * pred.width_sig[used] / pred.width_mean[used]
+        w = (1.0 / sig**2).sum()
+        return float(0.5 * math.sqrt(1.0 / w))
+
+    def effect_params(self, shape, amplitude):
+        return {"scale": float(1.0 + shape["sign"] * amplitude)}
+
+    def hidden_amplitude(self, params):
+        return float(params["scale"])
+
+    def effect_from_params(self, params):
+        return {"scale": params["scale"]}

@@ -1,0 +1,259 @@
+"""Thermal candidates: an elevation drift that follows the sunset with a lag, and one that
+follows the air temperature.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar
+
+import numpy as np
+from scipy import optimize
+
+from ..data import Observations
+from ..problem import Problem, _lstsq
+from .base import (
+    GRID_STEP_S,
+    Candidate,
+    TestResult,
+    obs_key,
+    periodic_interp,
+    stacked,
+    sun_el_grid_deg,
+    time_grid,
+)
+
+__all__ = ['SunsetCandidate', 'TemperatureCandidate']
+
+
+class _LaggedCandidate(Candidate):
+    """An effect with one time constant ``tau_s`` (a lag or a relaxation): the blind
+    harness draws tau log-uniformly between 30 min and 3 h, with either sign."""
+
+    def _refine_log_theta(self, problem: Problem, perp, z_perp, best: TestResult,
+                          log_lo: float, log_hi: float) -> TestResult:
+        """The time constant between exp(log_lo) and exp(log_hi) that fits best (bounded
+        search in log theta), or ``best`` if that fits better."""
+        obs = problem.obs
+
+        def neg(log_theta: float) -> float:
+            cols, names = self.columns(obs, math.exp(log_theta))
+            return -self._linear(problem, perp, z_perp, cols, names, None).delta_chi2
+
+        opt = optimize.minimize_scalar(neg, bounds=(log_lo, log_hi), method="bounded",
+                                       options={"xatol": 1e-3})
+        theta = float(math.exp(opt.x))
+        cols, names = self.columns(obs, theta)
+        res = self._linear(problem, perp, z_perp, cols, names, theta)
+        return best if res.delta_chi2 < best.delta_chi2 else res
+
+    def draw_shape(self, rng, obs):
+        return {"tau_s": float(math.exp(rng.uniform(math.log(1800.0), math.log(10800.0)))),
+                "sign": float(rng.choice([-1.0, 1.0]))}
+
+    def unit_signal(self, obs, shape):
+        return shape.get("sign", 1.0) * self.columns(obs, shape["tau_s"])[0][:, 0]
+
+
+class SunsetCandidate(_LaggedCandidate):
+    name = "sunset_drift"
+    effect = "sunset_drift"
+    title = "thermal lag after sunset"
+    signature = ("elevation residuals that change after sunset as a (1 - exp(-t/tau)) "
+                 "relaxation and return after sunrise")
+    params_doc: ClassVar[dict[str, str]] = {
+        "amplitude_arcsec": "total elevation change after sunset (arcsec)",
+        "tau_s": "time constant of the drift (s)"}
+    amplitude_param = "amplitude_arcsec"
+    needs = ("time",)
+    TAUS = (600.0, 900.0, 1200.0, 1800.0, 2400.0, 3600.0, 4800.0, 6000.0, 7200.0, 9000.0,
+            10800.0, 14400.0, 18000.0)
+
+    def __init__(self):
+        from antsim.world.effects.thermal import SunsetDrift
+
+        self.explanation = SunsetDrift.explanation + " (Fomalont 1973: 1' in the 4 h after " \
+                                                      "sunset)"
+        self._cache: dict[tuple, np.ndarray] = {}
+
+    def applicable(self, obs, known_noise):
+        return super().applicable(obs, known_noise) and (
+            obs.sun_el_deg is not None or "epoch_utc" in obs.meta) and np.ptp(obs.t_s) > 4 * 3600
+
+    def level(self, obs: Observations, tau_s: float) -> np.ndarray:
+        from antsim.world.effects.thermal import relax
+
+        t = time_grid(obs)
+        key = (obs_key(obs), round(tau_s, 3))
+        if key not in self._cache:
+            if len(self._cache) > 512:
+                self._cache.clear()
+            night = (sun_el_grid_deg(obs, t) < 0.0).astype(float)
+            lev = relax(night, GRID_STEP_S, tau_s, float(night[0]))
+            self._cache[key] = np.interp(obs.t_s, t, lev)
+        return self._cache[key]
+
+    def thetas(self, obs):
+        return list(self.TAUS)
+
+    def columns(self, obs, theta=None):
+        return stacked(None, self.level(obs, float(theta)), obs.n)[:, None], ("amplitude",)
+
+    def refine(self, problem, perp, z_perp, best):
+        if best.dof == 0:
+            return best
+        obs = problem.obs
+        lo, hi = math.log(self.TAUS[0] / 1.5), math.log(self.TAUS[-1] * 1.5)
+        i = list(self.TAUS).index(best.theta)
+        a = math.log(self.TAUS[max(i - 1, 0)]) if i > 0 else lo
+        b = math.log(self.TAUS[min(i + 1, len(self.TAUS) - 1)]) if i < len(self.TAUS) - 1 \
+            else hi
+
+        res = self._refine_log_theta(problem, perp, z_perp, best, a, b)
+        # joint covariance of (amplitude, log tau) from the Jacobian
+        tau = float(res.theta)
+        h = 0.01
+        d = (self.columns(obs, tau * math.exp(h))[0] - self.columns(obs, tau * math.exp(-h))[0]) \
+            / (2 * h) * float(res.coef[0])
+        perp, z_perp = problem.perp_for(res.mask)
+        jac = perp(np.column_stack([res.columns, problem.cand(d)]))
+        _, cov2 = _lstsq(jac, z_perp)
+        res.cov = cov2
+        res.refit = self._refit_factory(problem)
+        return res
+
+    def _refit_factory(self, problem: Problem):
+        def refit(train: np.ndarray) -> np.ndarray:
+            obs = problem.obs
+            best, best_tau = -1.0, self.TAUS[0]
+            for tau in self.TAUS:
+                cols = problem.cand(self.columns(obs, tau)[0])
+                full = np.column_stack([problem.current_columns(), cols])
+                f = problem.fit(full, train)
+                g = problem.fit(problem.current_columns(), train)
+                if g.chi2 - f.chi2 > best:
+                    best, best_tau = g.chi2 - f.chi2, tau
+            return problem.cand(self.columns(obs, best_tau)[0])
+        return refit
+
+    def params_from(self, obs, theta, coef, cov, names):
+        amp = float(coef[0])
+        tau = float(theta)
+        sig_amp = math.sqrt(max(cov[0, 0], 0.0))
+        sig_tau = tau * math.sqrt(max(cov[1, 1], 0.0)) if cov.shape[0] > 1 else float("nan")
+        return ({"amplitude_arcsec": amp, "tau_s": tau, "tau_sigma_s": sig_tau}, amp, sig_amp)
+
+    def effect_params(self, shape, amplitude):
+        return {"amplitude_arcsec": float(shape.get("sign", 1.0) * amplitude),
+                "tau_s": float(shape["tau_s"])}
+
+    def effect_from_params(self, params: dict[str, Any]) -> dict[str, Any]:
+        return {"amplitude_arcsec": params["amplitude_arcsec"], "tau_s": params["tau_s"]}
+
+
+class TemperatureCandidate(_LaggedCandidate):
+    name = "temperature_drift"
+    effect = "temperature_drift"
+    title = "temperature-driven elevation drift"
+    signature = ("elevation residuals proportional to the air temperature, lagged by the "
+                 "structure's time constant")
+    params_doc: ClassVar[dict[str, str]] = {
+        "arcsec_per_k": "elevation error per kelvin of structure temperature",
+        "tau_s": "time constant of the structure temperature (s)",
+        "reference_c": "structure temperature of zero error (C)"}
+    amplitude_param = "arcsec_per_k"
+    needs = ("time", "air_temp_c")
+    TAUS = (0.0, 600.0, 1200.0, 1800.0, 2700.0, 3600.0, 5400.0, 7200.0, 10800.0, 14400.0,
+            21600.0)
+
+    def __init__(self):
+        from antsim.world.effects.drifts import TemperatureDrift
+
+        self.explanation = TemperatureDrift.explanation
+        self._cache: dict[tuple, tuple[np.ndarray, float]] = {}
+
+    def applicable(self, obs, known_noise):
+        return super().applicable(obs, known_noise) and np.ptp(obs.t_s) > 4 * 3600 and \
+            float(np.nanstd(obs.air_temp_c)) > 0.3
+
+    def structure(self, obs: Observations, tau_s: float) -> tuple[np.ndarray, float]:
+        from antsim.world.effects.drifts import structure_temperature_c
+
+        key = (obs_key(obs), round(tau_s, 3))
+        if key not in self._cache:
+            if len(self._cache) > 512:
+                self._cache.clear()
+            t = time_grid(obs)
+            ok = np.isfinite(obs.air_temp_c)
+            if obs.air_daily_c is not None and np.ptp(obs.t_s[ok]) < 72000.0:
+                # a campaign much shorter than a day: the day before follows the scenario's
+                # daily curve, shifted to the recorded temperatures
+                curve = np.asarray(obs.air_daily_c(t), dtype=float)
+                shift = float(np.median(obs.air_temp_c[ok]
+                                        - np.asarray(obs.air_daily_c(obs.t_s[ok]))))
+                air = np.interp(t, obs.t_s[ok], obs.air_temp_c[ok])
+                outside = (t < obs.t_s[ok].min()) | (t > obs.t_s[ok].max())
+                air[outside] = curve[outside] + shift
+            else:
+                air = periodic_interp(t, obs.t_s[ok], obs.air_temp_c[ok])
+            ts = np.interp(obs.t_s, t, structure_temperature_c(t, air, tau_s))
+            self._cache[key] = (ts, float(np.mean(ts[obs.good]) if obs.good.any() else 0.0))
+        return self._cache[key]
+
+    def thetas(self, obs):
+        return list(self.TAUS)
+
+    def columns(self, obs, theta=None):
+        ts, mean = self.structure(obs, float(theta))
+        return stacked(None, ts - mean, obs.n)[:, None], ("arcsec_per_k",)
+
+    def refine(self, problem, perp, z_perp, best):
+        if best.dof == 0:
+            return best
+        obs = problem.obs
+        taus = list(self.TAUS)
+        i = taus.index(best.theta)
+        if best.theta == 0.0:
+            res = best
+        else:
+            a = math.log(taus[i - 1]) if taus[i - 1] > 0 else math.log(60.0)
+            b = math.log(taus[i + 1]) if i + 1 < len(taus) else math.log(taus[-1] * 1.5)
+
+            res = self._refine_log_theta(problem, perp, z_perp, best, a, b)
+        tau = float(res.theta)
+        if tau > 0:
+            h = 0.01
+            d = (self.columns(obs, tau * math.exp(h))[0]
+                 - self.columns(obs, tau * math.exp(-h))[0]) / (2 * h) * float(res.coef[0])
+            perp, z_perp = problem.perp_for(res.mask)
+            jac = perp(np.column_stack([res.columns, problem.cand(d)]))
+            _, res.cov = _lstsq(jac, z_perp)
+
+        def refit(train: np.ndarray) -> np.ndarray:
+            best_d, best_tau = -1.0, taus[0]
+            g = problem.fit(problem.current_columns(), train)
+            for t in taus:
+                cols = problem.cand(self.columns(obs, t)[0])
+                f = problem.fit(np.column_stack([problem.current_columns(), cols]), train)
+                if g.chi2 - f.chi2 > best_d:
+                    best_d, best_tau = g.chi2 - f.chi2, t
+            return problem.cand(self.columns(obs, best_tau)[0])
+
+        res.refit = refit
+        return res
+
+    def params_from(self, obs, theta, coef, cov, names):
+        k = float(coef[0])
+        tau = float(theta)
+        _, mean = self.structure(obs, tau)
+        sig_tau = tau * math.sqrt(max(cov[1, 1], 0.0)) if cov.shape[0] > 1 else float("nan")
+        return ({"arcsec_per_k": k, "tau_s": tau, "tau_sigma_s": sig_tau, "reference_c": mean},
+                k, math.sqrt(max(cov[0, 0], 0.0)))
+
+    def effect_params(self, shape, amplitude):
+        return {"arcsec_per_k": float(shape.get("sign", 1.0) * amplitude),
+                "tau_s": float(shape["tau_s"]), "reference_c": 5.0}
+
+    def effect_from_params(self, params):
+        return {"arcsec_per_k": params["arcsec_per_k"], "tau_s": params["tau_s"],
+                "reference_c": params["reference_c"]}
