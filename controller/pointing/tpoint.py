@@ -372,6 +372,63 @@ def _classify_record(tokens: list[str]) -> str:
     return "bad"
 
 
+def _decimal_record(tokens: list[str], where: str
+                    ) -> tuple[tuple[float, ...], tuple[str, ...]]:
+    """An observation of 4-5 decimal-degree fields (A_obs E_obs A_raw E_raw [rotator]): the
+    row (obs, raw, rotator, no LST) and no extra fields."""
+    values = [_number(t, where, name) for t, name in
+              zip(tokens, ("A_obs", "E_obs", "A_raw", "E_raw", "rotator"), strict=False)]
+    for value, name in ((values[1], "E_obs"), (values[3], "E_raw")):
+        if not -90.0 <= value <= 90.0:
+            raise InputError(where, name, value, "elevation must lie within -90..90 deg")
+    rotator = values[4] if len(values) == 5 else math.nan
+    return (values[0], values[1], values[2], values[3], rotator, math.nan), ()
+
+
+def _sexagesimal_record(tokens: list[str], where: str, content: str
+                        ) -> tuple[tuple[float, ...], tuple[str, ...]]:
+    """An observation as a sexagesimal RA/Dec record (h m s +d m s h m s +d m s [lst h m]):
+    the row (obs, raw in degrees, no rotator, LST hours) and the fields after it."""
+    for i in (0, 1, 3, 4, 6, 7, 9, 10):  # hours, degrees and minutes are whole
+        if not re.fullmatch(r"[+-]?\d+", tokens[i]):
+            raise InputError(
+                where, "observation", content,
+                "is neither 4-5 decimal-degree fields nor a sexagesimal RA/Dec record "
+                "(h m s +d m s h m s +d m s [lst h m]); sexagesimal Az/El is not a "
+                "TPOINT format",
+            )
+    ra_obs = _sexagesimal(tokens[0:3], where, "RA_obs", 24.0) * 15.0
+    dec_obs = _sexagesimal(tokens[3:6], where, "Dec_obs", 90.0)
+    ra_raw = _sexagesimal(tokens[6:9], where, "RA_raw", 24.0) * 15.0
+    dec_raw = _sexagesimal(tokens[9:12], where, "Dec_raw", 90.0)
+    for value, token, name in ((ra_obs, tokens[0], "RA_obs"),
+                               (ra_raw, tokens[6], "RA_raw")):
+        if token.startswith("-"):
+            raise InputError(where, name, token, "right ascension cannot be negative")
+        if value >= 360.0:
+            raise InputError(where, name, token, "right ascension must be below 24 h")
+    lst = math.nan
+    rest = tokens[12:]
+    if len(rest) >= 2 and re.fullmatch(r"\d+", rest[0]) and _NUMBER.match(rest[1]):
+        hours = int(rest[0])
+        minutes = float(rest[1])
+        if hours >= 24 or minutes >= 60:
+            raise InputError(where, "LST", " ".join(rest[:2]),
+                             "sidereal time must be below 24 h and minutes below 60")
+        lst = hours + minutes / 60.0
+        rest = rest[2:]
+    return (ra_obs, dec_obs, ra_raw, dec_raw, math.nan, lst), tuple(rest)
+
+
+def _coordinates(kind: str | None, options: list[str]) -> Literal["azel", "radec", "decimal"]:
+    """What the records' angles are: RA/Dec for sexagesimal records, else azimuth and
+    elevation with ``: ALTAZ``, else unspecified decimal degrees."""
+    if kind == "sexagesimal":
+        return "radec"
+    first_words = [o.split()[0] for o in options if o.split()]
+    return "azel" if "ALTAZ" in first_words else "decimal"
+
+
 def parse_tpoint(text: str, source: str = "<string>") -> TPointData:
     """Parse the text of a TPOINT pointing data file; ``source`` names it in errors."""
     caption: str | None = None
@@ -433,46 +490,10 @@ def parse_tpoint(text: str, source: str = "<string>") -> TPointData:
         elif kind != record:
             raise InputError(where, "observation", content,
                              f"is a {record} record in a file of {kind} records")
-        if record == "decimal":
-            values = [_number(t, where, name) for t, name in
-                      zip(tokens, ("A_obs", "E_obs", "A_raw", "E_raw", "rotator"), strict=False)]
-            for value, name in ((values[1], "E_obs"), (values[3], "E_raw")):
-                if not -90.0 <= value <= 90.0:
-                    raise InputError(where, name, value, "elevation must lie within -90..90 deg")
-            rotator = values[4] if len(values) == 5 else math.nan
-            rows.append((values[0], values[1], values[2], values[3], rotator, math.nan))
-            extras.append(())
-        else:
-            for i in (0, 1, 3, 4, 6, 7, 9, 10):  # hours, degrees and minutes are whole
-                if not re.fullmatch(r"[+-]?\d+", tokens[i]):
-                    raise InputError(
-                        where, "observation", content,
-                        "is neither 4-5 decimal-degree fields nor a sexagesimal RA/Dec record "
-                        "(h m s +d m s h m s +d m s [lst h m]); sexagesimal Az/El is not a "
-                        "TPOINT format",
-                    )
-            ra_obs = _sexagesimal(tokens[0:3], where, "RA_obs", 24.0) * 15.0
-            dec_obs = _sexagesimal(tokens[3:6], where, "Dec_obs", 90.0)
-            ra_raw = _sexagesimal(tokens[6:9], where, "RA_raw", 24.0) * 15.0
-            dec_raw = _sexagesimal(tokens[9:12], where, "Dec_raw", 90.0)
-            for value, token, name in ((ra_obs, tokens[0], "RA_obs"),
-                                       (ra_raw, tokens[6], "RA_raw")):
-                if token.startswith("-"):
-                    raise InputError(where, name, token, "right ascension cannot be negative")
-                if value >= 360.0:
-                    raise InputError(where, name, token, "right ascension must be below 24 h")
-            lst = math.nan
-            rest = tokens[12:]
-            if len(rest) >= 2 and re.fullmatch(r"\d+", rest[0]) and _NUMBER.match(rest[1]):
-                hours = int(rest[0])
-                minutes = float(rest[1])
-                if hours >= 24 or minutes >= 60:
-                    raise InputError(where, "LST", " ".join(rest[:2]),
-                                     "sidereal time must be below 24 h and minutes below 60")
-                lst = hours + minutes / 60.0
-                rest = rest[2:]
-            rows.append((ra_obs, dec_obs, ra_raw, dec_raw, math.nan, lst))
-            extras.append(tuple(rest))
+        row, extra = (_decimal_record(tokens, where) if record == "decimal"
+                      else _sexagesimal_record(tokens, where, content))
+        rows.append(row)
+        extras.append(extra)
         masked.append(is_masked)
         line_numbers.append(line_no)
 
@@ -481,12 +502,7 @@ def parse_tpoint(text: str, source: str = "<string>") -> TPointData:
     if run is None:
         raise InputError(source, "run parameters", "",
                          "no run-parameters record (latitude d m s ...) after the caption")
-    coordinates: Literal["azel", "radec", "decimal"]
-    if kind == "sexagesimal":
-        coordinates = "radec"
-    else:
-        first_words = [o.split()[0] for o in options if o.split()]
-        coordinates = "azel" if "ALTAZ" in first_words else "decimal"
+    coordinates = _coordinates(kind, options)
     table = np.array(rows, dtype=float).reshape(-1, 6)
     if coordinates == "azel":
         # South-based (TPOINT) to North-based azimuth: the only place this happens.
