@@ -1,6 +1,23 @@
-"""antsim: a simulated radio telescope, and the tool that calibrates its pointing."""
+"""antsim: a simulated radio telescope, and the tool that calibrates its pointing.
 
-from controller.astro import offline as _offline  # noqa: F401  (no network, before anything touches astropy)
+It runs the control program (:mod:`controller`, which never imports antsim) against a
+simulated world. Each part imports only those listed before it, and :mod:`controller`
+(``tests/test_layout.py`` checks it):
+
+* :mod:`.tomlcheck`: TOML read with one-line errors;
+* :mod:`.world`: the simulated telescope (sky, weather, mount, physical effects, beam,
+  receiver, camera) and the protocol's implementation;
+* :mod:`.scenario`: scenario files, read into the world's and the controller's settings
+  (the world's parts' settings are below it, the world built from a scenario above it);
+* :mod:`.figures`: figures, by page; they draw values and import nothing else of antsim;
+* :mod:`.studies`: the source reports' studies repeated (BIMA memo 23);
+* :mod:`.run`: a campaign run and the files it writes (recordings, fits, report);
+* :mod:`.plan`: what-if observing plans; :mod:`.diagnose`: what the model leaves out;
+* :mod:`.commands` and :mod:`.cli`: the ``antsim`` command line.
+"""
+
+# no network, before anything touches astropy
+from controller.astro import offline as _offline  # noqa: F401
 
 from ._version import __version__
 

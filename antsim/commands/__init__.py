@@ -1,0 +1,7 @@
+"""The subcommands of ``antsim`` (:mod:`antsim.cli`): one module each, with
+``configure(parser)`` and ``main(args)``, imported only when its subcommand runs.
+
+May import any part of antsim and :mod:`controller`; no module outside this package imports
+a command (the command line finds them by name; the teaching walk-through, :mod:`.demo`, runs
+the others through :mod:`antsim.cli`).
+"""

@@ -6,6 +6,10 @@ honest forward selection (:mod:`.select`), and reports findings best first
 (:class:`~.core.Diagnosis`); :mod:`.modelit` turns findings into an updated scenario and
 pointing model and re-simulates; :mod:`.blind` proves the whole chain on recordings with a
 hidden effect.
+
+May import: :mod:`antsim.plan` (its shared-schedule simulations predict the noise),
+:mod:`antsim.run`, :mod:`antsim.world`, :mod:`antsim.scenario`, :mod:`antsim.figures` and
+:mod:`controller`; never the command line.
 """
 
 from __future__ import annotations

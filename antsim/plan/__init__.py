@@ -12,5 +12,10 @@ Modules:
 * :mod:`~antsim.plan.ensemble`: tasks and engines (this process, a local pool, Dask);
 * :mod:`~antsim.plan.study`: running a plan, its JSON document and tables;
 * :mod:`~antsim.plan.answers`: how long, which sources, which terms cannot be separated;
-* :mod:`~antsim.figures.plan`: the comparison figures.
+* :mod:`~antsim.plan.schedule` and :mod:`~antsim.plan.streaming`: the shared schedule of a
+  quiet run, and its members streamed as it is recorded (also :mod:`antsim.diagnose`'s).
+
+Its figures are :mod:`antsim.figures.plan`. May import: :mod:`antsim.run`,
+:mod:`antsim.world`, :mod:`antsim.scenario`, :mod:`antsim.tomlcheck` and :mod:`controller`;
+never diagnosis or the command line.
 """

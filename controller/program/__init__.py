@@ -1,1 +1,11 @@
-"""(docstring follows in a later commit)"""
+"""The control program: a pointing campaign, from the catalogue to the recordings.
+
+* :mod:`.config`: what an observer sets (catalogue, scheduler, search, optical pointing,
+  and :class:`~.config.ControllerConfig`, which holds them and the scans' settings);
+* :mod:`.scheduler`: which source next (observer, targets, constraints, policies);
+* :mod:`.campaign`: the campaign loop as a simpy process (scan, reduce, record, search);
+  :mod:`.optical`: the same with a TV camera on stars;
+* :mod:`.recordings`: one ECSV row per scan and polarization, written as scans complete.
+
+May import every other part of :mod:`controller`; nothing of ``antsim``.
+"""

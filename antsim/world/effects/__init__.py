@@ -1,4 +1,12 @@
-"""The catalogue of physical effects, all behind one interface (:class:`Effect`)."""
+"""The catalogue of physical effects, all behind one interface (:class:`Effect`).
+
+One family per module: :mod:`.base` (the interface), :mod:`.geometric` (pointing-model
+terms), :mod:`.harmonics` (harmonic errors, the feed offset), :mod:`.thermal` (solar heating,
+sunset drift), :mod:`.drifts` (temperature drift), :mod:`.tracking` (wind and servo jitter),
+:mod:`.dynamics` (clock, servo lag, backlash), :mod:`.optics` (squint, beam width, source
+structure, refraction anomaly, exact tilt and collimation). :data:`EFFECTS` names them as
+scenarios do.
+"""
 
 from __future__ import annotations
 

@@ -1,0 +1,237 @@
+"""The layout shows the architecture: who may import whom, and no import circles.
+
+Every import statement of ``antsim/`` and ``controller/`` is read with ``ast`` (module level,
+inside functions and under ``if TYPE_CHECKING:`` alike: a type-only import is still a
+dependency a reader follows), resolved to the module it names, and checked against the
+rules the package docstrings state. Implicit imports of parent packages (importing
+``a.b.c`` runs ``a/__init__.py``) are not edges: they are how packages work, not a choice
+of the module's author.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: (importer prefix, forbidden prefixes, why): no module under the importer imports a module
+#: under a forbidden prefix. Prefixes are dotted module names; "a.b" covers a.b and a.b.*.
+RULES: tuple[tuple[str, tuple[str, ...], str], ...] = (
+    ("controller", ("antsim",), "the control program never imports the simulation"),
+    ("controller.errors", ("controller",), "a base module imports nothing of the program"),
+    ("controller.units", ("controller",), "a base module imports nothing of the program"),
+    ("controller.protocol", ("controller",), "a base module imports nothing of the program"),
+    ("controller.astro", ("controller.pointing", "controller.scans", "controller.program",
+                          "controller.protocol"),
+     "astronomy imports only the base modules"),
+    ("controller.pointing", ("controller.scans", "controller.program", "controller.protocol"),
+     "the pointing mathematics never imports the scan engine or the program"),
+    ("controller.scans", ("controller.program",),
+     "the scan engine never imports the control program that runs it"),
+    ("antsim.tomlcheck", ("antsim.world", "antsim.scenario", "antsim.figures", "antsim.studies",
+                          "antsim.run", "antsim.plan", "antsim.diagnose", "antsim.commands",
+                          "antsim.cli"),
+     "TOML checking is the base of antsim"),
+    ("antsim.world", ("antsim.figures", "antsim.studies", "antsim.run", "antsim.plan",
+                      "antsim.diagnose", "antsim.commands", "antsim.cli"),
+     "the simulated world knows nothing of what is done with it"),
+    ("antsim.scenario", ("antsim.world.world", "antsim.figures", "antsim.studies", "antsim.run",
+                         "antsim.plan", "antsim.diagnose", "antsim.commands", "antsim.cli"),
+     "a scenario reads the world's parts' settings; the world is built from it, above it"),
+    ("antsim.figures", ("antsim.world", "antsim.scenario", "antsim.studies", "antsim.run",
+                        "antsim.plan", "antsim.diagnose", "antsim.commands", "antsim.cli"),
+     "figures draw values, never a simulation"),
+    ("antsim.studies", ("antsim.run", "antsim.plan", "antsim.diagnose", "antsim.commands",
+                        "antsim.cli"),
+     "the studies use the world's parts and the fitter only"),
+    ("antsim.run", ("antsim.studies", "antsim.plan", "antsim.diagnose", "antsim.commands",
+                    "antsim.cli"),
+     "a run knows nothing of the analyses made of it"),
+    ("antsim.plan", ("antsim.studies", "antsim.diagnose", "antsim.commands", "antsim.cli"),
+     "plans never import diagnosis or the command line"),
+    ("antsim.diagnose", ("antsim.studies", "antsim.commands", "antsim.cli"),
+     "diagnosis never imports the command line"),
+)
+#: no module outside ``antsim.commands`` imports a command (antsim.cli finds them by name)
+COMMANDS = "antsim.commands"
+
+
+def _under(module: str, prefix: str) -> bool:
+    return module == prefix or module.startswith(prefix + ".")
+
+
+def module_files(root: Path, packages: tuple[str, ...]) -> dict[str, Path]:
+    """``{dotted module name: file}`` of every module of ``packages`` under ``root``."""
+    found = {}
+    for package in packages:
+        for path in sorted((root / package).rglob("*.py")):
+            parts = list(path.relative_to(root).with_suffix("").parts)
+            if parts[-1] == "__init__":
+                parts = parts[:-1]
+            found[".".join(parts)] = path
+    return found
+
+
+def import_graph(root: Path, packages: tuple[str, ...]) -> dict[str, dict[str, int]]:
+    """``{module: {imported module: line}}`` of the modules of ``packages``: every import
+    statement resolved to the module it names (``from pkg import name`` names the module
+    ``pkg.name`` when there is one, else ``pkg``); imports of other packages are left out."""
+    modules = module_files(root, packages)
+    graph: dict[str, dict[str, int]] = {}
+    for name, path in modules.items():
+        is_package = path.name == "__init__.py"
+        edges: dict[str, int] = {}
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+            if isinstance(node, ast.Import):
+                targets = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = name.split(".") if is_package else name.split(".")[:-1]
+                    base = base[: len(base) - (node.level - 1)]
+                    source = ".".join(base + ([node.module] if node.module else []))
+                else:
+                    source = node.module or ""
+                targets = [f"{source}.{alias.name}" if f"{source}.{alias.name}" in modules
+                           else source for alias in node.names]
+            else:
+                continue
+            for target in targets:
+                while target and target not in modules:  # a.b.function -> a.b
+                    target = target.rpartition(".")[0]
+                if target and target != name:
+                    edges.setdefault(target, node.lineno)
+        graph[name] = edges
+    return graph
+
+
+def rule_breaches(graph: dict[str, dict[str, int]], rules=RULES,
+                  commands: str = COMMANDS) -> list[str]:
+    """One line per import that breaks a rule."""
+    found = []
+    for module, edges in sorted(graph.items()):
+        for target, line in sorted(edges.items()):
+            for importer, forbidden, why in rules:
+                if _under(module, importer) and any(_under(target, f) for f in forbidden):
+                    found.append(f"{module} (line {line}) imports {target}: {why}")
+            if _under(target, commands) and not _under(module, commands):
+                found.append(f"{module} (line {line}) imports the command {target}")
+    return found
+
+
+def cycles(graph: dict[str, dict[str, int]]) -> list[list[str]]:
+    """The import circles: strongly connected components of more than one module (Tarjan),
+    each sorted, and any module importing itself."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+    counter = 0
+
+    def visit(v: str) -> None:
+        nonlocal counter
+        index[v] = low[v] = counter
+        counter += 1
+        stack.append(v)
+        on_stack.add(v)
+        for w in graph.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return sorted(found)
+
+
+@pytest.fixture(scope="module")
+def graph() -> dict[str, dict[str, int]]:
+    return import_graph(ROOT, ("antsim", "controller"))
+
+
+def test_the_graph_sees_the_imports_it_must(graph):
+    """A checker that read no edges would pass everything: it must see known imports, of
+    each kind (absolute, relative, inside a function)."""
+    assert len(graph) > 100
+    assert "controller.pointing.terms" in graph["controller.pointing.model"]  # relative
+    assert "controller.units" in graph["controller.pointing.model"]  # absolute
+    assert "controller.pointing.robust" in graph["controller.pointing.model"]  # in fit()
+    assert "antsim.diagnose.pvalues" in graph["antsim.diagnose.candidates.base"]  # from ..
+
+
+def test_imports_follow_the_layers(graph):
+    assert rule_breaches(graph) == []
+
+
+def test_no_import_circles(graph):
+    assert cycles(graph) == []
+
+
+def test_every_package_says_what_lives_there_and_what_it_may_import():
+    for init in sorted((ROOT / "controller").rglob("__init__.py")) + sorted(
+            (ROOT / "antsim").rglob("__init__.py")):
+        doc = ast.get_docstring(ast.parse(init.read_text(encoding="utf-8"))) or ""
+        rel = init.relative_to(ROOT)
+        assert len(doc) > 80, f"{rel}: no docstring saying what lives there"
+        if init.parent.name not in ("controller", "antsim", "effects", "candidates"):
+            assert "May import" in doc or "may import" in doc, \
+                f"{rel}: the docstring does not say what the package may import"
+
+
+def _fake_tree(tmp_path: Path, files: dict[str, str]) -> Path:
+    for rel, text in files.items():
+        path = tmp_path / rel
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text, encoding="utf-8")
+    return tmp_path
+
+
+def test_a_bad_import_and_a_circle_are_caught(tmp_path):
+    """The checker on a small tree with one import of each kind this test forbids: the
+    program importing the simulation (in a function), the scan engine importing the control
+    program (type-only), the command line importing a command (it must find them by name), and
+    a circle through a relative import."""
+    root = _fake_tree(tmp_path, {
+        "controller/__init__.py": "",
+        "controller/units.py": "",
+        "controller/scans/__init__.py": "",
+        "controller/scans/scan.py": (
+            "from typing import TYPE_CHECKING\n"
+            "if TYPE_CHECKING:\n"
+            "    from controller.program.config import X\n"
+        ),
+        "controller/program/__init__.py": "",
+        "controller/program/config.py": "def f():\n    import antsim.world\n",
+        "antsim/__init__.py": "",
+        "antsim/world/__init__.py": "",
+        "antsim/world/a.py": "from . import b\n",
+        "antsim/world/b.py": "from .a import thing\n",
+        "antsim/commands/__init__.py": "",
+        "antsim/commands/run.py": "",
+        "antsim/cli.py": "from antsim.commands import run\n",
+    })
+    graph = import_graph(root, ("antsim", "controller"))
+    breaches = rule_breaches(graph)
+    assert any(b.startswith("controller.program.config (line 2) imports antsim.world")
+               for b in breaches)
+    assert any(b.startswith("controller.scans.scan (line 3) imports controller.program.config")
+               for b in breaches)
+    assert "antsim.cli (line 1) imports the command antsim.commands.run" in breaches
+    assert len(breaches) == 3
+    assert cycles(graph) == [["antsim.world.a", "antsim.world.b"]]
