@@ -533,7 +533,7 @@ def _camera(t: Table) -> CameraConfig:
 
 
 def _stars(t: Table) -> tuple[SourceConfig, ...]:
-    """``[stars]``: ``count`` synthetic bright stars above ``dec_min_deg`` (antsim.camera)."""
+    """``[stars]``: ``count`` synthetic bright stars above ``dec_min_deg`` (antsim.world.camera)."""
     count = t.integer("count", min=1, max=5000)
     dec_min = t.number("dec_min_deg", -30.0, min=-90.0, lt=90.0)
     t.finish()

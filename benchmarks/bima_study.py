@@ -4,7 +4,7 @@
 
 Generates noise-free pointing data on an azimuth/elevation grid (every 10 deg of azimuth,
 elevation 10..85 deg every 5 deg) from an exact azimuth-axis tilt and collimation (rotations,
-the memo's equations (3) and (4); antsim.effects.optics.ExactTiltCollimation), fits the
+the memo's equations (3) and (4); antsim.world.effects.optics.ExactTiltCollimation), fits the
 memo's linear 7 + 7 term equations (1) and (2) by least squares, and prints the memo's
 quantities:
 

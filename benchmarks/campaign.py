@@ -5,8 +5,8 @@
 Prints the 24-hour campaign of ``scenarios/ghigo1990.toml`` (target: at most 1 s, i.e.
 86,400 times faster than real time), a 30-day campaign (cost should grow linearly with the
 duration: its cost per day against the 24-hour one, and the wall time per simulated day in
-each third of it), and the whole ``antsim run`` command with Python start-up (target: under
-3 s).
+each third of it), and the whole ``antsim run`` command with Python start-up (no target: the
+3 s target for it was withdrawn with the output process that met it, issue 29).
 """
 
 from __future__ import annotations
@@ -106,8 +106,7 @@ def main() -> None:
                 runs.append(time.perf_counter() - t0)
             whole = statistics.median(runs)
             print(f"whole `antsim run scenarios/ghigo1990.toml` {label} (Python start-up, fit, "
-                  f"files): median {whole:.2f} s{spread(runs)}; target < 3 s: "
-                  f"{'met' if whole < 3.0 else 'NOT met'}")
+                  f"files): median {whole:.2f} s{spread(runs)}")
 
 
 if __name__ == "__main__":

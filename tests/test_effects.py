@@ -172,7 +172,7 @@ SMOKE = {
     "refraction_anomaly": ({"scale": 1.05}, None),
     "exact_tilt_collimation": ({"tilt_arcmin": 1.0, "tilt_az_deg": 30.0,
                                 "collimation_arcmin": 0.5}, None),
-    # issue 5's effects for diagnosis (antsim/effects/harmonics.py, drifts.py)
+    # issue 5's effects for diagnosis (antsim/world/effects/harmonics.py, drifts.py)
     **{name: ({"amplitude_arcsec": 6.0, "phase_deg": 30.0}, None)
        for name in ("az_track_2a", "az_track_3a", "az_runout_1a", "az_runout_2a", "el_nod_1a",
                     "el_eccentricity", "el_eccentricity_2e")},

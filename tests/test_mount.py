@@ -1,7 +1,7 @@
 """The mount as simpy processes: slew and offset durations, cable wrap, elevation limits.
 
 Expected durations come from rest-to-rest kinematics written out here from first principles
-(not from ``antsim.mount.move_time_s``): an axis accelerates at ``a`` up to at most ``v``,
+(not from ``antsim.world.mount.move_time_s``): an axis accelerates at ``a`` up to at most ``v``,
 cruises, and brakes at ``a``. If the distance ``d`` is shorter than the distance needed to
 reach full speed and stop again, ``v^2 / a``, the profile is triangular and takes
 ``2 sqrt(d / a)``; otherwise it takes ``2 v / a`` accelerating and braking plus

@@ -159,7 +159,7 @@ def test_member_seeds_are_fixed_and_distinct():
 
 def test_ou_process_with_a_member_axis_is_each_members_process():
     """OUProcess(rms of shape (members, k)) drawing from each member's own generator equals
-    the members' own processes (the edit of antsim.effects.thermal that the ensembles rely
+    the members' own processes (the edit of antsim.world.effects.thermal that the ensembles rely
     on), however the draws are cut into integrations and buffered ahead."""
     rms = np.array([3e-4, 2e-3])
     times = [np.arange(15) + 0.5 + 21.0 * i for i in range(6)] + [np.arange(80) + 200.5]

@@ -1,4 +1,4 @@
-"""Tests of the five-point scan reduction (controller.reduction).
+"""Tests of the five-point scan reduction (controller.scans.reduction).
 
 Every random draw comes from a seeded numpy Generator; every tolerance says where it comes from.
 Beam: HPBW 11', s = 11' / 2.3548 = 4.671'; step D = 7'; integrations every 20 s in n order.

@@ -4,11 +4,11 @@ Each geometric term is injected alone as the truth of the noise-free world of
 ``tests/data/scenarios/quiet.toml`` (no gain fluctuation, radiometer noise ~5e-12 K per sample,
 no atmosphere, flat efficiency, constant weather, no jitter, no thermal). The expected error of
 each term is written out below from its published formula, independently of
-``controller.terms``:
+``controller.pointing.terms``:
 
 * Ghigo's W1..W10 are "indicated minus true" (encoder minus true observed position);
 * TPOINT's terms give a correction, ``true = raw + correction``, evaluated with TPOINT's own
-  South-based azimuth ``A_S = A - 180 deg`` (``controller.terms`` module docstring); the
+  South-based azimuth ``A_S = A - 180 deg`` (``controller.pointing.terms`` module docstring); the
   "indicated minus true" error is minus the correction.
 
 Two closures are shown: the world's error for a beam at the true position ``B`` equals the
@@ -67,7 +67,8 @@ def _expected(name: str, c: float, az: np.ndarray, el: np.ndarray):
         "AN": (-c * np.sin(a_s) * tan, -c * np.cos(a_s)),
         "AW": (-c * np.cos(a_s) * tan, c * np.sin(a_s)),
         "TF": (zero, -c * np.cos(el)), "TX": (zero, -c * cot),
-        # the harmonic generator's azimuth is A_H = 180 deg - A_S = -A_N (controller/terms.py)
+        # the harmonic generator's azimuth is A_H = 180 deg - A_S = -A_N
+        # (controller/pointing/terms.py)
         "HESA2": (zero, c * np.sin(2 * (math.pi - a_s))),
     }
     d_a, d_e = tpoint_correction[name]

@@ -34,7 +34,7 @@ from typing import Any
 from controller.errors import InputError
 
 #: the hidden effect of chapter 5: an uneven azimuth track, dE = HESA2 sin 2A_H (arcsec; TPOINT's
-#: harmonic azimuth A_H = -A_N, controller/terms.py), i.e. a correction of +60" sin 2A_N
+#: harmonic azimuth A_H = -A_N, controller/pointing/terms.py), i.e. a correction of +60" sin 2A_N
 HIDDEN_TERM = "HESA2"
 HIDDEN_ARCSEC = -60.0
 #: length of the closed-loop campaign (h): long enough for ~130 scans over day and night

@@ -11,7 +11,7 @@
   test with the simulations' own scatter and time correlation), before (the original
   scenario) and after (the updated one), and also the two residual distributions
   (two-sample Kolmogorov-Smirnov per axis).
-* Plots: residuals before and after (``antsim.figures.before_after_figures`` when present,
+* Plots: residuals before and after (``antsim.figures.diagnose.before_after_figures`` when present,
   else a minimal figure of our own).
 """
 

@@ -181,7 +181,7 @@ def amplitude_figure(el_deg, amp_k, source, path: str | Path, *, good=None,
     """Fig. 4: amplitude (K, mean of the two scan axes) of the strong ``sources`` against
     elevation (deg), and the same normalised by each source's median above 30 deg, with the
     report's relative gain curve (section V: flat above 30 deg, 95% at 20, 90% at 10).
-    ``fitted``: a gain curve fitted to this run (``controller.gaincurve.ElevationGainFit``),
+    ``fitted``: a gain curve fitted to this run (``controller.scans.gaincurve.ElevationGainFit``),
     drawn dashed with its knots and their errors."""
     el_deg = np.asarray(el_deg, float)
     amp_k = np.asarray(amp_k, float)
@@ -232,7 +232,7 @@ def amplitude_figure(el_deg, amp_k, source, path: str | Path, *, good=None,
             caption += (" The red dashed line and squares (with 1-sigma errors) are the gain "
                         "curve fitted to this run: amplitudes corrected for the cross-axis "
                         "pointing offset and for extinction with the measured zenith opacity, "
-                        "each source scaled by its own fitted peak (controller.gaincurve).")
+                        "each source scaled by its own fitted peak (controller.scans.gaincurve).")
         return figure_file(fig, Path(path), title, caption, formats)
 
 

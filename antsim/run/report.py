@@ -183,7 +183,7 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
 
 
 def _elevation_gain_fit(result: RunResult):
-    """The run's fitted elevation gain curve (controller.gaincurve), if one was fitted."""
+    """The run's fitted elevation gain curve (controller.scans.gaincurve), if one was fitted."""
     calibration = getattr(result, "calibration", None)
     fit = getattr(calibration, "fit", None)
     return fit if hasattr(fit, "knots_deg") else None

@@ -40,7 +40,7 @@ class RunResult:
     world: World | None = None
     wall_s: float = 0.0
     out_dir: Path | None = None
-    #: the gain curve and opacity (controller.gaincurve.Calibration), set by write_outputs
+    #: the gain curve and opacity (controller.scans.gaincurve.Calibration), set by write_outputs
     calibration: object = None
     #: the tipping scans the controller made (controller.tipping), for the calibration
     tippings: list = field(default_factory=list)

@@ -33,7 +33,7 @@ class BeamConfig:
     #: aperture gain at the top of the efficiency curve (K per Jy, one polarization)
     gain_k_per_jy: float = 0.025
     extra_efficiency: dict = field(default_factory=dict)
-    #: Crane 1981's gain curve: coefficients of Y00, Y10, Y11e, Y11o (controller.gaincurve)
+    #: Crane 1981's gain curve: coefficients of Y00, Y10, Y11e, Y11o (controller.scans.gaincurve)
     #: of the relative gain; when given it replaces the elevation curve (World.efficiency)
     gain_harmonics: tuple[float, float, float, float] | None = None
 

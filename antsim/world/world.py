@@ -183,7 +183,7 @@ class World:
         if self.scenario.mount.kind != "altaz":
             truth["mount"] = self.scenario.mount.kind
         harmonics = getattr(self.beam.config, "gain_harmonics", None)
-        if harmonics is not None:  # the gain curve in K/Jy (controller.gaincurve's form)
+        if harmonics is not None:  # the gain curve in K/Jy (controller.scans.gaincurve's form)
             from controller.scans.gaincurve import HARMONIC_NAMES
 
             gain = self.beam.config.gain_k_per_jy

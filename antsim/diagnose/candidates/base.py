@@ -197,7 +197,7 @@ class Candidate:
     """Base class; see the module docstring."""
 
     name: str = ""
-    effect: str | None = None  # simulator effect (antsim.effects.EFFECTS) or None
+    effect: str | None = None  # simulator effect (antsim.world.effects.EFFECTS) or None
     title: str = ""
     terms: tuple[str, ...] = ()
     signature: str = ""
