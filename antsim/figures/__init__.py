@@ -9,6 +9,11 @@
 * :mod:`.plan`: the plan's comparisons (``antsim plan --out``);
 * :mod:`.demo`: the teaching walk-through's cross scans (``antsim demo``).
 
+Conventions on every page: errors and residuals are "indicated minus true" (the sign of the
+recordings' corrections and of :class:`controller.pointing.data.PointingData`),
+cross-elevation = dA cos E, arcsec unless a label says otherwise; azimuth North = 0, East =
+90 deg.
+
 May import: :mod:`controller` (the fit results and recordings they draw) and matplotlib
 (inside the drawing, so that importing a page stays cheap). Figures are drawn from values,
 never from a simulation: nothing here imports the rest of :mod:`antsim`.

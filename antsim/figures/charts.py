@@ -1,9 +1,5 @@
 """Figure types more than one page draws: errors against elevation and azimuth, residual
 arrows on the sky, histograms, grouped bars.
-
-Conventions: errors and residuals are "indicated minus true" (the sign of the recordings'
-corrections and of :class:`controller.pointing.data.PointingData`), cross-elevation =
-dA cos E, arcsec unless a label says otherwise; azimuth North = 0, East = 90 deg.
 """
 
 from __future__ import annotations

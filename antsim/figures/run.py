@@ -9,10 +9,6 @@ strong sources against elevation with the report's gain curve (section V); a qui
 the residuals on the sky; residual histograms; residuals against time with the daylight
 marked; the coefficients of fits A-F against the truth; the coefficient sigmas and the rms
 of every fit. Figures other pages draw too are in :mod:`antsim.figures.charts`.
-
-Conventions: errors and residuals are "indicated minus true" (the sign of the recordings'
-corrections and of :class:`controller.pointing.data.PointingData`), cross-elevation =
-dA cos E, arcsec unless a label says otherwise; azimuth North = 0, East = 90 deg.
 """
 
 from __future__ import annotations
