@@ -123,7 +123,7 @@ def rule_breaches(graph: dict[str, dict[str, int]], rules=RULES,
 
 def cycles(graph: dict[str, dict[str, int]]) -> list[list[str]]:
     """The import circles: strongly connected components of more than one module (Tarjan),
-    each sorted, and any module importing itself."""
+    each sorted."""
     index: dict[str, int] = {}
     low: dict[str, int] = {}
     stack: list[str] = []
