@@ -179,7 +179,7 @@ def test_recent_history_is_the_same_as_scanning_it_all():
     """The spread policy's memory is bisected and each source's last time kept (a month's
     history made the scans quadratic); they must give exactly what scanning the history
     gives, boundaries included."""
-    from controller.program.scheduler import History
+    from controller.program.constraints import History
 
     rng = np.random.default_rng(5)
     memory_s = 6 * 3600.0

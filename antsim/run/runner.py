@@ -149,7 +149,7 @@ def check_scenario(scenario: Scenario, observer=None, targets=None) -> None:
     to observe that is never inside the elevation window during the campaign."""
     from controller.errors import InputError
     from controller.program.campaign import plan_targets
-    from controller.program.scheduler import never_rises, never_visible
+    from controller.program.observer import never_rises, never_visible
 
     if observer is None:
         observer, targets = plan_targets(scenario.controller)

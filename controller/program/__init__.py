@@ -2,7 +2,9 @@
 
 * :mod:`.config`: what an observer sets (catalogue, scheduler, search, optical pointing,
   and :class:`~.config.ControllerConfig`, which holds them and the scans' settings);
-* :mod:`.scheduler`: which source next (observer, targets, constraints, policies);
+* which source next, split as astroplan splits it: :mod:`.observer` (the site's view of the
+  sky, targets), :mod:`.constraints` (when a target may be observed; what was), and
+  :mod:`.scheduler` (the policies that pick one);
 * :mod:`.campaign`: the campaign loop as a simpy process (scan, reduce, record, search);
   :mod:`.optical`: the same with a TV camera on stars;
 * :mod:`.recordings`: one ECSV row per scan and polarization, written as scans complete.

@@ -40,7 +40,8 @@ from controller.scans.tracking import RefractionCorrection, SourceTrajectory, st
 from controller.units import ARCMIN_PER_RAD
 
 from .config import ControllerConfig
-from .scheduler import Observer, Target, make_scheduler
+from .observer import Observer, Target
+from .scheduler import make_scheduler
 
 __all__ = ["ControlProgram", "ScanOutcome", "plan_targets"]
 

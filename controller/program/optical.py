@@ -23,7 +23,7 @@ from controller.scans.reduction import Flag
 from controller.scans.tracking import SourceTrajectory
 
 from .campaign import ControlProgram, ScanOutcome
-from .scheduler import Target
+from .observer import Target
 
 __all__ = ["OpticalPointingProgram"]
 
