@@ -244,7 +244,8 @@ def _receiver(t: Table) -> ReceiverConfig:
     for ct in t.tables("channels", [{"name": c.name, "tsys_k": c.tsys_k} for c in d.channels]):
         channels.append(ChannelConfig(
             ct.string("name"), ct.number("tsys_k", gt=0.0, max=1e5),
-            ct.number("gain_fluctuation", None, min=0.0, max=0.1, allow_none=True)))
+            ct.number("gain_fluctuation", None, min=0.0, max=0.1, allow_none=True),
+            ct.number("gain_k_per_jy", None, gt=0.0, max=100.0, allow_none=True)))
         ct.finish()
     if not channels:
         raise t.error("channels", [], "the receiver needs at least one channel")
@@ -444,6 +445,8 @@ def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, re
             sched_t.number("hour_angle_limit_deg",
                            min(-mount.az.min_deg, mount.az.max_deg) - 2.0, gt=0.0, max=180.0)
             if mount.kind == "equatorial" else None),
+        declination_max_deg=sched_t.number("declination_max_deg", None, min=-90.0, max=90.0,
+                                           allow_none=True),
     )
     if sched.elevation_max_deg <= sched.elevation_min_deg:
         raise sched_t.error("elevation_max_deg", sched.elevation_max_deg,

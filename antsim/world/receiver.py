@@ -23,11 +23,14 @@ __all__ = ["ChannelConfig", "Receiver", "ReceiverConfig"]
 
 @dataclass(frozen=True)
 class ChannelConfig:
-    """One polarization channel; ``gain_fluctuation`` (dG/G) overrides the receiver's."""
+    """One polarization channel; ``gain_fluctuation`` (dG/G) overrides the receiver's and
+    ``gain_k_per_jy`` the beam's peak gain (a feed of its own, e.g. the 140-ft's two linear
+    feeds at 3245 MHz, Crane 1981 Table 5)."""
 
     name: str
     tsys_k: float
     gain_fluctuation: float | None = None
+    gain_k_per_jy: float | None = None
 
 
 @dataclass(frozen=True)

@@ -133,6 +133,10 @@ class World:
         self.beam = Beam(scenario.beam)
         self.atmosphere = Atmosphere(scenario.atmosphere)
         self.receiver = Receiver(scenario.receiver, component_rng(self.seed, "receiver"))
+        #: a channel's own peak gain relative to the beam's (1 unless the channel sets one)
+        self._channel_gain = {c.name: c.gain_k_per_jy / scenario.beam.gain_k_per_jy
+                              for c in scenario.receiver.channels
+                              if c.gain_k_per_jy is not None}
         if self.frame.is_altaz:
             self.mount = Mount(env, scenario.mount)
         else:  # an equatorial mount parks at the zenith: hour angle 0, dec = latitude
@@ -186,9 +190,19 @@ class World:
         if harmonics is not None:  # the gain curve in K/Jy (controller.scans.gaincurve's form)
             from controller.scans.gaincurve import HARMONIC_NAMES
 
-            gain = self.beam.config.gain_k_per_jy
-            truth["gain_curve"] = {"form": "harmonics", "coefficients_k_per_jy": {
-                n: gain * float(c) for n, c in zip(HARMONIC_NAMES, harmonics, strict=True)}}
+            base = self.beam.config.gain_k_per_jy
+            per_channel = {ch: base * self._channel_gain.get(ch, 1.0)
+                           for ch in self.receiver.names}
+
+            def curve(gain: float) -> dict[str, float]:
+                return {n: gain * float(c) for n, c in zip(HARMONIC_NAMES, harmonics,
+                                                           strict=True)}
+
+            # the recordings' AVG rows average the channels: their gain is the mean
+            truth["gain_curve"] = {
+                "form": "harmonics",
+                "coefficients_k_per_jy": curve(float(np.mean(list(per_channel.values())))),
+                "per_channel": {ch: curve(g) for ch, g in per_channel.items()}}
         if self.scenario.controller.tipping is not None:
             truth["zenith_opacity"] = float(self.atmosphere.tau0)
         return truth
@@ -310,12 +324,13 @@ class World:
             scale = (sky.flux_jy[i] * self.beam.config.gain_k_per_jy
                      * self.efficiency(src_az, src_el) * self.atmosphere.transmission(src_el))
             for c, channel in enumerate(channels):
+                channel_scale = scale * self._channel_gain.get(channel, 1.0)
                 off_x = off_e = 0.0
                 for effect in self.slow_effects:
                     ox, oe = effect.beam_offset(channel, state)
                     off_x += ox
                     off_e += oe
-                t_src[..., c] += scale * self.beam.response(
+                t_src[..., c] += channel_scale * self.beam.response(
                     (d_xel - off_x) * ARCMIN_PER_RAD, (d_el_src - off_e) * ARCMIN_PER_RAD,
                     float(sky.size_arcmin[i]))
         t_in = t_src + self.atmosphere.emission_k(beam_el)[..., None]

@@ -37,6 +37,8 @@ as TPOINT's: ``H`` + result (``H``: dH, ``D``: dDec, ``X``: dH cos(dec)) + one o
 Named models: ``crane11``, the NRAO 140-ft's eleven terms (Crane 1981; von Hoerner's own
 definitions, EDIR 102, were not available, see ``docs/telescopes.md``): IH ID CH NP MA ME TF
 FO DAF TX HCES. HCEC is left out because DAF = -cos(phi) HCEC + sin(phi) NP exactly.
+``crane1981``: Crane's own C1..C11 (Engineering Memo 147, Table 4), defined in
+:mod:`controller.pointing.crane`.
 """
 
 from __future__ import annotations
@@ -49,6 +51,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from .crane import CRANE_NAMES, crane_term
 from .model import PointingModel
 from .terms import Term, TermError, harmonic_factors
 
@@ -70,6 +73,8 @@ EQUATORIAL_TERMS = ("IH", "ID", "CH", "NP", "MA", "ME", "TF", "TX", "FO", "DAF",
 EQUATORIAL_MODELS: dict[str, tuple[str, ...]] = {
     "none": (),
     "crane11": ("IH", "ID", "CH", "NP", "MA", "ME", "TF", "FO", "DAF", "TX", "HCES"),
+    #: Crane's own C1..C11 (Table 4 of Engineering Memo 147; definitions: controller.pointing.crane)
+    "crane1981": tuple(f"C{i}" for i in range(1, 12)),
     "equatorial6": ("IH", "ID", "CH", "NP", "MA", "ME"),
 }
 
@@ -152,7 +157,8 @@ def _harmonic(name: str) -> Term | None:
 def is_equatorial_term(name: str) -> bool:
     """Whether ``name`` names an equatorial term (fixed or harmonic)."""
     key = str(name).strip().upper()
-    return key in EQUATORIAL_TERMS or _HARMONIC.match(key) is not None
+    return (key in EQUATORIAL_TERMS or _HARMONIC.match(key) is not None
+            or key in CRANE_NAMES)
 
 
 @lru_cache(maxsize=512)
@@ -160,11 +166,13 @@ def _term_at(key: str, latitude_deg: float) -> Term:
     fixed = _fixed_terms(latitude_deg)
     if key in fixed:
         return fixed[key]
+    if key in CRANE_NAMES:
+        return crane_term(key, latitude_deg)
     term = _harmonic(key)
     if term is None:
         raise TermError(
             f"unknown equatorial pointing term {key!r}: use {' '.join(EQUATORIAL_TERMS)} or a "
-            "harmonic such as HDSD or HHCH2 (H + result H/D/X + S/C of H or D)"
+            "harmonic such as HDSD or HHCH2 (H + result H/D/X + S/C of H or D), or Crane's C1..C11"
         )
     return term
 

@@ -44,6 +44,10 @@ class SchedulerConfig:
     sources: tuple[str, ...] = ()
     #: equatorial mounts: observe only within +-this hour angle for the whole scan (deg)
     hour_angle_limit_deg: float | None = None
+    #: the control program cannot point above this declination (deg; None: no limit). The
+    #: 140-ft's program of 1981 could not run its pointing verb above +72 deg (Crane 1981,
+    #: section II and summary item 7)
+    declination_max_deg: float | None = None
 
 
 @dataclass(frozen=True)

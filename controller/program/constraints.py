@@ -1,5 +1,6 @@
 """Constraints: whether a target may be observed at a time (elevation window, an equatorial
-mount's hour angles, day or night, revisit interval), and the history of what was observed."""
+mount's hour angles, a control program's declination limit, day or night, revisit interval),
+and the history of what was observed."""
 
 from __future__ import annotations
 
@@ -11,8 +12,8 @@ import numpy as np
 
 from .observer import Observer, Target
 
-__all__ = ["Constraint", "ElevationConstraint", "History", "HourAngleConstraint",
-           "RevisitConstraint", "WindowConstraint"]
+__all__ = ["Constraint", "DeclinationConstraint", "ElevationConstraint", "History",
+           "HourAngleConstraint", "RevisitConstraint", "WindowConstraint"]
 
 
 @dataclass
@@ -93,6 +94,19 @@ class HourAngleConstraint(Constraint):
             ha, _ = observer.ephemeris.hadec_rad(index, np.full(index.size, float(t)))
             ok &= np.abs(np.degrees(ha)) <= self.limit_deg
         return ok
+
+
+@dataclass(frozen=True)
+class DeclinationConstraint(Constraint):
+    """Sources at or below ``max_deg`` of (apparent) declination only: a control program's
+    limit, such as the 140-ft's in 1981 (no pointing above +72 deg, Crane 1981)."""
+
+    max_deg: float
+
+    def mask(self, observer, targets, t_s, history) -> np.ndarray:
+        index = np.array([tg.index for tg in targets])
+        _, dec = observer.ephemeris.hadec_rad(index, np.full(index.size, float(t_s)))
+        return np.degrees(dec) <= self.max_deg
 
 
 @dataclass(frozen=True)

@@ -20,6 +20,7 @@ import numpy as np
 from .config import SchedulerConfig
 from .constraints import (
     Constraint,
+    DeclinationConstraint,
     ElevationConstraint,
     History,
     HourAngleConstraint,
@@ -120,6 +121,8 @@ def make_scheduler(config: SchedulerConfig, observer: Observer, targets: Sequenc
     ]
     if config.hour_angle_limit_deg is not None:
         constraints.append(HourAngleConstraint(config.hour_angle_limit_deg, scan_duration_s))
+    if config.declination_max_deg is not None:
+        constraints.append(DeclinationConstraint(config.declination_max_deg))
     if config.policy == "round_robin":
         return RoundRobinScheduler(observer, targets, constraints)
     return SpreadScheduler(observer, targets, constraints, slew_weight=config.slew_weight)
