@@ -33,8 +33,8 @@ from controller.pointing.fitting import fit_model
 from controller.pointing.result import FitResult
 from controller.units import ARCSEC_PER_RAD
 
-__all__ = ["SPEED_OF_LIGHT_M_S", "StudyResult", "axis_offset_delay_s",
-           "axis_offset_path_m", "exact_errors_arcsec", "memo23_study"]
+__all__ = ["SPEED_OF_LIGHT_M_S", "TABLE1_ANT5", "StudyResult", "TermTest", "axis_offset_delay_s",
+           "axis_offset_path_m", "exact_errors_arcsec", "memo23_study", "term_significance"]
 
 
 def exact_errors_arcsec(tilt_arcmin: float, collimation_arcmin: float, tilt_az_deg: float,
@@ -119,3 +119,43 @@ def axis_offset_path_m(offset_m, el_rad) -> np.ndarray:
 def axis_offset_delay_s(offset_m, el_rad) -> np.ndarray:
     """The delay term ``D cos(E) / c`` (s) of :func:`axis_offset_path_m`."""
     return axis_offset_path_m(offset_m, el_rad) / SPEED_OF_LIGHT_M_S
+
+
+#: Table 1 of the memo, antenna 5 (arcmin): a(1)..a(7) and b(1)..b(7)
+TABLE1_ANT5 = {"A1": 70.41, "A2": 9.31, "A3": -0.40, "A4": 2.06, "A5": -3.39, "A6": 0.00,
+               "A7": 0.00, "B1": 33.17, "B2": -2.06, "B3": -2.94, "B4": 3.87, "B5": 2.27,
+               "B6": 0.17, "B7": 0.85}
+
+
+@dataclass(frozen=True)
+class TermTest:
+    """A fit with and without one term: rms per axis (arcsec), F statistic and p-value, and
+    the correlation of the reduced fit's elevation residual with ``pattern``."""
+
+    term: str
+    el_rms_with_arcsec: float
+    el_rms_without_arcsec: float
+    sky_rms_with_arcsec: float
+    sky_rms_without_arcsec: float
+    f_statistic: float
+    p_value: float
+    correlation: float
+
+
+def term_significance(data: PointingData, terms: tuple[str, ...], term: str,
+                      pattern: np.ndarray) -> TermTest:
+    """Least-squares fits of ``terms`` with and without ``term``; the F test of the residual
+    sums of squares (both axes, 1 and n - m degrees of freedom)."""
+    from scipy.stats import f as f_dist
+
+    full = fit_model(data, terms, robust=False)
+    reduced = fit_model(data, tuple(t for t in terms if t != term), robust=False)
+    n = 2 * len(data)
+    rss_full = 0.5 * n * full.sky_rms_arcsec ** 2
+    rss_reduced = 0.5 * n * reduced.sky_rms_arcsec ** 2
+    dof = n - len(terms)
+    f_stat = (rss_reduced - rss_full) / (rss_full / dof)
+    corr = float(np.corrcoef(reduced.residual_el_arcsec, pattern)[0, 1])
+    return TermTest(term, full.el_rms_arcsec, reduced.el_rms_arcsec, full.sky_rms_arcsec,
+                    reduced.sky_rms_arcsec, float(f_stat), float(f_dist.sf(f_stat, 1, dof)),
+                    corr)

@@ -1,34 +1,42 @@
 """BIMA memo 23's pointing model (Wright 1992): the 7 + 7 linear terms of its equations (1) and
 (2), and what an azimuth-axis tilt and a collimation error make of them.
 
-The memo's fitting equations (1) and (2) are all in the TPOINT vocabulary (``bima14`` in
-:data:`controller.pointing.model.NAMED_MODELS`), azimuth error as dA cos E and elevation error:
+The memo's fitting equations (1) and (2), "indicated minus true", azimuth error as dA cos E:
 
-| memo term | dA cos E (eq. 1) | TPOINT | memo term | dE (eq. 2) | TPOINT |
-|---|---|---|---|---|---|
-| encoder offset | cos E | IA | encoder offset | 1 | IE |
-| tilt | sin E sin A | HSSASE | tilt | sin A | HESA |
-| tilt | sin E cos A | HSCASE | tilt | cos A | HECA |
-| collimation | 1 | CA | sag | sin E | HESE |
-| axis alignment | sin E | NPAE | gravity | cos E | HECE |
-| 2Az | cos E sin 2A | HASA2 | 2Az | sin 2A | HESA2 |
-| 2Az | cos E cos 2A | HACA2 | 2Az | cos 2A | HECA2 |
+    daz = a(1) cos(el) + a(2) + a(3) sin(el) + sin(el) (a(4) sin(az) + a(5) cos(az))
+          + cos(el) (a(6) sin(2 az) + a(7) cos(2 az))
+    del = b(1) + b(2) sin(el) + b(3) cos(el) + b(4) sin(az) + b(5) cos(az) + b(6) sin(2 az)
+          + b(7) cot(el)
 
-(TPOINT's harmonic generator evaluates azimuth at ``A_H = -A_N`` and negates dA and dA cos E
-results (:mod:`controller.pointing.terms`), so some coefficients are minus the memo's North-based
-ones: for a correction written with North-based azimuth, HSSASE, HASA2, HECA and HECA2 keep the
-memo's sign and HSCASE, HACA2, HESA and HESA2 change it; the fitted space is the same.)
+are the named terms A1..A7, B1..B7 (``wright14``, :mod:`controller.pointing.terms`; the memo's
+names: a(1) azimuth encoder + mount offset from the meridian, a(2) collimation, a(3)
+elevation-axis misalignment, a(4), a(5) and b(4), b(5) tilt of the azimuth axis, a(6), a(7)
+residuals, b(1) elevation encoder offset, b(2), b(3) elevation axis errors, b(6) Fourier
+residual, b(7) refraction), and every one coincides with a TPOINT term (``bima14``, in the
+memo's order; ``controller.pointing.terms.WRIGHT_EQUIVALENTS``, tested column by column):
+
+| memo | TPOINT | memo | TPOINT |
+|---|---|---|---|
+| a(1) | IA | b(1) | -IE |
+| a(2) | CA | b(2) | -HESE |
+| a(3) | NPAE | b(3) | TF |
+| a(4) | -HSSASE | b(4) | HESA |
+| a(5) | HSCASE | b(5) | -HECA |
+| a(6) | -HASA2 | b(6) | HESA2 |
+| a(7) | HACA2 | b(7) | TX |
 """
 
 from __future__ import annotations
 
 import math
 
-__all__ = ["BIMA_TERMS", "tilt_collimation_equivalents"]
+__all__ = ["BIMA_TERMS", "WRIGHT_TERMS", "tilt_collimation_equivalents"]
 
-#: the memo's 7 azimuth and 7 elevation terms, in TPOINT's names
-BIMA_TERMS = ("IA", "HSSASE", "HSCASE", "CA", "NPAE", "HASA2", "HACA2",
-              "IE", "HESA", "HECA", "HESE", "HECE", "HESA2", "HECA2")
+#: the memo's 7 azimuth and 7 elevation terms, in TPOINT's names and the memo's order
+BIMA_TERMS = ("IA", "CA", "NPAE", "HSSASE", "HSCASE", "HASA2", "HACA2",
+              "IE", "HESE", "TF", "HESA", "HECA", "HESA2", "TX")
+#: the same, by the memo's names a(1)..a(7), b(1)..b(7)
+WRIGHT_TERMS = (*(f"A{i}" for i in range(1, 8)), *(f"B{i}" for i in range(1, 8)))
 
 
 def tilt_collimation_equivalents(tilt_arcmin: float, tilt_az_deg: float,

@@ -32,9 +32,11 @@ NAMED_MODELS: dict[str, tuple[str, ...]] = {
     "tpoint8": ("IA", "IE", "NPAE", "CA", "AN", "AW", "TF", "TX"),
     "tpoint6": ("IA", "IE", "NPAE", "CA", "AN", "AW"),
     "katpoint22": tuple(f"P{i}" for i in range(1, 23)),
-    #: BIMA memo 23 (Wright 1992), equations (1) and (2): 7 azimuth and 7 elevation terms
-    "bima14": ("IA", "HSSASE", "HSCASE", "CA", "NPAE", "HASA2", "HACA2",
-               "IE", "HESA", "HECA", "HESE", "HECE", "HESA2", "HECA2"),
+    #: BIMA memo 23 (Wright 1992), equations (1) and (2): a(1)..a(7), b(1)..b(7) by name
+    "wright14": (*(f"A{i}" for i in range(1, 8)), *(f"B{i}" for i in range(1, 8))),
+    #: the same 7 + 7 terms in TPOINT's names, in the memo's order (controller.pointing.bima)
+    "bima14": ("IA", "CA", "NPAE", "HSSASE", "HSCASE", "HASA2", "HACA2",
+               "IE", "HESE", "TF", "HESA", "HECA", "HESA2", "TX"),
     #: Fomalont 1973 (1990 report, Appendix A): the 45-ft's ten terms and the feed terms
     #: C6 cos(f - C7) (cross-elevation) and D6 cos(f - D7) (elevation), linear in cos f, sin f
     "fomalont14": (*(f"W{i}" for i in range(1, 11)), "HSCF", "HSSF", "HECF", "HESF"),

@@ -79,6 +79,7 @@ import numpy as np
 __all__ = [
     "GHIGO_EQUIVALENTS",
     "KATPOINT_EQUIVALENTS",
+    "WRIGHT_EQUIVALENTS",
     "Term",
     "TermError",
     "combine_arrays",
@@ -396,7 +397,58 @@ def _katpoint_terms() -> dict[str, Term]:
     return {t.name: t for t in terms}
 
 
-_FIXED: dict[str, Term] = {**_tpoint_terms(), **_ghigo_terms(), **_katpoint_terms()}
+# ---------------------------------------------------------------------------------------------
+# Wright (1992, BIMA memo 23) equations (1) and (2): a(1)..a(7) in dA cos E, b(1)..b(7) in dE,
+# North-based azimuth. Sign: indicated - true (what is added to the catalogue position), the
+# reading under which b(7) = 0.84-0.87' on every antenna (Table 1) is the optical refraction
+# at Hat Creek (about 0.87' cot E at 1043 m); negated like Ghigo's.
+# ---------------------------------------------------------------------------------------------
+def _wright_terms() -> dict[str, Term]:
+    s2a, c2a = ("sin", "AN", 2), ("cos", "AN", 2)
+    terms = [
+        _t("A1", "a(1) azimuth encoder + mount offset from the meridian: dA cos E = a1 cos E",
+           ("S", -1, (COS_E,))),
+        _t("A2", "a(2) collimation of the optical or radio axis: dA cos E = a2", ("S", -1, ())),
+        _t("A3", "a(3) elevation axis misaligned to the azimuth axis: dA cos E = a3 sin E",
+           ("S", -1, (SIN_E,))),
+        _t("A4", "a(4) tilt of the azimuth axis: dA cos E = a4 sin E sin A",
+           ("S", -1, (SIN_E, SIN_AN))),
+        _t("A5", "a(5) tilt of the azimuth axis: dA cos E = a5 sin E cos A",
+           ("S", -1, (SIN_E, COS_AN))),
+        _t("A6", "a(6) residual: dA cos E = a6 cos E sin 2A", ("S", -1, (COS_E, s2a))),
+        _t("A7", "a(7) residual: dA cos E = a7 cos E cos 2A", ("S", -1, (COS_E, c2a))),
+        _t("B1", "b(1) elevation encoder offset: dE = b1", ("E", -1, ())),
+        _t("B2", "b(2) elevation axis error: dE = b2 sin E", ("E", -1, (SIN_E,))),
+        _t("B3", "b(3) elevation axis error: dE = b3 cos E", ("E", -1, (COS_E,))),
+        _t("B4", "b(4) tilt of the azimuth axis: dE = b4 sin A", ("E", -1, (SIN_AN,))),
+        _t("B5", "b(5) tilt of the azimuth axis: dE = b5 cos A", ("E", -1, (COS_AN,))),
+        _t("B6", "b(6) Fourier analysis residual: dE = b6 sin 2A", ("E", -1, (s2a,))),
+        _t("B7", "b(7) refraction: dE = b7 cot E", ("E", -1, (COT_E,))),
+    ]
+    return {t.name: t for t in terms}
+
+
+_FIXED: dict[str, Term] = {**_tpoint_terms(), **_ghigo_terms(), **_katpoint_terms(),
+                           **_wright_terms()}
+
+#: Where Wright's a(i), b(i) coincide with TPOINT's terms: coefficient = sign * TPOINT's
+#: (tested column by column in tests/test_bima.py).
+WRIGHT_EQUIVALENTS: dict[str, tuple[str, float]] = {
+    "A1": ("IA", 1.0),
+    "A2": ("CA", 1.0),
+    "A3": ("NPAE", 1.0),
+    "A4": ("HSSASE", -1.0),
+    "A5": ("HSCASE", 1.0),
+    "A6": ("HASA2", -1.0),
+    "A7": ("HACA2", 1.0),
+    "B1": ("IE", -1.0),
+    "B2": ("HESE", -1.0),
+    "B3": ("TF", 1.0),
+    "B4": ("HESA", 1.0),
+    "B5": ("HECA", -1.0),
+    "B6": ("HESA2", 1.0),
+    "B7": ("TX", 1.0),
+}
 
 #: Where Ghigo's W terms coincide with TPOINT's: W = sign * TPOINT coefficient (tested).
 GHIGO_EQUIVALENTS: dict[str, tuple[str, float]] = {
@@ -439,7 +491,8 @@ KATPOINT_EQUIVALENTS: dict[str, tuple[str, float]] = {
 
 @lru_cache(maxsize=512)
 def get_term(name: str) -> Term:
-    """The term called ``name`` (TPOINT name, harmonic, W1..W10 or P1..P22)."""
+    """The term called ``name`` (TPOINT name, harmonic, W1..W10, P1..P22 or Wright's
+    A1..A7, B1..B7)."""
     key = name.strip().upper()
     if key in _FIXED:
         return _FIXED[key]
@@ -447,7 +500,8 @@ def get_term(name: str) -> Term:
     if term is None:
         raise TermError(
             f"unknown pointing term {name!r}: use a TPOINT name (IA IE CA NPAE AN AW TF TX "
-            "ACEC ACES ECEC ECES), a harmonic such as HESA2 or HSCA2CE, W1..W10 or P1..P22"
+            "ACEC ACES ECEC ECES), a harmonic such as HESA2 or HSCA2CE, W1..W10, P1..P22 or "
+            "A1..A7, B1..B7"
         )
     return term
 

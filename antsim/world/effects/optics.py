@@ -115,6 +115,9 @@ class ExactTiltCollimation(Effect):
         "tilt_arcmin": Param(0.0, "tilt of the azimuth axis (arcmin)", min=0.0),
         "tilt_az_deg": Param(0.0, "azimuth towards which the axis tilts (deg, N = 0)"),
         "collimation_arcmin": Param(0.0, "collimation error (arcmin)"),
+        "linear_part": Param(1.0, "1: the whole error; 0: only what the small-angle terms "
+                             "(AN, AW, CA) leave, when a scenario's linear terms carry them",
+                             min=0.0, max=1.0),
     }
 
     def coefficients(self) -> dict[str, float]:
@@ -127,7 +130,8 @@ class ExactTiltCollimation(Effect):
         phi = math.radians(self.p["tilt_az_deg"])
         linear = {"AN": -tilt_arcsec * math.cos(phi), "AW": tilt_arcsec * math.sin(phi),
                   "CA": -self.p["collimation_arcmin"] * 60.0}
-        return {**linear, **tilt_collimation_equivalents(**self.params())}
+        params = {k: v for k, v in self.params().items() if k != "linear_part"}
+        return {**linear, **tilt_collimation_equivalents(**params)}
 
     def truth(self) -> dict[str, Any]:
         return {**super().truth(), "coefficients_arcsec": self.coefficients()}
@@ -162,7 +166,23 @@ class ExactTiltCollimation(Effect):
     def pointing_error(self, state: PointingState) -> tuple[float, float]:
         az_enc, el_enc = self.encoder_from_true(state.az_rad, state.el_rad)
         d_az = (float(az_enc) - state.az_rad + math.pi) % (2 * math.pi) - math.pi
-        return d_az, float(el_enc) - state.el_rad
+        d_el = float(el_enc) - state.el_rad
+        if self.p["linear_part"] != 1.0:  # remove (part of) the small-angle equivalents
+            lin_az, lin_el = self._linear().offset_rad(state.az_rad, state.el_rad)
+            weight = 1.0 - self.p["linear_part"]
+            d_az -= weight * float(lin_az)
+            d_el -= weight * float(lin_el)
+        return d_az, d_el
+
+    def _linear(self):
+        model = getattr(self, "_linear_model", None)
+        if model is None:
+            from controller.pointing.model import PointingModel
+
+            c = self.coefficients()
+            model = PointingModel(["AN", "AW", "CA"], [c["AN"], c["AW"], c["CA"]])
+            self._linear_model = model
+        return model
 
 
 def _rotate(v: np.ndarray, axis: np.ndarray, angle: float) -> np.ndarray:
