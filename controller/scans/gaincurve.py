@@ -10,13 +10,14 @@ Two forms, from the two source reports:
   receiver gain must be constant ("under constant receiver gain"). Nonlinear least squares
   (source scales times knot gains).
 * **harmonics** (Crane 1981, section I, the 140-ft): gain in K/Jy as the spherical harmonics
-  Y00, Y10, Y11e, Y11o with theta = hour angle and phi = 90 deg - declination. Crane's
-  normalisation was not available; we use the unnormalised real harmonics
+  Y00, Y10, Y11e, Y11o. The memo writes theta = hour angle and phi = 90 deg - declination;
+  only with theta the co-declination and phi the hour angle, unnormalised, do its Table 5
+  coefficients give its own peaks and Figures 23 and 25's extrema (docs/telescopes.md):
 
       Y00 = 1, Y10 = cos(phi) = sin(dec),
       Y11e = sin(phi) cos(theta) = cos(dec) cos(H), Y11o = sin(phi) sin(theta) = cos(dec) sin(H),
 
-  with coefficients in K/Jy (assumption: another normalisation only rescales them).
+  with coefficients in K/Jy.
   ``sin E = sin(lat) Y10 + cos(lat) Y11e`` lies in this span, so a gain linear in sin E is
   one special case. Linear least squares of
   the amplitudes on ``S_i Y(H_i, dec_i)`` (S: catalogue flux density, Jy).
