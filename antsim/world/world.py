@@ -133,10 +133,6 @@ class World:
         self.beam = Beam(scenario.beam)
         self.atmosphere = Atmosphere(scenario.atmosphere)
         self.receiver = Receiver(scenario.receiver, component_rng(self.seed, "receiver"))
-        #: a channel's own peak gain relative to the beam's (1 unless the channel sets one)
-        self._channel_gain = {c.name: c.gain_k_per_jy / scenario.beam.gain_k_per_jy
-                              for c in scenario.receiver.channels
-                              if c.gain_k_per_jy is not None}
         if self.frame.is_altaz:
             self.mount = Mount(env, scenario.mount)
         else:  # an equatorial mount parks at the zenith: hour angle 0, dec = latitude
@@ -191,7 +187,8 @@ class World:
             from controller.scans.gaincurve import HARMONIC_NAMES
 
             base = self.beam.config.gain_k_per_jy
-            per_channel = {ch: base * self._channel_gain.get(ch, 1.0)
+            relative = channel_gains(self.scenario)
+            per_channel = {ch: base * relative.get(ch, 1.0)
                            for ch in self.receiver.names}
 
             def curve(gain: float) -> dict[str, float]:
@@ -315,6 +312,7 @@ class World:
 
         t_src = np.zeros((*np.shape(beam_el), len(channels)))
         sky = self.sky
+        relative = channel_gains(self.scenario)
         for i, src_az, src_el in paths:
             if self.frame.is_altaz:
                 d_xel = ((src_az - beam_az + math.pi) % (2 * math.pi) - math.pi) * np.cos(src_el)
@@ -324,7 +322,7 @@ class World:
             scale = (sky.flux_jy[i] * self.beam.config.gain_k_per_jy
                      * self.efficiency(src_az, src_el) * self.atmosphere.transmission(src_el))
             for c, channel in enumerate(channels):
-                channel_scale = scale * self._channel_gain.get(channel, 1.0)
+                channel_scale = scale * relative.get(channel, 1.0)
                 off_x = off_e = 0.0
                 for effect in self.slow_effects:
                     ox, oe = effect.beam_offset(channel, state)
@@ -346,6 +344,12 @@ class World:
 
         ha, dec = altaz_to_hadec(az_rad, el_rad, self.frame.latitude_rad)
         return harmonic_basis(ha, dec) @ np.asarray(harmonics, dtype=float)
+
+
+def channel_gains(scenario) -> dict[str, float]:
+    """Each channel's own peak gain relative to the beam's, for the channels that set one."""
+    return {c.name: c.gain_k_per_jy / scenario.beam.gain_k_per_jy
+            for c in scenario.receiver.channels if c.gain_k_per_jy is not None}
 
 
 def _day():
