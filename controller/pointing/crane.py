@@ -52,7 +52,6 @@ The alternatives tried (``CANDIDATES``) differ in C2..C4 and C7..C11.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -204,8 +203,3 @@ def candidate_terms(definition: str | tuple[str, ...], latitude_deg: float,
         return crane_terms(float(latitude_deg), float(height_m), definition)
     return tuple(Term(name, _DESCRIPTIONS[key], _components(key, latitude_deg, height_m))
                  for name, key in zip(CRANE_NAMES, definition, strict=True))
-
-
-def table4_arcsec(values_arcmin: Mapping[str, float]) -> dict[str, float]:
-    """Table 4's arcmin values as the model's arcsec (C5's arcmin reading kept: 60 x scale)."""
-    return {k: 60.0 * float(v) for k, v in values_arcmin.items()}
