@@ -15,12 +15,14 @@ declination; models in TPOINT's equatorial terms, e.g. ``crane11``), ``beam.gain
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
 from controller.astro.site import Site
+from controller.astro.sun import NIGHT_SUN_MAX_DEG
 from controller.errors import InputError
 from controller.pointing.model import NAMED_MODELS, PointingModel
 from controller.pointing.terms import TermError, get_term
@@ -98,6 +100,21 @@ class Scenario:
 
     def with_effects(self, effects: tuple[EffectSpec, ...]) -> Scenario:
         return replace(self, effects=tuple(effects))
+
+    def truth_arcsec(self, names) -> dict[str, float]:
+        """The injected value (arcsec) of each fitted term of ``names``: the truth model's, 0
+        where it has none. On an equatorial mount Crane's C5 is the world's refraction scale
+        (:mod:`controller.pointing.crane`), not a term of the truth model: its truth is the
+        ``refraction_anomaly`` effect's scale (1 without one), at 60" per unit."""
+        from controller.pointing.crane import REFRACTION_SCALE_TERM
+
+        truth = self.truth_model.as_dict()
+        out = {n: float(truth.get(n, 0.0)) for n in names}
+        if self.mount.kind == "equatorial" and REFRACTION_SCALE_TERM in out:
+            scales = [e.params.get("scale", 1.0) for e in self.effects
+                      if e.name == "refraction_anomaly"]
+            out[REFRACTION_SCALE_TERM] = 60.0 * math.prod(scales)
+        return out
 
 
 # ---------------------------------------------------------------------------------------------
@@ -483,6 +500,8 @@ def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, re
     optical = _optical(t.table("optical")) if "optical" in t else (
         OpticalConfig() if method == "optical" else None)
     gain_curve = _gain_curve(t.table("gain_curve"), names) if "gain_curve" in t else None
+    # what "night" means for the campaign's night window and its night fit (E)
+    night = t.number("night_sun_max_deg", NIGHT_SUN_MAX_DEG, min=-18.0, max=0.0)
     t.finish()
     catalog = tuple(CatalogSource(s.name, s.ra_deg, s.dec_deg, s.frame, s.flux_jy,
                                   s.size_arcmin) for s in sources)
@@ -495,7 +514,7 @@ def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, re
         scenario_name=scenario_name, site_name=site.name,
         fit_terms=fit_terms, fit_model_name=fit_name, mount=mount.kind, method=method,
         feed_angles_deg=feed_angles, tipping=tipping, sky=sky, optical=optical,
-        gain_curve=gain_curve)
+        gain_curve=gain_curve, night_sun_max_deg=night)
 
 
 def _fit_spec(t: Table, mount: MountConfig | None = None,

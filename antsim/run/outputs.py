@@ -13,6 +13,7 @@ import json
 import math
 from pathlib import Path
 
+from controller.astro.sun import NIGHT_SUN_MAX_DEG
 from controller.pointing.result import FitResult
 from controller.pointing.tpoint import TPointModel, write_mod
 from controller.pointing.variants import VARIANTS, fit_variants
@@ -25,24 +26,29 @@ __all__ = ["fit_tables", "run_fits", "write_outputs"]
 def run_fits(result: RunResult) -> dict[str, FitResult | None]:
     """Fits A-F of a run's recordings with the terms its controller fits."""
     terms, name = result.scenario.controller.fit_spec()
-    return fit_variants(result.rows, terms, name=name)
+    return fit_variants(result.rows, terms, name=name,
+                        night_sun_max_deg=result.scenario.controller.night_sun_max_deg)
 
 
 def _fmt(value: float, spec: str) -> str:
     return format(value, spec) if value is not None and math.isfinite(value) else "-"
 
 
-def fit_tables(fits: dict[str, FitResult | None], title: str) -> str:
-    """Text tables in the style of the report's Table 2 (rms per fit) and Table 3 (terms)."""
+def fit_tables(fits: dict[str, FitResult | None], title: str,
+               night_sun_max_deg: float = NIGHT_SUN_MAX_DEG) -> str:
+    """Text tables in the style of the report's Table 2 (rms per fit) and Table 3 (terms);
+    fit E's night is the Sun below ``night_sun_max_deg``."""
     lines = [title, "", "Table 2. Residuals of the fits (arcsec)", "",
              f"{'fit':<4}{'data':<48}{'N':>5}{'used':>6}{'xel rms':>9}{'el rms':>8}"
              f"{'sky rms':>9}"]
     for v in VARIANTS:
         fit = fits.get(v.name)
         if fit is None:
-            lines.append(f"{v.name:<4}{v.description:<48}{'(too few observations)':>30}")
+            lines.append(f"{v.name:<4}{v.describe(night_sun_max_deg):<48}"
+                         f"{'(too few observations)':>30}")
             continue
-        lines.append(f"{v.name:<4}{v.description:<48}{fit.n_input:>5}{fit.n_used:>6}"
+        lines.append(f"{v.name:<4}{v.describe(night_sun_max_deg):<48}{fit.n_input:>5}"
+                     f"{fit.n_used:>6}"
                      f"{fit.xel_rms_arcsec:>9.1f}{fit.el_rms_arcsec:>8.1f}"
                      f"{fit.sky_rms_arcsec:>9.1f}")
     present = [v.name for v in VARIANTS if fits.get(v.name) is not None]
@@ -86,7 +92,8 @@ def write_outputs(result: RunResult, report: bool = True) -> str:
     what = "star offsets" if result.scenario.controller.method == "optical" else "cross scans"
     title = (f"{result.scenario.name}, seed {result.seed}: {result.n_scans} {what}, "
              f"model in use {result.model.name}")
-    (out / "fit.txt").write_text(fit_tables(fits, title), encoding="utf-8")
+    (out / "fit.txt").write_text(
+        fit_tables(fits, title, result.scenario.controller.night_sun_max_deg), encoding="utf-8")
     good = sum(1 for r in result.rows if r["polarization"] == "AVG" and r["good"])
     summary = (f"{result.scenario.name}: {result.n_scans} {what} ({good} good) in "
                f"{result.scenario.duration_s / 3600:.1f} h, seed {result.seed}")

@@ -13,6 +13,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from controller.astro.sun import NIGHT_SUN_MAX_DEG
 from controller.pointing.result import FitResult
 from controller.pointing.variants import VARIANTS
 
@@ -34,9 +35,11 @@ PULL_WARN = 3.0
 # tables of fits
 # ---------------------------------------------------------------------------------------------
 def fit_summary_table(fits: Mapping[str, FitResult | None],
-                      reference_rms: Mapping[str, tuple[float, float]] | None = None) -> Table:
+                      reference_rms: Mapping[str, tuple[float, float]] | None = None,
+                      night_sun_max_deg: float = NIGHT_SUN_MAX_DEG) -> Table:
     """Table 2 style: per fit A-F, the data, N, used, xel/el/sky rms (arcsec), and the
-    published xel/el rms if ``reference_rms`` is given."""
+    published xel/el rms if ``reference_rms`` is given; fit E's night is the Sun below
+    ``night_sun_max_deg``."""
     header = ["fit", "data", "N", "used", "xel rms (\")", "el rms (\")", "sky rms (\")"]
     if reference_rms:
         header += ["report xel rms (\")", "report el rms (\")"]
@@ -45,9 +48,10 @@ def fit_summary_table(fits: Mapping[str, FitResult | None],
         fit = fits.get(v.name)
         ref = list(reference_rms.get(v.name, (None, None))) if reference_rms else []
         if fit is None:
-            rows.append([v.name, v.description, None, None, None, None, None, *ref])
+            rows.append([v.name, v.describe(night_sun_max_deg), None, None, None, None, None,
+                         *ref])
         else:
-            rows.append([v.name, v.description, fit.n_input, fit.n_used,
+            rows.append([v.name, v.describe(night_sun_max_deg), fit.n_input, fit.n_used,
                          float(fit.xel_rms_arcsec), float(fit.el_rms_arcsec),
                          float(fit.sky_rms_arcsec), *ref])
     return Table(header, rows, caption="Residuals of the fits (the 1990 report's Table 2)")
@@ -145,7 +149,9 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
         "truth.json (the injected truth), fit.json and fit_variants.json (the fits), fit.txt "
         "(these tables as text), model.dat (fit A as a TPOINT model, usable as antsim run "
         "--model), figures/ (the figures below as PNG files).")])]
-    fit_blocks: list[Block] = [fit_summary_table(fits, reference), coefficient_table(fits)]
+    fit_blocks: list[Block] = [
+        fit_summary_table(fits, reference, scenario.controller.night_sun_max_deg),
+        coefficient_table(fits)]
     if reference:
         fit_blocks.append(Paragraph(
             "The report columns are the 1990 report's Table 2 (Ghigo 1990) for the same "

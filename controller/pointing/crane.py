@@ -63,10 +63,12 @@ from controller.units import RAD_PER_ARCMIN
 
 from .terms import Term
 
-__all__ = ["CANDIDATES", "CRANE_NAMES", "crane_term", "crane_terms", "is_crane_term",
-           "reference_weather"]
+__all__ = ["CANDIDATES", "CRANE_NAMES", "REFRACTION_SCALE_TERM", "crane_term", "crane_terms",
+           "is_crane_term", "reference_weather"]
 
 CRANE_NAMES = tuple(f"C{i}" for i in range(1, 12))
+#: the coefficient that scales the refraction (dimensionless; 60" of the model per unit)
+REFRACTION_SCALE_TERM = "C5"
 
 SIN_H, COS_H = ("sin", "AN", 1), ("cos", "AN", 1)
 SIN_D, COS_D = ("sin", "E", 1), ("cos", "E", 1)

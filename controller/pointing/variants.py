@@ -6,7 +6,7 @@
 | B | XR only, filtered |
 | C | XL only, filtered |
 | D | AVG, by day (Sun above 0 deg), filtered |
-| E | AVG, at night (Sun below -12 deg), filtered |
+| E | AVG, at night (Sun below -12 deg unless the campaign sets another night), filtered |
 | F | AVG, unfiltered: every scan with a defined offset, plain least squares |
 
 "Filtered" is the report's procedure: scans the reduction flagged (S/N < 4, undefined log
@@ -41,6 +41,12 @@ class Variant:
     window: str  # "all", "day", "night"
     filtered: bool
 
+    def describe(self, night_sun_max_deg: float = NIGHT_SUN_MAX_DEG) -> str:
+        """The description, with the campaign's night threshold for the night fit."""
+        if self.window != "night":
+            return self.description
+        return self.description.replace(f"{NIGHT_SUN_MAX_DEG:g} deg", f"{night_sun_max_deg:g} deg")
+
 
 VARIANTS: tuple[Variant, ...] = (
     Variant("A", "XR+XL averaged, filtered", "AVG", "all", True),
@@ -71,9 +77,11 @@ def columns(recordings) -> dict[str, np.ndarray]:
     return cols
 
 
-def variant_mask(cols: Mapping[str, np.ndarray], variant: Variant) -> np.ndarray:
-    """Rows that enter ``variant``: its polarization and window, and (if filtered) only scans
-    the reduction did not flag; always only rows whose offsets are defined."""
+def variant_mask(cols: Mapping[str, np.ndarray], variant: Variant,
+                 night_sun_max_deg: float = NIGHT_SUN_MAX_DEG) -> np.ndarray:
+    """Rows that enter ``variant``: its polarization and window (night: the Sun below
+    ``night_sun_max_deg``), and (if filtered) only scans the reduction did not flag; always
+    only rows whose offsets are defined."""
     mask = cols["polarization"] == variant.polarization
     mask &= np.isfinite(cols["xel_arcmin"].astype(float))
     mask &= np.isfinite(cols["el_arcmin"].astype(float))
@@ -83,7 +91,7 @@ def variant_mask(cols: Mapping[str, np.ndarray], variant: Variant) -> np.ndarray
     if variant.window == "day":
         mask &= sun > DAY_SUN_MIN_DEG
     elif variant.window == "night":
-        mask &= sun < NIGHT_SUN_MAX_DEG
+        mask &= sun < night_sun_max_deg
     return mask
 
 
@@ -103,13 +111,15 @@ def pointing_data(cols: Mapping[str, np.ndarray], mask: np.ndarray) -> PointingD
 
 
 def fit_variants(recordings, terms: Sequence[str] | str, name: str = "custom",
-                 variants: Sequence[Variant] = VARIANTS) -> dict[str, FitResult | None]:
-    """Fit every variant; a variant with too few observations maps to None."""
+                 variants: Sequence[Variant] = VARIANTS,
+                 night_sun_max_deg: float = NIGHT_SUN_MAX_DEG) -> dict[str, FitResult | None]:
+    """Fit every variant (night: the Sun below ``night_sun_max_deg``); a variant with too
+    few observations maps to None."""
     cols = columns(recordings)
     out: dict[str, FitResult | None] = {}
     n_terms = len(terms) if not isinstance(terms, str) else None
     for variant in variants:
-        mask = variant_mask(cols, variant)
+        mask = variant_mask(cols, variant, night_sun_max_deg)
         n = int(mask.sum())
         if n == 0 or (n_terms is not None and 2 * n <= n_terms):
             out[variant.name] = None

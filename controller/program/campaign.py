@@ -76,7 +76,8 @@ def plan_targets(config: ControllerConfig,
                               sources)
     names = config.scheduler.sources or tuple(s.name for s in config.sources)
     all_names = [s.name for s in config.sources]
-    return Observer(ephemeris), [Target(n, all_names.index(n)) for n in names]
+    return (Observer(ephemeris, config.night_sun_max_deg),
+            [Target(n, all_names.index(n)) for n in names])
 
 
 class ControlProgram:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from controller.astro.sun import NIGHT_SUN_MAX_DEG
 from controller.pointing.model import PointingModel
 from controller.scans.config import GainCurveConfig, ScanConfig, SkyConfig, TippingConfig
 
@@ -39,7 +40,8 @@ class SchedulerConfig:
     min_revisit_s: float = 900.0
     #: weight of the slew time (per minute) against the sky-coverage gain
     slew_weight: float = 0.5
-    #: windows to observe in: "all", "day" (Sun above 0 deg) or "night" (Sun below -12 deg)
+    #: windows to observe in: "all", "day" (Sun above 0 deg) or "night" (Sun below
+    #: ControllerConfig.night_sun_max_deg)
     window: str = "all"
     sources: tuple[str, ...] = ()
     #: equatorial mounts: observe only within +-this hour angle for the whole scan (deg)
@@ -103,6 +105,10 @@ class ControllerConfig:
     sky: SkyConfig | None = None
     optical: OpticalConfig | None = None
     gain_curve: GainCurveConfig | None = None
+    #: the Sun's elevation below which it is night (deg): the scheduler's "night" window and
+    #: the night fit (E). The 1990 report's night is not defined either; -12 deg (nautical
+    #: twilight over) is this project's reading of it
+    night_sun_max_deg: float = NIGHT_SUN_MAX_DEG
 
     def reduction_width_arcmin(self, source: str) -> float:
         """The width (FWHM, arcmin) the reduction assumes for the catalogue's ``source``

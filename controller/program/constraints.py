@@ -111,7 +111,8 @@ class DeclinationConstraint(Constraint):
 
 @dataclass(frozen=True)
 class WindowConstraint(Constraint):
-    """Observe only by day (Sun above 0 deg), only by night (Sun below -12 deg), or always."""
+    """Observe only by day (Sun above 0 deg), only by night (Sun below the observer's night
+    threshold, -12 deg unless the campaign says otherwise), or always."""
 
     window: str = "all"
 

@@ -35,6 +35,8 @@ class Observer:
     """The site's view of the sky: positions of targets and of the Sun at campaign times."""
 
     ephemeris: Ephemeris
+    #: the Sun's elevation below which it is night (deg; ControllerConfig.night_sun_max_deg)
+    night_sun_max_deg: float = NIGHT_SUN_MAX_DEG
     _last: tuple | None = field(default=None, init=False, repr=False, compare=False)
 
     def altaz_deg(self, target: Target, t_s: float) -> tuple[float, float]:
@@ -62,7 +64,7 @@ class Observer:
         return bool(self.sun_el_deg(t_s)[0] > DAY_SUN_MIN_DEG)
 
     def is_night(self, t_s: float) -> bool:
-        return bool(self.sun_el_deg(t_s)[0] < NIGHT_SUN_MAX_DEG)
+        return bool(self.sun_el_deg(t_s)[0] < self.night_sun_max_deg)
 
 
 def never_visible(observer: Observer, targets: Sequence[Target], config: SchedulerConfig,
