@@ -384,6 +384,27 @@ def test_tracking_jitter_rms(quiet):
     assert _rms(d_el) / ARCSEC == pytest.approx(8.0 * scale, rel=0.16)
 
 
+def test_tracking_jitter_is_larger_by_day_by_its_day_factors(quiet):
+    """day_el_factor 2, day_xel_factor 1: by day (the Sun above the horizon) the elevation
+    wander's rms doubles, the cross-elevation's stays. A day of one-second samples, rho =
+    exp(-1/60): each half has ~360 independent values, so each rms is known to ~4% and
+    their ratio to ~5.3%; tolerance 4 x 5.3% = 21%."""
+    day = dataclasses.replace(quiet, duration_s=86400.0)
+    world = _quiet_world(day, [("tracking_jitter", {"xel_rms_arcsec": 5.0,
+                                                    "el_rms_arcsec": 8.0, "timescale_s": 60.0,
+                                                    "day_el_factor": 2.0})])
+    jitter = _effect(world, "tracking_jitter")
+    el = math.radians(40.0)
+    t = 15.0 * np.arange(5760)[:, None] + np.arange(15) + 0.5
+    chunks = [jitter.sample_error(ti, el) for ti in t]
+    d_az = np.array([c[0] for c in chunks]) * math.cos(el) / ARCSEC
+    d_el = np.array([c[1] for c in chunks]) / ARCSEC
+    up = world.sun_el_rad(t[:, 7]) > 0.0
+    assert 0.3 < up.mean() < 0.7  # both day and night in the day simulated
+    assert _rms(d_el[up]) / _rms(d_el[~up]) == pytest.approx(2.0, rel=0.21)
+    assert _rms(d_az[up]) / _rms(d_az[~up]) == pytest.approx(1.0, rel=0.21)
+
+
 # ---------------------------------------------------------------------------------------------
 def _linear_tilt_model(tilt_arcsec: float, tilt_az_deg: float, collimation_arcsec: float):
     """Small-angle equivalent of a tilt towards azimuth phi and a collimation c: to first

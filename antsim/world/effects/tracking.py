@@ -23,6 +23,11 @@ class TrackingJitter(Effect):
     (wind pressure goes as the square of speed), so a breezy afternoon shakes the beam more
     than a calm night.
 
+    By day (the Sun above the horizon) each axis' rms is multiplied by ``day_xel_factor`` and
+    ``day_el_factor`` (default 1): the structure heated by the Sun scatters more than at night,
+    as the 140-ft's nights were quieter (Crane 1981, Table 4: Dec 9.3" at night against 11.9"
+    in all) and the 45-ft's (Ghigo 1990, fit E).
+
     Gusts (off by default): Poisson events at ``gust_rate_per_h``, each displacing the beam by
     a random amount (rms ``gust_arcsec`` per axis) along a raised-cosine profile lasting
     ``gust_duration_s``. A gust inside a scan distorts its five points: the reduction flags it
@@ -44,7 +49,13 @@ class TrackingJitter(Effect):
         "gust_arcsec": Param(60.0, "rms beam displacement of a gust per axis (arcsec)",
                              min=0.0),
         "gust_duration_s": Param(30.0, "duration of a gust (s)", min=1.0),
+        "day_xel_factor": Param(1.0, "cross-elevation rms by day (Sun above the horizon) over "
+                                "xel_rms_arcsec", min=0.0),
+        "day_el_factor": Param(1.0, "elevation rms by day (Sun above the horizon) over "
+                               "el_rms_arcsec", min=0.0),
     }
+    #: step of the table of day (Sun up) and night over the campaign (s)
+    DAY_TABLE_STEP_S: ClassVar[float] = 60.0
 
     def start(self, world, rng: np.random.Generator) -> None:
         self.weather = world.weather
@@ -56,6 +67,19 @@ class TrackingJitter(Effect):
         self.gust_start_s = np.sort(rng.uniform(0.0, span_h * 3600.0, n_gusts))
         self.gust_rad = rng.standard_normal((n_gusts, 2)) * self.p["gust_arcsec"] \
             * RAD_PER_ARCSEC
+        self.day_factor = np.array([self.p["day_xel_factor"], self.p["day_el_factor"]])
+        self.sun_up: tuple[np.ndarray, np.ndarray] | None = None
+        if np.any(self.day_factor != 1.0):  # (times, Sun up) on a grid over the campaign
+            grid = np.arange(0.0, span_h * 3600.0 + self.DAY_TABLE_STEP_S, self.DAY_TABLE_STEP_S)
+            self.sun_up = (grid, (world.sun_el_rad(grid) > 0.0).astype(float))
+
+    def axis_factor(self, t_s) -> np.ndarray:
+        """The rms factor of each axis at time(s) ``t_s``: (*shape, 2), 1 at night."""
+        t = np.asarray(t_s, dtype=float)
+        if self.sun_up is None:
+            return np.ones((*t.shape, 2))
+        up = np.interp(t, *self.sun_up) >= 0.5  # the nearest grid time's day or night
+        return 1.0 + up[..., None] * (self.day_factor - 1.0)
 
     def gusts_rad(self, t_s: np.ndarray) -> np.ndarray:
         """Displacement by gusts at times ``t_s``, shape (n, 2) (xel, el), radians."""
@@ -73,15 +97,18 @@ class TrackingJitter(Effect):
         """Per-sample error (rad) at times ``t_s`` (n,), or (K, n) for K integrations
         (``el_rad`` then (K, 1), or (K, 1, members)); ``el_rad`` is the elevation at each
         integration's middle."""
-        wind = self.weather.wind_m_s(t_s[..., t_s.shape[-1] // 2])
+        mid = t_s[..., t_s.shape[-1] // 2]
+        wind = self.weather.wind_m_s(mid)
         scale = 1.0 + (wind / self.p["wind_ref_m_s"]) ** 2
+        rms = self.rms_rad * self.axis_factor(mid)  # (2,), or (K, 2) per integration
         if t_s.ndim == 2:  # scale per integration against (K, n, [members,] 2)
             out = self.process.sample(t_s)
-            out = out * (self.rms_rad * scale.reshape(-1, *[1] * (out.ndim - 1)))
+            lead = (-1, *[1] * (out.ndim - 2))
+            out = out * (rms * scale[:, None]).reshape(*lead, 2)
             if self.gust_start_s.size:
                 out = out + self.gusts_rad(t_s.ravel()).reshape(out.shape)
         else:
-            out = self.process.sample(t_s) * (self.rms_rad * float(scale))
+            out = self.process.sample(t_s) * (rms * float(scale))
             if self.gust_start_s.size:
                 out = out + self.gusts_rad(t_s)
         # out is (n, 2), or (n, members, 2) in antsim.plan's ensembles (el_rad then (members,))
