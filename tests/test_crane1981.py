@@ -20,10 +20,14 @@ from antsim.studies.crane1981 import (
     TABLE5,
     channel_gain,
     difference_chi2,
+    good_rows,
     rounding_ratio,
+    search_declination_terms,
     sigma_pattern,
+    table4_datasets,
+    worst_factor,
 )
-from controller.pointing.crane import CRANE_NAMES
+from controller.pointing.crane import CANDIDATES, CRANE_NAMES
 from controller.program.recordings import read_recordings
 
 REPO = Path(__file__).resolve().parents[1]
@@ -46,45 +50,61 @@ def runs(tmp_path_factory) -> dict:
     return out
 
 
-def _good(cols, night=False):
-    sel = (cols["polarization"].astype(str) == "AVG") & cols["good"].astype(bool)
-    if night:
-        sel &= cols["sun_el_deg"].astype(float) < -12.0
-    return sel
+def _night_deg(band: int) -> float:
+    return load_scenario(_scenario(band)).controller.night_sun_max_deg
 
 
 def test_points_and_rms_per_point_are_table4s(runs):
-    # within 20% (the issue's bar): measured 397/400, 331/353, 174/182 points; RA rms
-    # 18.3/18.2, 19.9/20.7, 25.1/22.4"; Dec rms 11.9/11.9, 12.1/11.0, 10.6/10.8"
+    # within 20% (the issue's bar), all data and night (the Sun below the horizon): measured
+    # 396/400, 332/353, 174/182 points; RA rms 18.3/18.2, 20.9/20.7, 25.1/22.4"; Dec rms
+    # 11.8/11.9, 11.0/11.0, 10.6/10.8"; night 164/172 and 149/139 points, RA 18.6/18.2 and
+    # 17.4/17.4", Dec 9.1/9.3 and 8.8/9.0"
     for band, r in runs.items():
-        memo = TABLE4[band]["all"]
-        fit = r["fit"]
-        assert fit["n_used"] == pytest.approx(memo["n"], rel=0.20), band
-        assert fit["xel_rms_arcsec"] == pytest.approx(memo["rms"][0], rel=0.20), band
-        assert fit["el_rms_arcsec"] == pytest.approx(memo["rms"][1], rel=0.20), band
-        # RA about twice Dec (summary item 3)
-        assert 1.4 < fit["xel_rms_arcsec"] / fit["el_rms_arcsec"] < 2.6
+        for which in TABLE4[band]:
+            memo = TABLE4[band][which]
+            fit = r["fit"] if which == "all" else r["variants"]["E"]
+            assert fit["n_used"] == pytest.approx(memo["n"], rel=0.20), (band, which)
+            assert fit["xel_rms_arcsec"] == pytest.approx(memo["rms"][0], rel=0.20), band
+            assert fit["el_rms_arcsec"] == pytest.approx(memo["rms"][1], rel=0.20), band
+            # RA about twice Dec (summary item 3)
+            assert 1.4 < fit["xel_rms_arcsec"] / fit["el_rms_arcsec"] < 2.6
+    # the night: the Sun below the horizon, not -12 deg, whose 3245 MHz count (126) misses
+    # the memo's 172 by 27%
+    assert _night_deg(3245) == 0.0
+    twilight = int(np.sum(good_rows(runs[3245]["cols"], -12.0)))
+    assert twilight < 0.8 * TABLE4[3245]["night"]["n"]
+
+
+def test_night_is_quieter_by_day_scatter(runs):
+    # Table 4: the night rms is the smaller (Dec 9.3 against 11.9", 9.0 against 11.0"); the
+    # simulated by-day scatter (tracking_jitter's day factors) gives the same order
+    for band in (3245, 4990):
+        night, day = runs[band]["variants"]["E"], runs[band]["variants"]["D"]
+        assert night["el_rms_arcsec"] < 0.8 * day["el_rms_arcsec"], band
 
 
 def test_standard_error_pattern_of_the_chosen_definitions(runs):
     # the chosen C1..C11 give Table 4's standard errors (outside the rounding of its last
-    # digit) within 30% for every term of the all-data fits but C6, which comes out 1.45-1.65
-    # times the memo's; the textbook reading is off by up to 9x (C8 0.11-0.13 of the memo's)
+    # digit) within 30% for every term of the all-data fits but C6, which comes out 1.43-1.61
+    # times the memo's (C11 0.75-0.76); at night C9-C11 come out smaller (0.55-0.75) and C6
+    # 1.16-1.57. The textbook reading is off by up to 12x (C8 0.08-0.12 of the memo's)
     lat = load_scenario(_scenario(3245)).site.latitude_deg
-    for band, r in runs.items():
-        cols, fit = r["cols"], r["fit"]
-        sel = _good(cols)
-        ha = np.radians(cols["ha_deg"][sel].astype(float))
-        dec = np.radians(cols["dec_deg"][sel].astype(float))
-        memo = [c[1] for c in TABLE4[band]["all"]["c"]]
-        chosen = rounding_ratio(sigma_pattern(ha, dec, fit["xel_rms_arcsec"],
-                                              fit["el_rms_arcsec"], lat), memo)
-        others = np.delete(chosen, CRANE_NAMES.index("C6"))
-        assert np.all((others >= 0.7) & (others <= 1.3)), (band, np.round(chosen, 2))
-        assert 1.0 <= chosen[CRANE_NAMES.index("C6")] < 1.8
-        textbook = rounding_ratio(sigma_pattern(ha, dec, fit["xel_rms_arcsec"],
-                                                fit["el_rms_arcsec"], lat, "textbook"), memo)
-        assert np.max(np.maximum(textbook, 1 / textbook)) > 5.0
+    data = table4_datasets(runs, {b: _night_deg(b) for b in BANDS})
+    for d in data:
+        chosen = rounding_ratio(sigma_pattern(d.ha_rad, d.dec_rad, d.xel_rms_arcsec,
+                                              d.dec_rms_arcsec, lat), d.memo_sigma)
+        c6 = chosen[CRANE_NAMES.index("C6")]
+        if d.label.endswith("all"):
+            others = np.delete(chosen, CRANE_NAMES.index("C6"))
+            assert np.all((others >= 0.7) & (others <= 1.3)), (d.label, np.round(chosen, 2))
+            assert 1.3 < c6 < 1.8, d.label
+        textbook = rounding_ratio(sigma_pattern(d.ha_rad, d.dec_rad, d.xel_rms_arcsec,
+                                                d.dec_rms_arcsec, lat, "textbook"), d.memo_sigma)
+        assert worst_factor(textbook) > 5.0
+    # no other five of the declination functions does better on all five columns (worst
+    # factor 1.82 for the chosen; the next 1.94)
+    best = search_declination_terms(data, lat, top=2)
+    assert best[0][1] == CANDIDATES["crane1981"] and best[1][0] > best[0][0]
 
 
 def test_no_day_night_difference(runs):
@@ -150,7 +170,7 @@ def test_crane_benchmark_prints_the_memo_beside_ours(capsys):
     import runpy
 
     module = runpy.run_path(str(REPO / "benchmarks" / "crane1981.py"))
-    assert module["main"]([]) == 0
+    assert module["main"](["--no-coverage"]) == 0
     out = capsys.readouterr().out
     for text in ("Points and rms per point", "Standard errors against Table 4's",
                  "Day and night", "subreflector", "above +72 deg", "tipping opacity"):

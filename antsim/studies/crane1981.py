@@ -14,20 +14,27 @@ simulated runs of ``scenarios/crane1981_140ft_*.toml``:
   the coefficient differences in units of the night fit's standard error (the memo's errors
   are rounded to one digit, too coarse for the nested-fit sqrt(s_night^2 - s_all^2));
 * :func:`channel_gain`: a harmonic gain curve per receiver channel (Table 5 lists 3245 MHz per
-  feed).
+  feed);
+* :func:`good_rows`: a run's rows that enter a fit, all or at night; :func:`table4_datasets`:
+  Table 4's columns against runs;
+* :func:`search_declination_terms`: the best declination terms C7..C11 from a library of
+  functions, by the same standard-error pattern.
 """
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
-from controller.pointing.crane import CRANE_NAMES, candidate_terms
+from controller.pointing.crane import CANDIDATES, CRANE_NAMES, candidate_terms
 from controller.pointing.terms import evaluate_basis
 
-__all__ = ["BANDS", "TABLE4", "TABLE5", "channel_gain", "difference_chi2", "rounding_ratio",
-           "sigma_pattern"]
+__all__ = ["BANDS", "DEC_LIBRARY", "TABLE4", "TABLE5", "Dataset", "channel_gain",
+           "difference_chi2", "good_rows", "rounding_ratio", "search_declination_terms",
+           "sigma_pattern", "table4_datasets", "worst_factor"]
 
 BANDS = (3245, 4990, 10500)
 
@@ -72,18 +79,115 @@ TABLE5: dict[str, dict] = {
 }
 
 
+def good_rows(cols: Mapping[str, np.ndarray], night_sun_max_deg: float | None = None
+              ) -> np.ndarray:
+    """The averaged (AVG) rows the reduction accepted; only those at night (the Sun below
+    ``night_sun_max_deg``, deg) when it is given."""
+    sel = ((np.asarray(cols["polarization"]).astype(str) == "AVG")
+           & np.asarray(cols["good"]).astype(bool))
+    if night_sun_max_deg is not None:
+        sel &= np.asarray(cols["sun_el_deg"]).astype(float) < night_sun_max_deg
+    return sel
+
+
 def sigma_pattern(ha_rad: np.ndarray, dec_rad: np.ndarray, xel_rms_arcsec: float,
                   dec_rms_arcsec: float, latitude_deg: float,
-                  definition: str | tuple[str, ...] = "crane1981") -> np.ndarray:
+                  definition: str | tuple[str, ...] = "crane1981",
+                  weighted: bool = True) -> np.ndarray:
     """Standard errors (arcmin) of C1..C11 of ``definition`` at the rows' hour angles and
     declinations (rad) for the rms per axis given (arcsec): weighted least squares, each axis
-    weighted by its own rms (Table 4 gives them apart). C5's is in its own unit (a scale)."""
+    weighted by its own rms (Table 4 gives them apart); ``weighted=False``: the true scatter
+    of plain least squares (both axes alike, as the observatory's fit A) with that noise, the
+    sandwich (A^T A)^-1 A^T C A (A^T A)^-1. C5's is in its own unit (a scale)."""
     terms = candidate_terms(definition, latitude_deg)
     b_h, b_d = evaluate_basis(terms, np.asarray(ha_rad, float), np.asarray(dec_rad, float))
     x = b_h * np.cos(np.asarray(dec_rad, float))[:, None]
-    a = np.vstack([x / xel_rms_arcsec, b_d / dec_rms_arcsec])
-    cov = np.linalg.inv(a.T @ a)
+    if weighted:
+        a = np.vstack([x / xel_rms_arcsec, b_d / dec_rms_arcsec])
+        cov = np.linalg.inv(a.T @ a)
+    else:
+        a = np.vstack([x, b_d])
+        noise = np.concatenate([np.full(len(x), xel_rms_arcsec ** 2),
+                                np.full(len(b_d), dec_rms_arcsec ** 2)])
+        bread = np.linalg.inv(a.T @ a)
+        cov = bread @ (a.T * noise) @ a @ bread
     return np.sqrt(np.diag(cov)) / 60.0
+
+
+#: the declination functions of the definition search (controller.pointing.crane's keys):
+#: the standard equatorial ones (polar axis, flexure, encoder eccentricity, tube flexure) and
+#: the harmonics of the hour angle
+DEC_LIBRARY = ("dch", "dsh", "dcd", "dsd", "dc2h", "ds2h", "dchsd", "dtf", "dh")
+
+
+@dataclass(frozen=True)
+class Dataset:
+    """One of Table 4's columns against a run: the rows' hour angles and declinations (rad),
+    the rms per axis (arcsec) and the memo's standard errors (arcmin)."""
+
+    label: str
+    ha_rad: np.ndarray
+    dec_rad: np.ndarray
+    xel_rms_arcsec: float
+    dec_rms_arcsec: float
+    memo_sigma: tuple[float, ...]
+
+
+def table4_datasets(runs: Mapping[int, Mapping], night_sun_max_deg: Mapping[int, float]
+                    ) -> list[Dataset]:
+    """Table 4's columns against runs ``{band: {"cols", "fit", "variants"}}`` (recording
+    columns, fit.json, fit_variants.json): each column's rows (all, or at night: the Sun below
+    the band's ``night_sun_max_deg``), our fit's rms per axis (A, or E at night) and the
+    memo's standard errors."""
+    out = []
+    for band, r in runs.items():
+        cols = r["cols"]
+        for which in TABLE4[band]:
+            sel = good_rows(cols, night_sun_max_deg[band] if which == "night" else None)
+            fit = r["fit"] if which == "all" else r["variants"]["E"]
+            out.append(Dataset(f"{band} {which}",
+                               np.radians(np.asarray(cols["ha_deg"])[sel].astype(float)),
+                               np.radians(np.asarray(cols["dec_deg"])[sel].astype(float)),
+                               fit["xel_rms_arcsec"], fit["el_rms_arcsec"],
+                               tuple(c[1] for c in TABLE4[band][which]["c"])))
+    return out
+
+
+def worst_factor(ratios: np.ndarray) -> float:
+    """The largest factor by which ratios (ours over the memo's) miss 1, either way."""
+    with np.errstate(divide="ignore"):
+        return float(np.max(np.maximum(ratios, 1.0 / ratios)))
+
+
+def search_declination_terms(datasets: Sequence[Dataset], latitude_deg: float,
+                             first: tuple[str, ...] = CANDIDATES["crane1981"][:6],
+                             library: Sequence[str] = DEC_LIBRARY, top: int = 3
+                             ) -> list[tuple[float, tuple[str, ...]]]:
+    """The best C7..C11 from ``library`` given C1..C6 (``first``): for every five functions,
+    their standard errors on every data set, assigned to C7..C11 in the order that misses
+    Table 4 least; ``top`` (worst factor, definition) pairs, best first."""
+    memo = np.array([d.memo_sigma for d in datasets])  # (sets, 11)
+    out = []
+    for combo in itertools.combinations(library, 5):
+        try:
+            with np.errstate(invalid="ignore"):
+                ours = np.array([sigma_pattern(d.ha_rad, d.dec_rad, d.xel_rms_arcsec,
+                                               d.dec_rms_arcsec, latitude_deg, (*first, *combo))
+                                 for d in datasets])
+        except np.linalg.LinAlgError:  # functions that span the same space
+            continue
+        ours = np.where(np.isfinite(ours), ours, np.inf)
+        base = max(worst_factor(rounding_ratio(ours[k, :6], memo[k, :6]))
+                   for k in range(len(datasets)))
+        # cost[f, s]: function f (of the five) as C(7 + s), over every data set
+        cost = np.array([[worst_factor(rounding_ratio(ours[:, 6 + f], memo[:, 6 + s]))
+                          for s in range(5)] for f in range(5)])
+        best = min(itertools.permutations(range(5)),
+                   key=lambda p: max(cost[f, p[f]] for f in range(5)))
+        worst = max(base, max(cost[f, best[f]] for f in range(5)))
+        out.append((worst, (*first, *(combo[best.index(slot)] for slot in range(5)))))
+    out.sort()
+    return out[:top]
 
 
 def rounding_ratio(ours: Sequence[float], memo: Sequence[float],
