@@ -63,12 +63,16 @@ from controller.units import RAD_PER_ARCMIN
 
 from .terms import Term
 
-__all__ = ["CANDIDATES", "CRANE_NAMES", "REFRACTION_SCALE_TERM", "crane_term", "crane_terms",
-           "is_crane_term", "reference_weather"]
+__all__ = ["CANDIDATES", "CRANE_NAMES", "HEIGHT_M", "REFRACTION_SCALE_TERM", "crane_term",
+           "crane_terms", "is_crane_term", "reference_weather"]
 
 CRANE_NAMES = tuple(f"C{i}" for i in range(1, 12))
 #: the coefficient that scales the refraction (dimensionless; 60" of the model per unit)
 REFRACTION_SCALE_TERM = "C5"
+#: the 140-ft's height (m; SLALIB/PAL GBVA140): C5's reference pressure is the standard
+#: atmosphere's there (the equatorial vocabulary resolves terms by latitude only, and C1..C11
+#: are the 140-ft's)
+HEIGHT_M = 881.0
 
 SIN_H, COS_H = ("sin", "AN", 1), ("cos", "AN", 1)
 SIN_D, COS_D = ("sin", "E", 1), ("cos", "E", 1)
@@ -172,7 +176,7 @@ def _components(key: str, latitude_deg: float, height_m: float) -> tuple:
 
 
 @lru_cache(maxsize=64)
-def crane_terms(latitude_deg: float, height_m: float = 810.0,
+def crane_terms(latitude_deg: float, height_m: float = HEIGHT_M,
                 definition: str = "crane1981") -> tuple[Term, ...]:
     """The terms C1..C11 of ``definition`` (a key of :data:`CANDIDATES`) for a site at
     ``latitude_deg`` and ``height_m`` (C5's reference pressure)."""
@@ -192,14 +196,14 @@ def is_crane_term(name: str) -> bool:
     return str(name).strip().upper() in CRANE_NAMES
 
 
-def crane_term(name: str, latitude_deg: float, height_m: float = 810.0) -> Term:
+def crane_term(name: str, latitude_deg: float, height_m: float = HEIGHT_M) -> Term:
     """One of C1..C11 (the chosen definitions)."""
     key = str(name).strip().upper()
     return crane_terms(float(latitude_deg), float(height_m))[CRANE_NAMES.index(key)]
 
 
 def candidate_terms(definition: str | tuple[str, ...], latitude_deg: float,
-                    height_m: float = 810.0) -> tuple[Term, ...]:
+                    height_m: float = HEIGHT_M) -> tuple[Term, ...]:
     """C1..C11 of a candidate definition: a key of :data:`CANDIDATES` or 11 function keys."""
     if isinstance(definition, str):
         return crane_terms(float(latitude_deg), float(height_m), definition)
