@@ -32,7 +32,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--members", type=int, default=None,
                         help="Monte Carlo members per variant (default: the plan's)")
     parser.add_argument("--no-answers", action="store_true",
-                        help="skip the plan's questions (duration, sources)")
+                        help="skip the plan's questions (duration, sources, coverage)")
     parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                         help="progress bar (default: when stderr is a terminal)")
     parser.epilog = ("Results are the same for any --workers or --scheduler: member seeds "

@@ -77,10 +77,13 @@ def _duration_figure(answer: dict[str, Any], path: Path) -> Path:
         ax = fig.add_axes((0.11, 0.13, 0.85, 0.74))
         curve = answer["curve"]
         x = [c["count"] for c in curve]
+        one = answer["target_arcsec"]  # one target for every term, or None: each its own
         for term in answer["terms"]:
-            ax.plot(x, [c["sigma_arcsec"][term] for c in curve], marker="o", ms=3, label=term)
-        ax.axhline(answer["target_arcsec"], color="k", ls="--", lw=1,
-                   label=f"target {answer['target_arcsec']:g}\"")
+            per = 1.0 if one is not None else answer["targets_arcsec"][term]
+            ax.plot(x, [c["sigma_arcsec"][term] / per for c in curve], marker="o", ms=3,
+                    label=term)
+        ax.axhline(one if one is not None else 1.0, color="k", ls="--", lw=1,
+                   label=f"target {one:g}\"" if one is not None else "each term's target")
         if answer["reached"]:
             ax.axvline(answer["answer"]["count"], color="tab:red", lw=1,
                        label=f"answer: {answer['answer']['count']} {answer['unit']}s")
@@ -88,11 +91,12 @@ def _duration_figure(answer: dict[str, Any], path: Path) -> Path:
             ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel(f"{answer['unit']}s of '{answer['based_on']}'")
-        ax.set_ylabel("predicted sigma (arcsec)")
+        ax.set_ylabel("predicted sigma (arcsec)" if one is not None
+                      else "predicted sigma / the term's target")
         ax.grid(True, alpha=0.35)
         ax.legend(fontsize=8)
-        fig.suptitle(f"How long for {', '.join(answer['terms'])} to reach "
-                     f"{answer['target_arcsec']:g}\"", fontsize=11)
+        goal = f"{one:g}\"" if one is not None else "their targets"
+        fig.suptitle(f"How long for {', '.join(answer['terms'])} to reach {goal}", fontsize=11)
         path.parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(path, format="png", dpi=DPI, metadata={"Software": "antsim"})
     return path

@@ -31,11 +31,12 @@ from controller.errors import InputError
 from controller.pointing.model import PointingModel
 
 from .ensemble import Executor, Job, task_noise, task_record
-from .fisher import predict
-from .planfile import DurationQuestion, Plan, SourcesQuestion
+from .fisher import predict, truth_vector
+from .planfile import CoverageQuestion, DurationQuestion, Plan, SourcesQuestion
 from .vectorized import quiet_scenario
 
-__all__ = ["answer_duration", "answer_questions", "answer_sources", "answers_text"]
+__all__ = ["answer_duration", "answer_questions", "answer_sources", "answers_text",
+           "coverage_answer", "reachable_cells"]
 
 #: thermal draws for the noise models of the answers' (longer) schedules
 N_THERMAL_ANSWERS = 128
@@ -50,11 +51,16 @@ def answer_questions(plan: Plan, variants: list, executor: Executor,
     """Every question of the plan, answered. The deterministic runs the answers need (the
     long campaigns of the duration questions, the candidate source lists) are all submitted
     at once, so they run in parallel."""
-    out: dict[str, list] = {"duration": [], "sources": [], "separation": []}
+    out: dict[str, list] = {"duration": [], "sources": [], "coverage": [], "separation": []}
     todo: list[Any] = []
+    # the coverage questions need only the long deterministic runs, submitted first
+    cover = [(q, duration_scenario(q, plan)) for q in plan.coverage]
+    recorded = [executor.submit(task_record, quiet_scenario(sc)) for _, sc in cover]
     for q in plan.durations:
         if log:
-            log(f"answering {q.key}: {', '.join(q.terms)} to {q.target_arcsec:g}\" "
+            goal = (f"{q.target_arcsec:g}\"" if q.target_arcsec is not None
+                    else "their targets")
+            log(f"answering {q.key}: {', '.join(q.terms)} to {goal} "
                 f"({q.based_on}, up to {q.max_days:g} days)")
         todo.append(("duration", q, [duration_scenario(q, plan)]))
     for q in plan.sources:
@@ -72,6 +78,10 @@ def answer_questions(plan: Plan, variants: list, executor: Executor,
             done = [next(prepared) if item["scenario"] is not None else None
                     for item in items["candidates"]]
             out["sources"].append(sources_answer(q, items, done))
+    for (q, sc), done in zip(cover, recorded, strict=True):
+        if log:
+            log(f"answering {q.key}: coverage below dec {q.dec_max_deg:g} deg ({q.based_on})")
+        out["coverage"].append(coverage_answer(q, sc, done.result()))
     for v in variants:
         out["separation"].append({"variant": v.spec.name, "level": plan.separation_level,
                                   "pairs": v.cannot_separate()})
@@ -128,7 +138,7 @@ def _periods(t_s: np.ndarray, sun_el_deg: np.ndarray, unit: str) -> list[int]:
     return ends
 
 
-def duration_scenario(q: DurationQuestion, plan: Plan):
+def duration_scenario(q: DurationQuestion | CoverageQuestion, plan: Plan):
     """The variant of the question run for ``max_days``."""
     base = plan.scenarios[plan.variant_index(q.based_on)]
     span = q.max_days * 86400.0
@@ -142,21 +152,26 @@ def answer_duration(q: DurationQuestion, plan: Plan, executor: Executor) -> dict
 
 
 def duration_answer(q: DurationQuestion, long, shared, noise, terms) -> dict[str, Any]:
-    """:func:`answer_duration` from the long run's schedule and noise model."""
+    """:func:`answer_duration` from the long run's schedule and noise model: per count, the
+    predicted sigma of each term; the first count at which every term reaches its target,
+    and each term's own first count."""
     span = long.duration_s
     t_s = shared.columns["t_s"].astype(float)
     sun = shared.columns["sun_el_deg"].astype(float)
-    if q.unit == "hour":
-        hours = np.arange(1, math.floor(span / 3600.0) + 1)
-        ends = [int(np.searchsorted(t_s, h * 3600.0, side="right")) for h in hours]
-        counts = list(hours)
+    if q.unit in ("hour", "run_day"):
+        step = 3600.0 if q.unit == "hour" else 86400.0
+        counts = list(range(1, math.floor(span / step + 1e-9) + 1))
+        ends = [int(np.searchsorted(t_s, k * step, side="right")) for k in counts]
     else:
         ends = _periods(t_s, sun, q.unit)
         counts = list(range(1, len(ends) + 1))
-    truth = np.array([long.truth_model.as_dict().get(n, 0.0) for n in terms])
-    idx = [terms.index(n) for n in q.terms]
+    names = PointingModel(list(terms)).names
+    truth = truth_vector(long, names)
+    idx = [names.index(n) for n in q.terms]
+    target = np.array(q.targets_arcsec)
     curve = []
     answer = None
+    first: dict[str, int | None] = dict.fromkeys(q.terms)
     for count, end in zip(counts, ends, strict=True):
         n_design = int(np.sum(noise.scans < end))
         if n_design <= len(terms):
@@ -170,19 +185,99 @@ def duration_answer(q: DurationQuestion, long, shared, noise, terms) -> dict[str
                  "bias_predicted_arcsec": {n: float(pred.bias_arcsec[j])
                                            for n, j in zip(q.terms, idx, strict=True)}}
         curve.append(point)
-        if answer is None and bool(np.all(sig <= q.target_arcsec)):
+        for n, s, g in zip(q.terms, sig, target, strict=True):
+            if first[n] is None and s <= g:
+                first[n] = int(count)
+        if answer is None and bool(np.all(sig <= target)):
             answer = point
     out: dict[str, Any] = {"based_on": q.based_on, "terms": list(q.terms),
-                           "target_arcsec": q.target_arcsec, "unit": q.unit,
-                           "max_days": q.max_days, "reached": answer is not None,
-                           "answer": answer, "curve": curve, "extrapolated": None}
+                           "target_arcsec": q.target_arcsec,
+                           "targets_arcsec": dict(zip(q.terms, q.targets_arcsec, strict=True)),
+                           "unit": q.unit, "max_days": q.max_days, "note": q.note,
+                           "reached": answer is not None, "answer": answer,
+                           "first_count": first, "curve": curve, "extrapolated": None}
     if answer is None and curve:
         last = curve[-1]
-        worst = max(last["sigma_arcsec"][n] / q.target_arcsec for n in q.terms)
+        worst = max(last["sigma_arcsec"][n] / g for n, g in zip(q.terms, target, strict=True))
         out["extrapolated"] = {"count": math.ceil(last["count"] * worst ** 2),
                                "method": "sigma proportional to 1/sqrt(duration) beyond "
                                          f"the {q.max_days:g} days simulated"}
     return out
+
+
+# ---------------------------------------------------------------------------------------------
+#: step of the hour angles at which a source's reach is tabulated (h)
+REACH_STEP_H = 0.05
+
+
+def _cell(ha_deg, dec_deg, q: CoverageQuestion) -> tuple[np.ndarray, np.ndarray]:
+    """Cell indices: hour-angle bins of ``ha_step_h`` from 0 h, declination bins of
+    ``dec_step_deg`` down from ``dec_max_deg``."""
+    return (np.floor(np.asarray(ha_deg) / 15.0 / q.ha_step_h).astype(int),
+            np.floor((q.dec_max_deg - np.asarray(dec_deg)) / q.dec_step_deg).astype(int))
+
+
+def reachable_cells(q: CoverageQuestion, scenario) -> set[tuple[int, int]]:
+    """The cells below ``q.dec_max_deg`` that a catalogue source passes through within the
+    scheduler's limits (elevation window, hour-angle and declination limits) for at least
+    half of the cell's hour angles, from each source's apparent declination at the start."""
+    from controller.program.campaign import plan_targets
+
+    c = scenario.controller
+    sched = c.scheduler
+    observer, targets = plan_targets(c)
+    _, dec = observer.ephemeris.hadec_rad(np.array([t.index for t in targets]),
+                                          np.zeros(len(targets)))
+    limit_h = (sched.hour_angle_limit_deg or 180.0) / 15.0
+    ha_h = np.arange(-limit_h, limit_h + 1e-9, REACH_STEP_H)
+    phi = math.radians(c.site_latitude_deg)
+    counts: dict[tuple[int, int], int] = {}
+    for d in np.atleast_1d(dec):
+        dec_deg = math.degrees(d)
+        if dec_deg >= q.dec_max_deg or (sched.declination_max_deg is not None
+                                        and dec_deg > sched.declination_max_deg):
+            continue
+        el = np.degrees(np.arcsin(math.sin(phi) * math.sin(d)
+                                  + math.cos(phi) * math.cos(d) * np.cos(np.radians(ha_h * 15))))
+        seen = ha_h[(el >= sched.elevation_min_deg) & (el <= sched.elevation_max_deg)]
+        ha_i, dec_i = _cell(seen * 15.0, np.full(seen.size, dec_deg), q)
+        for i, span in zip(*np.unique(ha_i, return_counts=True), strict=True):
+            cell = (int(i), int(dec_i[0]))
+            counts[cell] = max(counts.get(cell, 0), int(span))
+    half = 0.5 * q.ha_step_h / REACH_STEP_H
+    return {cell for cell, n in counts.items() if n >= half}
+
+
+def coverage_answer(q: CoverageQuestion, long, shared) -> dict[str, Any]:
+    """:class:`~antsim.plan.planfile.CoverageQuestion` from the long run's schedule: after
+    each 24-hour day, the share of the reachable cells holding ``min_scans`` scans; the first
+    day at which all do."""
+    cols = shared.columns
+    good = cols["good"].astype(bool)
+    t_s = cols["t_s"].astype(float)[good]
+    ha_i, dec_i = _cell(cols["ha_deg"].astype(float)[good], cols["dec_deg"].astype(float)[good],
+                        q)
+    below = cols["dec_deg"].astype(float)[good] < q.dec_max_deg
+    reach = reachable_cells(q, long)
+    days = list(range(1, math.floor(long.duration_s / 86400.0 + 1e-9) + 1))
+    curve, answer = [], None
+    for day in days:
+        seen: dict[tuple[int, int], int] = {}
+        for cell in zip(ha_i[below & (t_s < day * 86400.0)],
+                        dec_i[below & (t_s < day * 86400.0)], strict=True):
+            seen[cell] = seen.get(cell, 0) + 1
+        filled = sum(1 for cell in reach if seen.get(cell, 0) >= q.min_scans)
+        curve.append({"day": day, "filled": filled, "cells": len(reach)})
+        if answer is None and filled == len(reach):
+            answer = day
+    missing = sorted(cell for cell in reach if seen.get(cell, 0) < q.min_scans) if days else []
+    return {"based_on": q.based_on, "dec_max_deg": q.dec_max_deg, "ha_step_h": q.ha_step_h,
+            "dec_step_deg": q.dec_step_deg, "min_scans": q.min_scans, "max_days": q.max_days,
+            "note": q.note, "cells": len(reach), "answer_days": answer, "curve": curve,
+            "missing_at_max_days": [{"ha_h": [i * q.ha_step_h, (i + 1) * q.ha_step_h],
+                                     "dec_deg": [q.dec_max_deg - (k + 1) * q.dec_step_deg,
+                                                 q.dec_max_deg - k * q.dec_step_deg]}
+                                    for i, k in missing]}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -206,7 +301,7 @@ def sources_shortlist(q: SourcesQuestion, vr) -> dict[str, Any]:
     config = replace(base.controller, scheduler=replace(sched, sources=()))
     observer, targets = plan_targets(config)
     index = {t.name: t.index for t in targets}
-    terms = vr.terms
+    terms = vr.terms  # names; the model below is built from the fitted terms themselves
     shared = vr.shared
     slots = shared.columns["t_s"].astype(float)
     # per-source predicted offset variance (xel, el) from the variant's noise model
@@ -218,13 +313,17 @@ def sources_shortlist(q: SourcesQuestion, vr) -> dict[str, Any]:
     noise = {n: (var[src_of == n].mean(axis=0) if np.any(src_of == n) else default)
              for n in catalogue}
     el_min, el_max = np.radians(sched.elevation_min_deg), np.radians(sched.elevation_max_deg)
-    model = PointingModel(list(terms))
+    model = PointingModel(list(base.controller.fit_spec()[0]))
+    equatorial = base.mount.kind == "equatorial"
     rows = {}
     for name in catalogue:
-        az, el = observer.ephemeris.altaz_rad(np.full(slots.size, index[name]), slots)
+        src = np.full(slots.size, index[name])
+        az, el = observer.ephemeris.altaz_rad(src, slots)
         visible = (el >= el_min) & (el <= el_max)
-        bx, be = model.design_matrix(az, el)
-        rows[name] = (visible, bx * np.cos(el)[:, None], be)
+        # the fit's axes: an equatorial mount's hour angle and declination
+        lon, lat = observer.ephemeris.hadec_rad(src, slots) if equatorial else (az, el)
+        bx, be = model.design_matrix(lon, lat)
+        rows[name] = (visible, bx * np.cos(lat)[:, None], be)
     catalogue = [n for n in catalogue if rows[n][0].any()]  # visible at some slot
     spacing = float(np.median(np.diff(slots))) if slots.size > 1 else 600.0
     sel = [terms.index(n) for n in q.terms] if q.terms else None
@@ -324,28 +423,57 @@ def _criterion(matrix: np.ndarray, sel: list[int] | None, inverse: bool) -> floa
 
 
 # ---------------------------------------------------------------------------------------------
+def _unit(unit: str, count: int) -> str:
+    """The unit's name for ``count`` of it ("run_day": 24-hour days from the start)."""
+    name = {"run_day": "day"}.get(unit, unit) + ("s" if count != 1 else "")
+    return f"{name} (24 h each)" if unit == "run_day" else name
+
+
 def answers_text(answers: dict[str, list]) -> list[str]:
     """The answers as sentences with their numbers."""
     lines: list[str] = []
     for a in answers.get("duration", []):
         terms = ", ".join(a["terms"])
         unit = a["unit"]
+        one = a["target_arcsec"]
+        goal = f"{one:g}\"" if one is not None else "their targets (" + ", ".join(
+            f"{n} {g:g}\"" for n, g in a["targets_arcsec"].items()) + ")"
         if a["reached"]:
             ans = a["answer"]
             sig = ", ".join(f"{n} {s:.1f}\"" for n, s in ans["sigma_arcsec"].items())
             bias = ", ".join(f"{n} {b:+.1f}\"" for n, b in ans["bias_predicted_arcsec"].items())
             lines.append(
-                f"duration: {ans['count']} {unit}{'s' if ans['count'] != 1 else ''} of "
-                f"'{a['based_on']}' bring {terms} to {a['target_arcsec']:g}\" or better "
+                f"duration: {ans['count']} {_unit(unit, ans['count'])} of "
+                f"'{a['based_on']}' bring {terms} to {goal} or better "
                 f"(predicted {sig}; {ans['n_scans']} scans, {ans['scan_time_h']:.1f} h of "
                 f"scanning in {ans['campaign_h']:.1f} h); the systematic bias ({bias}) does not "
                 "shrink with time")
         else:
             ext = a["extrapolated"]
-            more = (f"; about {ext['count']} {unit}s by extrapolation ({ext['method']})"
-                    if ext else "")
-            lines.append(f"duration: {terms} to {a['target_arcsec']:g}\" is not reached within "
+            more = (f"; about {ext['count']} {_unit(unit, 2)} by extrapolation "
+                    f"({ext['method']})" if ext else "")
+            lines.append(f"duration: {terms} to {goal} is not reached within "
                          f"{a['max_days']:g} days of '{a['based_on']}'{more}")
+        if one is None:
+            lines.append("  each term's first: " + ", ".join(
+                f"{n} {c if c is not None else '-'}" for n, c in a["first_count"].items())
+                + f" ({_unit(unit, 2)}; - not within {a['max_days']:g} days)")
+        if a.get("note"):
+            lines.append(f"  beside: {a['note']}")
+    for a in answers.get("coverage", []):
+        shares = ", ".join(f"day {c['day']} {c['filled']}/{c['cells']}" for c in a["curve"])
+        cells = (f"{a['ha_step_h']:g} h x {a['dec_step_deg']:g} deg cells below dec "
+                 f"{a['dec_max_deg']:g} deg")
+        if a["answer_days"] is not None:
+            lines.append(f"coverage: after {a['answer_days']} {_unit('run_day', a['answer_days'])}"
+                         f" of '{a['based_on']}' each of the {a['cells']} {cells} the "
+                         f"catalogue reaches holds {a['min_scans']} scan(s) ({shares})")
+        else:
+            lines.append(f"coverage: the {a['cells']} {cells} the catalogue reaches are not all "
+                         f"observed within {a['max_days']:g} days of '{a['based_on']}' "
+                         f"({shares})")
+        if a.get("note"):
+            lines.append(f"  beside: {a['note']}")
     for a in answers.get("sources", []):
         best = a["best"]
         if best is None:

@@ -50,7 +50,7 @@ from controller.pointing.model import PointingModel
 
 from .vectorized import MemberEngine, SharedSchedule
 
-__all__ = ["NoiseModel", "Prediction", "noise_model", "predict"]
+__all__ = ["NoiseModel", "Prediction", "noise_model", "predict", "truth_vector"]
 
 #: nudge of the pointing for the linear response of the powers (arcsec)
 NUDGE_ARCSEC = 1.0
@@ -147,10 +147,22 @@ class Prediction:
 
 
 # ---------------------------------------------------------------------------------------------
+def truth_vector(scenario, terms) -> np.ndarray:
+    """The injected value (arcsec) of each fitted term (names or terms), in fit order:
+    :meth:`antsim.scenario.Scenario.truth_arcsec`."""
+    names = tuple(t.strip().upper() if isinstance(t, str) else t.name for t in terms)
+    truth = scenario.truth_arcsec(names)
+    return np.array([truth[n] for n in names])
+
+
 def _design(columns: dict[str, np.ndarray], terms, rows: np.ndarray) -> np.ndarray:
-    """Design matrix of the fit (2n x m: xel rows then el rows), as the fitter builds it."""
-    az = np.radians(columns["az_deg"][rows].astype(float))
-    el = np.radians(columns["el_deg"][rows].astype(float))
+    """Design matrix of the fit (2n x m: cross-axis rows then the second axis' rows), as the
+    fitter builds it: on an equatorial mount's hour angle and declination when the rows
+    carry them (:func:`controller.pointing.variants.pointing_data`), else azimuth and
+    elevation."""
+    lon, lat = ("ha_deg", "dec_deg") if "ha_deg" in columns else ("az_deg", "el_deg")
+    az = np.radians(columns[lon][rows].astype(float))
+    el = np.radians(columns[lat][rows].astype(float))
     basis_az, basis_el = PointingModel(list(terms)).design_matrix(az, el)
     return np.vstack([basis_az * np.cos(el)[:, None], basis_el])
 
@@ -463,7 +475,8 @@ def predict(shared: SharedSchedule, terms: Sequence[str], noise: NoiseModel,
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = b / np.outer(sd, sd)
     truth = np.zeros(m) if truth is None else truth
-    return Prediction(names=tuple(terms), covariance=total, design_correlation=corr,
+    return Prediction(names=PointingModel(list(terms)).names, covariance=total,
+                      design_correlation=corr,
                       sky_rms_arcsec=rej.sky_rms, n_scans=n, components=comps,
                       bias_arcsec=coef - shift - truth, n_rejected=rej.n_rejected)
 

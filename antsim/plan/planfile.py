@@ -12,17 +12,27 @@ A plan is TOML (see ``scenarios/plans/ghigo1990_whatif.toml``)::
     window = "night"                   # all | day | night
     # duration_h or duration_days, start_utc, sources = [...], elevation_min_deg,
     # elevation_max_deg, step_arcmin, integration_s, estimator (clark | lsq),
-    # model (scenario | none | truth | a .mod/.json file), fit_model, members
+    # model (scenario | none | truth | a .mod/.json file), fit_model, members,
+    # scenario (another base scenario for this variant, relative to the plan file),
+    # tipping = false (no tipping scans; their sky subtraction a priori)
 
     [[answers.duration]]               # the smallest duration reaching a target sigma
     based_on = "night only"
     terms = ["W4"]
-    target_arcsec = 6.0
-    unit = "night"                     # hour | day | night
+    target_arcsec = 6.0                # or targets_arcsec = {W4 = 6.0, ...}, one per term
+    unit = "night"                     # hour | day | night | run_day (24 h from the start)
     max_days = 20
+    note = "..."                       # printed beside the answer (e.g. a source's claim)
 
     [[answers.sources]]                # the best source list for a variant's duration
     based_on = "8 hours"
+
+    [[answers.coverage]]               # equatorial mounts: how long until the hour-angle
+    based_on = "as run"                # and declination cells below dec_max_deg that the
+    dec_max_deg = 20.0                 # catalogue can reach each hold a scan
+    ha_step_h = 1.0
+    dec_step_deg = 10.0
+    max_days = 10
 
 Every bad value is one :class:`~controller.errors.InputError` line naming the file, the key
 and the value (exit status 2 through the command line), as for scenarios.
@@ -38,15 +48,16 @@ from typing import Any
 from controller.errors import InputError
 from controller.pointing.model import NAMED_MODELS, PointingModel
 from controller.pointing.terms import TermError, get_term
+from controller.scans.config import SkyConfig
 
 from ..scenario import ESTIMATORS, Scenario, load_scenario
 from ..tomlcheck import Table, load_toml
 
-__all__ = ["DurationQuestion", "Plan", "SourcesQuestion", "VariantSpec", "load_plan",
-           "make_variant"]
+__all__ = ["CoverageQuestion", "DurationQuestion", "Plan", "SourcesQuestion", "VariantSpec",
+           "load_plan", "make_variant"]
 
 WINDOWS = ("all", "day", "night")
-UNITS = ("hour", "day", "night")
+UNITS = ("hour", "day", "night", "run_day")
 #: most members a plan may ask for per variant
 MAX_MEMBERS = 100_000
 
@@ -69,26 +80,55 @@ class VariantSpec:
     model: str | None = None
     fit_model: str | None = None
     members: int | None = None
+    #: another base scenario for this variant (path as written, relative to the plan file)
+    scenario: str | None = None
+    #: False: no tipping scans; the sky emission they would measure is subtracted a priori
+    #: (the scenario's own opacity), so that only the time they take is saved
+    tipping: bool | None = None
     key: str = ""  # where it sits in the plan file, e.g. variants[2]
 
     def settings(self) -> dict[str, Any]:
         """The settings this variant changes (for reports)."""
-        names = ("window", "duration_h", "start_utc", "sources", "elevation_min_deg",
-                 "elevation_max_deg", "step_arcmin", "integration_s", "estimator", "model",
-                 "fit_model")
+        names = ("scenario", "window", "duration_h", "start_utc", "sources",
+                 "elevation_min_deg", "elevation_max_deg", "step_arcmin", "integration_s",
+                 "estimator", "model", "fit_model", "tipping")
         return {n: (list(v) if isinstance(v, tuple) else v) for n in names
                 if (v := getattr(self, n)) is not None}
 
 
 @dataclass(frozen=True)
 class DurationQuestion:
-    """The smallest duration of ``based_on``'s plan giving ``terms`` sigma <= target."""
+    """The smallest duration of ``based_on``'s plan giving each of ``terms`` a sigma no
+    larger than its target (``targets_arcsec``, in the order of ``terms``)."""
 
     based_on: str
     terms: tuple[str, ...]
-    target_arcsec: float
+    targets_arcsec: tuple[float, ...]
     unit: str = "day"
     max_days: float = 10.0
+    note: str = ""
+    key: str = ""
+
+    @property
+    def target_arcsec(self) -> float | None:
+        """The one target of every term, or None when they differ."""
+        return self.targets_arcsec[0] if len(set(self.targets_arcsec)) == 1 else None
+
+
+@dataclass(frozen=True)
+class CoverageQuestion:
+    """The smallest duration (24-hour days from the start) of ``based_on``'s plan after which
+    every cell of ``ha_step_h`` hours by ``dec_step_deg`` below ``dec_max_deg`` that a
+    catalogue source passes through within the scheduler's limits holds ``min_scans``
+    scans (an equatorial mount's sky coverage)."""
+
+    based_on: str
+    dec_max_deg: float
+    ha_step_h: float = 1.0
+    dec_step_deg: float = 10.0
+    min_scans: int = 1
+    max_days: float = 10.0
+    note: str = ""
     key: str = ""
 
 
@@ -118,6 +158,7 @@ class Plan:
     scenarios: tuple[Scenario, ...]
     durations: tuple[DurationQuestion, ...] = ()
     sources: tuple[SourcesQuestion, ...] = ()
+    coverage: tuple[CoverageQuestion, ...] = ()
     separation_level: float = 0.95
     block_members: int = 0
     extra: dict[str, Any] = field(default_factory=dict)
@@ -155,29 +196,58 @@ def load_plan(path: str | Path) -> Plan:
     for i, n in enumerate(names):
         if names.index(n) != i:
             raise InputError(str(path), f"variants[{i}].name", n, "duplicate variant name")
-    scenarios = tuple(make_variant(base, v, str(path)) for v in specs)
+    scenarios = tuple(make_variant(_variant_base(v, path, base), v, str(path))
+                      for v in specs)
     answers = root.table("answers", {})
     durations = tuple(_duration(t, f"answers.duration[{i}]", names, scenarios)
                       for i, t in enumerate(answers.tables("duration", [])))
     sources = tuple(_sources(t, f"answers.sources[{i}]", names, scenarios)
                     for i, t in enumerate(answers.tables("sources", [])))
+    coverage = tuple(_coverage(t, f"answers.coverage[{i}]", names, scenarios)
+                     for i, t in enumerate(answers.tables("coverage", [])))
     answers.finish()
     root.finish()
     return Plan(name=name, path=str(path), description=description, scenario=base, seed=seed,
                 members=members, variants=tuple(specs), scenarios=scenarios,
-                durations=durations, sources=sources, separation_level=level,
-                block_members=block)
+                durations=durations, sources=sources, coverage=coverage,
+                separation_level=level, block_members=block)
 
 
-def _terms(t: Table, key: str, default: Any = None) -> tuple[str, ...]:
-    raw = t.strings(key, default if default is not None else [])
+def _variant_base(spec: VariantSpec, path: Path, base: Scenario) -> Scenario:
+    """The scenario a variant changes: the plan's, or its own ``scenario``."""
+    if spec.scenario is None:
+        return base
+    ref = Path(spec.scenario)
+    if not ref.is_absolute():
+        ref = path.parent / ref
+    if not ref.exists():
+        raise InputError(str(path), f"{spec.key}.scenario", spec.scenario,
+                         "no such scenario file", "paths are relative to the plan file")
+    return load_scenario(ref)
+
+
+def _terms(t: Table, key: str, default: Any = None, fitted: tuple[str, ...] = (),
+           raw: list[str] | None = None) -> tuple[str, ...]:
+    """Term names, each as the fit names it (``fitted``: the fit's names, which include an
+    equatorial model's terms such as Crane's C1..C11); ``raw``: names given otherwise than
+    as the list ``key``."""
+    if raw is None:
+        raw = t.strings(key, default if default is not None else [])
     out = []
     for term in raw:
+        if term.strip().upper() in fitted:
+            out.append(term.strip().upper())
+            continue
         try:
             out.append(get_term(term).name)
         except TermError as err:
             raise t.error(key, term, "not a pointing term", str(err)) from None
     return tuple(out)
+
+
+def _fitted_names(scenario: Scenario) -> tuple[str, ...]:
+    """The names of the terms the scenario's controller fits."""
+    return PointingModel(list(scenario.controller.fit_spec()[0])).names
 
 
 def _variant(t: Table, key: str) -> VariantSpec:
@@ -215,6 +285,8 @@ def _variant(t: Table, key: str) -> VariantSpec:
         fit_model=t.string("fit_model", None),
         members=t.integer("members", None, min=2, max=MAX_MEMBERS) if "members" in t
         else None,
+        scenario=t.string("scenario", None),
+        tipping=t.boolean("tipping") if "tipping" in t else None,
         key=key,
     )
     t.finish()
@@ -243,26 +315,65 @@ def _scenario_for(t: Table, key: str, names: list[str], scenarios) -> Scenario:
 
 def _duration(t: Table, key: str, names: list[str], scenarios) -> DurationQuestion:
     scenario = _scenario_for(t, "based_on", names, scenarios)
-    terms = _terms(t, "terms")
+    fitted = _fitted_names(scenario)
+    terms = _terms(t, "terms", fitted=fitted)
     if not terms:
         raise t.error("terms", [], "name at least one term", "e.g. terms = [\"W4\"]")
-    fitted = scenario.controller.fit_spec()[0]
     for term in terms:
         if term not in fitted:
             raise t.error("terms", term, "is not fitted by this plan",
                           f"fitted terms are {' '.join(fitted)}")
     q = DurationQuestion(based_on=t.string("based_on"), terms=terms,
-                         target_arcsec=t.number("target_arcsec", gt=0.0),
+                         targets_arcsec=_targets(t, terms, fitted),
                          unit=t.string("unit", "day", choices=UNITS),
-                         max_days=t.number("max_days", 10.0, gt=0.0, max=366.0), key=key)
+                         max_days=t.number("max_days", 10.0, gt=0.0, max=366.0),
+                         note=t.string("note", ""), key=key)
+    t.finish()
+    return q
+
+
+def _targets(t: Table, terms: tuple[str, ...], fitted: tuple[str, ...]) -> tuple[float, ...]:
+    """One target per term: ``target_arcsec`` for all, or ``targets_arcsec`` = {term = ...}
+    naming every term of ``terms``."""
+    if ("target_arcsec" in t) == ("targets_arcsec" in t):
+        raise t.error("target_arcsec", t.raw("target_arcsec", None),
+                      "give target_arcsec (one for every term) or targets_arcsec (one per "
+                      "term), not both or neither")
+    if "target_arcsec" in t:
+        return (t.number("target_arcsec", gt=0.0),) * len(terms)
+    table = t.table("targets_arcsec")
+    given = {_terms(table, k, fitted=fitted, raw=[k])[0]: k for k in table}
+    missing = [n for n in terms if n not in given]
+    extra = [k for n, k in given.items() if n not in terms]
+    if missing or extra:
+        raise t.error("targets_arcsec", sorted(table.keys()),
+                      f"must name exactly the terms {' '.join(terms)}",
+                      f"missing {' '.join(missing) or '-'}, not in terms {' '.join(extra) or '-'}")
+    out = tuple(table.number(given[n], gt=0.0) for n in terms)
+    table.finish()
+    return out
+
+
+def _coverage(t: Table, key: str, names: list[str], scenarios) -> CoverageQuestion:
+    scenario = _scenario_for(t, "based_on", names, scenarios)
+    if scenario.mount.kind != "equatorial":
+        raise t.error("based_on", t.string("based_on"), "coverage is asked of hour angle and "
+                      "declination cells: the variant's mount must be equatorial")
+    q = CoverageQuestion(based_on=t.string("based_on"),
+                         dec_max_deg=t.number("dec_max_deg", min=-90.0, max=90.0),
+                         ha_step_h=t.number("ha_step_h", 1.0, gt=0.0, max=12.0),
+                         dec_step_deg=t.number("dec_step_deg", 10.0, gt=0.0, max=90.0),
+                         min_scans=t.integer("min_scans", 1, min=1, max=1000),
+                         max_days=t.number("max_days", 10.0, gt=0.0, max=366.0),
+                         note=t.string("note", ""), key=key)
     t.finish()
     return q
 
 
 def _sources(t: Table, key: str, names: list[str], scenarios) -> SourcesQuestion:
     scenario = _scenario_for(t, "based_on", names, scenarios)
-    terms = _terms(t, "terms")
-    fitted = scenario.controller.fit_spec()[0]
+    fitted = _fitted_names(scenario)
+    terms = _terms(t, "terms", fitted=fitted)
     for term in terms:
         if term not in fitted:
             raise t.error("terms", term, "is not fitted by this plan",
@@ -327,6 +438,12 @@ def make_variant(base: Scenario, spec: VariantSpec, where: str = "plan") -> Scen
                   f"limit ({base.mount.el.min_deg:g} deg)",
                   "raise elevation_min_deg or use a smaller step")
     controller = replace(scenario.controller, scheduler=sched, scan=scan)
+    if spec.tipping is False and controller.tipping is not None:
+        controller = replace(controller, tipping=None, sky=SkyConfig(
+            base.atmosphere.zenith_opacity, controller.tipping.t_atm_k))
+    elif spec.tipping and controller.tipping is None:
+        raise err("tipping", True, "the scenario makes no tipping scans",
+                  "add [controller.tipping] to the scenario")
     if spec.model is not None:
         controller = replace(controller, model=_model(spec, base, where, err))
     if spec.fit_model is not None:

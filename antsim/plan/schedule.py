@@ -154,6 +154,8 @@ def record_schedule(quiet: Scenario, seed: int = 0,
     avg = [r for r in run.rows if r["polarization"] == "AVG"]
     names = ("az_deg", "el_deg", "model_xel_arcmin", "model_el_arcmin", "applied_xel_arcmin",
              "applied_el_arcmin", "sun_el_deg", "t_s", "xel_arcmin", "el_arcmin", "good")
+    # an equatorial mount's rows also carry hour angle and declination, which its fit uses
+    names += tuple(n for n in ("ha_deg", "dec_deg") if avg and n in avg[0])
     columns = {n: np.array([r[n] for r in avg]) for n in names}
     columns["polarization"] = np.array(["AVG"] * len(avg))
     shared = SharedSchedule(

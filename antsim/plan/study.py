@@ -28,7 +28,7 @@ from .ensemble import (
     task_noise,
     task_record,
 )
-from .fisher import NoiseModel, Prediction, predict
+from .fisher import NoiseModel, Prediction, predict, truth_vector
 from .planfile import Plan, VariantSpec
 from .vectorized import MemberResults, SharedSchedule, quiet_scenario
 
@@ -247,10 +247,7 @@ def _f(x: float | None, spec: str) -> str:
 
 
 # ---------------------------------------------------------------------------------------------
-def truth_vector(scenario: Scenario, terms: tuple[str, ...]) -> np.ndarray:
-    """The injected geometric truth of the fitted terms (0 where not injected)."""
-    truth = scenario.truth_model.as_dict()
-    return np.array([truth.get(n, 0.0) for n in terms])
+
 
 
 def run_plan(plan: Plan, workers: int | None = None, scheduler: str | None = None,
@@ -264,7 +261,7 @@ def run_plan(plan: Plan, workers: int | None = None, scheduler: str | None = Non
     try:
         variants = _run_variants(plan, executor, members, progress)
         result = PlanResult(plan, variants, engine=executor.description)
-        if answers and (plan.durations or plan.sources):
+        if answers and (plan.durations or plan.sources or plan.coverage):
             from .answers import answer_questions
 
             result.answers = answer_questions(plan, variants, executor, log=log)
@@ -326,7 +323,7 @@ def _run_variants(plan: Plan, executor: Executor, members: int | None,
     for v, spec in enumerate(plan.variants):
         nm, unshareable = noise[v]
         terms, _ = plan.scenarios[v].controller.fit_spec()
-        truth = truth_vector(plan.scenarios[v], tuple(terms))
+        truth = truth_vector(plan.scenarios[v], terms)
         pred = predict(shared[v], terms, nm, truth=truth)
         out.append(VariantResult(spec=spec, scenario=plan.scenarios[v], shared=shared[v],
                                  noise=nm, prediction=pred,

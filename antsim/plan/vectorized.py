@@ -191,6 +191,7 @@ class _MemberWorld(World):
 
     def __init__(self, reference: World, slow: list, fast: list, receiver: Receiver):
         self.scenario = reference.scenario
+        self.frame = reference.frame  # the mount's axes (an equatorial mount's HA and Dec)
         self.sky = reference.sky
         self.beam = reference.beam
         self.atmosphere = reference.atmosphere
