@@ -120,9 +120,11 @@ def prepare(executor: Executor, scenarios: list, plan: Plan) -> list[tuple]:
 
 
 # ---------------------------------------------------------------------------------------------
-def _periods(t_s: np.ndarray, sun_el_deg: np.ndarray, unit: str) -> list[int]:
-    """Indices (exclusive ends, in scan order) of the prefixes ending each day or night."""
-    label = sun_el_deg > DAY_SUN_MIN_DEG if unit == "day" else sun_el_deg < NIGHT_SUN_MAX_DEG
+def _periods(t_s: np.ndarray, sun_el_deg: np.ndarray, unit: str,
+             night_sun_max_deg: float = NIGHT_SUN_MAX_DEG) -> list[int]:
+    """Indices (exclusive ends, in scan order) of the prefixes ending each day or night (the
+    Sun below ``night_sun_max_deg``)."""
+    label = sun_el_deg > DAY_SUN_MIN_DEG if unit == "day" else sun_el_deg < night_sun_max_deg
     ends: list[int] = []
     inside, last = False, -1
     for i in range(t_s.size):
@@ -163,7 +165,7 @@ def duration_answer(q: DurationQuestion, long, shared, noise, terms) -> dict[str
         counts = list(range(1, math.floor(span / step + 1e-9) + 1))
         ends = [int(np.searchsorted(t_s, k * step, side="right")) for k in counts]
     else:
-        ends = _periods(t_s, sun, q.unit)
+        ends = _periods(t_s, sun, q.unit, long.controller.night_sun_max_deg)
         counts = list(range(1, len(ends) + 1))
     names = PointingModel(list(terms)).names
     truth = truth_vector(long, names)
