@@ -137,6 +137,13 @@ class FixedTrajectory:
     def elevation_deg(self, t_s: float) -> float:
         return self.lat_deg
 
+    def program_track(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """One point: a program track that holds it (see SourceTrajectory.program_track)."""
+        return np.zeros(1), np.array([self.lon_deg]), np.array([self.lat_deg])
+
+    def covers(self, t_s) -> bool:
+        return True
+
     def sky_elevation_deg(self, t_s: float) -> float:
         return self.lat_deg
 

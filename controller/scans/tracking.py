@@ -8,7 +8,9 @@ on nodes every ``NODE_STEP_S`` and interpolated linearly (the curvature over a m
 below 0.01"). The commanded path itself is tabulated every ``TABLE_STEP_S`` over the next
 ``NODE_SPAN_S`` and interpolated linearly: with a 2 s step the error is below 0.01" up to
 85 deg elevation, and a call costs a few microseconds. Outside the table (slew planning
-looks an hour ahead for the cable wrap) positions are computed exactly.
+looks an hour ahead for the cable wrap) positions are computed exactly. The table is kept in
+encoder degrees, so that an antenna driven over the wire with it as a program track
+(:meth:`SourceTrajectory.program_track`) interpolates to the same bits.
 
 On an equatorial mount (``frame``) the encoder coordinates are hour angle and declination of
 the observed (refracted) place, the model offset is evaluated there, and the running
@@ -89,11 +91,15 @@ class SourceTrajectory:
         if self._frame is not None:  # equatorial: (HA, Dec) of the observed place
             lon, lat = self._frame.from_altaz(az, el + np.interp(t_table, t_nodes,
                                                                  self._refraction))
-            self._table_az = np.unwrap(lon) + np.interp(t_table, t_nodes, self._offset_az)
-            self._table_el = lat + np.interp(t_table, t_nodes, self._offset_el)
+            self._table_az_deg = (np.unwrap(lon) + np.interp(t_table, t_nodes,
+                                                             self._offset_az)) * DEG_PER_RAD
+            self._table_el_deg = (lat + np.interp(t_table, t_nodes,
+                                                  self._offset_el)) * DEG_PER_RAD
             return
-        self._table_az = np.unwrap(az) + np.interp(t_table, t_nodes, self._offset_az)
-        self._table_el = el + np.interp(t_table, t_nodes, self._refraction + self._offset_el)
+        self._table_az_deg = (np.unwrap(az)
+                              + np.interp(t_table, t_nodes, self._offset_az)) * DEG_PER_RAD
+        self._table_el_deg = (el + np.interp(t_table, t_nodes,
+                                             self._refraction + self._offset_el)) * DEG_PER_RAD
 
     def _exact(self, t: np.ndarray):
         """Vacuum position, refraction and model + correction offsets at times ``t``."""
@@ -127,15 +133,27 @@ class SourceTrajectory:
     def __call__(self, t_s) -> tuple[np.ndarray, np.ndarray]:
         t = np.asarray(t_s, dtype=float)
         if self._covered(t):
-            az = np.interp(t, self._t_table, self._table_az)
-            el = np.interp(t, self._t_table, self._table_el)
-        else:  # rare: slew planning looks an hour ahead for the cable wrap
-            az, el, refraction, d_az, d_el = self._exact(t)
-            if self._frame is not None:
-                az, el = self._frame.from_altaz(az, el + refraction)
-                refraction = 0.0
-            az, el = az + d_az, el + refraction + d_el
+            return (np.interp(t, self._t_table, self._table_az_deg) % 360.0,
+                    np.interp(t, self._t_table, self._table_el_deg))
+        # rare: slew planning looks an hour ahead for the cable wrap
+        az, el, refraction, d_az, d_el = self._exact(t)
+        if self._frame is not None:
+            az, el = self._frame.from_altaz(az, el + refraction)
+            refraction = 0.0
+        az, el = az + d_az, el + refraction + d_el
         return (az * DEG_PER_RAD) % 360.0, el * DEG_PER_RAD
+
+    def program_track(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The table this trajectory interpolates linearly: clock times (s), encoder
+        azimuth (deg, continuous: not reduced to 0..360) and elevation (deg). Between its
+        first and last time the trajectory is ``np.interp`` on it (azimuth then modulo 360),
+        bit for bit, so that an antenna given the table (a program track) points exactly
+        where this trajectory would; elsewhere it is computed exactly (:meth:`covers`)."""
+        return self._t_table.copy(), self._table_az_deg.copy(), self._table_el_deg.copy()
+
+    def covers(self, t_s) -> bool:
+        """Whether every time of ``t_s`` lies within :meth:`program_track`'s table."""
+        return self._covered(np.asarray(t_s, dtype=float))
 
     def elevation_deg(self, t_s: float) -> float:
         """Commanded elevation at one instant (degrees); the declination on an equatorial
