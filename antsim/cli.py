@@ -23,6 +23,8 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "plan": ("antsim.commands.plan", "answer what-if questions about an observing plan"),
     "blindtest": ("antsim.commands.blindtest", "score diagnose on recordings with hidden effects"),
     "demo": ("antsim.commands.demo", "teaching walk-through: cold start to closed loop"),
+    "serve": ("antsim.commands.serve", "the simulated antenna as a KATCP device, for "
+              "closed-loop tests of control software"),
 }
 
 EXIT_INPUT = 2

@@ -1,0 +1,47 @@
+"""`antsim serve SCENARIO.toml`: the simulated antenna as a KATCP device (docs/katcp.md)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from controller.errors import InputError
+
+
+def configure(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("scenario", help="scenario file (TOML), e.g. scenarios/ghigo1990.toml")
+    parser.add_argument("--host", default="127.0.0.1",
+                        help="address to listen on (default: 127.0.0.1, this machine only)")
+    parser.add_argument("--port", type=int, default=5025,
+                        help="TCP port (default: 5025; 0: any free port, printed at start)")
+    parser.add_argument("--clock", default="virtual",
+                        help="virtual (time passes only as commands run; the default), "
+                             "realtime, or xK: K simulated seconds per second (x10)")
+    parser.add_argument("--seed", type=int, default=None,
+                        help="random seed (default: the scenario's)")
+    parser.add_argument("--out", default=None,
+                        help="directory for truth.json and requests.jsonl (the log of "
+                             "every request)")
+
+
+def main(args: argparse.Namespace) -> int:
+    import asyncio
+
+    from antsim.scenario import load_scenario
+    from antsim.serve.app import serve
+    from antsim.serve.clock import parse_clock
+
+    try:
+        clock = parse_clock(args.clock)
+    except ValueError as err:
+        raise InputError("command line", "--clock", args.clock, str(err)) from None
+    if not 0 <= args.port <= 65535:
+        raise InputError("command line", "--port", args.port, "must be in 0..65535")
+    if args.seed is not None and args.seed < 0:
+        raise InputError("command line", "--seed", args.seed, "must be >= 0")
+    out = Path(args.out) if args.out is not None else None
+    if out is not None and out.exists() and not out.is_dir():
+        raise InputError("command line", "--out", str(out), "exists and is not a directory")
+    scenario = load_scenario(args.scenario)
+    return asyncio.run(serve(scenario, clock, host=args.host, port=args.port, seed=args.seed,
+                             out=out))
