@@ -24,6 +24,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="progress bar (default: when stderr is a terminal)")
     parser.add_argument("--no-report", action="store_true",
                         help="skip the figures and report.html (faster)")
+    parser.add_argument("--connect", default=None, metavar="HOST:PORT",
+                        help="drive the antenna of a KATCP server (antsim serve) instead of "
+                             "simulating one: the truth and the seed are the server's")
 
 
 def main(args: argparse.Namespace) -> int:
@@ -50,8 +53,22 @@ def main(args: argparse.Namespace) -> int:
         raise InputError("command line", "--out", str(out),
                          "already holds recordings.ecsv",
                          "use --resume to continue that run, or another directory")
-    result = run_campaign(scenario, out, seed=args.seed, model=model, resume=args.resume,
-                          show_progress=args.progress)
+    antenna, seed = None, args.seed
+    if args.connect is not None:
+        from antsim.serve.remote import connect
+
+        for option, given in (("--seed", args.seed is not None), ("--resume", args.resume)):
+            if given:
+                raise InputError("command line", option, True, "not with --connect",
+                                 "the simulation is the server's (antsim serve --seed)")
+        antenna, seed = connect(scenario, args.connect)
+    try:
+        result = run_campaign(scenario, out, seed=seed, model=model, resume=args.resume,
+                              show_progress=args.progress, antenna=antenna)
+    except ConnectionError as err:  # controller.wire.ConnectionLostError, mid-campaign
+        print(f"antsim run: error: {err}; the scans recorded so far are in "
+              f"{out / 'recordings.ecsv'}", file=sys.stderr)
+        return 1
     summary = write_outputs(result, report=not args.no_report)
     print(summary, file=sys.stdout)
     return 0

@@ -101,6 +101,8 @@ def write_outputs(result: RunResult, report: bool = True) -> str:
         summary += (f"; fit A: {fit_a.n_used} points, xel rms {fit_a.xel_rms_arcsec:.1f}\", "
                     f"el rms {fit_a.el_rms_arcsec:.1f}\"")
     written = "recordings.ecsv truth.json fit.json fit_variants.json fit.txt model.dat"
+    if not result.truth:  # an antenna over the wire: its server keeps the truth
+        written = written.replace(" truth.json", "")
     if result.calibration is not None:
         written += " gaincurve.json"
     if report:

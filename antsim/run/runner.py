@@ -23,6 +23,7 @@ from antsim.world.world import World
 from controller.pointing.model import PointingModel
 from controller.program.campaign import ControlProgram
 from controller.program.recordings import RecordingWriter, recording_columns
+from controller.protocol import Antenna
 
 __all__ = ["RunResult", "check_scenario", "recording_meta", "run_campaign", "simulate"]
 
@@ -107,18 +108,26 @@ def recording_meta(scenario: Scenario, seed: int, model: PointingModel) -> dict:
 def simulate(scenario: Scenario, seed: int | None = None, model: PointingModel | None = None,
              sink: Callable[[list[dict]], None] | None = None,
              progress: Callable[[float], None] | None = None,
-             on_world: Callable[[World], None] | None = None) -> RunResult:
+             on_world: Callable[[World], None] | None = None,
+             antenna: Antenna | None = None) -> RunResult:
     """Run the campaign in memory; ``sink`` also receives each scan's rows as they complete;
     ``on_world`` is called with the world before the campaign starts (e.g. to attach the
-    antenna's recorder, as ``antsim.plan`` does)."""
+    antenna's recorder, as ``antsim.plan`` does). With ``antenna`` (e.g. a
+    :class:`controller.wire.KatcpAntenna`, whose ``env`` the controller then runs in) the
+    controller drives it instead of a simulated world, and the result has no truth."""
     seed = scenario.seed if seed is None else int(seed)
     if model is not None:
         scenario = scenario.with_controller_model(model)
     model = scenario.controller.model
     t0 = time.perf_counter()
-    env = simpy.Environment()
-    world = World(scenario, env, seed)
-    if on_world is not None:
+    world = None
+    if antenna is None:
+        env = simpy.Environment()
+        world = World(scenario, env, seed)
+        antenna = world.antenna
+    else:
+        env = antenna.env
+    if on_world is not None and world is not None:
         on_world(world)
     labeller = _TimeLabeller(scenario.epoch_utc, scenario.duration_s)
     rows: list[dict] = []
@@ -135,10 +144,11 @@ def simulate(scenario: Scenario, seed: int | None = None, model: PointingModel |
         from controller.program.optical import OpticalPointingProgram
 
         program_class = OpticalPointingProgram
-    program = program_class(scenario.controller, world.antenna, sink=collect, progress=progress)
+    program = program_class(scenario.controller, antenna, sink=collect, progress=progress)
     check_scenario(scenario, program.observer, program.targets)
     env.run(until=env.process(program.run(env)))
-    return RunResult(scenario=scenario, seed=seed, model=model, rows=rows, truth=world.truth(),
+    return RunResult(scenario=scenario, seed=seed, model=model, rows=rows,
+                     truth=world.truth() if world is not None else {},
                      program=program, world=world, wall_s=time.perf_counter() - t0,
                      tippings=list(getattr(program, "tippings", ())))
 
@@ -176,8 +186,10 @@ def check_scenario(scenario: Scenario, observer=None, targets=None) -> None:
 
 def run_campaign(scenario: Scenario, out_dir: str | Path, seed: int | None = None,
                  model: PointingModel | None = None, resume: bool = False,
-                 show_progress: bool | None = None) -> RunResult:
-    """Simulate into ``out_dir``: recordings.ecsv (scan by scan) and truth.json."""
+                 show_progress: bool | None = None,
+                 antenna: Antenna | None = None) -> RunResult:
+    """Simulate into ``out_dir``: recordings.ecsv (scan by scan) and truth.json (not with
+    ``antenna``, see :func:`simulate`: the truth is the antenna's)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     seed = scenario.seed if seed is None else int(seed)
@@ -190,11 +202,14 @@ def run_campaign(scenario: Scenario, out_dir: str | Path, seed: int | None = Non
     with RecordingWriter(out / "recordings.ecsv", meta, resume=resume,
                          columns=columns) as writer:
         try:
-            result = simulate(scenario, seed, model, sink=writer.write_scan, progress=progress)
+            result = simulate(scenario, seed, model, sink=writer.write_scan, progress=progress,
+                              antenna=antenna)
         finally:
             close_bar()
     result.out_dir = out
-    (out / "truth.json").write_text(json.dumps(result.truth, indent=2) + "\n", encoding="utf-8")
+    if antenna is None:
+        (out / "truth.json").write_text(json.dumps(result.truth, indent=2) + "\n",
+                                        encoding="utf-8")
     return result
 
 
