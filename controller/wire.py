@@ -134,6 +134,10 @@ class KatcpAntenna:
             event.fail(err)
         return event
 
+    def release(self) -> None:
+        """Stop controlling the antenna (another client may then command it)."""
+        self._request("release")
+
     def close(self) -> None:
         """Close the connection (the server stays up)."""
         self._file.close()

@@ -60,14 +60,16 @@ class ProgramTrack:
             bad = ~np.isfinite(x)
             if bad.any():
                 i = int(np.argmax(bad))
-                raise TableError(f"point {i + 1}: {name} {x[i]!r} is not a finite number")
+                raise TableError(f"point {i + 1}: {name} {float(x[i])!r} is not a finite "
+                                 "number")
         if np.any(np.abs(el) > 90.0):
             i = int(np.argmax(np.abs(el) > 90.0))
-            raise TableError(f"point {i + 1}: elevation {el[i]!r} deg is outside -90..90")
+            raise TableError(f"point {i + 1}: elevation {float(el[i])!r} deg is outside "
+                             "-90..90")
         if t.size > 1 and np.any(np.diff(t) <= 0.0):
             i = int(np.argmax(np.diff(t) <= 0.0))
-            raise TableError(f"point {i + 2}: time {t[i + 1]!r} s does not follow "
-                             f"{t[i]!r} s (times must increase)")
+            raise TableError(f"point {i + 2}: time {float(t[i + 1])!r} s does not follow "
+                             f"{float(t[i])!r} s (times must increase)")
         if self.t_s.size + t.size > MAX_POINTS:
             raise TableError(f"the table would hold more than {MAX_POINTS} points")
         keep = ~np.isin(self.t_s, t)
@@ -123,6 +125,6 @@ def _triplets(values: list[float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if not np.all(np.isfinite(a)):
         i, c = (int(x[0]) for x in np.nonzero(~np.isfinite(a)))
         name = ("time", "azimuth", "elevation")[c]
-        raise TableError(f"point {i + 1}: {name} {a[i, c]!r} is not a finite number")
+        raise TableError(f"point {i + 1}: {name} {float(a[i, c])!r} is not a finite number")
     return a[:, 0], a[:, 1], a[:, 2]
 

@@ -1,0 +1,399 @@
+"""`antsim serve` (the simulated antenna as a KATCP device) and its clients.
+
+Everything runs on loopback with ephemeral ports (``--port 0``); every socket read has a
+timeout, and servers are stopped by their context managers, so a hung server fails a test
+instead of hanging the suite.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+import signal
+import socket
+import subprocess
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import simpy
+
+from antsim.cli import main as cli_main
+from antsim.runner import run_campaign
+from antsim.scenario import load_scenario
+from antsim.serve.clock import parse_clock
+from antsim.serve.process import ServerProcess
+from antsim.serve.programtrack import ProgramTrack, TableError
+from antsim.serve.remote import connect
+from controller.protocol import AntennaError
+from controller.wire import KatcpAntenna
+
+TIMEOUT_S = 20.0
+
+
+class LineClient:
+    """A bare KATCP client: raw lines, as a user's program would send them."""
+
+    def __init__(self, port: int):
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=TIMEOUT_S)
+        self.file = self.sock.makefile("rb")
+        self.asynchronous: list[str] = []
+
+    def send(self, line: str) -> None:
+        self.sock.sendall(line.encode() + b"\n")
+
+    def line(self) -> str:
+        text = self.file.readline().decode().rstrip("\n")
+        assert text, "the server closed the connection"
+        return text
+
+    def request(self, line: str) -> tuple[str, list[str]]:
+        """Send ``line``; the reply line and the informs of this request (by name)."""
+        self.send(line)
+        name = line.split()[0][1:]
+        informs = []
+        while True:
+            text = self.line()
+            if text.startswith("!" + name + " ") or text == "!" + name:
+                return text, informs
+            if text.startswith("#" + name + " "):
+                informs.append(text)
+            else:
+                self.asynchronous.append(text)
+
+    def close(self) -> None:
+        self.file.close()
+        self.sock.close()
+
+
+@pytest.fixture(scope="module")
+def short_path(tmp_path_factory, short_ghigo_text) -> Path:
+    path = tmp_path_factory.mktemp("serve") / "short.toml"
+    path.write_text(short_ghigo_text, encoding="utf-8")
+    return path
+
+
+@pytest.fixture(scope="module")
+def server(short_path):
+    """One virtual-clock server of the 3-hour 1990 scenario for the robustness tests."""
+    with ServerProcess(short_path) as srv:
+        yield srv
+
+
+# ---------------------------------------------------------------------------------------------
+# the program track
+# ---------------------------------------------------------------------------------------------
+def test_program_track_reproduces_the_trajectory_bit_for_bit(ghigo_path):
+    """The table of a SourceTrajectory, interpolated by the antenna, gives the trajectory's
+    own positions to the bit inside the table; outside, a point sent at the instant used."""
+    from controller.program import plan_targets
+    from controller.tracking import RefractionCorrection, SourceTrajectory, standard_weather
+
+    config = load_scenario(ghigo_path).controller
+    observer, targets = plan_targets(config)
+    refraction = RefractionCorrection("weather", standard_weather(800.0), 8.4)
+    traj = SourceTrajectory(observer.ephemeris, targets[-1].index, config.model, refraction,
+                            1234.5, (0.3, -0.2))
+    track = ProgramTrack(*traj.program_track())
+    t = np.random.default_rng(7).uniform(track.start_s, track.end_s, 500)
+    for got, want in zip(track(t), traj(t), strict=True):
+        assert np.array_equal(got, want)
+    later = track.end_s + 3600.0  # outside the table: computed exactly by the trajectory
+    assert not traj.covers([later])
+    az, el = traj(np.array([later]))
+    track.add([later], az, el)
+    assert np.array_equal(track(np.array([later]))[0], az)
+    assert np.array_equal(track(np.array([later]))[1], el)
+
+
+def test_program_track_interpolates_azimuth_the_short_way_and_names_bad_points():
+    track = ProgramTrack([0.0, 10.0], [359.0, 1.0], [45.0, 46.0])
+    az, el = track(np.array([2.5, 5.0, 10.0, 20.0]))
+    assert np.allclose(az, [359.5, 0.0, 1.0, 1.0]) and np.allclose(el, [45.25, 45.5, 46, 46])
+    with pytest.raises(TableError, match=r"point 2: time 5\.0 s does not follow 10\.0 s"):
+        ProgramTrack([10.0, 5.0], [1.0, 2.0], [45.0, 45.0])
+    with pytest.raises(TableError, match=r"point 1: elevation 91\.0 deg is outside"):
+        ProgramTrack([0.0], [1.0], [91.0])
+    with pytest.raises(TableError, match="triplets of time, azimuth, elevation: got 4 numbers"):
+        ProgramTrack.from_numbers([0.0, 1.0, 2.0, 3.0])
+    with pytest.raises(TableError, match=r"point 1: azimuth nan is not a finite number"):
+        ProgramTrack.from_numbers([0.0, math.nan, 2.0])
+
+
+@pytest.mark.parametrize(("text", "factor"), [("virtual", math.inf), ("realtime", 1.0),
+                                               ("x10", 10.0), ("X2.5", 2.5)])
+def test_clock_specifications(text, factor):
+    assert parse_clock(text).factor == factor
+
+
+@pytest.mark.parametrize("text", ["x0", "x-3", "fast", "x", "xinf"])
+def test_bad_clock_specifications(text):
+    with pytest.raises(ValueError, match="use virtual, realtime, or xK"):
+        parse_clock(text)
+
+
+# ---------------------------------------------------------------------------------------------
+# the project's controller over the wire: the same recordings, to the byte
+# ---------------------------------------------------------------------------------------------
+def test_controller_over_the_wire_records_the_same_bytes(tmp_path, ghigo_path, capsys):
+    """The 24-hour 1990 campaign: `antsim run --connect` against `antsim serve` (virtual
+    clock) writes the recordings `antsim run` writes in process, byte for byte; the
+    server's truth.json is the in-process run's; the server logged every request."""
+    run_campaign(load_scenario(ghigo_path), tmp_path / "in", show_progress=False)
+    with ServerProcess(ghigo_path, out=tmp_path / "server") as srv:
+        code = cli_main(["run", str(ghigo_path), "--out", str(tmp_path / "wire"),
+                         "--no-report", "--connect", f"127.0.0.1:{srv.port}"])
+        assert code == 0
+        assert srv.stop() == 0
+    assert "truth.json" not in capsys.readouterr().out  # the client has no truth to write
+    assert not (tmp_path / "wire" / "truth.json").exists()
+    wire = (tmp_path / "wire" / "recordings.ecsv").read_bytes()
+    assert wire == (tmp_path / "in" / "recordings.ecsv").read_bytes()
+    assert json.loads((tmp_path / "server" / "truth.json").read_text()) == \
+        json.loads((tmp_path / "in" / "truth.json").read_text())
+    log = [json.loads(line) for line in
+           (tmp_path / "server" / "requests.jsonl").read_text().splitlines()]
+    requests = int(next(line for line in srv.lines if " after " in line)
+                   .split(" after ")[1].split()[0])
+    assert len(log) == requests > 5000
+    assert {e["request"] for e in log} >= {"track", "offset", "integrate", "powers", "wait"}
+    assert all(e["reply"] == "ok" for e in log if e["request"] == "integrate")
+
+
+@pytest.mark.parametrize(("name", "hours", "what"), [
+    ("fomalont1973.toml", 6.0, "feed angles"),
+    ("crane1981_140ft_4990.toml", 6.0, "equatorial mount, idle beyond a track's table"),
+    ("wright1992_bima_ant5.toml", 3.0, "optical camera"),
+])
+def test_other_telescopes_over_the_wire(tmp_path, repo_root, write_scenario, name, hours,
+                                       what):
+    text = (repo_root / "scenarios" / name).read_text(encoding="utf-8")
+    old = next(line for line in text.splitlines() if line.startswith("duration_h = "))
+    path = write_scenario(text, [(old, f"duration_h = {hours}")], name)
+    scenario = load_scenario(path)
+    inproc = run_campaign(scenario, tmp_path / "in", show_progress=False)
+    assert inproc.n_scans > 10, what
+    with ServerProcess(path) as srv:
+        antenna, seed = connect(scenario, f"127.0.0.1:{srv.port}")
+        with antenna:
+            run_campaign(scenario, tmp_path / "wire", seed=seed, show_progress=False,
+                         antenna=antenna)
+    assert (tmp_path / "wire" / "recordings.ecsv").read_bytes() == \
+        (tmp_path / "in" / "recordings.ecsv").read_bytes(), what
+
+
+# ---------------------------------------------------------------------------------------------
+# robustness
+# ---------------------------------------------------------------------------------------------
+def test_listens_on_loopback_and_says_so(server):
+    assert server.host == "127.0.0.1"
+    listening = next(line for line in server.lines if "listening on" in line)
+    assert "loopback only" in listening and "--host 0.0.0.0" in listening
+
+
+def test_bad_requests_get_failure_replies_and_the_connection_stays_usable(server):
+    c = LineClient(server.port)
+    try:
+        assert c.request("?integrate abc")[0] == \
+            r"!integrate fail argument\_1\_(SECONDS)\_'abc'\_is\_not\_a\_number"
+        assert c.request("?integrate")[0] == \
+            r"!integrate fail argument\_1\_(SECONDS)\_is\_missing"
+        assert c.request("?integrate -2")[0].endswith(r"must\_be\_positive")
+        assert c.request("?offset 1 2 3")[0].startswith(r"!offset fail too\_many\_arguments")
+        assert c.request("?track 0 180 45 0 181 45")[0].endswith(
+            r"point\_2:\_time\_0.0\_s\_does\_not\_follow\_0.0\_s\_(times\_must\_increase)")
+        assert c.request("?no-such-request 1")[0] == \
+            r"!no-such-request invalid unknown\_request\_no-such-request"
+        assert c.request("?powers 99")[0].startswith(r"!powers fail integration\_99\_is\_not")
+        c.send("this is not katcp")  # no request name to reply to: a #log error inform
+        reply, _ = c.request("?watchdog")
+        assert reply == "!watchdog ok"
+        assert any(line.startswith("#log error") for line in c.asynchronous)
+        reply, _ = c.request("?clock")
+        assert reply.startswith("!clock ok ") and reply.endswith(" virtual")
+    finally:
+        c.request("?release")
+        c.close()
+
+
+def test_one_client_controls_others_watch_sensors(server):
+    a, b = LineClient(server.port), LineClient(server.port)
+    try:
+        reply, _ = a.request("?track 0 120 40 7200 150 50")
+        assert reply.startswith("!track ok ")
+        refused, _ = b.request("?wait 10")
+        assert refused.startswith("!wait fail client\\_127.0.0.1:")
+        assert "controls\\_the\\_antenna" in refused and "?release" in refused
+        # the watcher reads and subscribes; the controller's commands reach it as updates
+        assert b.request("?encoder")[0].startswith("!encoder ok ")
+        reply, _ = b.request("?sensor-sampling encoder.az event")
+        assert reply == "!sensor-sampling ok encoder.az event"
+        a.request("?offset 0.5 0")
+        clock = float(a.request("?wait 30")[0].split()[2])
+        # sensor times are simulated UTC: the epoch, 1990-02-08T17:00:00 UTC, plus the clock
+        stamp = 634496400.0 + clock
+
+        def after_wait() -> list[list[str]]:
+            updates = [u.split() for u in b.asynchronous if u.startswith("#sensor-status ")]
+            return [u for u in updates if abs(float(u[1]) - stamp) < 1e-3]
+
+        deadline = time.monotonic() + TIMEOUT_S
+        while not after_wait() and time.monotonic() < deadline:
+            b.asynchronous.append(b.line())
+        _, _, _, name, status, value = after_wait()[0]
+        assert (name, status) == ("encoder.az", "nominal")
+        assert 120.5 < float(value) < 151.0
+        assert a.request("?release")[0] == "!release ok"
+        assert b.request("?wait 1")[0].startswith("!wait ok ")  # now b controls
+    finally:
+        b.request("?release")
+        a.close()
+        b.close()
+
+
+def test_a_client_that_disconnects_mid_scan_leaves_the_server_ready(server):
+    a = LineClient(server.port)
+    assert a.request("?track 0 200 45 7200 230 60")[0].startswith("!track ok ")
+    a.request("?offset 0.2 0")
+    assert a.request("?integrate 5 defer")[0].startswith("!integrate ok ")
+    a.request("?offset 0.4 0")
+    a.close()  # gone mid-scan: an integration never read, an offset set
+    b = LineClient(server.port)
+    try:
+        deadline = time.monotonic() + TIMEOUT_S
+        while True:  # the server notices the disconnection asynchronously
+            reply, _ = b.request("?track 0 200 45 7200 230 60")
+            if reply.startswith("!track ok ") or time.monotonic() > deadline:
+                break
+            time.sleep(0.05)
+        assert reply.startswith("!track ok ")
+        values = b.request("?integrate 5")[0].split()[2:]
+        assert len(values) == 11 + 2 * 2  # ... and the powers and std of XR and XL
+        assert all(math.isfinite(float(v)) for v in values)
+    finally:
+        b.request("?release")
+        b.close()
+
+
+def test_the_python_client_fails_commands_with_antenna_errors(server):
+    """As the in-process antenna does: the command's event fails with the reason."""
+    with KatcpAntenna("127.0.0.1", server.port, simpy.Environment()) as antenna:
+        assert antenna.channels == ("XR", "XL") and antenna.virtual
+        low = antenna.track(lambda t: (np.full(np.shape(t), 10.0), np.full(np.shape(t), 2.0)))
+        assert not low.ok and isinstance(low.value, AntennaError)
+        assert "target elevation 2.00 deg at arrival is outside the limits" in str(low.value)
+        camera = antenna.measure_offset(5.0)
+        assert not camera.ok and "this antenna has no camera" in str(camera.value)
+        antenna.release()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_signals_stop_the_server_cleanly_with_its_outputs(tmp_path, short_path, sig):
+    with ServerProcess(short_path, out=tmp_path) as srv:
+        c = LineClient(srv.port)
+        c.request("?track 0 200 45 7200 230 60")
+        c.request("?integrate 15")
+        assert srv.stop(sig) == 0
+        c.close()
+    assert f"stopped ({sig.name}) after 2 requests" in srv.lines[-1]
+    truth = json.loads((tmp_path / "truth.json").read_text())
+    assert truth["seed"] == 1 and "W6" in truth["terms"]
+    log = [json.loads(line) for line in (tmp_path / "requests.jsonl").read_text().splitlines()]
+    assert [e["request"] for e in log] == ["track", "integrate"]
+    assert log[1]["reply"] == "ok" and len(log[1]["values"]) == 15
+
+
+def test_accelerated_clock_follows_the_wall_clock(short_path):
+    with ServerProcess(short_path, clock="x20") as srv:
+        c = LineClient(srv.port)
+        try:
+            t0, w0 = float(c.request("?clock")[0].split()[2]), time.monotonic()
+            assert c.request("?clock")[0].endswith(" x20")
+            time.sleep(0.3)
+            t1, w1 = float(c.request("?clock")[0].split()[2]), time.monotonic()
+            # 20 simulated seconds per second; the bounds allow for a busy machine's delays
+            assert 0.5 * 20 * (w1 - w0) < t1 - t0 < 1.5 * 20 * (w1 - w0) + 2.0
+            w0 = time.monotonic()
+            reply, _ = c.request("?wait 6")  # 6 simulated seconds: 0.3 s of wall time
+            assert reply.startswith("!wait ok ") and time.monotonic() - w0 >= 0.25
+        finally:
+            c.close()
+
+
+# ---------------------------------------------------------------------------------------------
+# the command lines
+# ---------------------------------------------------------------------------------------------
+def test_bad_options_give_one_line_and_status_2(tmp_path, short_path, capsys):
+    busy = socket.socket()
+    busy.bind(("127.0.0.1", 0))
+    busy.listen()
+    try:
+        closed = socket.socket()
+        closed.bind(("127.0.0.1", 0))
+        free = closed.getsockname()[1]
+        closed.close()  # nothing listens there now
+        out = str(tmp_path / "o")
+        cases = [
+            (["serve", str(short_path), "--port", str(busy.getsockname()[1])],
+             f"--port = {busy.getsockname()[1]}: address already in use"),
+            (["serve", str(short_path), "--clock", "x0"], "--clock = 'x0': use virtual"),
+            (["serve", str(short_path), "--port", "70000"], "--port = 70000: must be in"),
+            (["serve", str(tmp_path / "missing.toml")], "missing.toml"),
+            (["run", str(short_path), "--out", out, "--connect", "nowhere"],
+             "--connect = 'nowhere': expected HOST:PORT"),
+            (["run", str(short_path), "--out", out, "--seed", "3", "--connect",
+              f"127.0.0.1:{free}"], "--seed = True: not with --connect"),
+            (["run", str(short_path), "--out", out, "--connect", f"127.0.0.1:{free}"],
+             "cannot connect to the antenna"),
+        ]
+        for argv, expected in cases:
+            assert cli_main(argv) == 2, argv
+            err = capsys.readouterr().err
+            assert err.count("\n") == 1 and "Traceback" not in err, err
+            assert expected in err, (expected, err)
+    finally:
+        busy.close()
+
+
+def test_serve_has_help(capsys):
+    with pytest.raises(SystemExit):
+        cli_main(["serve", "--help"])
+    out = capsys.readouterr().out
+    assert "--clock" in out and "realtime" in out and "127.0.0.1" in out
+
+
+# ---------------------------------------------------------------------------------------------
+# a client in another language
+# ---------------------------------------------------------------------------------------------
+@pytest.mark.skipif(shutil.which("node") is None, reason="node is not installed")
+def test_node_client_scans_a_source_and_finds_what_its_model_misses(tmp_path, repo_root,
+                                                                     ghigo_path):
+    """docs/katcp_client.mjs tracks Cas A with its own ephemeris and the 1990 model in use,
+    deliberately put 4' off in azimuth zero (W1) and 3' in elevation zero (W6), runs one cross
+    scan and prints the offsets: they must be the injected truth minus its model, scaled
+    by 0.91 (Cas A's 3.46' size shrinks measured offsets by 11^2 / (11^2 + 3.46^2), DESIGN
+    section 5). Tolerance 0.5': the solar heating of the hour (about 0.3', not in the
+    truth's geometry) and the client's ephemeris (no nutation or aberration, about 0.3')."""
+    from controller.model import PointingModel
+
+    model = {"W1": -5.6, "W2": 0.0, "W3": -1.8, "W4": -2.0, "W5": 0.6, "W6": 15.0, "W7": 1.5,
+             "W8": -0.5, "W9": -3.0, "W10": -1.5}
+    with ServerProcess(ghigo_path) as srv:
+        run = subprocess.run(["node", str(repo_root / "docs" / "katcp_client.mjs"), "--port",
+                              str(srv.port), "--model",
+                              ",".join(f"{k}={v}" for k, v in model.items())],
+                             capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0, run.stderr
+    assert "tracking Cassiopeia A" in run.stderr
+    result = json.loads(run.stdout)
+    az, el = math.radians(result["az_deg"] % 360.0), math.radians(result["el_deg"])
+    truth = load_scenario(ghigo_path).truth_model
+    used = PointingModel("ghigo10", {k: 60.0 * v for k, v in model.items()})
+    (ta, te), (ma, me) = truth.offset_rad(az, el), used.offset_rad(az, el)
+    expected_xel = 0.91 * math.degrees(float(ta - ma)) * 60.0 * math.cos(el)
+    expected_el = 0.91 * math.degrees(float(te - me)) * 60.0
+    assert abs(expected_xel) > 1.2 and abs(expected_el) > 2.0  # the test can tell a sign
+    assert result["xel_arcmin"] == pytest.approx(expected_xel, abs=0.5)
+    assert result["el_arcmin"] == pytest.approx(expected_el, abs=0.5)
