@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 import socket
+import time
 from collections.abc import Iterator, Mapping
 
 import numpy as np
@@ -64,10 +65,13 @@ class KatcpAntenna:
             self._sock = socket.create_connection((host, port), timeout=timeout_s)
         except OSError as err:
             raise ConnectionLostError(f"cannot connect to the antenna at {self.address}: "
-                                 f"{err.strerror or err}") from None
+                                      f"{err.strerror or err}") from None
         self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self._file = self._sock.makefile("rb")
         self._mid = 0
+        #: requests made, and the wall time from sending each to its reply (s)
+        self.requests = 0
+        self.waited_s = 0.0
         self.factor = 1.0  # simulated seconds per wall second, until ?antenna says
         _, informs = self._request("antenna")
         #: the antenna's description (?antenna): name -> value (strings)
@@ -90,15 +94,17 @@ class KatcpAntenna:
         came with it. A failure reply raises :class:`AntennaError` with its message."""
         self._mid += 1
         mid = self._mid
+        self.requests += 1
+        t0 = time.perf_counter()
         try:
-            self._sock.sendall(bytes(self._Message.request(name, *args, mid=mid)))
+            self._sock.sendall(bytes(self._message(name, args, mid)))
             self._sock.settimeout(self.timeout_s + wait_s / self.factor)
             informs = []
             while True:
                 line = self._file.readline()
                 if not line:
                     raise ConnectionLostError(f"the antenna at {self.address} closed the "
-                                         "connection")
+                                              "connection")
                 if not line.strip():
                     continue
                 msg = self._Message.parse(line)
@@ -109,15 +115,25 @@ class KatcpAntenna:
                     continue
                 break
         except TimeoutError:
-            raise ConnectionLostError(f"no reply to ?{name} from the antenna at {self.address} "
-                                 f"within {self._sock.gettimeout():.0f} s") from None
+            raise ConnectionLostError(f"no reply to ?{name} from the antenna at "
+                                      f"{self.address} within {self._sock.gettimeout():.0f} s"
+                                      ) from None
         except OSError as err:
             raise ConnectionLostError(f"lost the connection to the antenna at {self.address}: "
-                                 f"{err.strerror or err}") from None
+                                      f"{err.strerror or err}") from None
+        finally:
+            self.waited_s += time.perf_counter() - t0
         if not msg.reply_ok():
             text = b" ".join(msg.arguments[1:]).decode("utf-8", "replace")
             raise AntennaError(f"?{name}: {text}")
         return msg.arguments[1:], informs
+
+    def _message(self, name: str, args: tuple, mid: int):
+        if args and isinstance(args[0], _Encoded):  # a table, already encoded (_floats)
+            msg = self._Message.request(name, mid=mid)
+            msg.arguments = args[0]
+            return msg
+        return self._Message.request(name, *args, mid=mid)
 
     def _command(self, name: str, *args, wait_s: float = 0.0) -> list[bytes]:
         """A command: its reply starts with the antenna's clock after it."""
@@ -186,7 +202,7 @@ class KatcpAntenna:
             points = [np.append(points[0], look), np.append(points[1], a),
                       np.append(points[2], e)]
             exact.add(look)
-        (duration,) = self._command("track", *_floats(np.stack(points, axis=1)))
+        (duration,) = self._command("track", _floats(np.stack(points, axis=1)))
         self._traj = trajectory
         self._table_end = float(t[-1])
         self._exact = exact
@@ -217,7 +233,7 @@ class KatcpAntenna:
         start = max(self._table_end, self._clock - FEED_STEP_S)
         t = start + FEED_STEP_S * np.arange(1, math.ceil((until - start) / FEED_STEP_S) + 1)
         az, el = traj(t)
-        self._command("track-append", *_floats(np.stack([t, az, el], axis=1)))
+        self._command("track-append", _floats(np.stack([t, az, el], axis=1)))
         self._table_end = float(t[-1])
         self._exact.update(t.tolist())
 
@@ -284,10 +300,15 @@ class KatcpAntenna:
             enc_el_deg=float(v[6]), weather=WeatherReading(*(float(x) for x in v[7:11])))
 
 
-def _floats(table: np.ndarray) -> list[bytes]:
+class _Encoded(list):
+    """Message arguments already encoded (bytes)."""
+
+
+def _floats(table: np.ndarray) -> _Encoded:
     """The numbers of ``table`` (row by row) as KATCP arguments, encoded as aiokatcp
-    encodes a float (``repr``), ahead of the message: a program track has hundreds."""
-    return [repr(x).encode("ascii") for x in table.ravel().tolist()]
+    encodes a float (``repr``) but without its per-argument dispatch: a program track has
+    a thousand of them."""
+    return _Encoded(repr(x).encode("ascii") for x in table.ravel().tolist())
 
 
 class _Powers(Mapping):

@@ -318,6 +318,13 @@ def test_accelerated_clock_follows_the_wall_clock(short_path):
             w0 = time.monotonic()
             reply, _ = c.request("?wait 6")  # 6 simulated seconds: 0.3 s of wall time
             assert reply.startswith("!wait ok ") and time.monotonic() - w0 >= 0.25
+            # between commands the antenna keeps following its track (1 deg per 100 s)
+            t = float(c.request("?clock")[0].split()[2])
+            c.request(f"?track {t} 180 45 {t + 1000} 190 45")  # from the park: no slew
+            az0 = float(c.request("?encoder")[0].split()[2])
+            time.sleep(0.5)
+            az1 = float(c.request("?encoder")[0].split()[2])
+            assert 0.05 < az1 - az0 < 0.5
         finally:
             c.close()
 

@@ -101,18 +101,25 @@ async def _run(device: AntennaDevice, host: str, out: Path | None,
     if out is not None:
         _write_truth(device, out)
         wrote = f"; wrote {out / 'truth.json'} and {out / 'requests.jsonl'}"
-    say(f"stopped ({why[0]}) after {device.requests} requests at clock "
+    say(f"stopped ({why[0]}) after {device.requests} requests ({device.serving_s:.2f} s "
+        f"serving them) at clock "
         f"{device.antenna.clock_s():.1f} s{wrote}")
     return 0
 
 
 async def _status(device: AntennaDevice, say: Callable[[str], None],
                   stopped: asyncio.Event) -> None:
-    """A status line every STATUS_EVERY_S while requests come."""
+    """A status line every STATUS_EVERY_S while requests come; one when simulated time
+    reaches the end of the simulation."""
     last = device.requests
+    ended = False
     while not stopped.is_set():
         with contextlib.suppress(TimeoutError):
             await asyncio.wait_for(stopped.wait(), STATUS_EVERY_S)
+        if not ended and device.env.now >= device.end_s:
+            ended = True
+            say(f"simulated time reached the end of the simulation ({device.end_s:.0f} s: the "
+                "scenario's duration plus an hour); commands are refused from now on")
         if device.requests != last and not stopped.is_set():
             clock_s = device.antenna.clock_s()
             share = 100.0 * clock_s / device.scenario.duration_s

@@ -157,6 +157,8 @@ class AntennaDevice(aiokatcp.DeviceServer):
         self.log = log
         self.say = say
         self.requests = 0
+        #: wall time spent in the handlers of this module's requests (s)
+        self.serving_s = 0.0
         self.controller: aiokatcp.connection.Connection | None = None
         self._epoch_unix = float(Time(scenario.epoch_utc, scale="utc").unix)
         self._utc = _TimeLabeller(scenario.epoch_utc, self.end_s)
@@ -280,6 +282,14 @@ class AntennaDevice(aiokatcp.DeviceServer):
     # ------------------------------------------------------------------ serving
     async def _serve(self, ctx: aiokatcp.RequestContext, kind: str, func: Callable,
                      args: tuple[bytes, ...]):
+        t0 = time.perf_counter()
+        try:
+            return await self._serve_timed(ctx, kind, func, args)
+        finally:
+            self.serving_s += time.perf_counter() - t0
+
+    async def _serve_timed(self, ctx: aiokatcp.RequestContext, kind: str, func: Callable,
+                           args: tuple[bytes, ...]):
         name = ctx.req.name
         command = kind == "command" or (kind == "command-with-args" and bool(args))
         clock_before = float(self.antenna.clock_s())
