@@ -329,6 +329,24 @@ def test_accelerated_clock_follows_the_wall_clock(short_path):
             c.close()
 
 
+def test_controller_on_an_accelerated_clock(tmp_path, ghigo_text, write_scenario):
+    """The project's controller against a real-time clock (600 times accelerated): the
+    antenna's clock runs on, so the client asks for it; half an hour of scans, all good."""
+    path = write_scenario(ghigo_text, [
+        ("duration_h = 24.0", "duration_h = 0.5"),
+        ('policy = "spread"', 'policy = "spread"\nsources = ["Cygnus A", "Cassiopeia A"]')])
+    scenario = load_scenario(path)
+    with ServerProcess(path, clock="x600") as srv:
+        antenna, seed = connect(scenario, f"127.0.0.1:{srv.port}")
+        with antenna:
+            assert not antenna.virtual and antenna.factor == 600.0
+            result = run_campaign(scenario, tmp_path, seed=seed, show_progress=False,
+                                  antenna=antenna)
+    avg = [r for r in result.rows if r["polarization"] == "AVG"]
+    assert len(avg) >= 3 and all(r["good"] for r in avg)
+    assert max(abs(r["el_arcmin"]) for r in avg) < 3.0  # the model in use is within 0.4'
+
+
 # ---------------------------------------------------------------------------------------------
 # the command lines
 # ---------------------------------------------------------------------------------------------
