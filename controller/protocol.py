@@ -30,6 +30,7 @@ __all__ = [
     "Antenna",
     "AntennaError",
     "CameraAntenna",
+    "ChannelValues",
     "FeedAntenna",
     "Integration",
     "OffsetReading",
@@ -57,13 +58,40 @@ class WeatherReading:
     wind_speed_m_s: float
 
 
+class ChannelValues(Mapping):
+    """Values per channel (e.g. power or std in K) that an antenna computes or fetches when
+    first read: the mapping ``load()`` returns, asked for on every access (``load`` keeps
+    what it has). Copies and pickles as that plain dict."""
+
+    __slots__ = ("_load",)
+
+    def __init__(self, load: Callable[[], Mapping[str, float]]):
+        self._load = load
+
+    def __getitem__(self, channel: str) -> float:
+        return self._load()[channel]
+
+    def __iter__(self):
+        return iter(self._load())
+
+    def __len__(self) -> int:
+        return len(self._load())
+
+    def __repr__(self) -> str:
+        return repr(self._load())
+
+    def __reduce__(self):
+        return dict, (dict(self._load()),)
+
+
 @dataclass(frozen=True)
 class Integration:
     """One total-power integration, as the backend reports it.
 
     ``power_k`` and ``std_k`` map channel name (``"XR"``, ``"XL"``) to the mean total power
     and the standard deviation of the samples within the integration (kelvin); an antenna
-    may compute them when they are first read (the simulated one does).
+    may compute them when they are first read (:class:`ChannelValues`; the simulated one
+    does, and so does an antenna over the wire).
     ``enc_az_deg``/``enc_el_deg`` are the mean encoder readings during the integration.
     """
 

@@ -27,11 +27,18 @@ from __future__ import annotations
 import math
 import socket
 import time
-from collections.abc import Iterator, Mapping
+from functools import partial
 
 import numpy as np
 
-from .protocol import AntennaError, Integration, OffsetReading, Trajectory, WeatherReading
+from .protocol import (
+    AntennaError,
+    ChannelValues,
+    Integration,
+    OffsetReading,
+    Trajectory,
+    WeatherReading,
+)
 
 __all__ = ["ConnectionLostError", "KatcpAntenna"]
 
@@ -269,16 +276,18 @@ class KatcpAntenna:
         self._deferred[ident] = None
         return Integration(
             t_start_s=float(v[1]), t_end_s=float(v[2]),
-            power_k=_Powers(self, ident, 0), std_k=_Powers(self, ident, 1),
+            power_k=ChannelValues(partial(self._powers, ident, 0)),
+            std_k=ChannelValues(partial(self._powers, ident, 1)),
             enc_az_deg=float(v[4]), enc_el_deg=float(v[5]),
             weather=WeatherReading(*(float(x) for x in v[6:10])), n_samples=int(v[3]))
 
-    def _powers(self, ident: int) -> tuple[dict, dict]:
-        """Power and std per channel of a deferred integration: all those not fetched yet
-        are fetched together (the antenna computes them together, see the module)."""
+    def _powers(self, ident: int, which: int) -> dict[str, float]:
+        """Power (``which`` 0) or std (1) per channel of a deferred integration: all those
+        not fetched yet are fetched together (the antenna computes them together, see the
+        module)."""
         values = self._deferred.get(ident)
         if values is not None:
-            return values
+            return values[which]
         waiting = sorted(i for i, v in self._deferred.items() if v is None)
         _, informs = self._request("powers", waiting[0], waiting[-1])
         for msg in informs:
@@ -286,7 +295,7 @@ class KatcpAntenna:
             self._deferred[int(msg.arguments[0])] = (
                 dict(zip(self.channels, numbers[0::2], strict=True)),
                 dict(zip(self.channels, numbers[1::2], strict=True)))
-        return self._deferred[ident]
+        return self._deferred[ident][which]
 
     def measure_offset(self, seconds: float):
         return self._event(self._camera, float(seconds))
@@ -309,33 +318,3 @@ def _floats(table: np.ndarray) -> _Encoded:
     encodes a float (``repr``) but without its per-argument dispatch: a program track has
     a thousand of them."""
     return _Encoded(repr(x).encode("ascii") for x in table.ravel().tolist())
-
-
-class _Powers(Mapping):
-    """Power (``which`` 0) or std (1) per channel (K) of a deferred integration, fetched
-    from the antenna when first read."""
-
-    __slots__ = ("_antenna", "_ident", "_which")
-
-    def __init__(self, antenna: KatcpAntenna, ident: int, which: int):
-        self._antenna = antenna
-        self._ident = ident
-        self._which = which
-
-    def _dict(self) -> dict[str, float]:
-        return self._antenna._powers(self._ident)[self._which]
-
-    def __getitem__(self, channel: str) -> float:
-        return self._dict()[channel]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._dict())
-
-    def __len__(self) -> int:
-        return len(self._dict())
-
-    def __repr__(self) -> str:
-        return repr(self._dict())
-
-    def __reduce__(self):  # pickles and copies as the plain dict it stands for
-        return dict, (self._dict(),)

@@ -104,19 +104,13 @@ def _at_most(args: tuple[bytes, ...], n: int, usage: str) -> None:
 
 
 def _numbers(args: tuple[bytes, ...]) -> list[float]:
-    try:
-        return [float(a) for a in args]
-    except ValueError:
-        i = next(i for i, a in enumerate(args) if not _is_float(a))
-        raise ArgumentError(f"argument {i + 1} {_text(args[i])} is not a number") from None
-
-
-def _is_float(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
+    values = []
+    for i, arg in enumerate(args):
+        try:
+            values.append(float(arg))
+        except ValueError:
+            raise ArgumentError(f"argument {i + 1} {_text(arg)} is not a number") from None
+    return values
 
 
 def _request(kind: str):

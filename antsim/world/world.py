@@ -35,9 +35,9 @@ from __future__ import annotations
 
 import math
 import zlib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import replace
-from functools import lru_cache
+from functools import lru_cache, partial
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -47,6 +47,7 @@ from controller.astro.frames import ALTAZ, MountFrame, altaz_to_hadec
 from controller.astro.sources import FixedSource
 from controller.protocol import (
     AntennaError,
+    ChannelValues,
     Integration,
     OffsetReading,
     Trajectory,
@@ -530,8 +531,8 @@ class SimulatedAntenna:
         return Integration(
             t_start_s=float(t_start + (t_clock[0] - t[0])),
             t_end_s=float(t_start + seconds + (t_clock[-1] - t[-1])),
-            power_k=_Deferred(pending, 0),
-            std_k=_Deferred(pending, 1),
+            power_k=ChannelValues(partial(pending.read, 0)),
+            std_k=ChannelValues(partial(pending.read, 1)),
             enc_az_deg=math.fsum(enc_az_deg.tolist()) / t.size,
             enc_el_deg=math.fsum(enc_el_deg.tolist()) / t.size,
             weather=world.weather.reading(float(t[mid])),
@@ -609,35 +610,11 @@ class _Pending:
         self.paths: list | None = None
         self.values: tuple[dict, dict] | None = None
 
-
-class _Deferred(Mapping):
-    """Power or std per channel (K) of an integration, computed when first read."""
-
-    __slots__ = ("_pending", "_which")
-
-    def __init__(self, pending: _Pending, which: int):
-        self._pending = pending
-        self._which = which
-
-    def _dict(self) -> dict[str, float]:
-        if self._pending.values is None:
-            self._pending.antenna.flush()
-            if self._pending.values is None:  # its block raised when first read
+    def read(self, which: int) -> dict[str, float]:
+        """Power (``which`` 0) or std (1) per channel (K), computed when first read."""
+        if self.values is None:
+            self.antenna.flush()
+            if self.values is None:  # its block raised when first read
                 raise RuntimeError("this integration's samples could not be computed "
                                    "(see the error raised when they were first read)")
-        return self._pending.values[self._which]
-
-    def __getitem__(self, channel: str) -> float:
-        return self._dict()[channel]
-
-    def __iter__(self):
-        return iter(self._dict())
-
-    def __len__(self) -> int:
-        return len(self._dict())
-
-    def __repr__(self) -> str:
-        return repr(self._dict())
-
-    def __reduce__(self):  # pickles and copies as the plain dict it stands for
-        return dict, (self._dict(),)
+        return self.values[which]
