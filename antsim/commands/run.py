@@ -69,6 +69,9 @@ def main(args: argparse.Namespace) -> int:
         print(f"antsim run: error: {err}; the scans recorded so far are in "
               f"{out / 'recordings.ecsv'}", file=sys.stderr)
         return 1
+    finally:
+        if antenna is not None:
+            antenna.close()
     summary = write_outputs(result, report=not args.no_report)
     print(summary, file=sys.stdout)
     return 0

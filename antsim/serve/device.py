@@ -16,11 +16,9 @@ the argument; the connection stays usable. The truth of the simulation is never 
 """
 
 # no "from __future__ import annotations": aiokatcp reads the handlers' annotations
-import enum
 import functools
 import json
 import logging
-import math
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -33,28 +31,17 @@ from controller.protocol import AntennaError
 
 from .._version import __version__
 from ..world import EPHEMERIS_MARGIN_S, World
+from .arguments import ArgumentError, at_most, integer, number, numbers, quoted
 from .clock import ClockSpec, OutOfTimeError, make_clock
 from .programtrack import ProgramTrack, TableError
+from .sensors import add_sensors, update_sensors
 
 if TYPE_CHECKING:
     from ..scenario import Scenario
 
-__all__ = ["AntennaDevice", "MountMode", "RequestLog"]
+__all__ = ["AntennaDevice", "RequestLog"]
 
 logger = logging.getLogger(__name__)
-
-
-class MountMode(enum.Enum):
-    """What the mount is doing (the ``mount.mode`` sensor)."""
-
-    PARKED = 0
-    SLEWING = 1
-    MOVING = 2  # to a new offset or feed angle, and settling
-    TRACKING = 3
-
-
-class ArgumentError(ValueError):
-    """A request argument that cannot be used; the message names it."""
 
 
 class RequestLog:
@@ -70,47 +57,6 @@ class RequestLog:
 
     def close(self) -> None:
         self._file.close()
-
-
-def _text(arg: bytes) -> str:
-    return repr(arg.decode("utf-8", "replace"))
-
-
-def _number(args: tuple[bytes, ...], i: int, name: str) -> float:
-    try:
-        value = float(args[i])
-    except IndexError:
-        raise ArgumentError(f"argument {i + 1} ({name}) is missing") from None
-    except ValueError:
-        raise ArgumentError(f"argument {i + 1} ({name}) {_text(args[i])} is not a number") from None
-    if not math.isfinite(value):
-        raise ArgumentError(f"argument {i + 1} ({name}) {_text(args[i])} is not a finite number")
-    return value
-
-
-def _integer(args: tuple[bytes, ...], i: int, name: str) -> int:
-    try:
-        return int(args[i])
-    except IndexError:
-        raise ArgumentError(f"argument {i + 1} ({name}) is missing") from None
-    except ValueError:
-        raise ArgumentError(f"argument {i + 1} ({name}) {_text(args[i])} is not an "
-                            "integer") from None
-
-
-def _at_most(args: tuple[bytes, ...], n: int, usage: str) -> None:
-    if len(args) > n:
-        raise ArgumentError(f"too many arguments ({len(args)}): usage {usage}")
-
-
-def _numbers(args: tuple[bytes, ...]) -> list[float]:
-    values = []
-    for i, arg in enumerate(args):
-        try:
-            values.append(float(arg))
-        except ValueError:
-            raise ArgumentError(f"argument {i + 1} {_text(arg)} is not a number") from None
-    return values
 
 
 def _request(kind: str):
@@ -164,64 +110,16 @@ class AntennaDevice(aiokatcp.DeviceServer):
         #: sensors are brought up to date only when read, not after every command
         self._watched = False
         self._sensors_stale = True
-        self._add_sensors()
+        add_sensors(self.sensors, self.world.frame.is_altaz)
         self.refresh_sensors()
 
     # ------------------------------------------------------------------ sensors
-    def _add_sensors(self) -> None:
-        axes = (("az", "azimuth (North = 0, East = 90)", "elevation")
-                if self.world.frame.is_altaz else
-                ("ha", "hour angle (positive West)", "declination"))
-        first, second = axes[1], axes[2]
-        S = aiokatcp.Sensor
-        for sensor in (
-            S(float, "clock.seconds", "antenna clock: seconds since the scenario epoch", "s"),
-            S(str, "clock.utc", "antenna clock as UTC (ISO 8601)"),
-            S(float, "encoder.az", f"encoder of the first axis: {first}", "deg"),
-            S(float, "encoder.el", f"encoder of the second axis: {second}", "deg"),
-            S(float, "offset.az", "offset of the first axis from the program track", "deg"),
-            S(float, "offset.el", "offset of the second axis from the program track", "deg"),
-            S(MountMode, "mount.mode", "parked, slewing, moving (to an offset or feed "
-              "angle, and settling) or tracking"),
-            S(bool, "mount.on-target", "tracking the program track, settled"),
-            S(float, "feed.angle", "feed box angle", "deg"),
-            S(float, "weather.air-temperature", "air temperature", "degC"),
-            S(float, "weather.pressure", "air pressure", "hPa"),
-            S(float, "weather.relative-humidity", "relative humidity (0..1)"),
-            S(float, "weather.wind-speed", "wind speed", "m/s"),
-            S(str, "control.client", "address of the client that controls the antenna "
-              "(empty: none)"),
-        ):
-            self.sensors.add(sensor)
-
     def refresh_sensors(self) -> None:
         """Set every sensor to the world's present state."""
-        mount = self.world.mount
         clock_s = float(self.antenna.clock_s())
-        stamp = self._epoch_unix + clock_s
-        az, el = self.antenna.encoder_deg()
-        w = self.antenna.weather()
-        if self._busy == "track":
-            mode = MountMode.SLEWING
-        elif self._busy in ("offset", "feed-angle"):
-            mode = MountMode.MOVING
-        elif mount.on_track:
-            mode = MountMode.TRACKING
-        else:
-            mode = MountMode.PARKED
-        values = {
-            "clock.seconds": clock_s, "clock.utc": self._utc(clock_s),
-            "encoder.az": az, "encoder.el": el,
-            "offset.az": mount.offset_deg[0], "offset.el": mount.offset_deg[1],
-            "mount.mode": mode, "mount.on-target": mode is MountMode.TRACKING,
-            "feed.angle": self.antenna.feed_angle_deg(),
-            "weather.air-temperature": w.temperature_c, "weather.pressure": w.pressure_hpa,
-            "weather.relative-humidity": w.relative_humidity,
-            "weather.wind-speed": w.wind_speed_m_s,
-            "control.client": "" if self.controller is None else str(self.controller.address),
-        }
-        for name, value in values.items():
-            self.sensors[name].set_value(value, timestamp=stamp)
+        controller = "" if self.controller is None else str(self.controller.address)
+        update_sensors(self.sensors, self.world, self._busy, controller, self._utc(clock_s),
+                       self._epoch_unix + clock_s)
         self._sensors_stale = False
 
     async def request_sensor_value(self, ctx: aiokatcp.RequestContext,
@@ -353,7 +251,7 @@ class AntennaDevice(aiokatcp.DeviceServer):
 
         Times on the antenna clock (s), encoder degrees; see docs/katcp.md."""
         self.clock.check_room(0.0, "?track")
-        track = ProgramTrack.from_numbers(_numbers(args))
+        track = ProgramTrack.from_numbers(numbers(args))
         duration = await self._complete(self.antenna.track(track))
         self._track = track
         return self._clock(), float(duration)
@@ -364,14 +262,14 @@ class AntennaDevice(aiokatcp.DeviceServer):
         first and last time (s)."""
         if self._track is None or self.world.mount.trajectory is not self._track:
             raise ArgumentError("no program track is being followed: send ?track first")
-        ProgramTrack.from_numbers(_numbers(args), self._track)
+        ProgramTrack.from_numbers(numbers(args), self._track)
         return self._clock(), len(self._track), self._track.start_s, self._track.end_s
 
     @_request("command")
     async def request_offset(self, ctx, *args: bytes):
         """Offset from the track: ?offset DAZ DEL (encoder deg) -> clock, move+settle s."""
-        _at_most(args, 2, "?offset DAZ DEL")
-        d_az, d_el = _number(args, 0, "DAZ"), _number(args, 1, "DEL")
+        at_most(args, 2, "?offset DAZ DEL")
+        d_az, d_el = number(args, 0, "DAZ"), number(args, 1, "DEL")
         if not self.world.mount.on_track:
             raise ArgumentError("no program track is being followed: send ?track first")
         duration = await self._complete(self.antenna.set_offset(d_az, d_el))
@@ -385,13 +283,13 @@ class AntennaDevice(aiokatcp.DeviceServer):
         Replies clock, id, start and end (s), samples, mean encoders (deg), weather, then
         power and sample standard deviation (K) per channel; with defer without them (read
         them with ?powers)."""
-        _at_most(args, 2, "?integrate SECONDS [defer]")
-        seconds = _number(args, 0, "SECONDS")
+        at_most(args, 2, "?integrate SECONDS [defer]")
+        seconds = number(args, 0, "SECONDS")
         defer = len(args) == 2
         if defer and args[1] != b"defer":
-            raise ArgumentError(f"argument 2 {_text(args[1])}: the only option is 'defer'")
+            raise ArgumentError(f"argument 2 {quoted(args[1])}: the only option is 'defer'")
         if seconds <= 0:
-            raise ArgumentError(f"argument 1 (SECONDS) {_text(args[0])}: must be positive")
+            raise ArgumentError(f"argument 1 (SECONDS) {quoted(args[0])}: must be positive")
         self.clock.check_room(seconds, "?integrate")
         integ = await self._complete(self.antenna.integrate(seconds))
         ident = self._next_id
@@ -417,25 +315,24 @@ class AntennaDevice(aiokatcp.DeviceServer):
 
         One inform per integration: id, then power and sample standard deviation (K) per
         channel."""
-        _at_most(args, 2, "?powers FIRST [LAST]")
-        first = _integer(args, 0, "FIRST")
-        last = _integer(args, 1, "LAST") if len(args) == 2 else first
+        at_most(args, 2, "?powers FIRST [LAST]")
+        first = integer(args, 0, "FIRST")
+        last = integer(args, 1, "LAST") if len(args) == 2 else first
         missing = [i for i in range(first, last + 1) if i not in self._deferred]
         if missing or last < first:
             raise ArgumentError(f"integration {missing[0] if missing else last} is not waiting "
                                 "for ?powers (never made with defer, or already read)")
-        for ident in range(first, last + 1):
-            integ = self._deferred.pop(ident)
-            ctx.inform(ident, *self._powers(integ))
-        return (last - first + 1,)
+        # one write for the informs and the reply ("ok COUNT"): one wake-up of the client
+        ctx.informs([(ident, *self._powers(self._deferred.pop(ident)))
+                     for ident in range(first, last + 1)])
 
     @_request("command")
     async def request_wait(self, ctx, *args: bytes):
         """Let time pass, tracking: ?wait SECONDS -> clock."""
-        _at_most(args, 1, "?wait SECONDS")
-        seconds = _number(args, 0, "SECONDS")
+        at_most(args, 1, "?wait SECONDS")
+        seconds = number(args, 0, "SECONDS")
         if seconds < 0:
-            raise ArgumentError(f"argument 1 (SECONDS) {_text(args[0])}: must not be negative")
+            raise ArgumentError(f"argument 1 (SECONDS) {quoted(args[0])}: must not be negative")
         self.clock.check_room(seconds, "?wait")
         await self._complete(self.antenna.wait(seconds))
         return (self._clock(),)
@@ -443,10 +340,10 @@ class AntennaDevice(aiokatcp.DeviceServer):
     @_request("command-with-args")
     async def request_feed_angle(self, ctx, *args: bytes):
         """Turn the feed box or read it: ?feed-angle [ANGLE] -> clock, angle, turn s."""
-        _at_most(args, 1, "?feed-angle [ANGLE]")
+        at_most(args, 1, "?feed-angle [ANGLE]")
         if not args:
             return self._clock(), self.antenna.feed_angle_deg(), 0.0
-        angle = _number(args, 0, "ANGLE")
+        angle = number(args, 0, "ANGLE")
         duration = await self._complete(self.antenna.set_feed_angle(angle))
         return self._clock(), self.antenna.feed_angle_deg(), float(duration)
 
@@ -456,8 +353,8 @@ class AntennaDevice(aiokatcp.DeviceServer):
 
         Replies clock, start and end (s), found (1/0), the star's offset xel and el
         (arcsec), mean encoders (deg), weather."""
-        _at_most(args, 1, "?camera SECONDS")
-        seconds = _number(args, 0, "SECONDS")
+        at_most(args, 1, "?camera SECONDS")
+        seconds = number(args, 0, "SECONDS")
         self.clock.check_room(seconds, "?camera")
         r = await self._complete(self.antenna.measure_offset(seconds))
         w = r.weather
@@ -468,7 +365,7 @@ class AntennaDevice(aiokatcp.DeviceServer):
     @_request("reading")
     async def request_release(self, ctx, *args: bytes):
         """Stop controlling the antenna: ?release (another client may then command)."""
-        _at_most(args, 0, "?release")
+        at_most(args, 0, "?release")
         if self.controller is not ctx.conn:
             raise ArgumentError("this connection does not control the antenna")
         self.release("?release")
@@ -485,7 +382,7 @@ class AntennaDevice(aiokatcp.DeviceServer):
     @_request("reading")
     async def request_clock(self, ctx, *args: bytes):
         """The antenna clock: ?clock -> seconds since the epoch, UTC, clock mode."""
-        _at_most(args, 0, "?clock")
+        at_most(args, 0, "?clock")
         clock_s = self._clock()
         return clock_s, self._utc(clock_s), self.clock.spec.text
 
@@ -494,21 +391,21 @@ class AntennaDevice(aiokatcp.DeviceServer):
         """Encoders now: ?encoder -> first and second axis (deg).
 
         Azimuth and elevation, or hour angle and declination on an equatorial mount."""
-        _at_most(args, 0, "?encoder")
+        at_most(args, 0, "?encoder")
         az, el = self.antenna.encoder_deg()
         return float(az), float(el)
 
     @_request("reading")
     async def request_weather(self, ctx, *args: bytes):
         """Weather: ?weather -> air C, pressure hPa, humidity 0..1, wind m/s."""
-        _at_most(args, 0, "?weather")
+        at_most(args, 0, "?weather")
         w = self.antenna.weather()
         return w.temperature_c, w.pressure_hpa, w.relative_humidity, w.wind_speed_m_s
 
     @_request("reading")
     async def request_channels(self, ctx, *args: bytes):
         """Receiver channels: ?channels -> names, in the order ?integrate reports them."""
-        _at_most(args, 0, "?channels")
+        at_most(args, 0, "?channels")
         return tuple(self.antenna.channels)
 
     @_request("reading")
@@ -516,7 +413,7 @@ class AntennaDevice(aiokatcp.DeviceServer):
         """Structure temperatures: ?structure-temperatures -> informs (name, C), count.
 
         The count is 0 where the scenario has no structure temperature sensors."""
-        _at_most(args, 0, "?structure-temperatures")
+        at_most(args, 0, "?structure-temperatures")
         return (0,)
 
     @_request("reading")
@@ -525,11 +422,8 @@ class AntennaDevice(aiokatcp.DeviceServer):
 
         One inform per item (name, value): site, epoch, mount, limits, speeds, channels,
         capabilities."""
-        _at_most(args, 0, "?antenna")
-        items = self.description()
-        for key, value in items.items():
-            ctx.inform(key, value)
-        return (len(items),)
+        at_most(args, 0, "?antenna")
+        ctx.informs(self.description().items())
 
     def description(self) -> dict[str, object]:
         """The items of ``?antenna`` (nothing of the truth: no pointing errors, no
