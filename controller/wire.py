@@ -11,9 +11,10 @@ time). The antenna is sent a program track: the trajectory's own table where it 
 exactly as the trajectory does; elsewhere the trajectory's exact positions: at the instant
 slew planning looks ahead to (now + the mount's wrap margin), at the instants the antenna's
 position is read (:meth:`encoder_deg`, the start of the next slew), and every
-``FEED_STEP_S`` ahead of each command. A plain callable without a table is sampled every
-``FEED_STEP_S``. So the project's controller against ``antsim serve --clock virtual``
-records what it records in process, byte for byte.
+``FEED_STEP_S`` ahead of each command past the table's end (an integration there would be
+interpolated between exact positions; the project's scans end within their tables). A plain
+callable without a table is sampled every ``FEED_STEP_S``. So the project's controller
+against ``antsim serve --clock virtual`` records what it records in process, byte for byte.
 
 Integrations are made with ``defer`` and their powers fetched (``?powers``) when the
 controller first reads one, all outstanding at once: as the in-process antenna computes

@@ -258,8 +258,9 @@ class AntennaDevice(aiokatcp.DeviceServer):
 
     @_request("command")
     async def request_track_append(self, ctx, *args: bytes):
-        """Add points to the program track: ?track-append T AZ EL ... -> clock, points,
-        first and last time (s)."""
+        """Add to the program track: ?track-append T AZ EL ... -> clock, points, first, last.
+
+        Points may come in any order; one at a time already in the table replaces it."""
         if self._track is None or self.world.mount.trajectory is not self._track:
             raise ArgumentError("no program track is being followed: send ?track first")
         ProgramTrack.from_numbers(numbers(args), self._track)
@@ -277,8 +278,7 @@ class AntennaDevice(aiokatcp.DeviceServer):
 
     @_request("command")
     async def request_integrate(self, ctx, *args: bytes):
-        """Total power: ?integrate SECONDS [defer] -> clock, id, times, encoders, weather,
-        powers.
+        """Total power: ?integrate SECONDS [defer] -> clock, id, ..., power and std per channel.
 
         Replies clock, id, start and end (s), samples, mean encoders (deg), weather, then
         power and sample standard deviation (K) per channel; with defer without them (read
