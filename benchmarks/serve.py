@@ -127,6 +127,11 @@ def main() -> int:
     print(f"median of {len(rounds)} rounds: campaign {med['campaign_in']:.2f} s in process, "
           f"{med['campaign_wire']:.2f} s over the wire (x{campaign:.2f}, target x2); whole "
           f"command {med['command_in']:.2f} s vs {med['command_wire']:.2f} s (x{command:.2f})")
+    controller = statistics.median(r["campaign_wire"] - r["waited"] for r in rounds)
+    transit = statistics.median(r["waited"] - r["serving"] for r in rounds)
+    print(f"median split of the wire campaign: the controller {controller:.2f} s, the server "
+          f"{med['serving']:.2f} s, in transit {transit:.2f} s for {med['requests']:.0f} "
+          f"requests ({transit / med['requests'] * 1e6:.0f} us each)")
     print(f"recordings byte-identical in every round: {all(r['identical'] for r in rounds)}")
     print(f"load average after: {os.getloadavg()[0]:.2f}")
     return 0 if all(r["identical"] for r in rounds) else 1
