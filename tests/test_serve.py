@@ -382,6 +382,20 @@ def test_bad_options_give_one_line_and_status_2(tmp_path, short_path, capsys):
         busy.close()
 
 
+def test_connecting_with_another_epoch_is_refused(server, short_ghigo_text, write_scenario,
+                                                  tmp_path, capsys):
+    """The controller's ephemeris counts time from its scenario's epoch: another epoch
+    than the antenna's would point at the wrong sky."""
+    path = write_scenario(short_ghigo_text, [('start_utc = "1990-02-08T17:00:00"',
+                                              'start_utc = "1990-02-08T18:00:00"')])
+    assert cli_main(["run", str(path), "--out", str(tmp_path / "o"), "--connect",
+                     f"127.0.0.1:{server.port}"]) == 2
+    err = capsys.readouterr().err
+    assert "the antenna's epoch is '1990-02-08T17:00:00.000', the scenario's " \
+           "'1990-02-08T18:00:00.000'" in err and err.count("\n") == 1
+    assert not (tmp_path / "o" / "recordings.ecsv").exists()
+
+
 def test_serve_has_help(capsys):
     with pytest.raises(SystemExit):
         cli_main(["serve", "--help"])

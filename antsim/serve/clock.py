@@ -70,9 +70,9 @@ class _Clock:
     def check_room(self, seconds: float, what: str) -> None:
         """Refuse a command that would run past the end of the simulation."""
         if self.env.now + seconds > self.end_s:
-            raise OutOfTimeError(f"{what} would end at {self.env.now + seconds:.1f} s, after the "
-                             f"end of the simulation ({self.end_s:.1f} s: the scenario's "
-                             "duration plus an hour's margin)")
+            raise OutOfTimeError(f"{what} would end at {self.env.now + seconds:.1f} s, after "
+                                 f"the end of the simulation ({self.end_s:.1f} s: the "
+                                 "scenario's duration plus an hour's margin)")
 
 
 class OutOfTimeError(RuntimeError):
@@ -129,8 +129,8 @@ class RealtimeClock(_Clock):
             if outcome.done():
                 break
             if self.env.now >= self.end_s:
-                raise OutOfTimeError(f"the simulation ended ({self.end_s:.1f} s) before the "
-                                 "command completed")
+                raise OutOfTimeError(f"the simulation ended ({self.end_s:.1f} s) before "
+                                     "the command completed")
             await asyncio.sleep(self.sleep_s())
         ev = outcome.result()
         if not ev.ok:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import simpy
 
 from controller.errors import InputError
+from controller.protocol import AntennaError
 from controller.wire import ConnectionLostError, KatcpAntenna
 
 from ..scenario import Scenario
@@ -35,6 +36,10 @@ def connect(scenario: Scenario, address: str) -> tuple[KatcpAntenna, int]:
     except ConnectionLostError as err:
         raise InputError("command line", "--connect", address, str(err),
                          "start the antenna first, e.g. antsim serve SCENARIO.toml") from None
+    except AntennaError as err:  # a KATCP device, but not one with docs/katcp.md's requests
+        raise InputError("command line", "--connect", address,
+                         f"the device there does not describe itself ({err})",
+                         "connect to antsim serve, or a device with its requests") from None
     info = antenna.info
     if _epoch(info.get("epoch-utc", "")) != _epoch(scenario.epoch_utc):
         antenna.close()
