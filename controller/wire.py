@@ -7,7 +7,7 @@ they arrive to the bit.
 
 Tracking: the controller hands :meth:`KatcpAntenna.track` a trajectory (a callable of clock
 time). The antenna is sent a program track: the trajectory's own table where it has one
-(:meth:`controller.tracking.SourceTrajectory.program_track`), which the antenna interpolates
+(:meth:`controller.scans.tracking.SourceTrajectory.program_track`), which the antenna interpolates
 exactly as the trajectory does; elsewhere the trajectory's exact positions: at the instant
 slew planning looks ahead to (now + the mount's wrap margin), at the instants the antenna's
 position is read (:meth:`encoder_deg`, the start of the next slew), and every

@@ -21,7 +21,7 @@ import pytest
 import simpy
 
 from antsim.cli import main as cli_main
-from antsim.runner import run_campaign
+from antsim.run.runner import run_campaign
 from antsim.scenario import load_scenario
 from antsim.serve.clock import parse_clock
 from antsim.serve.process import ServerProcess
@@ -88,8 +88,8 @@ def server(short_path):
 def test_program_track_reproduces_the_trajectory_bit_for_bit(ghigo_path):
     """The table of a SourceTrajectory, interpolated by the antenna, gives the trajectory's
     own positions to the bit inside the table; outside, a point sent at the instant used."""
-    from controller.program import plan_targets
-    from controller.tracking import RefractionCorrection, SourceTrajectory, standard_weather
+    from controller.program.campaign import plan_targets
+    from controller.scans.tracking import RefractionCorrection, SourceTrajectory, standard_weather
 
     config = load_scenario(ghigo_path).controller
     observer, targets = plan_targets(config)
@@ -415,7 +415,7 @@ def test_node_client_scans_a_source_and_finds_what_its_model_misses(tmp_path, re
     by 0.91 (Cas A's 3.46' size shrinks measured offsets by 11^2 / (11^2 + 3.46^2), DESIGN
     section 5). Tolerance 0.5': the solar heating of the hour (about 0.3', not in the
     truth's geometry) and the client's ephemeris (no nutation or aberration, about 0.3')."""
-    from controller.model import PointingModel
+    from controller.pointing.model import PointingModel
 
     model = {"W1": -5.6, "W2": 0.0, "W3": -1.8, "W4": -2.0, "W5": 0.6, "W6": 15.0, "W7": 1.5,
              "W8": -0.5, "W9": -3.0, "W10": -1.5}

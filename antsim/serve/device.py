@@ -30,7 +30,7 @@ import simpy
 from controller.protocol import AntennaError
 
 from .._version import __version__
-from ..world import EPHEMERIS_MARGIN_S, World
+from ..world.world import EPHEMERIS_MARGIN_S, World
 from .arguments import ArgumentError, at_most, integer, number, numbers, quoted
 from .clock import ClockSpec, OutOfTimeError, make_clock
 from .programtrack import ProgramTrack, TableError
@@ -74,7 +74,7 @@ def _request(kind: str):
 
 
 class AntennaDevice(aiokatcp.DeviceServer):
-    """The KATCP device: a :class:`~antsim.world.World` driven by requests."""
+    """The KATCP device: a :class:`~antsim.world.world.World` driven by requests."""
 
     VERSION = "antsim-antenna-1.0"
     BUILD_STATE = f"antsim-{__version__}"
@@ -85,7 +85,7 @@ class AntennaDevice(aiokatcp.DeviceServer):
         super().__init__(host, port)
         from astropy.time import Time
 
-        from ..runner import _TimeLabeller
+        from ..run.runner import _TimeLabeller
 
         self.scenario = scenario
         self.env = simpy.Environment()

@@ -3,7 +3,7 @@
 Real antenna control units take a program-track table from the control software, which
 computes the positions with its own ephemeris and pointing model, and interpolate between
 its points. This one interpolates linearly (``numpy.interp``, so that a table taken from
-:meth:`controller.tracking.SourceTrajectory.program_track` reproduces that trajectory bit
+:meth:`controller.scans.tracking.SourceTrajectory.program_track` reproduces that trajectory bit
 for bit), azimuth the shorter way round between two points (a table may give azimuths
 modulo 360), and holds the first and last points before and after the table. Points may be
 added later (:meth:`ProgramTrack.add`), in any order; a point at a time already in the
