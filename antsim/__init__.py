@@ -12,6 +12,8 @@ simulated world. Each part imports only those listed before it, and :mod:`contro
 * :mod:`.figures`: figures, by page; they draw values and import nothing else of antsim;
 * :mod:`.studies`: the source reports' studies repeated (BIMA memo 23);
 * :mod:`.run`: a campaign run and the files it writes (recordings, fits, report);
+* :mod:`.serve`: the simulated antenna as a KATCP device, for control software outside
+  (it imports the world and scenarios only, and only the command line imports it);
 * :mod:`.plan`: what-if observing plans; :mod:`.diagnose`: what the model leaves out;
 * :mod:`.commands` and :mod:`.cli`: the ``antsim`` command line.
 """

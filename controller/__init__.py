@@ -5,6 +5,8 @@ Each part imports only the parts listed before it (``tests/test_layout.py`` chec
 
 * :mod:`.errors`, :mod:`.units`, :mod:`.protocol`: bad input as one line, angle units and
   Quantity at the boundary, the narrow interface an antenna implements;
+* :mod:`.wire`: the protocol over KATCP, an antenna reached over the network (``antsim
+  serve`` or a real antenna's control unit); it imports only the base modules;
 * :mod:`.astro`: time, site, sources, the ephemeris, refraction, the Sun, mount frames, and
   astropy kept offline;
 * :mod:`.pointing`: the pointing model's terms, the model, its fit (the 1990 report's

@@ -24,35 +24,48 @@ RULES: tuple[tuple[str, tuple[str, ...], str], ...] = (
     ("controller.errors", ("controller",), "a base module imports nothing of the program"),
     ("controller.units", ("controller",), "a base module imports nothing of the program"),
     ("controller.protocol", ("controller",), "a base module imports nothing of the program"),
+    ("controller.wire", ("antsim", "controller.astro", "controller.pointing", "controller.scans",
+                         "controller.program"),
+     "the wire client is the protocol over a network: part of the controller, it imports "
+     "only the base modules and never the simulation it may be talking to"),
     ("controller.astro", ("controller.pointing", "controller.scans", "controller.program",
-                          "controller.protocol"),
+                          "controller.protocol", "controller.wire"),
      "astronomy imports only the base modules"),
-    ("controller.pointing", ("controller.scans", "controller.program", "controller.protocol"),
+    ("controller.pointing", ("controller.scans", "controller.program", "controller.protocol",
+                             "controller.wire"),
      "the pointing mathematics never imports the scan engine or the program"),
-    ("controller.scans", ("controller.program",),
+    ("controller.scans", ("controller.program", "controller.wire"),
      "the scan engine never imports the control program that runs it"),
+    ("controller.program", ("controller.wire",),
+     "the control program drives any antenna through the protocol, never the wire's"),
     ("antsim.tomlcheck", ("antsim.world", "antsim.scenario", "antsim.figures", "antsim.studies",
-                          "antsim.run", "antsim.plan", "antsim.diagnose", "antsim.commands",
-                          "antsim.cli"),
+                          "antsim.run", "antsim.serve", "antsim.plan", "antsim.diagnose",
+                          "antsim.commands", "antsim.cli"),
      "TOML checking is the base of antsim"),
-    ("antsim.world", ("antsim.figures", "antsim.studies", "antsim.run", "antsim.plan",
-                      "antsim.diagnose", "antsim.commands", "antsim.cli"),
+    ("antsim.world", ("antsim.figures", "antsim.studies", "antsim.run", "antsim.serve",
+                      "antsim.plan", "antsim.diagnose", "antsim.commands", "antsim.cli"),
      "the simulated world knows nothing of what is done with it"),
     ("antsim.scenario", ("antsim.world.world", "antsim.figures", "antsim.studies", "antsim.run",
-                         "antsim.plan", "antsim.diagnose", "antsim.commands", "antsim.cli"),
+                         "antsim.serve", "antsim.plan", "antsim.diagnose", "antsim.commands",
+                         "antsim.cli"),
      "a scenario reads the world's parts' settings; the world is built from it, above it"),
     ("antsim.figures", ("antsim.world", "antsim.scenario", "antsim.studies", "antsim.run",
-                        "antsim.plan", "antsim.diagnose", "antsim.commands", "antsim.cli"),
-     "figures draw values, never a simulation"),
-    ("antsim.studies", ("antsim.run", "antsim.plan", "antsim.diagnose", "antsim.commands",
+                        "antsim.serve", "antsim.plan", "antsim.diagnose", "antsim.commands",
                         "antsim.cli"),
+     "figures draw values, never a simulation"),
+    ("antsim.studies", ("antsim.run", "antsim.serve", "antsim.plan", "antsim.diagnose",
+                        "antsim.commands", "antsim.cli"),
      "the studies use the world's parts and the fitter only"),
-    ("antsim.run", ("antsim.studies", "antsim.plan", "antsim.diagnose", "antsim.commands",
-                    "antsim.cli"),
-     "a run knows nothing of the analyses made of it"),
-    ("antsim.plan", ("antsim.studies", "antsim.diagnose", "antsim.commands", "antsim.cli"),
+    ("antsim.run", ("antsim.studies", "antsim.serve", "antsim.plan", "antsim.diagnose",
+                    "antsim.commands", "antsim.cli"),
+     "a run knows nothing of the analyses made of it, nor of a server (it takes any antenna)"),
+    ("antsim.serve", ("antsim.figures", "antsim.studies", "antsim.run", "antsim.plan",
+                      "antsim.diagnose", "antsim.commands", "antsim.cli"),
+     "the server serves the world: it imports the world, scenarios and the controller only"),
+    ("antsim.plan", ("antsim.studies", "antsim.serve", "antsim.diagnose", "antsim.commands",
+                     "antsim.cli"),
      "plans never import diagnosis or the command line"),
-    ("antsim.diagnose", ("antsim.studies", "antsim.commands", "antsim.cli"),
+    ("antsim.diagnose", ("antsim.studies", "antsim.serve", "antsim.commands", "antsim.cli"),
      "diagnosis never imports the command line"),
 )
 #: no module outside ``antsim.commands`` imports a command (antsim.cli finds them by name)
@@ -206,7 +219,8 @@ def test_a_bad_import_and_a_circle_are_caught(tmp_path):
     """The checker on a small tree with one import of each kind this test forbids: the
     program importing the simulation (in a function), the scan engine importing the control
     program (type-only), the command line importing a command (it must find them by name), and
-    a circle through a relative import."""
+    a circle through a relative import; and the two rules of issue 26's pieces: the wire
+    client importing the server, the server importing the run."""
     root = _fake_tree(tmp_path, {
         "controller/__init__.py": "",
         "controller/units.py": "",
@@ -222,6 +236,11 @@ def test_a_bad_import_and_a_circle_are_caught(tmp_path):
         "antsim/world/__init__.py": "",
         "antsim/world/a.py": "from . import b\n",
         "antsim/world/b.py": "from .a import thing\n",
+        "controller/wire.py": "import antsim.serve.device\n",
+        "antsim/serve/__init__.py": "",
+        "antsim/serve/device.py": "from antsim.run.runner import UtcLabeller\n",
+        "antsim/run/__init__.py": "",
+        "antsim/run/runner.py": "",
         "antsim/commands/__init__.py": "",
         "antsim/commands/run.py": "",
         "antsim/cli.py": "from antsim.commands import run\n",
@@ -233,5 +252,13 @@ def test_a_bad_import_and_a_circle_are_caught(tmp_path):
     assert any(b.startswith("controller.scans.scan (line 3) imports controller.program.config")
                for b in breaches)
     assert "antsim.cli (line 1) imports the command antsim.commands.run" in breaches
-    assert len(breaches) == 3
+    # the wire client importing the server breaks two rules: the controller's and its own
+    assert [b for b in breaches if b.startswith("controller.wire (line 1)")] == [
+        f"controller.wire (line 1) imports antsim.serve.device: {why}" for why in (
+            "the control program never imports the simulation",
+            "the wire client is the protocol over a network: part of the controller, it "
+            "imports only the base modules and never the simulation it may be talking to")]
+    assert any(b.startswith("antsim.serve.device (line 1) imports antsim.run.runner")
+               for b in breaches)
+    assert len(breaches) == 6
     assert cycles(graph) == [["antsim.world.a", "antsim.world.b"]]

@@ -7,7 +7,6 @@ and ``truth.json`` into an output directory. Same scenario and seed give the sam
 
 from __future__ import annotations
 
-import datetime as dt
 import json
 import sys
 import time
@@ -20,6 +19,7 @@ import simpy
 from antsim._version import __version__
 from antsim.scenario import Scenario
 from antsim.world.world import World
+from controller.astro.earth import UtcLabeller
 from controller.pointing.model import PointingModel
 from controller.program.campaign import ControlProgram
 from controller.program.recordings import RecordingWriter, recording_columns
@@ -49,28 +49,6 @@ class RunResult:
     @property
     def n_scans(self) -> int:
         return len({r["scan"] for r in self.rows})
-
-
-class _TimeLabeller:
-    """UTC ISO labels for campaign seconds, without astropy per row (leap seconds checked)."""
-
-    def __init__(self, epoch_utc: str, duration_s: float):
-        from astropy.time import Time, TimeDelta
-
-        epoch = Time(epoch_utc, scale="utc")
-        end = epoch + TimeDelta(duration_s, format="sec")
-        # A leap second inside the campaign would shift naive datetime arithmetic by 1 s;
-        # fall back to astropy then (rare; 1990-02 has none).
-        self.leap = abs(((end.tai.mjd - end.mjd) - (epoch.tai.mjd - epoch.mjd)) * 86400.0) > 0.5
-        self.epoch = epoch
-        self.epoch_dt = epoch.to_datetime()
-
-    def __call__(self, t_s: float) -> str:
-        if self.leap:
-            from astropy.time import TimeDelta
-
-            return (self.epoch + TimeDelta(t_s, format="sec")).isot
-        return (self.epoch_dt + dt.timedelta(seconds=t_s)).isoformat(timespec="milliseconds")
 
 
 def recording_meta(scenario: Scenario, seed: int, model: PointingModel) -> dict:
@@ -129,7 +107,7 @@ def simulate(scenario: Scenario, seed: int | None = None, model: PointingModel |
         env = antenna.env
     if on_world is not None and world is not None:
         on_world(world)
-    labeller = _TimeLabeller(scenario.epoch_utc, scenario.duration_s)
+    labeller = UtcLabeller(scenario.epoch_utc, scenario.duration_s)
     rows: list[dict] = []
 
     def collect(scan_rows: list[dict]) -> None:

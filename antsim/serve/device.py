@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 import aiokatcp
 import simpy
 
+from controller.astro.earth import UtcLabeller
 from controller.protocol import AntennaError
 
 from .._version import __version__
@@ -85,8 +86,6 @@ class AntennaDevice(aiokatcp.DeviceServer):
         super().__init__(host, port)
         from astropy.time import Time
 
-        from ..run.runner import _TimeLabeller
-
         self.scenario = scenario
         self.env = simpy.Environment()
         self.world = World(scenario, self.env, seed)
@@ -101,7 +100,7 @@ class AntennaDevice(aiokatcp.DeviceServer):
         self.serving_s = 0.0
         self.controller: aiokatcp.connection.Connection | None = None
         self._epoch_unix = float(Time(scenario.epoch_utc, scale="utc").unix)
-        self._utc = _TimeLabeller(scenario.epoch_utc, self.end_s)
+        self._utc = UtcLabeller(scenario.epoch_utc, self.end_s)
         self._track: ProgramTrack | None = None
         self._busy: str | None = None
         self._deferred: dict[int, object] = {}

@@ -1,9 +1,10 @@
 """Time and the Earth's orientation: the campaign's UTC instant, UT1 and polar motion from
 the bundled IERS tables (:mod:`controller.astro.offline`), exactly as astropy's own transforms
-obtain them."""
+obtain them; UTC labels of the campaign's seconds (:class:`UtcLabeller`)."""
 
 from __future__ import annotations
 
+import datetime
 import math
 import warnings
 from typing import TYPE_CHECKING, Any
@@ -15,7 +16,7 @@ from . import offline as _offline
 if TYPE_CHECKING:
     from astropy.time import Time
 
-__all__: list[str] = []
+__all__ = ["UtcLabeller"]
 
 #: astropy's fallback polar motion (50-year mean) for dates outside the IERS tables (arcsec)
 _DEFAULT_POLAR_MOTION_ARCSEC = (0.035, 0.29)
@@ -73,3 +74,26 @@ def _polar_motion_rad(times: Time) -> tuple[np.ndarray, np.ndarray]:
             stacklevel=4,
         )
     return xp, yp
+
+
+class UtcLabeller:
+    """UTC ISO labels (milliseconds) for seconds since ``epoch_utc`` up to ``duration_s``,
+    without astropy per call (a leap second in the span is checked for)."""
+
+    def __init__(self, epoch_utc: str, duration_s: float):
+        from astropy.time import Time, TimeDelta
+
+        epoch = Time(epoch_utc, scale="utc")
+        end = epoch + TimeDelta(duration_s, format="sec")
+        # A leap second inside the campaign would shift naive datetime arithmetic by 1 s;
+        # fall back to astropy then (rare; 1990-02 has none).
+        self.leap = abs(((end.tai.mjd - end.mjd) - (epoch.tai.mjd - epoch.mjd)) * 86400.0) > 0.5
+        self.epoch = epoch
+        self.epoch_dt = epoch.to_datetime()
+
+    def __call__(self, t_s: float) -> str:
+        if self.leap:
+            from astropy.time import TimeDelta
+
+            return (self.epoch + TimeDelta(t_s, format="sec")).isot
+        return (self.epoch_dt + datetime.timedelta(seconds=t_s)).isoformat(timespec="milliseconds")
