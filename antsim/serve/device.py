@@ -16,6 +16,7 @@ the argument; the connection stays usable. The truth of the simulation is never 
 """
 
 # no "from __future__ import annotations": aiokatcp reads the handlers' annotations
+import asyncio
 import functools
 import json
 import logging
@@ -102,7 +103,9 @@ class AntennaDevice(aiokatcp.DeviceServer):
         self._epoch_unix = float(Time(scenario.epoch_utc, scale="utc").unix)
         self._utc = UtcLabeller(scenario.epoch_utc, self.end_s)
         self._track: ProgramTrack | None = None
+        #: the command being carried out (the mount's mode sensor shows it)
         self._busy: str | None = None
+        self._in_order = asyncio.Lock()
         self._deferred: dict[int, object] = {}
         self._next_id = 1
         #: whether a client has asked for sensor updates (?sensor-sampling): until then
@@ -187,13 +190,10 @@ class AntennaDevice(aiokatcp.DeviceServer):
         try:
             try:
                 if command:
-                    self._take_control(ctx.conn)
-                    if self._busy is not None:
-                        raise aiokatcp.FailReply(f"busy: ?{self._busy} has not completed; "
-                                                 "wait for its reply")
-                    self._busy = name
-                self.clock.sync()
-                reply = await func(self, ctx, *args)
+                    reply = await self._command(ctx, func, args)
+                else:
+                    self.clock.sync()
+                    reply = await func(self, ctx, *args)
             except (ArgumentError, TableError, AntennaError, OutOfTimeError) as err:
                 raise aiokatcp.FailReply(str(err)) from err
             except aiokatcp.FailReply:
@@ -201,18 +201,36 @@ class AntennaDevice(aiokatcp.DeviceServer):
             except Exception as err:
                 logger.exception("?%s failed", name)
                 raise aiokatcp.FailReply(f"internal error: {type(err).__name__}: {err}") from err
-            finally:
-                if command and self._busy == name:
-                    self._busy = None
-                if command:
-                    self._sensors_stale = True
-                    if self._watched:
-                        self.refresh_sensors()
         except aiokatcp.FailReply as err:
             self._log(ctx, name, args, clock_before, "fail", [str(err)])
             raise
         self._log(ctx, name, args, clock_before, "ok", reply)
         return reply
+
+    async def _command(self, ctx: aiokatcp.RequestContext, func: Callable,
+                       args: tuple[bytes, ...]):
+        """Carry out a command of the controlling client once those it sent before are
+        done (a client may send several without waiting for their replies: they are carried
+        out in the order they came). A command from a connection that has closed in the
+        meantime is not carried out: the antenna is no longer that client's."""
+        self._check_open(ctx.conn)
+        self._take_control(ctx.conn)
+        async with self._in_order:
+            self._check_open(ctx.conn)
+            self._take_control(ctx.conn)  # still: it may have released while waiting
+            self._busy = ctx.req.name
+            try:
+                self.clock.sync()
+                return await func(self, ctx, *args)
+            finally:
+                self._busy = None
+                self._sensors_stale = True
+                if self._watched:
+                    self.refresh_sensors()
+
+    def _check_open(self, conn) -> None:
+        if conn not in self._connections:
+            raise aiokatcp.FailReply("not carried out: the connection closed")
 
     def _log(self, ctx, name: str, args, clock_s: float, status: str, reply) -> None:
         if self.log is None:
@@ -310,20 +328,24 @@ class AntennaDevice(aiokatcp.DeviceServer):
 
     @_request("command")
     async def request_powers(self, ctx, *args: bytes):
-        """Powers of deferred integrations: ?powers FIRST [LAST] -> #powers informs, count.
+        """Powers of deferred integrations: ?powers [FIRST [LAST]] -> #powers informs, count.
 
         One inform per integration: id, then power and sample standard deviation (K) per
-        channel."""
-        at_most(args, 2, "?powers FIRST [LAST]")
-        first = integer(args, 0, "FIRST")
-        last = integer(args, 1, "LAST") if len(args) == 2 else first
-        missing = [i for i in range(first, last + 1) if i not in self._deferred]
-        if missing or last < first:
-            raise ArgumentError(f"integration {missing[0] if missing else last} is not waiting "
-                                "for ?powers (never made with defer, or already read)")
+        channel. Without arguments: every integration waiting for ?powers."""
+        at_most(args, 2, "?powers [FIRST [LAST]]")
+        if args:
+            first = integer(args, 0, "FIRST")
+            last = integer(args, 1, "LAST") if len(args) == 2 else first
+            missing = [i for i in range(first, last + 1) if i not in self._deferred]
+            if missing or last < first:
+                raise ArgumentError(f"integration {missing[0] if missing else last} is not "
+                                    "waiting for ?powers (never made with defer, or already "
+                                    "read)")
+            idents = range(first, last + 1)
+        else:
+            idents = sorted(self._deferred)
         # one write for the informs and the reply ("ok COUNT"): one wake-up of the client
-        ctx.informs([(ident, *self._powers(self._deferred.pop(ident)))
-                     for ident in range(first, last + 1)])
+        ctx.informs([(ident, *self._powers(self._deferred.pop(ident))) for ident in idents])
 
     @_request("command")
     async def request_wait(self, ctx, *args: bytes):
