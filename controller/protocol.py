@@ -130,10 +130,14 @@ class Antenna(Protocol):
 
     def set_offset(self, d_az_deg: float, d_el_deg: float):
         """Offset the encoder command from the trajectory (degrees of encoder angle);
-        the event fires once settled, its value the time the move and settling took (s)."""
+        the event fires once settled, its value the time the move and settling took (s):
+        read it with ``float()`` (an antenna over a network may give it when first read,
+        :class:`controller.wire.LaterSeconds`)."""
 
     def integrate(self, seconds: float):
-        """Integrate total power for ``seconds``; the event's value is an :class:`Integration`."""
+        """Integrate total power for ``seconds``; the event's value is an :class:`Integration`
+        (whose numbers an antenna over a network may give when first read,
+        :class:`controller.wire.LaterIntegration`)."""
 
     def wait(self, seconds: float):
         """Let time pass (the antenna keeps tracking)."""

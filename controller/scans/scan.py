@@ -93,7 +93,8 @@ def cross_scan(env, antenna: Antenna, trajectory, scan: ScanConfig, label: str =
             if axis == "az":
                 # the step holds at the middle of the integration: near the zenith cos E
                 # changes by ~3%/min, ~0.7% between the move's start and that middle
-                el_deg = trajectory.sky_elevation_deg(antenna.clock_s() + move_s + 0.5 * tau)
+                el_deg = trajectory.sky_elevation_deg(antenna.clock_s() + float(move_s)
+                                                      + 0.5 * tau)
                 cos_el = max(math.cos(math.radians(el_deg)), 1e-3)
                 raw.cos_el = cos_el
                 move_s = yield antenna.set_offset(n * step / 60.0 / cos_el, 0.0)
