@@ -141,7 +141,8 @@ class LaterIntegration(Integration):
         object.__setattr__(self, "_get", get)  # Integration is frozen
 
     def __reduce_ex__(self, protocol):
-        return self._get().__reduce_ex__(protocol)
+        given = self._get()
+        return Integration, tuple(getattr(given, f.name) for f in fields(Integration))
 
 
 for _field in fields(Integration):  # each field read from the Integration the reply gives

@@ -9,11 +9,13 @@ from __future__ import annotations
 
 import json
 import math
+import pickle
 import shutil
 import signal
 import socket
 import subprocess
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -62,6 +64,25 @@ class LineClient:
                 informs.append(text)
             else:
                 self.asynchronous.append(text)
+
+    def pipeline(self, lines: list[str]) -> dict[int, tuple[str, list[str]]]:
+        """Send ``lines`` (requests with message ids, ``?name[id] ...``) in one write, then
+        read every reply: ``{id: (reply line, informs)}`` in the order the replies came."""
+        self.sock.sendall("".join(line + "\n" for line in lines).encode())
+        mids = {int(line.split("[")[1].split("]")[0]) for line in lines}
+        out: dict[int, tuple[str, list[str]]] = {}
+        informs: dict[int, list[str]] = {}
+        while len(out) < len(mids):
+            text = self.line()
+            head = text.split()[0]
+            mid = int(head.split("[")[1].rstrip("]")) if "[" in head else None
+            if mid not in mids:
+                self.asynchronous.append(text)
+            elif text.startswith("#"):
+                informs.setdefault(mid, []).append(text)
+            else:
+                out[mid] = text, informs.get(mid, [])
+        return out
 
     def close(self) -> None:
         self.file.close()
@@ -277,8 +298,85 @@ def test_a_client_that_disconnects_mid_scan_leaves_the_server_ready(server):
         b.close()
 
 
+def test_pipelined_commands_are_carried_out_in_order_and_matched_by_id(server):
+    """A scan's offsets and deferred integrations in one write: carried out one after the
+    other (each reply's clock follows the one before by at least what the command took),
+    the replies matched by message id, and ?powers without arguments reads the integrations
+    this client left waiting."""
+    c = LineClient(server.port)
+    try:
+        assert c.request("?track 0 200 45 90000 230 60")[0].startswith("!track ok ")
+        lines = []
+        for k, step in enumerate((-0.2, 0.0, 0.2)):
+            lines += [f"?offset[{10 + 2 * k}] {step} 0", f"?integrate[{11 + 2 * k}] 5 defer"]
+        lines += ["?offset[16] 0 0", "?wait[17] 3", "?powers[18]"]
+        replies = c.pipeline(lines)
+        assert all(r.split()[1] == "ok" for r, _ in replies.values()), replies
+        clock = {mid: float(replies[mid][0].split()[2]) for mid in range(10, 18)}
+        took = {11: 5.0, 13: 5.0, 15: 5.0, 17: 3.0}  # the offsets' moves: in their replies
+        for mid in range(11, 18):
+            seconds = took.get(mid) or float(replies[mid][0].split()[3])
+            assert clock[mid] >= clock[mid - 1] + seconds - 1e-6, (mid, clock)
+        idents = [int(replies[mid][0].split()[3]) for mid in (11, 13, 15)]
+        reply, informs = replies[18]
+        assert reply == "!powers[18] ok 3"
+        assert [int(i.split()[1]) for i in informs] == idents
+        assert c.pipeline(["?powers[19]"])[19][0] == "!powers[19] ok 0"  # none left
+    finally:
+        c.request("?release")
+        c.close()
+
+
+def test_a_pipelined_client_that_disconnects_mid_pipeline_leaves_the_server_ready(server):
+    """A client sends a scan's commands in one write, the last cut short, and goes without
+    reading a reply: the next client gets the antenna, none of the first client's
+    integrations is waiting for it, and its own scan works. The server says once that the
+    first client left (if it got as far as controlling), not once per reply it could not
+    send."""
+    a = LineClient(server.port)
+    a_address = "{}:{}".format(*a.sock.getsockname())
+    for _ in range(3):  # #version-connect: read, so that closing is a clean end of stream
+        a.line()
+    lines = ["?track[1] 0 200 45 90000 230 60"]
+    for k in range(20):
+        lines += [f"?offset[{2 + 2 * k}] {0.1 * (k % 5 - 2)} 0",
+                  f"?integrate[{3 + 2 * k}] 5 defer"]
+    a.sock.sendall(("\n".join(lines) + "\n?integrate[99] 5 de").encode())
+    a.close()
+    b = LineClient(server.port)
+    b_address = "{}:{}".format(*b.sock.getsockname())
+    try:
+        deadline = time.monotonic() + TIMEOUT_S
+        while True:  # the server notices the disconnection asynchronously
+            reply, _ = b.request("?track 0 200 45 90000 230 60")
+            if reply.startswith("!track ok ") or time.monotonic() > deadline:
+                break
+            time.sleep(0.05)
+        assert reply.startswith("!track ok ")
+        replies = b.pipeline(["?offset[1] 0.1 0", "?integrate[2] 5 defer", "?powers[3]"])
+        ident = int(replies[2][0].split()[3])
+        reply, informs = replies[3]
+        assert reply == "!powers[3] ok 1" and int(informs[0].split()[1]) == ident
+        assert all(math.isfinite(float(v)) for v in informs[0].split()[2:])
+    finally:
+        b.request("?release")
+        b.close()
+    deadline = time.monotonic() + TIMEOUT_S  # the server's lines arrive through a pipe
+    while not any(f"client {b_address} controls" in line for line in server.lines) \
+            and time.monotonic() < deadline:
+        time.sleep(0.05)
+    mine = server.lines[next(i for i, line in enumerate(server.lines)
+                             if f"client {a_address} connected" in line):]
+    if any(f"client {a_address} controls the antenna" in line for line in mine):
+        assert any(f"client {a_address} no longer controls the antenna (disconnected)" in line
+                   for line in mine), mine
+    assert not any("socket.send()" in line for line in mine), mine
+
+
 def test_the_python_client_fails_commands_with_antenna_errors(server):
-    """As the in-process antenna does: the command's event fails with the reason."""
+    """As the in-process antenna does: the command's event fails with the reason; a command
+    sent without waiting for its reply fails at the next reply read, naming the request,
+    and those sent behind it are carried out."""
     with KatcpAntenna("127.0.0.1", server.port, simpy.Environment()) as antenna:
         assert antenna.channels == ("XR", "XL") and antenna.virtual
         low = antenna.track(lambda t: (np.full(np.shape(t), 10.0), np.full(np.shape(t), 2.0)))
@@ -286,6 +384,56 @@ def test_the_python_client_fails_commands_with_antenna_errors(server):
         assert "target elevation 2.00 deg at arrival is outside the limits" in str(low.value)
         camera = antenna.measure_offset(5.0)
         assert not camera.ok and "this antenna has no camera" in str(camera.value)
+        assert antenna.track(lambda t: (np.full(np.shape(t), 200.0),
+                                        np.full(np.shape(t), 45.0))).ok
+        before = antenna.clock_s()
+        bad = antenna.integrate(-1.0)  # sent; the reply is read later
+        antenna.wait(2.0)
+        with pytest.raises(AntennaError, match=r"^\?integrate -1\.0 defer: argument 1 "
+                                               r"\(SECONDS\) '-1\.0': must be positive"):
+            antenna.clock_s()
+        assert antenna.clock_s() == before + 2.0  # the wait behind it was carried out
+        with pytest.raises(AntennaError, match=r"\?integrate -1\.0 defer"):
+            _ = bad.value.t_start_s
+        antenna.release()
+
+
+def test_a_cross_scan_waits_for_the_antenna_once_per_azimuth_point_and_once_after(
+        server, short_path):
+    """The project's cross scan over the wire: the track's reply is read at once, the clock
+    before each azimuth point after the first (the step is divided by the cosine of the
+    elevation at the point's middle), and everything else (the elevation points, the return
+    to zero offset, the wait and the powers) in one round trip when the powers are read.
+    What an integration command returned copies, pickles and is replaced as a plain
+    Integration."""
+    from controller.program.campaign import plan_targets
+    from controller.protocol import Integration
+    from controller.scans.scan import cross_scan
+    from controller.scans.tracking import RefractionCorrection, SourceTrajectory
+
+    config = load_scenario(short_path).controller
+    observer, targets = plan_targets(config)
+    env = simpy.Environment()
+    with KatcpAntenna("127.0.0.1", server.port, env) as antenna:
+        now = antenna.clock_s()
+        refraction = RefractionCorrection("none", None, config.frequency_ghz)
+        trajectories = [SourceTrajectory(observer.ephemeris, t.index, config.model,
+                                         refraction, now, (0.0, 0.0)) for t in targets]
+        traj = max(trajectories, key=lambda tr: tr.sky_elevation_deg(now + 300.0))
+        requests, trips = antenna.requests, antenna.round_trips
+        scan = env.process(cross_scan(env, antenna, traj, config.scan))
+        env.run(scan)
+        raw = scan.value
+        assert antenna.round_trips - trips == 5  # the track and the azimuth points 2..5
+        power, _, times = raw.powers()
+        assert antenna.round_trips - trips == 6
+        assert antenna.requests - requests == 1 + 11 + 10 + (config.scan.overhead_s > 0) + 1
+        assert np.all(np.isfinite(power)) and np.all(np.diff(times[0, 0]) > 0)
+        later = raw.integrations["el"][2]
+        plain = replace(later)
+        assert type(plain) is Integration and plain.t_start_s == later.t_start_s
+        copied = pickle.loads(pickle.dumps(later))
+        assert type(copied) is Integration and copied.power_k == dict(later.power_k)
         antenna.release()
 
 
@@ -325,6 +473,11 @@ def test_accelerated_clock_follows_the_wall_clock(short_path):
             time.sleep(0.5)
             az1 = float(c.request("?encoder")[0].split()[2])
             assert 0.05 < az1 - az0 < 0.5
+            # commands sent together wait for one another: the second ?wait starts when
+            # the first ends (0.1 s of wall time each)
+            replies = c.pipeline(["?wait[51] 2", "?wait[52] 2"])
+            first, second = (float(replies[m][0].split()[2]) for m in (51, 52))
+            assert replies[52][0].startswith("!wait[52] ok ") and second >= first + 2.0
         finally:
             c.close()
 
