@@ -10,17 +10,20 @@ the two whole commands (``antsim run --no-report``, and ``antsim run --no-report
 against a server already listening). Every wire campaign's recordings.ecsv is checked to be
 byte-identical to the in-process one. Target: the wire at most 2x the in-process run.
 
-Also printed, for the wire: the controller's own time, the time it waited for the
-antenna's replies, how much of that the server spent serving the requests (the world's work
-and the request handling) and the rest, in transit between the two processes, per request;
-and the round trip of one trivial request (``?channels``) sent back to back. The transit of
-about 27 sequential requests per scan is the part no server or client code can remove.
+Also printed, for the wire: the requests and the round trips (a write, then the replies of
+everything unanswered: the client pipelines, see controller/wire.py); the processor time of
+the client and of the server against the in-process run's (the two processes mostly take
+turns, so the wire's wall time is about their sum); the wall time the client waited for
+replies; the round trip of one trivial request (``?channels``) sent back to back, and the
+cost per request of trivial requests pipelined as a scan's are (13 per write): aiokatcp's
+and the client's handling of a request, which every one of the campaign's requests pays.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -50,8 +53,18 @@ def _command_s(args: list[str]) -> float:
     return time.perf_counter() - t0
 
 
-def round_trip_us(port: int, n: int = 2000) -> float:
-    """Median time of one trivial request (us)."""
+def _cpu_s(pid: int | None = None) -> float:
+    """Processor time (user + system, s) of this process, or of process ``pid`` (Linux)."""
+    if pid is None:
+        usage = resource.getrusage(resource.RUSAGE_SELF)
+        return usage.ru_utime + usage.ru_stime
+    fields = Path(f"/proc/{pid}/stat").read_text().rpartition(")")[2].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def trivial_requests_us(port: int, n: int = 2000, batch: int = 13) -> tuple[float, float]:
+    """Median wall time (us) of one trivial request (``?channels``) sent back to back, and
+    the mean per request when they go ``batch`` to a write (pipelined)."""
     import simpy
 
     from controller.wire import KatcpAntenna
@@ -62,28 +75,36 @@ def round_trip_us(port: int, n: int = 2000) -> float:
             t0 = time.perf_counter()
             antenna._request("channels")
             times.append(time.perf_counter() - t0)
-    return statistics.median(times) * 1e6
+        t0 = time.perf_counter()
+        for _ in range(n // batch):
+            for _ in range(batch):
+                antenna._send("channels")
+            antenna._sync()
+        pipelined = (time.perf_counter() - t0) / (n // batch * batch)
+    return statistics.median(times) * 1e6, pipelined * 1e6
 
 
 def one_round(path: str, tmp: Path, k: int) -> dict:
     scenario = load_scenario(path)
     out: dict = {}
-    t0 = time.perf_counter()
-    run_campaign(scenario, tmp / f"in{k}", show_progress=False)
+    c0, t0 = _cpu_s(), time.perf_counter()
+    result = run_campaign(scenario, tmp / f"in{k}", show_progress=False)
     out["campaign_in"] = time.perf_counter() - t0
+    out["cpu_in"] = _cpu_s() - c0
+    out["scans"] = result.n_scans
     with ServerProcess(path) as server:
         antenna, seed = connect(scenario, f"127.0.0.1:{server.port}")
-        requests, waited = antenna.requests, antenna.waited_s
-        t0 = time.perf_counter()
+        requests, trips, waited = antenna.requests, antenna.round_trips, antenna.waited_s
+        s0, c0, t0 = _cpu_s(server.process.pid), _cpu_s(), time.perf_counter()
         run_campaign(scenario, tmp / f"wire{k}", seed=seed, show_progress=False,
                      antenna=antenna)
         out["campaign_wire"] = time.perf_counter() - t0
+        out["cpu_client"] = _cpu_s() - c0
+        out["cpu_server"] = _cpu_s(server.process.pid) - s0
         out["requests"] = antenna.requests - requests
+        out["round_trips"] = antenna.round_trips - trips
         out["waited"] = antenna.waited_s - waited
         antenna.close()
-        server.stop()
-        out["serving"] = next(float(line.split(" requests (")[1].split()[0])
-                              for line in server.lines if " s serving them)" in line)
     same = ((tmp / f"in{k}" / "recordings.ecsv").read_bytes()
             == (tmp / f"wire{k}" / "recordings.ecsv").read_bytes())
     out["identical"] = same
@@ -93,7 +114,7 @@ def one_round(path: str, tmp: Path, k: int) -> dict:
                                           "--no-report", "--connect",
                                           f"127.0.0.1:{server.port}"])
     with ServerProcess(path) as server:
-        out["round_trip_us"] = round_trip_us(server.port)
+        out["round_trip_us"], out["pipelined_us"] = trivial_requests_us(server.port)
     return out
 
 
@@ -112,26 +133,31 @@ def main() -> int:
                   f"{r['campaign_wire']:.2f} s (x{r['campaign_wire'] / r['campaign_in']:.2f}); "
                   f"whole command {r['command_in']:.2f} s vs {r['command_wire']:.2f} s "
                   f"(x{r['command_wire'] / r['command_in']:.2f}); recordings identical: "
-                  f"{r['identical']}", flush=True)
-            print(f"  over the wire: the controller {r['campaign_wire'] - r['waited']:.2f} s, "
-                  f"waiting for {r['requests']} replies {r['waited']:.2f} s (the server "
-                  f"serving them {r['serving']:.2f} s, the rest {r['waited'] - r['serving']:.2f}"
-                  f" s = {(r['waited'] - r['serving']) / r['requests'] * 1e6:.0f} us per "
-                  f"request in transit); back-to-back round trip {r['round_trip_us']:.0f} us",
-                  flush=True)
-    med = {key: statistics.median(r[key] for r in rounds)
-           for key in ("campaign_in", "campaign_wire", "command_in", "command_wire",
-                       "round_trip_us", "requests", "waited", "serving")}
-    campaign = med["campaign_wire"] / med["campaign_in"]
-    command = med["command_wire"] / med["command_in"]
-    print(f"median of {len(rounds)} rounds: campaign {med['campaign_in']:.2f} s in process, "
-          f"{med['campaign_wire']:.2f} s over the wire (x{campaign:.2f}, target x2); whole "
-          f"command {med['command_in']:.2f} s vs {med['command_wire']:.2f} s (x{command:.2f})")
-    controller = statistics.median(r["campaign_wire"] - r["waited"] for r in rounds)
-    transit = statistics.median(r["waited"] - r["serving"] for r in rounds)
-    print(f"median split of the wire campaign: the controller {controller:.2f} s, the server "
-          f"{med['serving']:.2f} s, in transit {transit:.2f} s for {med['requests']:.0f} "
-          f"requests ({transit / med['requests'] * 1e6:.0f} us each)")
+                  f"{r['identical']}; load {os.getloadavg()[0]:.2f}", flush=True)
+            print(f"  over the wire: {r['requests']} requests in {r['round_trips']} round "
+                  f"trips ({r['round_trips'] / r['scans']:.1f} per scan); processor time: "
+                  f"client {r['cpu_client']:.2f} s + server {r['cpu_server']:.2f} s against "
+                  f"{r['cpu_in']:.2f} s in process; the client waited {r['waited']:.2f} s; "
+                  f"a trivial request {r['round_trip_us']:.0f} us back to back, "
+                  f"{r['pipelined_us']:.0f} us pipelined", flush=True)
+    keys = ("campaign_in", "campaign_wire", "command_in", "command_wire", "round_trip_us",
+            "pipelined_us", "requests", "round_trips", "scans", "waited", "cpu_in",
+            "cpu_client", "cpu_server")
+    med = {key: statistics.median(r[key] for r in rounds) for key in keys}
+    campaign = statistics.median(r["campaign_wire"] / r["campaign_in"] for r in rounds)
+    command = statistics.median(r["command_wire"] / r["command_in"] for r in rounds)
+    print(f"median of {len(rounds)} interleaved rounds: campaign {med['campaign_in']:.2f} s in "
+          f"process, {med['campaign_wire']:.2f} s over the wire (ratio x{campaign:.2f}, "
+          f"target x2); whole command {med['command_in']:.2f} s vs {med['command_wire']:.2f} s "
+          f"(x{command:.2f})")
+    print(f"median processor time: in process {med['cpu_in']:.2f} s; over the wire client "
+          f"{med['cpu_client']:.2f} s + server {med['cpu_server']:.2f} s = "
+          f"{med['cpu_client'] + med['cpu_server']:.2f} s (x"
+          f"{(med['cpu_client'] + med['cpu_server']) / med['cpu_in']:.2f}); "
+          f"{med['requests']:.0f} requests x {med['pipelined_us']:.0f} us (a trivial request "
+          f"pipelined: aiokatcp's and the client's handling) = "
+          f"{med['requests'] * med['pipelined_us'] * 1e-6:.2f} s; {med['round_trips']:.0f} "
+          f"round trips ({med['round_trips'] / med['scans']:.1f} per scan)")
     print(f"recordings byte-identical in every round: {all(r['identical'] for r in rounds)}")
     print(f"load average after: {os.getloadavg()[0]:.2f}")
     return 0 if all(r["identical"] for r in rounds) else 1

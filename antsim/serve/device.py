@@ -186,7 +186,7 @@ class AntennaDevice(aiokatcp.DeviceServer):
                            args: tuple[bytes, ...]):
         name = ctx.req.name
         command = kind == "command" or (kind == "command-with-args" and bool(args))
-        clock_before = float(self.antenna.clock_s())
+        clock_before = float(self.antenna.clock_s()) if self.log is not None else 0.0
         try:
             try:
                 if command:
