@@ -18,8 +18,8 @@ powers, instead of once per request. What such a command returns stands for its 
 when first used) and :class:`LaterSeconds` (a move's duration, ``float()`` reads it). A
 command that fails does not stop those sent behind it (KATCP has no transactions): its
 failure is raised as :class:`~controller.protocol.AntennaError` naming the request at the
-next read of a reply, whichever that is. Tracks, whose failure the controller handles at
-once, are not sent behind unanswered commands' backs: their reply is read before the
+next read of a reply, whichever that is. A track, whose failure the controller handles at
+once, goes out when every command before it is answered, and its reply is read before the
 controller goes on.
 
 Tracking: the controller hands :meth:`KatcpAntenna.track` a trajectory (a callable of clock
