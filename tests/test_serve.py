@@ -84,6 +84,16 @@ class LineClient:
                 out[mid] = text, informs.get(mid, [])
         return out
 
+    def track_once_free(self, track: str) -> str:
+        """Send ``track`` (a ?track line) until the antenna takes it: a client that just
+        disconnected keeps control until the server notices (asynchronously)."""
+        deadline = time.monotonic() + TIMEOUT_S
+        while True:
+            reply, _ = self.request(track)
+            if reply.startswith("!track ok ") or time.monotonic() > deadline:
+                return reply
+            time.sleep(0.05)
+
     def close(self) -> None:
         self.file.close()
         self.sock.close()
@@ -283,13 +293,7 @@ def test_a_client_that_disconnects_mid_scan_leaves_the_server_ready(server):
     a.close()  # gone mid-scan: an integration never read, an offset set
     b = LineClient(server.port)
     try:
-        deadline = time.monotonic() + TIMEOUT_S
-        while True:  # the server notices the disconnection asynchronously
-            reply, _ = b.request("?track 0 200 45 7200 230 60")
-            if reply.startswith("!track ok ") or time.monotonic() > deadline:
-                break
-            time.sleep(0.05)
-        assert reply.startswith("!track ok ")
+        assert b.track_once_free("?track 0 200 45 7200 230 60").startswith("!track ok ")
         values = b.request("?integrate 5")[0].split()[2:]
         assert len(values) == 11 + 2 * 2  # ... and the powers and std of XR and XL
         assert all(math.isfinite(float(v)) for v in values)
@@ -346,13 +350,7 @@ def test_a_pipelined_client_that_disconnects_mid_pipeline_leaves_the_server_read
     b = LineClient(server.port)
     b_address = "{}:{}".format(*b.sock.getsockname())
     try:
-        deadline = time.monotonic() + TIMEOUT_S
-        while True:  # the server notices the disconnection asynchronously
-            reply, _ = b.request("?track 0 200 45 90000 230 60")
-            if reply.startswith("!track ok ") or time.monotonic() > deadline:
-                break
-            time.sleep(0.05)
-        assert reply.startswith("!track ok ")
+        assert b.track_once_free("?track 0 200 45 90000 230 60").startswith("!track ok ")
         replies = b.pipeline(["?offset[1] 0.1 0", "?integrate[2] 5 defer", "?powers[3]"])
         ident = int(replies[2][0].split()[3])
         reply, informs = replies[3]
