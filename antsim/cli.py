@@ -10,8 +10,10 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import warnings
 
 from controller.errors import InputError
+from controller.pointing.legacy import RelabelledTermsWarning
 
 from ._version import __version__
 
@@ -63,7 +65,10 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_INPUT
     module = importlib.import_module(args._module)
     try:
-        return int(module.main(args) or 0)
+        with warnings.catch_warnings():
+            warnings.simplefilter("always", RelabelledTermsWarning)
+            warnings.showwarning = _notes_in_one_line(args.command, warnings.showwarning)
+            return int(module.main(args) or 0)
     except InputError as err:
         print(f"antsim {args.command}: error: {err.line()}", file=sys.stderr)
         return EXIT_INPUT
@@ -71,6 +76,22 @@ def main(argv: list[str] | None = None) -> int:
         print(f"antsim {args.command}: interrupted; recordings written so far are kept",
               file=sys.stderr)
         return 130
+
+
+def _notes_in_one_line(command: str, show):
+    """A ``warnings.showwarning`` printing notes to the user (a file's W terms renamed, see
+    :mod:`controller.pointing.legacy`) as one line, ``antsim COMMAND: note: ...``; other
+    warnings go to ``show``. A note is printed once, however often the file is read."""
+    printed: set[str] = set()
+
+    def showwarning(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, RelabelledTermsWarning):
+            if str(message) not in printed:
+                printed.add(str(message))
+                print(f"antsim {command}: note: {message}", file=sys.stderr)
+        else:
+            show(message, category, filename, lineno, file, line)
+    return showwarning
 
 
 def command() -> int:

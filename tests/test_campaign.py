@@ -46,9 +46,10 @@ def quiet(scenario, hours: float, truth: PointingModel, estimator: str = "clark"
 
 @pytest.mark.parametrize("estimator", ["clark", "lsq"])
 def test_noise_free_scans_reduce_to_the_injected_offset(ghigo, estimator):
-    # injected errors constant on the sky: 2' of collimation (W2: dA = W2 sec E, so xel = 2')
-    # and 3' of elevation zero; point sources only, so the reduction must return them exactly
-    truth = PointingModel(["W2", "W6"], [120.0, 180.0], name="test")
+    # injected errors constant on the sky: 2' of collimation (W10: dA cos E = W10, so
+    # xel = 2') and 3' of elevation encoder offset (W1); point sources only, so the reduction
+    # must return them exactly
+    truth = PointingModel(["W10", "W1"], [120.0, 180.0], name="test")
     sc = quiet(ghigo, 3.0, truth, estimator)
     sources = [s for s in sc.sources if s.size_arcmin == 0.0]
     sc = replace(sc, sources=tuple(sources),
@@ -84,13 +85,13 @@ def test_azimuth_steps_follow_the_sky_elevation_up_to_the_zenith(ghigo, estimato
     # computed at the move's start rather than the integration's middle by ~0.7% near the
     # zenith, where cos E changes by ~3% a minute. Both are gone: every scan to 85 deg is
     # exact to the 0.005' of the point-source test. Exact means to second order too: the
-    # 1' collimation (W2 sec E, E the beam's elevation, 1' below the source) is seen from
+    # 1' collimation (W10 sec E in dA, E the beam's elevation, 1' below the source) is seen from
     # the source as 1' cos(E_source) / cos(E_beam), 0.2" less at 85 deg (measured errors
     # then at most 0.11" in cross-elevation and 0.18" in elevation, both estimators)
-    truth = PointingModel(["W2", "W6"], [60.0, 720.0], name="test")
+    truth = PointingModel(["W10", "W1"], [60.0, 720.0], name="test")
     sc = quiet(ghigo, 12.0, truth, estimator)
     sources = [s for s in sc.sources if s.size_arcmin == 0.0]
-    controller = replace(sc.controller, model=PointingModel(["W6"], [660.0], name="in use"),
+    controller = replace(sc.controller, model=PointingModel(["W1"], [660.0], name="in use"),
                          sources=tuple(c for c in sc.controller.sources
                                        if c.name in {s.name for s in sources}))
     sc = replace(sc, sources=tuple(sources), controller=controller)
@@ -112,7 +113,7 @@ def test_extended_sources_and_the_width_the_reduction_assumes(ghigo, estimator, 
     # catalogued size gives (use_source_size) both estimators are exact. 1' and 1.5' are
     # injected: the shrinkage is then 0.09-0.2', the tolerance of 0.005' (0.3") holds the
     # second-order geometry (measured 0.003' at most for Clark)
-    truth = PointingModel(["W2", "W6"], [60.0, 90.0], name="test")
+    truth = PointingModel(["W10", "W1"], [60.0, 90.0], name="test")
     sc = quiet(ghigo, 3.0, truth, estimator)
     sources = [s for s in sc.sources if s.size_arcmin > 0.0]
     controller = replace(sc.controller, scan=replace(sc.controller.scan, use_source_size=use_size),
@@ -138,7 +139,7 @@ def test_sky_drift_in_time_and_the_a_priori_atmosphere(ghigo, knows_sky):
     # ~4.8' d / A (several arcmin for a 1 K source). Subtracting the emission the controller
     # predicts from its a-priori atmosphere (equal to the world's here) removes it: the
     # offsets are exact to the 0.005' of the point-source test
-    truth = PointingModel(["W2", "W6"], [60.0, 90.0], name="test")
+    truth = PointingModel(["W10", "W1"], [60.0, 90.0], name="test")
     sc = quiet(ghigo, 3.0, truth, "clark")
     sources = [s for s in sc.sources if s.size_arcmin == 0.0]
     atmosphere = AtmosphereConfig(zenith_opacity=0.05, temperature_k=270.0)
@@ -237,6 +238,7 @@ def test_recordings_round_trip(ghigo, tmp_path):
     assert meta["scenario"] == "ghigo1990" and meta["seed"] == sc.seed
     assert meta["model"]["name"] == "ghigo10"
     assert meta["model"]["terms_arcsec"]["W6"] == pytest.approx(720.0)
+    assert meta["model"]["w_terms"] == "Ghigo 1990 (NRAO EDIR 288) section II"
     assert meta["step_arcmin"] == 7.0 and meta["beam_hpbw_arcmin"] == 11.0
     # total pointing error = measured + model in use + applied correction
     data = read_pointing_data(tmp_path / "recordings.ecsv")

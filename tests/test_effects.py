@@ -287,8 +287,9 @@ def test_polarization_squint_splits_xr_and_xl(quiet, probe):
     assert 0.5 * (xr + xl) == pytest.approx([0.0, 0.0], abs=STATIC_ARCSEC)
 
 
-#: injected geometry for the scaling checks: W2 = 60" (xel = W2 everywhere) and W6 = 60"
-SCALING_MODEL = PointingModel(["W2", "W6"], [60.0, 60.0])
+#: injected geometry for the scaling checks: W10 = 60" (collimation: xel = W10 everywhere) and
+#: W1 = 60" (elevation encoder offset)
+SCALING_MODEL = PointingModel(["W10", "W1"], [60.0, 60.0])
 
 
 def test_beam_width_scales_measured_offsets(quiet, probe):

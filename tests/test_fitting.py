@@ -304,7 +304,7 @@ def test_dependent_and_zero_columns_are_named_not_papered_over():
     rng = np.random.default_rng(3)
     truth = PointingModel(["IA", "CA", "IE"], [40.0, -25.0, 12.0])
     data = synthetic(truth, rng, 200, 2.0, 2.0)
-    result = fit_model(data, ["W1", "IA", "P2", "CA", "IE", "HESA2", "HESACA"], robust=False)
+    result = fit_model(data, ["W6", "IA", "P2", "CA", "IE", "HESA2", "HESACA"], robust=False)
     assert result.unconstrained == ("IA", "P2", "HESACA")
     assert result.n_fitted == 4
     doc = result.to_json()
@@ -312,10 +312,11 @@ def test_dependent_and_zero_columns_are_named_not_papered_over():
         assert doc["terms"][name] == {"value_arcsec": 0.0, "sigma_arcsec": None,
                                       "sigma_honest_arcsec": None}
         assert any(w.startswith(f"{name} cannot be determined") for w in result.warnings)
-    assert any("indistinguishable from W1" in w for w in result.warnings)
+    assert any("indistinguishable from W6" in w for w in result.warnings)
     assert any("P2 cannot be determined" in w and "zero" in w for w in result.warnings)
-    # the constrained part is fitted correctly: W1 = IA (both "indicated minus true" dA)
-    assert result.model["W1"] == pytest.approx(40.0, abs=1.0)
+    # the constrained part is fitted correctly: W6 = IA (the report's azimuth encoder offset,
+    # dA cos E = W6 cos E, is TPOINT's IA)
+    assert result.model["W6"] == pytest.approx(40.0, abs=1.0)
     assert result.model["CA"] == pytest.approx(-25.0, abs=1.0)
     assert doc["correlations"]["matrix"][1][1] is None
     assert np.isfinite(result.condition_number)
@@ -427,9 +428,10 @@ def test_result_is_immutable_json_clean_and_inputs_untouched():
     doc = result.to_json()
     text = json.dumps(doc, allow_nan=False)
     # DESIGN section 4's schema, extended (never changed) by the honest error bars
-    assert set(doc) == {"n_input", "n_used", "n_rejected", "model", "terms", "sky_rms_arcsec",
-                        "xel_rms_arcsec", "el_rms_arcsec", "popn_sd_arcsec", "condition_number",
-                        "correlations", "unconstrained", "honest_sigma"}
+    # (and by w_terms: which definition the W terms follow, controller/pointing/legacy.py)
+    assert set(doc) == {"n_input", "n_used", "n_rejected", "model", "w_terms", "terms",
+                        "sky_rms_arcsec", "xel_rms_arcsec", "el_rms_arcsec", "popn_sd_arcsec",
+                        "condition_number", "correlations", "unconstrained", "honest_sigma"}
     assert doc["model"] == "fitted" and list(doc["terms"]) == list(result.names)
     assert set(doc["terms"]["W6"]) == {"value_arcsec", "sigma_arcsec", "sigma_honest_arcsec"}
     assert doc["correlations"]["names"] == list(result.names)

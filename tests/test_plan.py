@@ -364,8 +364,16 @@ def test_members_that_would_search_are_simulated_in_full(write_plan, short_engin
     assert any("update_gain" in why for why in eng.unshareable)
 
 
-def test_cold_start_runs_members_in_full(write_plan):
-    plan = load_plan(write_plan(members=2, block=2, variant='model = "none"\nduration_h = 1.5\n'
+def test_cold_start_runs_members_in_full(write_plan, tmp_path):
+    # a model in use 12' wrong in elevation (W1, the elevation encoder offset): every first
+    # scan misses, even in the noise-free run, and the controller searches. (With no model
+    # at all the 1990 antenna's 12.24' azimuth offset is only W6 cos E on the sky: the
+    # noise-free run of these hours finds its sources on the flank of the beam.)
+    model = tmp_path / "wrong.json"
+    model.write_text('{"model": "wrong", "w_terms": "Ghigo 1990 (NRAO EDIR 288) section II", '
+                     '"terms": {"W1": {"value_arcsec": -720.0}}}', encoding="utf-8")
+    plan = load_plan(write_plan(members=2, block=2,
+                                variant=f'model = "{model.as_posix()}"\nduration_h = 1.5\n'
                                 'sources = ["3C84", "Cygnus A", "Cassiopeia A"]'))
     result = run_plan(plan, workers=0, answers=False, progress=False)
     doc = result.to_json()["plans"][0]
@@ -437,20 +445,20 @@ def test_same_results_with_1_and_2_workers_and_dask(write_plan, tmp_path, capsys
 
 
 def test_answers_duration_sources_and_separation(write_plan):
-    more = ('[[answers.duration]]\nbased_on = "as run"\nterms = ["W6"]\n'
+    more = ('[[answers.duration]]\nbased_on = "as run"\nterms = ["W1"]\n'
             'target_arcsec = 60.0\nunit = "hour"\nmax_days = 0.125\n'
-            '[[answers.duration]]\nbased_on = "as run"\nterms = ["W6"]\n'
+            '[[answers.duration]]\nbased_on = "as run"\nterms = ["W1"]\n'
             'target_arcsec = 0.5\nunit = "hour"\nmax_days = 0.125\n'
             '[[answers.sources]]\nbased_on = "as run"\nmin_sources = 3\ncandidates = 1\n')
     variant = 'duration_h = 2.0\nsources = ["3C84", "W31", "Cygnus A", "Cassiopeia A"]'
     plan = load_plan(write_plan(members=2, block=2, variant=variant, more=more))
     result = run_plan(plan, workers=0, progress=False)
     reached, missed = result.answers["duration"]
-    assert reached["reached"] and reached["answer"]["sigma_arcsec"]["W6"] <= 60.0
-    sig = [c["sigma_arcsec"]["W6"] for c in reached["curve"]]
+    assert reached["reached"] and reached["answer"]["sigma_arcsec"]["W1"] <= 60.0
+    sig = [c["sigma_arcsec"]["W1"] for c in reached["curve"]]
     assert sig == sorted(sig, reverse=True)  # more hours, smaller sigma
     earlier = [c for c in reached["curve"] if c["count"] < reached["answer"]["count"]]
-    assert all(c["sigma_arcsec"]["W6"] > 60.0 for c in earlier)
+    assert all(c["sigma_arcsec"]["W1"] > 60.0 for c in earlier)
     assert not missed["reached"] and missed["extrapolated"]["count"] > 3
     src = result.answers["sources"][0]
     best = src["best"]

@@ -85,7 +85,7 @@ def test_antsim_run_twice_writes_identical_bytes(short_scenario, tmp_path, capsy
         a, b = (o / filename for o in outputs)
         assert a.read_bytes() == b.read_bytes(), filename
     truth = json.loads((outputs[0] / "truth.json").read_text(encoding="utf-8"))
-    assert set(truth) == {"seed", "model", "terms", "effects"}
+    assert set(truth) == {"seed", "model", "w_terms", "terms", "effects"}
     assert truth["terms"]["W6"]["value_arcsec"] == pytest.approx(734.4, abs=1e-9)  # 12.24'
     # and a different seed gives different recordings
     out = tmp_path / "c"
@@ -140,7 +140,7 @@ BAD = {
     "duplicate source": (
         [('name = "Virgo A"', 'name = "3C273"')], "sources[4].name", "'3C273'"),
     "source position out of range": (
-        [('ra = "03h16m29.57s"', 'ra = "25h16m29.57s"')], "sources[0].ra", "'25h16m29.57s'"),
+        [('ra = "03h16m29.6s"', 'ra = "25h16m29.6s"')], "sources[0].ra", "'25h16m29.6s'"),
     "negative flux density": (
         [("flux_jy = 40.0", "flux_jy = -40.0")], "sources[3].flux_jy", "-40.0"),
     "step too large for the beam": (
@@ -151,7 +151,7 @@ BAD = {
     # W31 moved to declination -60: from latitude 38.4 it culminates at -8 deg. The runner
     # names the declination key and its value in degrees.
     "source never above the elevation limit": (
-        [('dec = "-19d56m00s"', 'dec = "-60d00m00s"')], "sources[5].dec", "-60.0"),
+        [('dec = "-20d19m36s"', 'dec = "-60d00m00s"')], "sources[5].dec", "-60.0"),
     "TOML syntax error": ([("seed = 1\n", "seed = = 1\n")], "TOML syntax", "line 7"),
     "negative a-priori sky opacity": (
         [("zenith_opacity = 0.010\nt_atm_k", "zenith_opacity = -0.01\nt_atm_k")],

@@ -19,6 +19,7 @@ from hypothesis import strategies as st
 from controller.pointing.model import NAMED_MODELS, PointingModel
 from controller.pointing.terms import (
     GHIGO_EQUIVALENTS,
+    GHIGO_TILT,
     KATPOINT_EQUIVALENTS,
     TermError,
     combine_scalar,
@@ -243,7 +244,8 @@ GHIGO_TABLE3_ARCMIN = [-1.88, -0.17, -1.54, -2.16, 0.80, 12.24, 1.62, -0.35, -3.
     el=st.floats(math.radians(5.0), math.radians(80.0)),
 )
 def test_apply_reverse_round_trip(coeffs, az, el):
-    """reverse(apply(x)) == x, with W6 = 12.24' (Ghigo's large elevation zero) on top.
+    """reverse(apply(x)) == x, with W6 = 12.24' (the 1990 report's large azimuth encoder
+    offset) on top.
 
     Tolerance 1e-8 rad (2 mas): reverse iterates to 1e-4 arcsec on the sky.
     """
@@ -265,9 +267,12 @@ def test_table3_model_round_trip_on_a_grid():
     back = model.reverse_rad(*enc)
     np.testing.assert_allclose(back[1], GRID_EL, rtol=0, atol=1e-9)
     np.testing.assert_allclose((back[0] - GRID_AZ) * np.cos(GRID_EL), 0.0, atol=1e-9)
-    # the elevation zero alone moves the indicated elevation by W6 = 12.24' (734.4")
+    # the azimuth encoder offset alone moves the indicated azimuth by W6 = 12.24' (734.4"),
+    # which is 734.4" cos E across the sky (the report's "W6 cos E" in dA cos E)
     w6 = PointingModel(["W6"], [12.24 * 60.0])
-    assert w6.offset_rad(0.3, 0.7)[1] * ARCSEC_PER_RAD == pytest.approx(734.4, rel=1e-12)
+    d_az, d_el = w6.offset_rad(0.3, 0.7)
+    assert d_az * ARCSEC_PER_RAD == pytest.approx(734.4, rel=1e-12) and d_el == 0.0
+    assert d_az * math.cos(0.7) * ARCSEC_PER_RAD == pytest.approx(734.4 * math.cos(0.7))
 
 
 def test_quantity_api_refuses_bare_floats():
@@ -325,3 +330,138 @@ def test_named_models_resolve():
         model = PointingModel(name)
         assert model.names == terms
         assert model.name == name
+
+
+# ---------------------------------------------------------------------------------------------
+# The 1990 report's W1..W10 (Ghigo 1990, section II), written out here from the report,
+# independently of the code's factor tables: indicated minus true, North-based azimuth,
+#     dE = W1 + W2 cos A + W3 sin A + W4 cos E + W5 cot E
+#     dA cos E = W6 cos E + (W7 cos A + W8 sin A + W9) sin E + W10
+# ---------------------------------------------------------------------------------------------
+REPORT_W = {  # name: (dA cos E, dE) per unit coefficient
+    "W1": lambda a, e: (0 * a, 1 + 0 * a),
+    "W2": lambda a, e: (0 * a, np.cos(a) + 0 * e),
+    "W3": lambda a, e: (0 * a, np.sin(a) + 0 * e),
+    "W4": lambda a, e: (0 * a, np.cos(e) + 0 * a),
+    "W5": lambda a, e: (0 * a, 1 / np.tan(e) + 0 * a),
+    "W6": lambda a, e: (np.cos(e) + 0 * a, 0 * a),
+    "W7": lambda a, e: (np.cos(a) * np.sin(e), 0 * a),
+    "W8": lambda a, e: (np.sin(a) * np.sin(e), 0 * a),
+    "W9": lambda a, e: (np.sin(e) + 0 * a, 0 * a),
+    "W10": lambda a, e: (1 + 0 * a, 0 * a),
+}
+
+
+@pytest.mark.parametrize("name", sorted(REPORT_W))
+def test_w_terms_are_the_equations_of_the_report(name):
+    """Each W's offset (indicated - true) is its term in the report's section II, with the
+    azimuth error as dA cos E."""
+    d_az, d_el = PointingModel([name], [1.0]).offset_rad(GRID_AZ, GRID_EL)
+    want_xel, want_el = REPORT_W[name](GRID_AZ, GRID_EL)
+    np.testing.assert_allclose(d_az * np.cos(GRID_EL) * ARCSEC_PER_RAD, want_xel, atol=1e-12)
+    np.testing.assert_allclose(d_el * ARCSEC_PER_RAD, want_el, atol=1e-12)
+
+
+def _tpoint_written_out(a, e):
+    """TPOINT's basic alt-az corrections (true = raw + correction), as in its documentation,
+    with its South-based azimuth A_S = A_N - 180 deg (docs/assumptions.md): per unit
+    coefficient, (dA, dE) of IA, IE, CA, NPAE, AN, AW, TF, TX."""
+    a_s = a - math.pi
+    zero = 0 * a
+    return {
+        "IA": (-1 + zero, zero), "IE": (zero, 1 + zero),
+        "CA": (-1 / np.cos(e) + zero, zero), "NPAE": (-np.tan(e) + zero, zero),
+        "AN": (-np.sin(a_s) * np.tan(e), -np.cos(a_s) + 0 * e),
+        "AW": (-np.cos(a_s) * np.tan(e), np.sin(a_s) + 0 * e),
+        "TF": (zero, -np.cos(e) + zero), "TX": (zero, -1 / np.tan(e) + zero),
+    }
+
+
+@pytest.mark.parametrize(("w", "tpoint", "sign"), [
+    ("W1", "IE", -1.0), ("W4", "TF", 1.0), ("W5", "TX", 1.0), ("W6", "IA", 1.0),
+    ("W9", "NPAE", 1.0), ("W10", "CA", 1.0)])
+def test_w_terms_against_tpoint_written_out(w, tpoint, sign):
+    """Column by column: the report's W (indicated - true) is minus TPOINT's correction, so
+    W = sign * TPOINT coefficient gives the same pointing, and the library agrees."""
+    t_az, t_el = _tpoint_written_out(GRID_AZ, GRID_EL)[tpoint]
+    want_xel, want_el = REPORT_W[w](GRID_AZ, GRID_EL)
+    # a model W = 1 and the TPOINT model with coefficient 1/sign point identically:
+    # offset = -correction
+    np.testing.assert_allclose(-t_az * np.cos(GRID_EL) / sign, want_xel, atol=1e-12)
+    np.testing.assert_allclose(-t_el / sign, want_el, atol=1e-12)
+    assert GHIGO_EQUIVALENTS[w] == (tpoint, sign)
+
+
+def test_tied_pairs_are_tpoints_azimuth_axis_tilt():
+    """Section II ties W2 = W8 (elevation axis misalignment) and W3 = -W7 (azimuth axis): an
+    AN tilt is W2 = W8 = -AN and an AW tilt W3 = -W7 = AW, checked against TPOINT's AN and AW
+    written out and against the library's table."""
+    tp = _tpoint_written_out(GRID_AZ, GRID_EL)
+    cos_e = np.cos(GRID_EL)
+    for tpoint, pair in GHIGO_TILT.items():
+        xel = sum(s * REPORT_W[w](GRID_AZ, GRID_EL)[0] for w, s in pair)
+        el = sum(s * REPORT_W[w](GRID_AZ, GRID_EL)[1] for w, s in pair)
+        # the TPOINT term's offset (indicated - true) is minus its correction
+        np.testing.assert_allclose(xel, -tp[tpoint][0] * cos_e, atol=1e-12)
+        np.testing.assert_allclose(el, -tp[tpoint][1], atol=1e-12)
+        assert np.abs(el).max() > 0.9 and np.abs(xel).max() > 0.5
+    assert GHIGO_TILT == {"AN": (("W2", -1.0), ("W8", -1.0)), "AW": (("W3", 1.0), ("W7", -1.0))}
+
+
+def test_independent_tilt_terms_are_tpoint_harmonics():
+    """Fitted independently (as the report fits ten), W2 and W3 are dE cos A / sin A and W7,
+    W8 dA cos E ~ cos A sin E / sin A sin E: TPOINT's harmonics with its A_H = -A_N and
+    result signs (dE plus, dA cos E minus)."""
+    for w, (h, sign) in {"W2": ("HECA", -1.0), "W3": ("HESA", 1.0),
+                         "W7": ("HSCASE", 1.0), "W8": ("HSSASE", -1.0)}.items():
+        want_az, want_el = HARMONICS_REPORT[h](GRID_AZ, GRID_EL)
+        xel, el = REPORT_W[w](GRID_AZ, GRID_EL)
+        np.testing.assert_allclose(-want_az * np.cos(GRID_EL) / sign, xel, atol=1e-12)
+        np.testing.assert_allclose(-want_el / sign, el, atol=1e-12)
+        assert GHIGO_EQUIVALENTS[w] == (h, sign)
+
+
+#: TPOINT's once-per-turn harmonics written out (corrections, A_H = -A_N)
+HARMONICS_REPORT = {
+    "HECA": HARMONICS["HECA"],
+    "HESA": lambda a, e: (0 * a, np.sin(_h(a)) + 0 * e),
+    "HSCASE": lambda a, e: (-np.cos(_h(a)) * np.sin(e) / np.cos(e), 0 * a),
+    "HSSASE": HARMONICS["HSSASE"],
+}
+
+#: each W against katpoint's own parameters (katpoint.PointingModel.offset, indicated - true):
+#: W = sign * P alone; the tied pairs are katpoint's tilt terms, P5 = W2 = W8, P6 = W3 = -W7
+KATPOINT_OF_W = {"W1": ("P7", 1.0), "W2": ("P21", 1.0), "W3": ("P22", 1.0), "W4": ("P8", 1.0),
+                 "W6": ("P1", 1.0), "W9": ("P3", 1.0), "W10": ("P4", -1.0)}
+
+
+@pytest.mark.parametrize(("w", "p"), sorted(KATPOINT_OF_W.items()))
+def test_w_terms_against_katpoint_itself(w, p):
+    katpoint = pytest.importorskip("katpoint")
+    name, sign = p
+    rng = np.random.default_rng(22)
+    az = rng.uniform(0.0, 2 * math.pi, 300)
+    el = rng.uniform(math.radians(3.0), math.radians(85.0), 300)
+    params = np.zeros(22)
+    params[int(name[1:]) - 1] = 1e-3
+    kp_az, kp_el = katpoint.PointingModel(params).offset(az, el)
+    ours = PointingModel([w], [sign * 1e-3 * ARCSEC_PER_RAD]).offset_rad(az, el)
+    assert np.abs(kp_az).max() + np.abs(kp_el).max() > 0.5e-3
+    np.testing.assert_allclose(ours[0], kp_az, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(ours[1], kp_el, rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize(("p", "pair"), [("P5", (("W2", 1.0), ("W8", 1.0))),
+                                         ("P6", (("W3", 1.0), ("W7", -1.0)))])
+def test_tied_pairs_against_katpoint_tilt(p, pair):
+    katpoint = pytest.importorskip("katpoint")
+    rng = np.random.default_rng(23)
+    az = rng.uniform(0.0, 2 * math.pi, 300)
+    el = rng.uniform(math.radians(3.0), math.radians(85.0), 300)
+    params = np.zeros(22)
+    params[int(p[1:]) - 1] = 1e-3
+    kp_az, kp_el = katpoint.PointingModel(params).offset(az, el)
+    ours = PointingModel([w for w, _ in pair],
+                         [s * 1e-3 * ARCSEC_PER_RAD for _, s in pair]).offset_rad(az, el)
+    np.testing.assert_allclose(ours[0], kp_az, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(ours[1], kp_el, rtol=0, atol=1e-15)

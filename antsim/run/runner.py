@@ -20,6 +20,7 @@ from antsim._version import __version__
 from antsim.scenario import Scenario
 from antsim.world.world import World
 from controller.astro.earth import UtcLabeller
+from controller.pointing.legacy import w_terms_marker
 from controller.pointing.model import PointingModel
 from controller.program.campaign import ControlProgram
 from controller.program.recordings import RecordingWriter, recording_columns
@@ -69,7 +70,8 @@ def recording_meta(scenario: Scenario, seed: int, model: PointingModel) -> dict:
         "estimator": c.scan.estimator,
         "refraction": c.refraction,
         "frequency_ghz": c.frequency_ghz,
-        "model": {"name": model.name, "terms_arcsec": model.as_dict()},
+        "model": {"name": model.name, "terms_arcsec": model.as_dict(),
+                  **w_terms_marker(model.names)},
         "sign_convention": "xel/el: correction to apply (indicated minus true); total "
                            "pointing error = measured + model + applied",
         **({"mount": c.mount} if c.mount != "altaz" else {}),

@@ -45,6 +45,7 @@ import numpy as np
 from controller.astro.ephemeris import Ephemeris
 from controller.astro.frames import ALTAZ, MountFrame, altaz_to_hadec
 from controller.astro.sources import FixedSource
+from controller.pointing.legacy import w_terms_marker
 from controller.protocol import (
     AntennaError,
     ChannelValues,
@@ -178,6 +179,7 @@ class World:
         truth = {
             "seed": int(self.seed),
             "model": model.name,
+            **w_terms_marker(model.names),
             "terms": {n: {"value_arcsec": float(v)} for n, v in model.as_dict().items()},
             "effects": [e.truth() for e in self.effects[1:]],
         }

@@ -106,17 +106,18 @@ class FixedSource:
         return cls(name, ra_hms_to_deg(ra), dec_dms_to_deg(dec), frame, **kwargs)
 
 
-#: The 8 sources of the Ghigo 8-9 February 1990 run (report Table 1), B1950 FK4.
+#: The 8 sources of the Ghigo 8-9 February 1990 run at the report's Table 1 positions (B1950
+#: FK4, to 0.1 s of right ascension and 1" of declination).
 GHIGO1990_SOURCES: tuple[FixedSource, ...] = tuple(
     FixedSource.from_sexagesimal(name, ra, dec, "fk4")
     for name, ra, dec in (
-        ("3C84", "03h16m29.57s", "+41d19m51.9s"),
-        ("Taurus A", "05h31m31.40s", "+21d58m54.0s"),
-        ("Orion A", "05h32m49.0s", "-05d25m16s"),
-        ("3C273", "12h26m33.25s", "+02d19m43.3s"),
-        ("Virgo A", "12h28m17.57s", "+12d40m01.7s"),
-        ("W31", "18h07m30s", "-19d56m00s"),
-        ("Cygnus A", "19h57m44.44s", "+40d35m46.3s"),
-        ("Cassiopeia A", "23h21m07.0s", "+58d32m48s"),
+        ("3C84", "03h16m29.6s", "+41d19m52s"),
+        ("Taurus A", "05h31m31.0s", "+21d59m00s"),
+        ("Orion A", "05h32m49.0s", "-05d25m15s"),
+        ("3C273", "12h26m33.3s", "+02d19m43s"),
+        ("Virgo A", "12h28m17.6s", "+12d40m02s"),
+        ("W31", "18h06m25.6s", "-20d19m36s"),
+        ("Cygnus A", "19h57m44.4s", "+40d35m46s"),
+        ("Cassiopeia A", "23h21m09.0s", "+58d32m30s"),
     )
 )

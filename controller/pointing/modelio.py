@@ -7,6 +7,7 @@ from pathlib import Path
 
 from controller.errors import InputError
 
+from .legacy import W_TERMS_KEY, names_w_terms, relabel_reconstructed, w_terms_marker
 from .model import NAMED_MODELS, PointingModel
 from .terms import TermError
 
@@ -14,7 +15,7 @@ __all__ = ["load_model", "model_from_json", "model_to_json"]
 
 
 def model_to_json(model: PointingModel) -> dict:
-    return {"model": model.name,
+    return {"model": model.name, **w_terms_marker(model.names),
             "terms": {n: {"value_arcsec": v} for n, v in model.as_dict().items()}}
 
 
@@ -25,13 +26,15 @@ def model_from_json(data: dict, where: str) -> PointingModel:
     terms = data["terms"]
     if not isinstance(terms, dict):
         raise InputError(where, "terms", terms, "must be an object of term -> {value_arcsec}")
-    names, values = [], []
+    values_of: dict[str, float] = {}
     for name, entry in terms.items():
         value = entry.get("value_arcsec") if isinstance(entry, dict) else entry
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise InputError(where, f"terms.{name}.value_arcsec", value, "must be a number")
-        names.append(name)
-        values.append(float(value))
+        values_of[name] = float(value)
+    if names_w_terms(values_of) and W_TERMS_KEY not in data:
+        values_of = relabel_reconstructed(values_of, where)
+    names, values = list(values_of), list(values_of.values())
     try:
         return PointingModel(names, values, name=str(data.get("model", "custom")))
     except TermError as err:

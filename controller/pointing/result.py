@@ -11,6 +11,7 @@ import numpy as np
 
 from .data import LinearModel
 from .jackknife import JackknifeResult
+from .legacy import w_terms_marker
 
 __all__ = ["FitResult"]
 
@@ -117,6 +118,7 @@ class FitResult:
             "n_used": int(self.n_used),
             "n_rejected": int(self.n_rejected),
             "model": self.model.name,
+            **w_terms_marker(names),
             "terms": {
                 n: {"value_arcsec": _json_float(v), "sigma_arcsec": _json_float(s),
                     "sigma_honest_arcsec": _json_float(h)}

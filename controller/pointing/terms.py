@@ -18,13 +18,20 @@ Two facts fix the signs (both are tested):
   minus the TPOINT correction. Their basis functions are therefore negated here, so that a
   fitted coefficient equals the number those sources print.
 
-Ghigo's W1..W10: the report's own equations were not available to us (see
-``docs/assumptions.md``). They are reconstructed as five azimuth and five elevation terms of
-the kind an NRAO model of 1990 fitted independently, keeping what the issues state: W4 is the
-gravitational sag (cos E in elevation) and W6, 12.24', is the elevation zero offset::
+Ghigo's W1..W10 are the 1990 report's (Ghigo 1990, NRAO EDIR 288, section II; Table 3
+names each term), indicated minus true, North-based azimuth::
 
-    dA = W1 + W2 sec E + W3 tan E + W9 sin A tan E + W10 cos A tan E
-    dE = W4 cos E + W5 cot E + W6 + W7 cos A + W8 sin A      (indicated - true)
+    dE       = W1 + W2 cos A + W3 sin A + W4 cos E + W5 cot E
+    dA cos E = W6 cos E + (W7 cos A + W8 sin A + W9) sin E + W10
+
+The report ties W2 = W8 (elevation axis misalignment) and W3 = -W7 (azimuth axis
+misalignment) physically but fits all ten independently (Table 3: W2 -0.17', W8 -0.35').
+With TPOINT's corrections (true = raw + correction, A_S = A_N - 180 deg) every W is one
+TPOINT term up to sign (``GHIGO_EQUIVALENTS``; tested column by column):
+W1 = -IE, W2 = -HECA, W3 = HESA, W4 = TF, W5 = TX, W6 = IA, W7 = HSCASE, W8 = -HSSASE,
+W9 = NPAE, W10 = CA; tied, an azimuth-axis tilt is W2 = W8 = -AN and W3 = -W7 = AW
+(``GHIGO_TILT``). Fomalont's 1973 model (the report's Appendix A) has the same ten functions:
+C1..C5 = W6..W10 and D1..D5 = W1..W5 (``FOMALONT_NAMES``), plus its feed terms.
 
 The harmonic generator follows TPOINT: ``H`` + result letter (A: azimuth, E: elevation,
 S: left-right on the sky = dA cos E, Z: zenith distance) + one or two factors, each ``S`` or
@@ -77,7 +84,9 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "FOMALONT_NAMES",
     "GHIGO_EQUIVALENTS",
+    "GHIGO_TILT",
     "KATPOINT_EQUIVALENTS",
     "WRIGHT_EQUIVALENTS",
     "Term",
@@ -338,23 +347,26 @@ def _harmonic(name: str) -> Term | None:
 
 
 # ---------------------------------------------------------------------------------------------
-# Ghigo (1990) W1..W10: indicated - true, North-based azimuth (see module docstring); the
-# TPOINT correction is the negative, hence the minus signs below.
+# Ghigo (1990) W1..W10, section II of the report: indicated - true, North-based azimuth; the
+# TPOINT correction is the negative, hence the minus signs below. The azimuth terms are
+# written as dA (the report's dA cos E divided by cos E), which is exact at every elevation.
 # ---------------------------------------------------------------------------------------------
 def _ghigo_terms() -> dict[str, Term]:
     terms = [
-        _t("W1", "azimuth encoder zero: dA = W1", ("A", -1, ())),
-        _t("W2", "collimation: dA = W2 sec E", ("A", -1, (SEC_E,))),
-        _t("W3", "az/el axis non-perpendicularity: dA = W3 tan E", ("A", -1, (TAN_E,))),
+        _t("W1", "elevation encoder offset: dE = W1", ("E", -1, ())),
+        _t("W2", "elevation axis misalignment (= W8): dE = W2 cos A", ("E", -1, (COS_AN,))),
+        _t("W3", "azimuth axis misalignment (= -W7): dE = W3 sin A", ("E", -1, (SIN_AN,))),
         _t("W4", "gravitational sag: dE = W4 cos E", ("E", -1, (COS_E,))),
-        _t("W5", "refraction error: dE = W5 cot E", ("E", -1, (COT_E,))),
-        _t("W6", "elevation encoder zero: dE = W6", ("E", -1, ())),
-        _t("W7", "azimuth axis tilt seen in elevation: dE = W7 cos A", ("E", -1, (COS_AN,))),
-        _t("W8", "azimuth axis tilt seen in elevation: dE = W8 sin A", ("E", -1, (SIN_AN,))),
-        _t("W9", "azimuth axis tilt seen in azimuth: dA = W9 sin A tan E",
-           ("A", -1, (SIN_AN, TAN_E))),
-        _t("W10", "azimuth axis tilt seen in azimuth: dA = W10 cos A tan E",
+        _t("W5", "refraction: dE = W5 cot E", ("E", -1, (COT_E,))),
+        _t("W6", "azimuth encoder offset: dA cos E = W6 cos E", ("A", -1, ())),
+        _t("W7", "azimuth axis misalignment (= -W3): dA cos E = W7 cos A sin E",
            ("A", -1, (COS_AN, TAN_E))),
+        _t("W8", "elevation axis misalignment (= W2): dA cos E = W8 sin A sin E",
+           ("A", -1, (SIN_AN, TAN_E))),
+        _t("W9", "non-perpendicularity of azimuth and elevation axes: dA cos E = W9 sin E",
+           ("A", -1, (TAN_E,))),
+        _t("W10", "non-perpendicularity of beam centre and elevation axis: dA cos E = W10",
+           ("A", -1, (SEC_E,))),
     ]
     return {t.name: t for t in terms}
 
@@ -450,18 +462,34 @@ WRIGHT_EQUIVALENTS: dict[str, tuple[str, float]] = {
     "B7": ("TX", 1.0),
 }
 
-#: Where Ghigo's W terms coincide with TPOINT's: W = sign * TPOINT coefficient (tested).
+#: Where Ghigo's W terms coincide with TPOINT's: W = sign * TPOINT coefficient (tested). Each
+#: W fitted on its own (as the report fits ten) is one TPOINT term or harmonic.
 GHIGO_EQUIVALENTS: dict[str, tuple[str, float]] = {
-    "W1": ("IA", 1.0),
-    "W2": ("CA", 1.0),
-    "W3": ("NPAE", 1.0),
+    "W1": ("IE", -1.0),
+    "W2": ("HECA", -1.0),
+    "W3": ("HESA", 1.0),
     "W4": ("TF", 1.0),
     "W5": ("TX", 1.0),
-    "W6": ("IE", -1.0),
-    "W7": ("HECA", -1.0),
-    "W8": ("HESA", 1.0),
-    "W9": ("HSSASE", -1.0),
-    "W10": ("HSCASE", 1.0),
+    "W6": ("IA", 1.0),
+    "W7": ("HSCASE", 1.0),
+    "W8": ("HSSASE", -1.0),
+    "W9": ("NPAE", 1.0),
+    "W10": ("CA", 1.0),
+}
+
+#: The report's tied pairs (section II: W2 = W8, W3 = -W7) are TPOINT's azimuth-axis tilt:
+#: a tilt AN is W2 = W8 = -AN, a tilt AW is W3 = -W7 = AW, i.e. TPOINT term = sum of
+#: (sign * W term) over the pair, as basis columns (tested).
+GHIGO_TILT: dict[str, tuple[tuple[str, float], tuple[str, float]]] = {
+    "AN": (("W2", -1.0), ("W8", -1.0)),
+    "AW": (("W3", 1.0), ("W7", -1.0)),
+}
+
+#: Fomalont's 1973 coefficients (the 1990 report's Appendix A) on the report's functions:
+#: C1..C5 in dA cos E, D1..D5 in dE (the feed terms C6/C7, D6/D7 are HSCF/HSSF, HECF/HESF).
+FOMALONT_NAMES: dict[str, str] = {
+    "C1": "W6", "C2": "W7", "C3": "W8", "C4": "W9", "C5": "W10",
+    "D1": "W1", "D2": "W2", "D3": "W3", "D4": "W4", "D5": "W5",
 }
 
 #: Where katpoint's P terms coincide with TPOINT's: P = sign * TPOINT coefficient (tested).

@@ -55,6 +55,7 @@ import numpy as np
 from controller.errors import InputError
 from controller.units import RAD_PER_DEG
 
+from .legacy import W_TERMS, W_TERMS_COMMENT, names_w_terms, relabel_reconstructed
 from .model import PointingModel
 from .terms import TermError, get_term
 
@@ -744,6 +745,13 @@ def parse_mod(text: str, source: str = "<string>") -> TPointModel:
         parallel.append("&" in flags)
     if caption is None:
         raise InputError(source, "caption", "", "the file is empty: no caption line")
+    if names_w_terms(names) and W_TERMS not in text:
+        renamed = relabel_reconstructed(dict(zip(names, range(len(names)), strict=True)),
+                                        source)
+        order = list(renamed.values())  # the old positions, in the new order
+        names = list(renamed)
+        values, sigmas, fixed, parallel = ([seq[i] for i in order]
+                                           for seq in (values, sigmas, fixed, parallel))
     return TPointModel(names, values, sigma_arcsec=sigmas, fixed=fixed, parallel=parallel,
                        caption=caption, parameters=parameters)
 
@@ -762,6 +770,8 @@ def format_mod(model: PointingModel) -> str:
     if not isinstance(model, TPointModel):
         model = TPointModel.from_model(model)
     lines = [model.caption or model.name]
+    if names_w_terms(model.names):
+        lines.append(W_TERMS_COMMENT)
     if model.parameters is not None:
         lines.append("  ".join(model.parameters))
     for i, term in enumerate(model.terms):

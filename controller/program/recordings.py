@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from controller.errors import InputError
+from controller.pointing.legacy import W_TERMS, W_TERMS_KEY, names_w_terms, relabel_reconstructed
 
 __all__ = [
     "COLUMNS",
@@ -243,6 +244,13 @@ def read_recordings(path: str | Path):
                if c not in table.colnames]
     if missing:
         raise InputError(str(path), "columns", missing, "required columns are missing")
+    model = table.meta.get("model")
+    if isinstance(model, dict) and isinstance(model.get("terms_arcsec"), dict) \
+            and names_w_terms(model["terms_arcsec"]) and W_TERMS_KEY not in model:
+        # written before antsim followed the 1990 report's W1..W10: the model in use is
+        # renamed (the offsets recorded per row never depended on the names)
+        model["terms_arcsec"] = relabel_reconstructed(model["terms_arcsec"], f"{path}")
+        model[W_TERMS_KEY] = W_TERMS
     return table
 
 
