@@ -157,6 +157,47 @@ def test_sky_drift_in_time_and_the_a_priori_atmosphere(ghigo, knows_sky):
         assert np.abs(error[:, 1]).max() > 0.05
 
 
+def test_a_cold_start_searches_across_and_keeps_an_azimuth_offset(ghigo):
+    """No model, the 1990 truth (Table 3 on the report's functions): 3C84 rising at 22 deg is
+    8.6' away across (the 12.24' azimuth encoder offset W6 is 11.4' cos E there, less the
+    collimation and axis terms) and 3' in elevation, so the first scan misses. The wide
+    search's elevation half passes the source 9' to the side: only its cross-elevation offset
+    is adopted, and the scan after it is centred to within half a beam in both axes (had the
+    search's elevation been adopted it would have been ~6' wrong). The correction is kept as
+    an azimuth offset: Cygnus A at 78 deg then gets it times cos E, and no search."""
+    import simpy
+
+    from antsim.world.world import World
+    from controller.program.campaign import ControlProgram
+
+    cold = ghigo.with_controller_model(PointingModel("none"))
+    env = simpy.Environment()
+    program = ControlProgram(cold.controller, World(cold, env, cold.seed).antenna)
+    target = {t.name: t for t in program.targets}
+    first = env.run(until=env.process(program.observe(env, target["3C84"])))
+    row = first.rows[-1]
+    assert first.searches == 1 and 20.0 < row["el_deg"] < 24.0
+    truth = cold.truth_model.offset_rad(math.radians(row["az_deg"]), math.radians(row["el_deg"]))
+    true_xel = truth[0] * math.cos(math.radians(row["el_deg"])) * 3437.75
+    assert true_xel > 8.0 and abs(truth[1] * 3437.75) < 4.0
+    assert row["applied_el_arcmin"] == 0.0  # the search's elevation was not trusted
+    # 1' tolerance: the wide search's 5 s integrations on its 14' grid
+    assert row["applied_xel_arcmin"] == pytest.approx(true_xel, abs=1.0)
+    assert abs(row["xel_arcmin"]) < 5.5 and abs(row["el_arcmin"]) < 5.5 and row["good"]
+    d_az = program.axis_correction_arcmin[0]
+    assert d_az == pytest.approx(row["applied_xel_arcmin"] / math.cos(math.radians(22.0)),
+                                 rel=0.02)
+    t0 = env.now
+    second = env.run(until=env.process(program.observe(env, target["Cygnus A"])))
+    row2 = second.rows[-1]
+    assert second.searches == 0 and row2["el_deg"] > 70.0
+    # applied as the trajectory is made, before the slew: the azimuth offset times cos E of
+    # the source then (within a degree of the row's elevation: 0.2' at 78 deg)
+    applied = program.correction_arcmin(target["Cygnus A"], t0)
+    assert row2["applied_xel_arcmin"] == applied[0] and row2["applied_el_arcmin"] == 0.0
+    assert applied[0] == pytest.approx(d_az * math.cos(math.radians(row2["el_deg"])), abs=0.2)
+
+
 def test_ghigo1990_gives_about_300_scans_over_all_sources(ghigo):
     result = simulate(ghigo)
     avg = [r for r in result.rows if r["polarization"] == "AVG"]

@@ -92,8 +92,9 @@ def test_closed_loop_second_campaign_points_well(ghigo, campaign):
 
 
 def test_cold_start_converges_within_three_campaigns(ghigo):
-    """No model at all: W6 = 12.24' exceeds the 11' beam, so the first scans miss; the
-    controller searches, adopts a correction, and the fitted model closes the loop."""
+    """No model at all: the 12.24' azimuth encoder offset (W6) is W6 cos E on the sky, beyond
+    the 11' beam low in the sky, so scans there miss; the controller searches, adopts a
+    correction (an azimuth offset), and the fitted model closes the loop."""
     model = PointingModel()
     history = []
     previous_fit_rms = float("nan")  # no fit before the first campaign

@@ -4,8 +4,13 @@ Loop until the campaign window ends: ask the scheduler for the next source, comp
 trajectory (apparent place, the controller's refraction, the pointing model in use and any
 running correction), run a five-point cross scan, reduce it, and record one row per
 polarization. When a scan misses its source (large errors, e.g. a cold start with no model:
-the 45-ft's elevation zero offset alone, 12', exceeds the beam) the controller searches with
-a wider cross, adopts what it finds as a running correction, and scans again.
+the 45-ft's azimuth encoder offset alone, 12.24', is 11.5' on the sky at 20 deg elevation,
+more than the beam) the controller searches with a wider cross, adopts what it finds as a
+running correction, and scans again. The running correction is held as offsets of the two
+encoders (azimuth, elevation), as the errors of a cold start mostly are (encoder zero
+offsets): a cross-elevation offset x found at elevation E is an azimuth offset x / cos E,
+and is applied as that azimuth offset to every later source, x cos E' / cos E on the sky
+at elevation E'.
 
 It uses only the protocol (:mod:`controller.protocol`) and its own configuration.
 
@@ -101,7 +106,9 @@ class ControlProgram:
                          for t in self.targets}
         self.scheduler = make_scheduler(config.scheduler, self.observer, self.targets,
                                         self.scan_duration_s)
-        self.correction_arcmin = (0.0, 0.0)
+        #: the running correction: offsets of the encoders (azimuth or hour angle, and
+        #: elevation or declination), arcmin
+        self.axis_correction_arcmin = (0.0, 0.0)
         self.outcomes: list[ScanOutcome] = []
         self.scan_number = 0
         self.searches = 0
@@ -134,8 +141,27 @@ class ControlProgram:
     def trajectory(self, target: Target, t_s: float) -> SourceTrajectory:
         feed = None if self.feed_angle_deg is None else math.radians(self.feed_angle_deg)
         return SourceTrajectory(self.ephemeris, target.index, self.config.model,
-                                self.refraction(), t_s, self.correction_arcmin,
+                                self.refraction(), t_s, self.correction_arcmin(target, t_s),
                                 frame=self.frame, feed_rad=feed)
+
+    def correction_arcmin(self, target: Target, t_s: float) -> tuple[float, float]:
+        """The running correction on the sky at ``target`` at ``t_s``: (cross-elevation,
+        elevation) arcmin, the azimuth offset times the cosine of the source's elevation
+        (cross-declination and declination on an equatorial mount)."""
+        d_lon, d_lat = self.axis_correction_arcmin
+        return d_lon * self._cos_lat(target, t_s), d_lat
+
+    def _cos_lat(self, target: Target, t_s: float) -> float:
+        az, el = self.ephemeris.altaz_rad(target.index, float(t_s))
+        if not self.frame.is_altaz:
+            _, el = self.frame.from_altaz(az, el)
+        return max(math.cos(float(el)), 1e-3)
+
+    def _adopt(self, target: Target, t_s: float, xel_arcmin: float, el_arcmin: float) -> None:
+        """Add a sky offset found at ``target`` at ``t_s`` to the running correction."""
+        d_lon, d_lat = self.axis_correction_arcmin
+        self.axis_correction_arcmin = (d_lon + xel_arcmin / self._cos_lat(target, t_s),
+                                       d_lat + el_arcmin)
 
     def position_altaz_deg(self) -> tuple[float, float]:
         """The encoder position as azimuth and elevation (deg), for the scheduler."""
@@ -212,14 +238,21 @@ class ControlProgram:
         gain = self.config.search.update_gain
         if gain > 0 and self._detected(reduced, tolerated=Flag(0)):
             avg = reduced.axes
-            self.correction_arcmin = (
-                self.correction_arcmin[0] + gain * float(avg["az"].offset_arcmin[-1]),
-                self.correction_arcmin[1] + gain * float(avg["el"].offset_arcmin[-1]),
-            )
+            self._adopt(target, raw.t_mid_s, gain * float(avg["az"].offset_arcmin[-1]),
+                        gain * float(avg["el"].offset_arcmin[-1]))
         return ScanOutcome(target, reduced, rows, searches, sky_k)
 
     def search(self, env, target: Target):
-        """simpy process: a wide cross scan; adopt the offsets it finds. Returns found axes."""
+        """simpy process: a wide cross scan; adopt the offsets it finds. Returns found axes.
+
+        Each half of the cross is made at zero offset in the other axis, so it passes the
+        source as far away as the other axis misses: an elevation scan made 9' beside the
+        source in cross-elevation (a cold start of the 45-ft at low elevation: its 12.24'
+        azimuth encoder offset is 12.24' cos E on the sky) sees a fifth of the peak and can
+        place it arcminutes wrong. An axis' offset is adopted only where the other axis'
+        offset found is within half a beam (if neither is, the larger: its half passed
+        nearer the source); the other is left to the next scan (or search), which is then
+        made on the source in the adopted axis."""
         self.searches += 1
         scan = self.scan_for[target.name]
         step = scan.step_arcmin * self.config.search.step_factor
@@ -228,19 +261,19 @@ class ControlProgram:
                                            step_arcmin=step,
                                            integration_s=max(scan.integration_s / 3.0, 1.0)))
         reduced = reduce_scan(raw, scan, estimator="lsq", step_arcmin=step)
-        found = 0
-        xel, el = self.correction_arcmin
+        offsets = {}
         for axis in AXES:
             red = reduced.axes[axis]
             flags = int(red.flags[-1]) & ~int(SEARCH_TOLERATED)
             if flags == 0 and math.isfinite(float(red.offset_arcmin[-1])):
-                found += 1
-                if axis == "az":
-                    xel += float(red.offset_arcmin[-1])
-                else:
-                    el += float(red.offset_arcmin[-1])
-        self.correction_arcmin = (xel, el)
-        return found
+                offsets[axis] = float(red.offset_arcmin[-1])
+        beside = {"az": abs(offsets.get("el", 0.0)), "el": abs(offsets.get("az", 0.0))}
+        adopted = {a: d for a, d in offsets.items() if beside[a] <= 0.5 * scan.hpbw_arcmin}
+        if offsets and not adopted:
+            farther = max(offsets, key=lambda a: abs(offsets[a]))
+            adopted = {farther: offsets[farther]}
+        self._adopt(target, raw.t_mid_s, adopted.get("az", 0.0), adopted.get("el", 0.0))
+        return len(adopted)
 
     def sky_emission_k(self, raw: RawScan) -> np.ndarray | None:
         """The sky emission (K) the controller subtracts from each integration of ``raw``,
