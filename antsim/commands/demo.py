@@ -2,9 +2,10 @@
 
 Five chapters, each printed to stdout as it runs and collected into ``DIR/demo.html``:
 
-1. A cold start: with no pointing model the antenna misses Cassiopeia A (the 45-ft's
-   elevation encoder zero offset alone, W6 = 12.24', exceeds the 11' beam); the controller's
-   wide search finds it and the next scan is centred.
+1. A cold start: with no pointing model the 45-ft's azimuth encoder offset (the 1990
+   report's W6 = 12.24') is 12.24' cos E on the sky: inside the 11' beam for Cassiopeia A
+   high in the sky, beyond it for a source rising at 20 deg, which the first scan misses; the
+   controller's wide search finds it and the next scan is centred.
 2. The first campaign: 24 hours of five-point scans from that cold start.
 3. The fit: the 1990 report's ten-term model recovers the injected coefficients.
 4. Closing the loop: a second (12-hour) campaign with the fitted model points to the accuracy
@@ -32,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from controller.errors import InputError
+from controller.units import ARCMIN_PER_RAD
 
 #: the hidden effect of chapter 5: an uneven azimuth track, dE = HESA2 sin 2A_H (arcsec; TPOINT's
 #: harmonic azimuth A_H = -A_N, controller/pointing/terms.py), i.e. a correction of +60" sin 2A_N
@@ -41,8 +43,10 @@ HIDDEN_ARCSEC = -60.0
 CLOSED_LOOP_HOURS = 12.0
 #: seeds of the three campaigns (a new night's noise for each)
 SEEDS = (1, 2, 3)
-#: the source of the cold-start illustration, in order of preference
-COLD_START_SOURCES = ("Cassiopeia A", "Cygnus A", "Taurus A")
+#: the cold start is shown on a source high in the sky, then on one low in the sky (where the
+#: azimuth encoder offset is nearly all on the sky), each the first of its list that is up
+COLD_START_HIGH = ("Cassiopeia A", "Cygnus A")
+COLD_START_LOW = ("3C84", "W31", "Taurus A")
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -155,7 +159,8 @@ def run_demo(out: Path, scenario_path: Path,
     first, fits, more = _first_campaign(story, scenario, scenario_path, out)
     numbers.update(more)
     numbers.update(_the_fit(story, first, fits, out))
-    numbers.update(_closed_loop(story, base_text, scenario_path, out, first, fits, figdir))
+    numbers.update(_closed_loop(story, base_text, scenario_path, out, first, fits, figdir,
+                                numbers["first_sky_rms_arcsec"]))
     numbers.update(_hidden_effect(story, base_text, scenario_path, out, figdir,
                                   numbers["fit_sky_rms_arcsec"]))
 
@@ -229,16 +234,44 @@ def _trace(label: str, scan: list) -> Any:
     return ScanTrace(label, axes[0][0], axes[0][1], axes[1][0], axes[1][1])
 
 
-def _cold_start(story: _Story, scenario, figdir: Path) -> dict[str, Any]:
+def _cold_observe(cold, name: str):
+    """One scan of source ``name`` by a controller without a model, at the campaign's start
+    (a fresh world): (outcome, the recording antenna, the target), or None when
+    the source is not up."""
     import simpy
 
-    from antsim.figures.demo import scan_trace_figure
     from antsim.world.world import World
-    from controller.pointing.model import PointingModel
     from controller.program.campaign import ControlProgram
     from controller.protocol import AntennaError
 
-    ch = story.chapter("1. A cold start: the antenna misses")
+    env = simpy.Environment()
+    world = World(cold, env, cold.seed)
+    antenna = _RecordingAntenna(world.antenna)
+    program = ControlProgram(cold.controller, antenna)
+    targets = [t for t in program.targets if t.name == name]
+    if not targets:
+        return None
+    try:
+        outcome = env.run(until=env.process(program.observe(env, targets[0])))
+    except AntennaError:  # below the horizon or the limits at the start
+        return None
+    return outcome, antenna, targets[0]
+
+
+def _true_error_arcmin(cold, row) -> tuple[float, float]:
+    """The injected geometry's error (indicated - true) at a row's position: (dA cos E, dE)
+    arcmin. The simulation knows it; the controller does not."""
+    d_az, d_el = cold.truth_model.offset_rad(math.radians(row["az_deg"]),
+                                             math.radians(row["el_deg"]))
+    return (float(d_az) * math.cos(math.radians(row["el_deg"])) * ARCMIN_PER_RAD,
+            float(d_el) * ARCMIN_PER_RAD)
+
+
+def _cold_start(story: _Story, scenario, figdir: Path) -> dict[str, Any]:
+    from antsim.figures.demo import scan_trace_figure
+    from controller.pointing.model import PointingModel
+
+    ch = story.chapter("1. A cold start: where the antenna misses")
     cold = scenario.with_controller_model(PointingModel("none"))
     w6 = cold.truth_model.as_dict().get("W6", math.nan) / 60.0
     hpbw = cold.beam.hpbw_arcmin
@@ -246,31 +279,45 @@ def _cold_start(story: _Story, scenario, figdir: Path) -> dict[str, Any]:
         "A radio telescope is pointed by commanding its two axes, azimuth and elevation, to "
         "where the source should be. But no real mount is perfect: encoders have zero offsets, "
         "axes are tilted, the structure sags under gravity. Here we start with no pointing "
-        f"model at all. The 45-ft's elevation encoder reads {w6:.2f} arcminutes too high (the "
-        f"1990 report's W6), more than its {hpbw:g}' beam, so the antenna looks beside the "
-        "source."))
-    env = simpy.Environment()
-    world = World(cold, env, cold.seed)
-    antenna = _RecordingAntenna(world.antenna)
-    program = ControlProgram(cold.controller, antenna)
-    outcome, target = None, None
-    for name in COLD_START_SOURCES:
-        candidates = [t for t in program.targets if t.name == name]
-        if not candidates:
+        f"model at all. The 45-ft's azimuth encoder reads {w6:.2f} arcminutes ahead (the 1990 "
+        f"report's W6, its azimuth encoder offset). On the sky an azimuth error shrinks with "
+        f"the cosine of the elevation: {w6:.2f}' cos E is {w6 * math.cos(math.radians(20)):.1f}' "
+        f"at 20 deg, {w6 * math.cos(math.radians(60)):.1f}' at 60 deg, against a {hpbw:g}' "
+        "beam. Where the antenna misses depends on where it looks."))
+    numbers: dict[str, Any] = {}
+    for name in COLD_START_HIGH:
+        got = _cold_observe(cold, name)
+        if got is None:
             continue
-        target = candidates[0]
-        antenna.scans.clear()
-        program.correction_arcmin = (0.0, 0.0)
-        try:
-            outcome = env.run(until=env.process(program.observe(env, target)))
-            break
-        except AntennaError:
+        outcome, _, target = got
+        row = outcome.rows[-1]
+        true_xel, true_el = _true_error_arcmin(cold, row)
+        found = ("the first scan found it" if outcome.searches == 0 else
+                 f"it took {outcome.searches} wide search(es)")
+        story.say(ch, (
+            f"First {target.name}, at {row['el_deg']:.0f} deg elevation: the mount's errors "
+            f"there are {true_xel:+.1f}' across and {true_el:+.1f}' in elevation (the "
+            f"simulation knows them; the controller does not), and {found}: the scan "
+            f"measured {row['xel_arcmin'] + row['applied_xel_arcmin']:+.2f}' and "
+            f"{row['el_arcmin'] + row['applied_el_arcmin']:+.2f}'. High in the sky the "
+            "azimuth offset is only a fraction of the beam."))
+        numbers["cold_start_high"] = {"source": target.name, "el_deg": row["el_deg"],
+                                      "searches": outcome.searches,
+                                      "true_arcmin": (true_xel, true_el)}
+        break
+    for name in COLD_START_LOW:
+        got = _cold_observe(cold, name)
+        if got is None or got[0].searches == 0 or len(got[1].scans) < 3:
             continue
-    if outcome is None or len(antenna.scans) < 3:
-        story.say(ch, "(The cold-start illustration needs a source above the horizon at the "
-                      "start of the campaign and a first scan that misses; neither happened "
-                      "with this scenario.)")
-        return {"cold_start_searches": 0 if outcome is None else outcome.searches}
+        outcome, antenna, target = got
+        break
+    else:
+        story.say(ch, "(No source low in the sky at the start of this scenario was missed "
+                      "by its first scan: there is no search to show.)")
+        numbers["cold_start_searches"] = 0
+        return numbers
+    row = outcome.rows[-1]
+    true_xel, true_el = _true_error_arcmin(cold, row)
     step = cold.controller.scan.step_arcmin
     wide = step * cold.controller.search.step_factor
     labels = [f"1: first scan, no model (step {step:g}')",
@@ -278,31 +325,43 @@ def _cold_start(story: _Story, scenario, figdir: Path) -> dict[str, Any]:
               "3: scan with the search's correction"]
     traces = [_trace(labels[min(k, 2)] if k < 3 else f"{k + 1}: scan", s)
               for k, s in enumerate(antenna.scans)]
-    corr = program.correction_arcmin
-    row = outcome.rows[-1]
+    corr_xel, corr_el = row["applied_xel_arcmin"], row["applied_el_arcmin"]
     fig = scan_trace_figure(
         traces[:3], figdir / "demo1_cold_start.png", hpbw_arcmin=hpbw,
         ylabel="power above the baseline (K, mean of XR and XL)",
         title=f"A cold start on {target.name}: a miss, a wide search, a hit",
-        caption=("Power above the baseline along the two halves of each cross scan. Scan 1 "
-                 "(no pointing model) sees almost nothing in azimuth and only the edge of the "
-                 "beam in elevation: the source is about 12' above where the antenna looks. "
-                 "The wide search (twice the step) catches it; scan 3, with the offsets the "
-                 "search found, is centred and sees the full peak."),
+        caption=(f"Power above the baseline along the two halves of each cross scan on "
+                 f"{target.name} at {row['el_deg']:.0f} deg elevation. Scan 1 (no pointing "
+                 f"model) passes {true_xel:+.1f}' beside the source in cross-elevation (the "
+                 "azimuth encoder offset, seen low in the sky) and sees at most the edge of "
+                 "the beam. The wide search (twice the step) catches it; scan 3, with the "
+                 "offset the search found, sees the peak."),
         formats=("png",))
     story.figure(ch, fig)
     peak_first = max(float(traces[0].az_power_k.max()), float(traces[0].el_power_k.max()))
     peak_last = max(float(traces[2].az_power_k.max()), float(traces[2].el_power_k.max()))
+    adopted = (f"adopted that as a running correction (its elevation scan had passed the "
+               f"source {abs(corr_xel):.0f}' to the side, too far to trust)" if corr_el == 0
+               else f"adopted that and {corr_el:+.1f}' in elevation as a running correction")
     story.say(ch, (
-        f"Scan 1 on {target.name} found at most {peak_first:.2f} K above the baseline, and "
-        "the reduction could not place the source: a miss. The controller then made a wide "
-        f"cross scan with {wide:g}' steps, found the source {corr[1]:+.1f}' away in elevation "
-        f"and {corr[0]:+.1f}' in cross-elevation, and adopted that as a running correction. "
-        f"Scan 3 sees {peak_last:.2f} K: the source is in the beam. That is how every cold "
-        f"start goes: search, then measure. The remaining error, {row['xel_arcmin']:+.2f}' "
-        f"and {row['el_arcmin']:+.2f}', is what a five-point scan measures precisely."))
-    return {"cold_start_searches": outcome.searches, "cold_start_peaks_k": (peak_first,
-                                                                            peak_last)}
+        f"Then {target.name}, rising at {row['el_deg']:.0f} deg: there the errors are "
+        f"{true_xel:+.1f}' across and {true_el:+.1f}' in elevation. Scan 1 found at most "
+        f"{peak_first:.2f} K above the baseline, and the reduction could not place the "
+        f"source: a miss. The controller then made a wide cross scan with {wide:g}' steps, "
+        f"found the source {corr_xel:+.1f}' away in cross-elevation and {adopted}. Scan 3 "
+        f"sees {peak_last:.2f} K: the source is in the beam, and the scan measures the rest, "
+        f"{row['xel_arcmin']:+.2f}' and {row['el_arcmin']:+.2f}'. The controller keeps the "
+        "correction as an azimuth offset, "
+        f"{corr_xel / math.cos(math.radians(row['el_deg'])):+.1f}', so that it fits every "
+        "elevation as an encoder offset does. That is how a cold start goes: search, then "
+        "measure."))
+    numbers.update({"cold_start_source": target.name, "cold_start_el_deg": row["el_deg"],
+                    "cold_start_searches": outcome.searches,
+                    "cold_start_peaks_k": (peak_first, peak_last),
+                    "cold_start_true_arcmin": (true_xel, true_el),
+                    "cold_start_correction_arcmin": (corr_xel, corr_el),
+                    "cold_start_final_arcmin": (row["xel_arcmin"], row["el_arcmin"])})
+    return numbers
 
 
 # ---------------------------------------------------------------------------------------------
@@ -346,22 +405,33 @@ def _first_campaign(story: _Story, scenario, scenario_path: Path, out: Path):
              "pointing run covers as much of the sky as it can."),
             ("fig2_total_errors", "How wrong the bare mount is (Fig. 2a-d)",
              "The total pointing error of every scan, against elevation and azimuth. The "
-             "elevation error is about 12' everywhere (the encoder zero offset) and changes "
-             "smoothly with elevation (gravity) and azimuth (a tilted azimuth axis); the "
-             "cross-elevation error swings with azimuth (tilt) and elevation (collimation).")):
+             "cross-elevation error (a) falls steeply from the horizon to the zenith: the "
+             "azimuth encoder offset seen on the sky, W6 cos E, as the 1990 report's Fig. 2a "
+             "showed; the elevation error, a few arcminutes, changes smoothly with elevation "
+             "(gravity, refraction) and azimuth (a tilted azimuth axis).")):
         if stem in figs:
             ch.blocks.append(Figure(figs[stem], title, caption))
             story.echo(f"  [figure: {figs[stem]}]")
+    el_deg = np.array([r["el_deg"] for r in rows])
+    low, high = xel[el_deg < 25.0], xel[el_deg > 65.0]
     story.say(ch, (
         f"{result.n_scans} scans ({len(rows)} good), {result.program.searches} wide "
-        f"search(es). Without a model the mean elevation error is {el.mean() / 60:+.2f}' and "
-        f"the cross-elevation error ranges from {xel.min() / 60:+.1f}' to "
-        f"{xel.max() / 60:+.1f}'. These are not noise: they are the mount's geometry, "
-        "repeatable, and therefore fittable. The full report of this campaign is "
-        f"{run_dir / 'report.html'}."))
+        f"search(es). Without a model the cross-elevation error ranges from "
+        f"{xel.min() / 60:+.1f}' to {xel.max() / 60:+.1f}': "
+        + (f"{low.mean() / 60:+.1f}' on average below 25 deg and {high.mean() / 60:+.1f}' "
+           "above 65 deg, the azimuth encoder offset shrinking on the sky as cos E (plus "
+           "the collimation and axis terms). " if low.size and high.size else "")
+        + f"The elevation error averages {el.mean() / 60:+.2f}'. These are not noise: they "
+        "are the mount's geometry, repeatable, and therefore fittable. The full report of "
+        f"this campaign is {run_dir / 'report.html'}."))
     story.command(ch, f"antsim run {scenario_path} --out {run_dir} --model none")
+    sky = float(np.sqrt(np.mean(xel ** 2 + el ** 2)))
     return result, fits, {"first_scans": result.n_scans,
-                          "first_searches": result.program.searches}
+                          "first_searches": result.program.searches,
+                          "first_xel_low_high_arcmin": (
+                              float(low.mean() / 60) if low.size else math.nan,
+                              float(high.mean() / 60) if high.size else math.nan),
+                          "first_sky_rms_arcsec": sky}
 
 
 def _pulls(fit, truth: dict[str, float]) -> dict[str, float]:
@@ -431,7 +501,7 @@ def _the_fit(story: _Story, result, fits, out: Path) -> dict[str, Any]:
 # 4. the closed loop
 # ---------------------------------------------------------------------------------------------
 def _closed_loop(story: _Story, base_text: str, scenario_path: Path, out: Path, first, fits,
-                 figdir: Path) -> dict[str, Any]:
+                 figdir: Path, first_sky: float) -> dict[str, Any]:
     import numpy as np
 
     from antsim.figures.charts import histogram_figure
@@ -485,7 +555,8 @@ def _closed_loop(story: _Story, base_text: str, scenario_path: Path, out: Path, 
         + f"Pointing error rms with the fitted model: {sky:.1f}\" on the sky (xel "
         f"{float(np.sqrt(np.mean(xel ** 2))):.1f}\", el {float(np.sqrt(np.mean(el ** 2))):.1f}"
         f"\"), against {fit.sky_rms_arcsec:.1f}\" left by the fit of the first campaign. "
-        f"{verdict}. The error went from 12' to {sky / 60:.2f}', "
+        f"{verdict}. The error went from {first_sky / 60:.1f}' rms without a model to "
+        f"{sky / 60:.2f}', "
         f"{100 * sky / hpbw_arcsec:.0f}% of the {hpbw_arcsec / 60:g}' beam."))
     numbers: dict[str, Any] = {}
     refit = refits.get("A")
