@@ -486,6 +486,7 @@ def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, re
     search_t.finish()
     refraction = t.string("refraction", "weather", choices=("weather", "standard", "none"))
     fit_terms, fit_name = _fit_spec(t, mount, site)
+    fit_fixed = _fit_fixed(t, fit_terms)
     method = t.string("method", "five_point", choices=("five_point", "optical"))
     if method == "optical" and camera is None:
         raise t.error("method", method, "optical pointing needs a [camera] table")
@@ -512,7 +513,8 @@ def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, re
         frequency_ghz=(camera.frequency_ghz if camera is not None and method == "optical"
                        else receiver.frequency_ghz),
         scenario_name=scenario_name, site_name=site.name,
-        fit_terms=fit_terms, fit_model_name=fit_name, mount=mount.kind, method=method,
+        fit_terms=fit_terms, fit_model_name=fit_name, fit_fixed=fit_fixed, mount=mount.kind,
+        method=method,
         feed_angles_deg=feed_angles, tipping=tipping, sky=sky, optical=optical,
         gain_curve=gain_curve, night_sun_max_deg=night)
 
@@ -541,6 +543,23 @@ def _fit_spec(t: Table, mount: MountConfig | None = None,
         except TermError as err:
             raise t.error("fit_model", spec, f"{n} is not a pointing term", str(err)) from None
     return names, "custom"
+
+
+def _fit_fixed(t: Table, fit_terms: tuple[str, ...]) -> tuple[tuple[str, float], ...]:
+    """``fit_fixed``: terms of ``fit_model`` held at a value (in the table's ``units``)."""
+    if "fit_fixed" not in t:
+        return ()
+    scale = UNIT_ARCSEC[t.string("units", "arcsec", choices=tuple(UNIT_ARCSEC))]
+    fixed_t = t.table("fit_fixed")
+    out = []
+    for key in fixed_t:
+        name = key.strip().upper()
+        if name not in fit_terms:
+            raise fixed_t.error(key, fixed_t.raw(key), "is not a term of controller.fit_model",
+                                f"its terms are {' '.join(fit_terms) or '(none given)'}")
+        out.append((name, fixed_t.number(key) * scale))
+    fixed_t.finish()
+    return tuple(out)
 
 
 def _camera(t: Table) -> CameraConfig:

@@ -1,8 +1,9 @@
 """``antsim demo``: the teaching walk-through runs end to end (its wall time is printed, not
 asserted: a timed assertion would be flaky on a loaded machine), tells the five chapters in
 order, writes demo.html with every figure embedded, and its numbers tell the story it
-claims: the cold start misses a source low in the sky (not one high in it) then finds it, the closed loop points about as well
-as the fit promised, the hidden effect shows in the residuals.
+claims: the cold start misses a source low in the sky (not one high in it) then finds it,
+the closed loop points about as well as the fit promised, the hidden effect shows in the
+residuals.
 """
 
 from __future__ import annotations

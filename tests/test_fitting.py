@@ -817,3 +817,54 @@ def test_t_scaled_sigma_is_unbounded_at_two_or_fewer_degrees_of_freedom():
     assert scaled[0] == pytest.approx(2.0 * math.sqrt(10.0 / 8.0), rel=1e-15)
     assert scaled[1] == math.inf  # a t with nu <= 2 has no finite variance
     assert math.isnan(scaled[2])  # a term not fitted stays without an error bar
+
+
+# ---------------------------------------------------------------------------------------------
+# terms held fixed (Fomalont 1973 held his refraction term at 1'.1)
+# ---------------------------------------------------------------------------------------------
+def test_fixed_terms_are_held_and_listed_without_sigma():
+    rng = np.random.default_rng(22)
+    truth = ghigo_truth()
+    data = synthetic(truth, rng, 300)
+    exact = fit_model(data, "ghigo10", robust=False, fixed={"W5": truth["W5"]})
+    assert exact.names == truth.names and exact.fixed == ("W5",)
+    # noise-free data, the fixed term at its true value: the others exact (1e-6": rounding)
+    np.testing.assert_allclose(exact.values_arcsec, truth.values_arcsec, atol=1e-6)
+    j = exact.names.index("W5")
+    assert math.isnan(exact.sigma_arcsec[j]) and np.isnan(exact.correlation[j]).all()
+    assert np.isfinite(np.delete(exact.sigma_arcsec, j)).all()
+    # held 6" off, the fit moves the terms that mimic cot E and leaves residuals
+    wrong = fit_model(data, "ghigo10", robust=False, fixed={"w5": truth["W5"] + 6.0})
+    assert wrong.model["W5"] == truth["W5"] + 6.0 and wrong.sky_rms_arcsec > 0.1
+    assert abs(wrong.model["W1"] - truth["W1"]) > 1.0
+    doc = wrong.to_json()
+    assert doc["fixed"] == ["W5"] and doc["terms"]["W5"]["sigma_arcsec"] is None
+    assert "fixed" in wrong.table().splitlines()[j + 1]
+    from controller.pointing.tpoint import TPointModel, format_mod
+
+    assert " =W5 " in format_mod(TPointModel.from_fit(wrong, caption="held"))
+    with pytest.raises(ValueError, match="W11"):
+        fit_model(data, "ghigo10", fixed={"W11": 1.0})
+
+
+def test_fixed_terms_from_the_command_line(tmp_path, capsys):
+    from antsim.cli import main as cli
+
+    rng = np.random.default_rng(23)
+    data = synthetic(ghigo_truth(), rng, 60, 2.0, 2.0)
+    from controller.pointing.tpoint import RunParameters, TPointData, write_tpoint
+
+    # as a TPOINT data file: raw (indicated) = true + error
+    az, el = np.degrees(data.az_rad), np.degrees(data.el_rad)
+    path = tmp_path / "w.dat"
+    write_tpoint(TPointData.from_azel(
+        "synthetic", RunParameters(38.43), az, el,
+        az + data.xel_arcsec / 3600.0 / np.cos(data.el_rad), el + data.el_arcsec / 3600.0),
+        path)
+    assert cli(["fit", str(path), "--model", "ghigo10", "--fixed", "W5=48", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["fixed"] == ["W5"] and doc["terms"]["W5"]["value_arcsec"] == 48.0
+    for bad, word in (("W5", "TERM=ARCSEC"), ("W5=x", "TERM=ARCSEC"), ("IA=3", "not a term")):
+        assert cli(["fit", str(path), "--model", "ghigo10", "--fixed", bad]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and word in err and "--fixed" in err

@@ -152,6 +152,9 @@ BAD = {
     # names the declination key and its value in degrees.
     "source never above the elevation limit": (
         [('dec = "-20d19m36s"', 'dec = "-60d00m00s"')], "sources[5].dec", "-60.0"),
+    "fixed term not fitted": (
+        [('fit_model = "ghigo10"', 'fit_model = "ghigo10"\nfit_fixed = { P5 = 1.1 }')],
+        "controller.fit_fixed.P5", "1.1"),
     "TOML syntax error": ([("seed = 1\n", "seed = = 1\n")], "TOML syntax", "line 7"),
     "negative a-priori sky opacity": (
         [("zenith_opacity = 0.010\nt_atm_k", "zenith_opacity = -0.01\nt_atm_k")],

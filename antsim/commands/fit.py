@@ -33,6 +33,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
                             "TPOINT data, ghigo10 for recordings)")
     which.add_argument("--terms", metavar="T1,T2,...",
                        help="comma-separated term names, e.g. IA,IE,NPAE,CA,AN,AW,TF,TX")
+    parser.add_argument("--fixed", metavar="T=ARCSEC,...",
+                        help="terms held at these values (arcsec) instead of fitted, e.g. "
+                             "W5=66 (Fomalont 1973 held refraction at 1'.1)")
     parser.add_argument("--json", action="store_true",
                         help="print the fit as JSON (the 'antsim fit --json' schema)")
     parser.add_argument("--no-robust", action="store_true",
@@ -62,6 +65,29 @@ def _terms_from_option(text: str) -> tuple[str, ...]:
     if duplicates:
         raise InputError("command line", "--terms", ",".join(duplicates), "listed twice")
     return tuple(names)
+
+
+def _fixed_from_option(text: str | None, terms) -> dict[str, float]:
+    """``--fixed T=ARCSEC,...``: terms of the fit held at these values."""
+    if text is None:
+        return {}
+    names = [getattr(t, "name", t) for t in terms]
+    fixed: dict[str, float] = {}
+    for item in text.split(","):
+        name, sep, value = item.partition("=")
+        name = name.strip().upper()
+        try:
+            number = float(value)
+        except ValueError:
+            number = None
+        if not sep or number is None:
+            raise InputError("command line", "--fixed", item.strip(),
+                             "must be TERM=ARCSEC, e.g. W5=66")
+        if name not in names:
+            raise InputError("command line", "--fixed", name, "is not a term of the fit",
+                             f"its terms are {' '.join(names)}")
+        fixed[name] = number
+    return fixed
 
 
 def _terms_from_model(spec: str) -> tuple[tuple[str, ...], str]:
@@ -113,9 +139,11 @@ def main(args: argparse.Namespace) -> int:
         terms, model_name = _terms_from_option(args.terms), "custom"
     else:
         terms, model_name = _terms_from_model(args.model or DEFAULT_MODEL[fmt])
+    fixed = _fixed_from_option(args.fixed, terms)
     data = _read_data(path, fmt, args.include_masked)
     try:
-        result = fit_model(data, terms, robust=not args.no_robust, name=model_name)
+        result = fit_model(data, terms, robust=not args.no_robust, name=model_name,
+                           fixed=fixed)
     except InputError:
         raise
     except ValueError as err:  # too few observations, a term infinite at the zenith, ...

@@ -25,9 +25,10 @@ __all__ = ["fit_tables", "run_fits", "write_outputs"]
 
 def run_fits(result: RunResult) -> dict[str, FitResult | None]:
     """Fits A-F of a run's recordings with the terms its controller fits."""
-    terms, name = result.scenario.controller.fit_spec()
-    return fit_variants(result.rows, terms, name=name,
-                        night_sun_max_deg=result.scenario.controller.night_sun_max_deg)
+    c = result.scenario.controller
+    terms, name = c.fit_spec()
+    return fit_variants(result.rows, terms, name=name, night_sun_max_deg=c.night_sun_max_deg,
+                        fixed=dict(c.fit_fixed))
 
 
 def _fmt(value: float, spec: str) -> str:

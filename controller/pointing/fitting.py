@@ -11,12 +11,15 @@ fits a model's own terms.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import dataclasses
+from collections.abc import Mapping, Sequence
+
+import numpy as np
 
 from .data import PointingData, require_pointing_data
-from .jackknife import BLOCK_PHASES
+from .jackknife import BLOCK_PHASES, JackknifeResult
 from .model import NAMED_MODELS, PointingModel
-from .result import FitResult
+from .result import FitResult, _readonly
 from .robust import fit_terms
 from .terms import Term
 
@@ -45,6 +48,7 @@ def fit_model(
     rms_factor: float = 3.0,
     block_s: float = 3600.0,
     block_phases: int = BLOCK_PHASES,
+    fixed: Mapping[str, float] | None = None,
 ) -> FitResult:
     """Fit the linear pointing terms ``terms`` to ``data`` by the 1990 report's procedure
     (:mod:`controller.pointing.robust`).
@@ -68,12 +72,61 @@ def fit_model(
     coefficients vary more than the kept residuals say; with time blocks the jackknife
     replays the last rejection in each replicate and scales the variances by the mean ratio.
 
+    ``fixed``: terms held at the given values (arcsec) instead of fitted, as Fomalont (1973)
+    held his refraction term at 1'.1 and TPOINT's ``FIX`` does: their offsets are taken off
+    the data, the others fitted to the rest, and the result lists every term in order, the
+    fixed ones with their value, no sigma and no correlation (``result.fixed``).
+
     Raises ``ValueError`` (plain sentence) for no observations, fewer used observations than
-    terms, invalid factors or ``block_phases``, ``weighted=True`` without weights, or a term
-    that is infinite at an observation (e.g. TX at elevation 0, CA at 90 deg). Unknown term
-    names raise :class:`~controller.pointing.terms.TermError`.
+    terms, invalid factors or ``block_phases``, ``weighted=True`` without weights, a term
+    that is infinite at an observation (e.g. TX at elevation 0, CA at 90 deg), or a fixed
+    term that is not among ``terms``. Unknown term names raise
+    :class:`~controller.pointing.terms.TermError`.
     """
     require_pointing_data(data)
-    return fit_terms(data, _resolve_terms(terms, name), robust=robust, weighted=weighted,
-                     lad_factor=lad_factor, rms_factor=rms_factor, block_s=block_s,
-                     block_phases=block_phases)
+    start = _resolve_terms(terms, name)
+    options = {"robust": robust, "weighted": weighted, "lad_factor": lad_factor,
+               "rms_factor": rms_factor, "block_s": block_s, "block_phases": block_phases}
+    if not fixed:
+        return fit_terms(data, start, **options)
+    fixed = {n.strip().upper(): float(v) for n, v in fixed.items()}
+    unknown = sorted(set(fixed) - set(start.names))
+    if unknown:
+        raise ValueError(f"fixed term(s) {', '.join(unknown)} are not among the terms fitted "
+                         f"({', '.join(start.names)})")
+    held = PointingModel(list(fixed), list(fixed.values()))
+    d_az, d_el = held.offset_rad(data.az_rad, data.el_rad, data.feed_rad)
+    rest = dataclasses.replace(
+        data, xel_arcsec=data.xel_arcsec - np.degrees(d_az) * 3600.0 * np.cos(data.el_rad),
+        el_arcsec=data.el_arcsec - np.degrees(d_el) * 3600.0)
+    free = PointingModel([n for n in start.names if n not in fixed], name=start.name)
+    return _with_fixed(fit_terms(rest, free, **options), start, fixed)
+
+
+def _with_fixed(result: FitResult, start: PointingModel, fixed: Mapping[str, float]) -> FitResult:
+    """``result`` (a fit of the free terms) with the ``fixed`` terms put back in ``start``'s
+    order: their values, NaN sigmas and correlations."""
+    names = start.names
+    where = np.array([names.index(n) for n in result.names], dtype=int)
+
+    def spread(vector: np.ndarray) -> np.ndarray:
+        out = np.full(len(names), np.nan)
+        out[where] = vector
+        return out
+
+    values = spread(result.values_arcsec)
+    for n, v in fixed.items():
+        values[names.index(n)] = v
+    corr = np.full((len(names), len(names)), np.nan)
+    corr[np.ix_(where, where)] = result.correlation
+    source = result.honest_source
+
+    def honest() -> JackknifeResult:
+        j = source()
+        return dataclasses.replace(j, sigma=spread(j.sigma), dof=spread(j.dof))
+
+    return dataclasses.replace(
+        result, model=start.with_values(values, name=start.name),
+        sigma_arcsec=_readonly(spread(result.sigma_arcsec)), correlation=_readonly(corr),
+        honest_source=honest if source is not None else None,
+        fixed=tuple(n for n in names if n in fixed))

@@ -71,6 +71,8 @@ class FitResult:
     #: 100,000 observations, and many callers need only TPOINT's statistics)
     honest_source: Callable[[], JackknifeResult] | None = field(
         default=None, repr=False, compare=False)
+    #: terms held at a given value, not fitted (no sigma; ``fit_model(fixed=...)``)
+    fixed: tuple[str, ...] = ()
 
     @cached_property
     def _jackknife(self) -> JackknifeResult | None:
@@ -135,6 +137,7 @@ class FitResult:
                 "matrix": [[_json_float(x) for x in row] for row in self.correlation],
             },
             "unconstrained": list(self.unconstrained),
+            **({"fixed": list(self.fixed)} if self.fixed else {}),
             "honest_sigma": {
                 "method": "cluster jackknife (CV3) of the same least-squares coefficients, "
                           "clusters = observations"
@@ -165,7 +168,8 @@ class FitResult:
         value_head, sigma_head = 'value (")', 'sigma (")'
         lines = [f"{'term':<{width}}  {value_head:>12}  {sigma_head:>10}"]
         for n, v, s in zip(self.names, self.model.values_arcsec, self.sigma_arcsec, strict=True):
-            sigma = f"{s:10.4f}" if math.isfinite(s) else f"{'not fitted':>10}"
+            sigma = (f"{s:10.4f}" if math.isfinite(s) else
+                     f"{'fixed' if n in self.fixed else 'not fitted':>10}")
             lines.append(f"{n:<{width}}  {v:+12.4f}  {sigma}")
         return "\n".join(lines)
 

@@ -649,18 +649,22 @@ class TPointModel(PointingModel):
         caption: str | None = None,
         n_obs: int = 0,
         sky_rms_arcsec: float = 0.0,
+        fixed: Sequence[str] = (),
     ) -> TPointModel:
-        """``model`` with sigmas (NaN = none) and the parameters record filled in."""
+        """``model`` with sigmas (NaN = none), the terms named in ``fixed`` flagged as fixed
+        (``=``), and the parameters record filled in."""
         rms = sky_rms_arcsec if math.isfinite(sky_rms_arcsec) else 0.0
         params = ("T", str(int(n_obs)), f"{rms:.3f}", "0.0000", "0.0000")
         return cls(model.terms, model.values_arcsec, model.name, sigma_arcsec=sigma_arcsec,
-                   caption=caption or model.name, parameters=params)
+                   fixed=[n in fixed for n in model.names], caption=caption or model.name,
+                   parameters=params)
 
     @classmethod
     def from_fit(cls, result, caption: str | None = None) -> TPointModel:
         """The model of a :class:`~controller.pointing.result.FitResult` with its sigmas."""
         return cls.from_model(result.model, result.sigma_arcsec, caption=caption,
-                              n_obs=result.n_used, sky_rms_arcsec=result.sky_rms_arcsec)
+                              n_obs=result.n_used, sky_rms_arcsec=result.sky_rms_arcsec,
+                              fixed=result.fixed)
 
     def to_pointing_model(self, name: str | None = None) -> PointingModel:
         """A plain :class:`~controller.pointing.model.PointingModel` with the same terms and

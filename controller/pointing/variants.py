@@ -112,9 +112,11 @@ def pointing_data(cols: Mapping[str, np.ndarray], mask: np.ndarray) -> PointingD
 
 def fit_variants(recordings, terms: Sequence[str] | str, name: str = "custom",
                  variants: Sequence[Variant] = VARIANTS,
-                 night_sun_max_deg: float = NIGHT_SUN_MAX_DEG) -> dict[str, FitResult | None]:
+                 night_sun_max_deg: float = NIGHT_SUN_MAX_DEG,
+                 fixed: Mapping[str, float] | None = None) -> dict[str, FitResult | None]:
     """Fit every variant (night: the Sun below ``night_sun_max_deg``); a variant with too
-    few observations maps to None."""
+    few observations maps to None. ``fixed``: terms held at these values (arcsec), see
+    :func:`~controller.pointing.fitting.fit_model`."""
     cols = columns(recordings)
     out: dict[str, FitResult | None] = {}
     n_terms = len(terms) if not isinstance(terms, str) else None
@@ -126,7 +128,7 @@ def fit_variants(recordings, terms: Sequence[str] | str, name: str = "custom",
             continue
         try:
             out[variant.name] = fit_model(pointing_data(cols, mask), terms,
-                                          robust=variant.filtered, name=name)
+                                          robust=variant.filtered, name=name, fixed=fixed)
         except ValueError:
             out[variant.name] = None  # e.g. fewer usable observations than terms
     return out

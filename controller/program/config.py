@@ -95,6 +95,9 @@ class ControllerConfig:
     #: TPOINT's eight when no model is in use)
     fit_terms: tuple[str, ...] = ()
     fit_model_name: str = ""
+    #: terms of the fit held at a value instead of fitted, (name, arcsec) pairs (Fomalont
+    #: 1973 held refraction at 1'.1)
+    fit_fixed: tuple[tuple[str, float], ...] = ()
     #: the mount's axes: "altaz" (azimuth, elevation) or "equatorial" (hour angle, dec)
     mount: str = "altaz"
     #: how offsets are measured: "five_point" cross scans or "optical" (a TV camera on stars)
