@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from antsim.documents import GHIGO1990
 from antsim.figures import run as figures
 from antsim.figures.charts import comparison_figure
 from antsim.figures.diagnose import before_after_figures
@@ -75,7 +76,7 @@ def run_figs(short_run, tmp_path_factory):
     out = tmp_path_factory.mktemp("figs")
     return figures.run_figures(result.rows, fits, out, truth_arcsec=truth, name="short",
                                el_limit_deg=10.0,
-                               reference_rms=figures.REPORT_TABLE2_ARCSEC)
+                               reference_rms=dict(GHIGO1990.table2))
 
 
 def test_run_figures_are_written_sane_and_not_blank(run_figs, short_run):

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from antsim.documents import GHIGO1990
 from antsim.run.outputs import run_fits, write_outputs
 from antsim.run.runner import run_campaign, simulate
 from antsim.scenario import load_scenario
@@ -49,6 +50,87 @@ def test_table2_of_the_1990_report_is_reproduced(campaign):
     assert 250 <= a.n_input <= 350
 
 
+def test_table3_of_the_1990_report_is_reproduced(ghigo, campaign):
+    """Ghigo (1990) Table 3 on the report's own functions (section II). The injected truth
+    is Table 3's values; fit A recovers each within 3 of its TPOINT sigma (the report's kind
+    of standard error), and those sigmas are the report's within 25% term by term: the same
+    ten functions, a similar spread of ~280 scans on the sky and a similar rms give the same
+    formal errors (measured at seed 1: 0.94-1.10 times the report's; W6, W9, W10, the terms
+    that cannot reliably be distinguished, 1.02, 0.98, 1.01). The honest sigma is not the
+    report's kind: with it W1 is 3.4 sigma off at this seed, the heating's bias that every
+    campaign shares (benchmarks/recovery.py)."""
+    _, fits = campaign
+    a = fits["A"]
+    truth = ghigo.truth_model.as_dict()
+    for name, (value_arcmin, se_arcmin) in GHIGO1990.terms.items():
+        j = a.names.index(name)
+        assert truth[name] == pytest.approx(60.0 * value_arcmin)
+        assert abs(a.values_arcsec[j] - truth[name]) < 3.0 * a.sigma_arcsec[j], name
+        assert a.sigma_arcsec[j] / 60.0 == pytest.approx(se_arcmin, rel=0.25), name
+
+
+def _visible_hours(scenario) -> dict[str, float]:
+    """Hours each source spends inside the scheduler's elevation window during the run."""
+    from controller.astro.ephemeris import Ephemeris
+    from controller.astro.site import Site
+    from controller.astro.sources import FixedSource
+
+    c = scenario.controller
+    site = Site(c.site_latitude_deg, c.site_longitude_deg, c.site_height_m)
+    sources = [FixedSource(s.name, s.ra_deg, s.dec_deg, s.frame) for s in c.sources]
+    eph = Ephemeris(site, c.epoch_utc, c.duration_s, sources)
+    t = np.arange(0.0, c.duration_s, 60.0)
+    out = {}
+    for i, s in enumerate(sources):
+        el = np.degrees(eph.altaz_rad(i, t)[1])
+        inside = (el >= c.scheduler.elevation_min_deg) & (el <= c.scheduler.elevation_max_deg)
+        out[s.name] = inside.sum() / 60.0
+    return out
+
+
+def test_table1_points_per_source(ghigo, campaign):
+    """Ghigo (1990) Table 1, points per source in fit A. The spread scheduler visits every
+    source about equally often per hour it is up (2.6-2.9 scans per hour at seed 1, within
+    20% of their mean here); six of the eight counts are then within 30% of the report's. The
+    1990 observers visited 3C84 (1.5 per visible hour) and Orion A (2.0) least and Cygnus A
+    (3.7) most, for reasons the report does not give: our 3C84 and Orion A counts are the two
+    more than 30% above it (docs/facts.md). Table 1 itself adds up to 282, its fit A to 285."""
+    from antsim.run.outputs import points_per_source
+
+    result, fits = campaign
+    points = points_per_source(result.rows, fits["A"])
+    report = GHIGO1990.source_points
+    assert sum(report.values()) == 282 and GHIGO1990.points["A"] == 285
+    hours = _visible_hours(ghigo)
+    ours = {n: points[n] / hours[n] for n in report}
+    mean = sum(ours.values()) / len(ours)
+    assert all(abs(r / mean - 1.0) < 0.2 for r in ours.values()), ours
+    ratio = {n: points[n] / report[n] for n in report}
+    outside = sorted(n for n, r in ratio.items() if abs(r - 1.0) > 0.30)
+    assert outside == ["3C84", "Orion A"], ratio
+    by_report_rate = sorted(report, key=lambda n: report[n] / hours[n])
+    assert sorted(by_report_rate[:2]) == outside
+
+
+def test_fig2a_azimuth_error_follows_elevation(campaign):
+    """Ghigo (1990) section IV: "a large azimuth encoder offset (W6) of 12 arcmin. This is
+    probably why Figure 2a shows a strong dependence of azimuth error with elevation". The
+    total cross-elevation error our Fig. 2a draws falls with elevation as W6 cos E does:
+    correlated with cos E (r > 0.9, 0.97 at seed 1; the other azimuth terms and the scatter
+    keep it below 1), and its least-squares slope against cos E is within 40% of W6 (15.5' at
+    seed 1: W9 sin E and W10 are not orthogonal to cos E over 10-85 deg)."""
+    from antsim.figures.run import _Observations
+
+    result, _ = campaign
+    obs = _Observations.from_rows(result.rows, "AVG")
+    keep = obs.good & np.isfinite(obs.xel_arcsec)
+    cos_e = np.cos(np.radians(obs.el_deg[keep]))
+    xel = obs.xel_arcsec[keep]
+    assert np.corrcoef(cos_e, xel)[0, 1] > 0.9
+    slope = np.polyfit(cos_e, xel, 1)[0]
+    assert slope == pytest.approx(12.24 * 60.0, rel=0.4)
+
+
 def test_run_writes_fit_files_that_round_trip(ghigo, tmp_path):
     result = run_campaign(ghigo, tmp_path, show_progress=False)
     write_outputs(result)
@@ -62,7 +144,12 @@ def test_run_writes_fit_files_that_round_trip(ghigo, tmp_path):
         assert key in fit
     assert fit["model"] == "ghigo10" and list(fit["terms"]) == [f"W{i}" for i in range(1, 11)]
     text = (tmp_path / "fit.txt").read_text()
-    assert "Table 2" in text and "Table 3" in text
+    assert "Table 2" in text and "Table 3" in text and "Table 1" in text
+    # the report's numbers beside ours: Table 3's W6 row ends with 12.24 and its s.e. 0.55
+    w6 = next(line for line in text.splitlines() if line.startswith("W6 "))
+    assert w6.split()[-2:] == ["+12.24", "0.55"]
+    assert next(line for line in text.splitlines() if line.startswith("Cassiopeia A")
+                ).split()[-1] == "64"
     for name in "ABCDEF":
         assert f"\n{name} " in text
     # model.dat is fit A as a TPOINT .mod file that the controller can load back

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from antsim.documents import GHIGO1990_GAIN_CURVE
 from controller.astro.sun import DAY_SUN_MIN_DEG
 from controller.pointing.data import PointingData
 from controller.pointing.result import FitResult
@@ -36,7 +37,6 @@ from .style import REJECT_COLOR, SERIES_COLORS, Canvas, FigureFile, binned_mean,
 
 __all__ = [
     "REPORT_GAIN_CURVE",
-    "REPORT_TABLE2_ARCSEC",
     "STRONG_SOURCES",
     "amplitude_figure",
     "coefficients_figure",
@@ -47,15 +47,8 @@ __all__ = [
 
 #: the strong sources of the report's gain-curve figure (Fig. 4)
 STRONG_SOURCES = ("Cassiopeia A", "Cygnus A")
-#: relative gain against elevation, Ghigo (1990) section V: flat above 30 deg, 95% at 20 deg,
-#: 90% at 10 deg; (elevation deg, relative gain) pairs, linear in between
-REPORT_GAIN_CURVE: tuple[tuple[float, float], ...] = (
-    (10.0, 0.90), (20.0, 0.95), (30.0, 1.0), (90.0, 1.0))
-#: Ghigo (1990) Table 2: rms of (xel, el) residuals per fit, arcsec
-REPORT_TABLE2_ARCSEC: dict[str, tuple[float, float]] = {
-    "A": (23.0, 38.0), "B": (23.0, 35.0), "C": (28.0, 43.0),
-    "D": (24.0, 40.0), "E": (18.0, 26.0), "F": (31.0, 41.0),
-}
+#: relative gain against elevation, Ghigo (1990) section V (antsim.documents)
+REPORT_GAIN_CURVE = GHIGO1990_GAIN_CURVE
 
 
 # ---------------------------------------------------------------------------------------------
@@ -393,7 +386,9 @@ def _recording_figures(obs: _Observations, out: Path, prefix: str,
                     "the pointing model and corrections in use: the error the antenna would "
                     "make with no model), cross-elevation and elevation, against elevation "
                     "and azimuth. Red crosses are scans the reduction flagged (S/N < 4, ...). "
-                    "The large constant elevation error is the encoder zero offset (W6).",
+                    "An azimuth encoder offset is an error across the sky that falls with "
+                    "elevation as cos E (a): the 1990 report's W6, 12.24', which its section "
+                    "IV gives as the reason for Fig. 2a's strong dependence on elevation.",
             formats=formats),
     ]
 
@@ -467,7 +462,8 @@ def _fits_figures(present: Mapping[str, FitResult], out: Path, prefix: str,
             ylabel="sigma (arcsec, log scale)",
             caption="The formal (TPOINT) uncertainty of each coefficient in each fit: fewer "
                     "points (fits D, E) or a narrower spread on the sky make it larger; "
-                    "strongly correlated terms (e.g. W1, W2, W3) are the least determined.",
+                    "strongly correlated terms (e.g. the 1990 model's W6, W9, W10) are the "
+                    "least determined.",
             formats=formats),
         comparison_figure(
             rms, out / "fig10_fit_rms.png",

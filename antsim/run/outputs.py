@@ -11,16 +11,20 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Mapping
 from pathlib import Path
 
+import numpy as np
+
+from antsim.documents import Reference, reference_for
 from controller.astro.sun import NIGHT_SUN_MAX_DEG
 from controller.pointing.result import FitResult
 from controller.pointing.tpoint import TPointModel, write_mod
-from controller.pointing.variants import VARIANTS, fit_variants
+from controller.pointing.variants import VARIANTS, columns, fit_variants, variant_mask
 
 from .runner import RunResult
 
-__all__ = ["fit_tables", "run_fits", "write_outputs"]
+__all__ = ["fit_tables", "points_per_source", "run_fits", "write_outputs"]
 
 
 def run_fits(result: RunResult) -> dict[str, FitResult | None]:
@@ -35,15 +39,39 @@ def _fmt(value: float, spec: str) -> str:
     return format(value, spec) if value is not None and math.isfinite(value) else "-"
 
 
+def points_per_source(rows, fit: FitResult | None) -> dict[str, int]:
+    """Observations of each source that fit A used (the 1990 report's Table 1), in the order
+    the sources first appear."""
+    if fit is None:
+        return {}
+    cols = columns(rows)
+    mask = variant_mask(cols, VARIANTS[0])
+    source = np.array([r["source"] for r in rows]) if isinstance(rows, list) else \
+        np.asarray(rows["source"])
+    used = source[mask][np.asarray(fit.used, dtype=bool)]
+    names = list(dict.fromkeys(source[mask].tolist()))
+    return {n: int((used == n).sum()) for n in names}
+
+
 def fit_tables(fits: dict[str, FitResult | None], title: str,
-               night_sun_max_deg: float = NIGHT_SUN_MAX_DEG) -> str:
-    """Text tables in the style of the report's Table 2 (rms per fit) and Table 3 (terms);
-    fit E's night is the Sun below ``night_sun_max_deg``."""
-    lines = [title, "", "Table 2. Residuals of the fits (arcsec)", "",
+               night_sun_max_deg: float = NIGHT_SUN_MAX_DEG,
+               reference: Reference | None = None,
+               points: Mapping[str, int] | None = None) -> str:
+    """Text tables in the style of the report's Table 2 (rms per fit) and Table 3 (terms),
+    with the document's numbers beside ours when ``reference`` is given, and the points
+    per source in fit A (Table 1) when ``points`` is; fit E's night is the Sun below
+    ``night_sun_max_deg``."""
+    ref_t2 = dict(reference.table2) if reference is not None else {}
+    lines = [title, "", "Table 2. Residuals of the fits (arcsec)"
+             + (f"; {reference.citation}, Table 2, beside them" if ref_t2 else ""), "",
              f"{'fit':<4}{'data':<48}{'N':>5}{'used':>6}{'xel rms':>9}{'el rms':>8}"
-             f"{'sky rms':>9}"]
+             f"{'sky rms':>9}" + (f"{'report N':>10}{'xel':>6}{'el':>6}" if ref_t2 else "")]
     for v in VARIANTS:
         fit = fits.get(v.name)
+        ref = ""
+        if v.name in ref_t2:
+            ref = (f"{reference.points.get(v.name, 0):>10d}{ref_t2[v.name][0]:>6.0f}"
+                   f"{ref_t2[v.name][1]:>6.0f}")
         if fit is None:
             lines.append(f"{v.name:<4}{v.describe(night_sun_max_deg):<48}"
                          f"{'(too few observations)':>30}")
@@ -51,23 +79,55 @@ def fit_tables(fits: dict[str, FitResult | None], title: str,
         lines.append(f"{v.name:<4}{v.describe(night_sun_max_deg):<48}{fit.n_input:>5}"
                      f"{fit.n_used:>6}"
                      f"{fit.xel_rms_arcsec:>9.1f}{fit.el_rms_arcsec:>8.1f}"
-                     f"{fit.sky_rms_arcsec:>9.1f}")
+                     f"{fit.sky_rms_arcsec:>9.1f}{ref}")
+    if reference is not None and reference.rms_arcsec is not None:
+        xel, el = reference.rms_arcsec
+        lines.append(f"{'':<4}{reference.citation + ': rms per point':<69}"
+                     f"{xel:>9.1f}{el:>8.1f}")
     present = [v.name for v in VARIANTS if fits.get(v.name) is not None]
     if present:
-        names = fits[present[0]].names
-        lines += ["", "Table 3. Coefficients (arcmin); sigma of fit A in parentheses", "",
-                  f"{'term':<8}" + "".join(f"{'fit ' + p:>10}" for p in present)
-                  + f"{'sigma A':>10}"]
-        for j, term in enumerate(names):
-            row = f"{term:<8}"
-            for p in present:
-                row += f"{_fmt(fits[p].values_arcsec[j] / 60.0, '+.3f'):>10}"
-            sigma = fits["A"].sigma_arcsec[j] / 60.0 if fits.get("A") is not None else math.nan
-            row += f"{'(' + _fmt(sigma, '.3f') + ')':>10}"
-            lines.append(row)
+        lines += _coefficient_lines(fits, present, reference)
+    if points:
+        lines += _points_lines(points, reference)
     warnings = fits["A"].warnings if fits.get("A") is not None else ()
     lines += [""] + [f"fit A: {w}" for w in warnings]
     return "\n".join(lines).rstrip() + "\n"
+
+
+def _coefficient_lines(fits, present: list[str], reference: Reference | None) -> list[str]:
+    names = fits[present[0]].names
+    terms = dict(reference.terms) if reference is not None else {}
+    labels = dict(reference.labels) if reference is not None else {}
+    fixed = fits["A"].fixed if fits.get("A") is not None else ()
+    lines = ["", "Table 3. Coefficients (arcmin); sigma of fit A in parentheses"
+             + (f"; {reference.citation} beside them" if terms else ""), "",
+             f"{'term':<8}" + "".join(f"{'fit ' + p:>10}" for p in present) + f"{'sigma A':>10}"
+             + (f"{reference.column:>10}{'s.e.':>7}" if terms else "")]
+    for j, term in enumerate(names):
+        row = f"{term:<8}"
+        for p in present:
+            row += f"{_fmt(fits[p].values_arcsec[j] / 60.0, '+.3f'):>10}"
+        sigma = fits["A"].sigma_arcsec[j] / 60.0 if fits.get("A") is not None else math.nan
+        row += f"{'fixed' if term in fixed else '(' + _fmt(sigma, '.3f') + ')':>10}"
+        if term in terms:
+            value, se = terms[term]
+            row += (f"{value:>+10.2f}{_fmt(se if se is not None else math.nan, '.2f'):>7}  "
+                    f"{labels.get(term, ''):<10}")
+        lines.append(row.rstrip())
+    return lines
+
+
+def _points_lines(points: Mapping[str, int], reference: Reference | None) -> list[str]:
+    report = dict(reference.source_points) if reference is not None else {}
+    lines = ["", "Table 1. Points per source in fit A"
+             + (f"; {reference.citation}, Table 1, beside them" if report else ""), "",
+             f"{'source':<16}{'fit A':>6}" + (f"{reference.column:>8}" if report else "")]
+    for name in list(report) + [n for n in points if n not in report]:
+        lines.append(f"{name:<16}{points.get(name, 0):>6d}"
+                     + (f"{report[name]:>8d}" if name in report else ""))
+    lines.append(f"{'all':<16}{sum(points.values()):>6d}"
+                 + (f"{sum(report.values()):>8d}" if report else ""))
+    return lines
 
 
 def write_outputs(result: RunResult, report: bool = True) -> str:
@@ -93,8 +153,11 @@ def write_outputs(result: RunResult, report: bool = True) -> str:
     what = "star offsets" if result.scenario.controller.method == "optical" else "cross scans"
     title = (f"{result.scenario.name}, seed {result.seed}: {result.n_scans} {what}, "
              f"model in use {result.model.name}")
+    reference = reference_for(result.scenario.name)
     (out / "fit.txt").write_text(
-        fit_tables(fits, title, result.scenario.controller.night_sun_max_deg), encoding="utf-8")
+        fit_tables(fits, title, result.scenario.controller.night_sun_max_deg, reference,
+                   points_per_source(result.rows, fit_a)),
+        encoding="utf-8")
     good = sum(1 for r in result.rows if r["polarization"] == "AVG" and r["good"])
     summary = (f"{result.scenario.name}: {result.n_scans} {what} ({good} good) in "
                f"{result.scenario.duration_s / 3600:.1f} h, seed {result.seed}")

@@ -13,6 +13,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from antsim.documents import Reference, reference_for
 from controller.astro.sun import NIGHT_SUN_MAX_DEG
 from controller.pointing.result import FitResult
 from controller.pointing.variants import VARIANTS
@@ -24,8 +25,8 @@ if TYPE_CHECKING:
 
     from .runner import RunResult
 
-__all__ = ["coefficient_table", "fit_summary_table", "truth_pull_table", "truth_terms_arcsec",
-           "write_run_report"]
+__all__ = ["coefficient_table", "fit_summary_table", "source_points_table", "truth_pull_table",
+           "truth_terms_arcsec", "write_run_report"]
 
 #: |pull| above which a table cell is highlighted
 PULL_WARN = 3.0
@@ -57,13 +58,17 @@ def fit_summary_table(fits: Mapping[str, FitResult | None],
     return Table(header, rows, caption="Residuals of the fits (the 1990 report's Table 2)")
 
 
-def coefficient_table(fits: Mapping[str, FitResult | None]) -> Table:
-    """Table 3 style: coefficients (arcmin) of each fit present, and fit A's TPOINT sigma."""
+def coefficient_table(fits: Mapping[str, FitResult | None],
+                      reference: Reference | None = None) -> Table:
+    """Table 3 style: coefficients (arcmin) of each fit present, fit A's TPOINT sigma, and
+    the document's value and standard error beside them when ``reference`` is given."""
     present = [v.name for v in VARIANTS if fits.get(v.name) is not None]
     if not present:
         return Table(["term"], [], caption="Coefficients: no fit had enough observations")
     names = fits[present[0]].names
     fit_a = fits.get("A")
+    terms = dict(reference.terms) if reference is not None else {}
+    labels = dict(reference.labels) if reference is not None else {}
     rows = []
     for j, term in enumerate(names):
         row: list[Any] = [term]
@@ -72,10 +77,29 @@ def coefficient_table(fits: Mapping[str, FitResult | None]) -> Table:
             row.append(float(fit.values_arcsec[fit.names.index(term)]) / 60.0
                        if term in fit.names else None)
         row.append(float(fit_a.sigma_arcsec[j]) / 60.0 if fit_a is not None else None)
+        if terms:
+            value, se = terms.get(term, (None, None))
+            row += [value, se] + ([labels.get(term, "")] if labels else [])
         rows.append(row)
-    return Table(["term", *(f"fit {p} (')" for p in present), "sigma A (')"], rows,
-                 caption="Coefficients (arcmin; the 1990 report's Table 3)",
-                 number_format="+.3f")
+    header = ["term", *(f"fit {p} (')" for p in present), "sigma A (')"]
+    if terms:
+        header += [f"{reference.column} (')", f"{reference.column} s.e. (')"] \
+            + (["its name"] if labels else [])
+    caption = "Coefficients (arcmin; the 1990 report's Table 3)"
+    if terms:
+        caption += f", beside {reference.citation}'s"
+    return Table(header, rows, caption=caption, number_format="+.3f")
+
+
+def source_points_table(points: Mapping[str, int], reference: Reference | None) -> Table:
+    """Table 1 style: the points per source fit A used, beside the document's."""
+    report = dict(reference.source_points) if reference is not None else {}
+    names = list(report) + [n for n in points if n not in report]
+    rows = [[n, points.get(n, 0), *([report[n]] if report else [])] for n in names]
+    rows.append(["all", sum(points.values()), *([sum(report.values())] if report else [])])
+    return Table(["source", "fit A", *([f"{reference.column}"] if report else [])], rows,
+                 caption="Points per source in fit A (the 1990 report's Table 1)"
+                         + (f", beside {reference.citation}'s" if report else ""))
 
 
 def truth_pull_table(fit: FitResult, truth_arcsec: Mapping[str, float]) -> Table:
@@ -122,12 +146,15 @@ def truth_terms_arcsec(truth: Mapping[str, Any] | None) -> dict[str, float]:
 def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
                      out_dir: str | Path | None = None) -> tuple[Path, list[FigureFile]]:
     """Figures (``DIR/figures/``) and ``DIR/report.html`` of a run; returns both."""
-    from antsim.figures.run import REPORT_TABLE2_ARCSEC, run_figures
+    from antsim.figures.run import run_figures
+
+    from .outputs import points_per_source
 
     out = Path(out_dir if out_dir is not None else result.out_dir)
     scenario = result.scenario
     truth = truth_terms_arcsec(result.truth)
-    reference = REPORT_TABLE2_ARCSEC if scenario.name == "ghigo1990" else None
+    document = reference_for(scenario.name)
+    reference = dict(document.table2) if document is not None and document.table2 else None
     figures = run_figures(result.rows, fits, out / "figures", truth_arcsec=truth or None,
                           name=scenario.name, start_label=f"UTC {scenario.epoch_utc}",
                           el_limit_deg=scenario.controller.scheduler.elevation_min_deg,
@@ -151,11 +178,19 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
         "--model), figures/ (the figures below as PNG files).")])]
     fit_blocks: list[Block] = [
         fit_summary_table(fits, reference, scenario.controller.night_sun_max_deg),
-        coefficient_table(fits)]
+        coefficient_table(fits, document)]
+    points = points_per_source(result.rows, fit_a)
+    if points:
+        fit_blocks.append(source_points_table(points, document))
     if reference:
         fit_blocks.append(Paragraph(
-            "The report columns are the 1990 report's Table 2 (Ghigo 1990) for the same "
+            "The report columns are the 1990 report's Tables 1-3 (Ghigo 1990) for the same "
             "selections of the real 24-hour run of 8-9 February 1990."))
+    if document is not None and document.rms_arcsec is not None:
+        fit_blocks.append(Paragraph(
+            f"{document.citation}: rms deviation of a data point from the best fit "
+            f"{document.rms_arcsec[0]:.1f}\" in azimuth (dA cos E) and "
+            f"{document.rms_arcsec[1]:.1f}\" in elevation."))
     sections.append(Section("Fits A-F", fit_blocks))
     if fit_a is not None and truth:
         effects = [e.get("effect", "?") for e in (result.truth or {}).get("effects", [])]
