@@ -13,8 +13,8 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-__all__ = ["FOMALONT1973", "FOMALONT1973_COEFFICIENTS", "GHIGO1990", "GHIGO1990_GAIN_CURVE",
-           "GHIGO1990_TABLE1_POINTS", "Reference", "reference_for"]
+__all__ = ["FOMALONT1973", "FOMALONT1973_COEFFICIENTS", "FOMALONT1973_EFFICIENCY", "GHIGO1990",
+           "GHIGO1990_GAIN_CURVE", "GHIGO1990_TABLE1_POINTS", "Reference", "reference_for"]
 
 
 @dataclass(frozen=True)
@@ -81,6 +81,18 @@ FOMALONT1973_COEFFICIENTS: dict[str, float] = {
     "C1": 1.03, "C2": -0.40, "C3": 0.94, "C4": 2.32, "C5": -5.24, "C6": 0.71, "C7": 152.0,
     "D1": 2.34, "D2": 0.68, "D3": 0.61, "D4": -7.00, "D5": 1.10, "D6": 0.76, "D7": 250.0,
 }
+
+#: Fomalont 1973, section II: efficiency (%) against elevation (deg) and azimuth (deg), S-band
+#: (SR) and X-band (XL); the Cyg A point at 59 deg has no S-band value. "There is no
+#: systematic changes of efficiency with elevation"; means 38.6 (S) and 37.6 (X).
+FOMALONT1973_EFFICIENCY: tuple[tuple[str, float, float, float | None, float], ...] = (
+    ("Cas A", 13.0, 338.0, 36.0, 41.0),
+    ("Tau A", 23.0, 280.0, 38.0, 37.0),
+    ("Cyg A", 33.0, 61.0, 38.0, 41.0),
+    ("Cas A", 38.0, 41.0, 43.0, 39.0),
+    ("Cyg A", 59.0, 73.0, None, 34.0),
+    ("Tau A", 65.0, 235.0, 38.0, 34.0),
+)
 
 _F = FOMALONT1973_COEFFICIENTS
 FOMALONT1973 = Reference(

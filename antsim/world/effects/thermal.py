@@ -454,7 +454,9 @@ class ThermalEffect(Effect):
 
 class SunsetDrift(Effect):
     """Elevation drift after sunset: ``a (1 - exp(-(t - t_set) / tau))``, relaxing back
-    with the same time constant after sunrise (Fomalont 1973's 1' in 4 hours)."""
+    with the same time constant after sunrise (Fomalont 1973's 1' in 4 hours). With
+    ``nights`` > 0 only after the first ``nights`` sunsets of the campaign (Fomalont saw it
+    "for a period of 4 hours after sunset on February 28", the first of his run)."""
 
     name: ClassVar[str] = "sunset_drift"
     explanation: ClassVar[str] = (
@@ -464,12 +466,22 @@ class SunsetDrift(Effect):
     PARAMS: ClassVar[dict[str, Param]] = {
         "amplitude_arcsec": Param(60.0, "total elevation change after sunset (arcsec)"),
         "tau_s": Param(5400.0, "time constant of the drift (s)", min=60.0),
+        "nights": Param(0.0, "after the first this many sunsets of the campaign only "
+                             "(0: every night)", min=0.0),
     }
 
     def start(self, world, rng: np.random.Generator) -> None:
         step = GRID_STEP_S
         t = np.arange(-SPINUP_S, world.duration_s + 2 * step, step)
         night = (world.sun_el_rad_periodic(t) < 0.0).astype(float)
+        nights = round(self.p["nights"])
+        if nights > 0:  # the nights that begin with one of the campaign's first sunsets
+            sunset = np.flatnonzero((np.diff(night) > 0) & (t[1:] >= 0.0)) + 1
+            keep = np.zeros_like(night)
+            for i in sunset[:nights]:
+                end = np.flatnonzero(night[i:] == 0.0)
+                keep[i:i + (end[0] if end.size else night.size)] = 1.0
+            night = keep
         # relaxing towards 1 at night and 0 by day gives the exponential approach after
         # each sunset and the return after each sunrise
         self.t_grid = t
