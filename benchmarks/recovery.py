@@ -20,7 +20,7 @@ so scans match one to one) is subtracted before the fit, as an observatory subtr
 thermal model driven by structure temperatures. The average is over 64 campaigns: an
 observatory's thermal model carries no scan's measurement noise, and the mean of 8 carried
 1/8 of one campaign's into every fitted seed alike, which the jackknife counts as error but
-the seed-to-seed spread does not (W1 and W2 then spread by 0.84 for an error bar 16% too
+the seed-to-seed spread does not (W6 and W10 then spread by 0.84 for an error bar 16% too
 large; with 64, 0.90-0.91).
 """
 

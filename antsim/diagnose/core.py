@@ -415,7 +415,7 @@ def fit_variants_before_after(diag: Diagnosis) -> dict[str, Any]:
 
 
 def _el_zero_term(p: Problem) -> str | None:
-    """The baseline term that is a constant elevation offset (IE, W6), if any."""
+    """The baseline term that is a constant elevation offset (IE, W1), if any."""
     cols = p.base
     n = p.n
     for j, name in enumerate(p.base_terms):

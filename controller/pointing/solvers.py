@@ -21,7 +21,7 @@ __all__ = ["RANK_RTOL"]
 
 #: A term is unconstrained when its unit-length design column is within this distance (the
 #: sine of the angle) of the span of the columns before it, or is this small relative to the
-#: largest column. Exact dependences (W1 with IA, HESA2 with HESACA, P2's zero column) sit at
+#: largest column. Exact dependences (W6 with IA, HESA2 with HESACA, P2's zero column) sit at
 #: the 1e-16 level in floating point; a term this close to degenerate would have a sigma ten
 #: orders of magnitude above the best-determined one, which is no determination at all.
 RANK_RTOL = 1e-10
@@ -56,8 +56,8 @@ def _rank_analysis(r_unit: np.ndarray, col_norms: np.ndarray, names: Sequence[st
     ``r_unit`` is the R factor of the design with unit-length columns (so column j of R has
     the geometry of column j of the design); ``col_norms`` the columns' original lengths.
     A column is kept when its distance from the span of the kept columns before it exceeds
-    ``RANK_RTOL``; terms listed first win: asked for IA then W1 (the same function), IA is
-    fitted and W1 reported unconstrained.
+    ``RANK_RTOL``; terms listed first win: asked for IA then W6 (the same function), IA is
+    fitted and W6 reported unconstrained.
     """
     m = r_unit.shape[1]
     biggest = float(col_norms.max()) if m else 0.0

@@ -165,8 +165,8 @@ class SourceTrajectory:
         the pointing model's and the correction's share (degrees; the declination on an
         equatorial mount). Azimuth steps of a cross scan are divided by its cosine: a
         source at sky elevation E is n D / cos E away in azimuth from a beam at n D in
-        cross-elevation, wherever the model puts the encoder (12' above it for the 1990
-        model, which would scale the steps by 1 + 12' tan E, 3.7% at 85 deg)."""
+        cross-elevation, wherever the model puts the encoder (an encoder d above the sky
+        would scale the steps by 1 + d tan E: 3.4% at 85 deg for d = 12')."""
         t = np.array([t_s])
         if self._covered(t):
             offset_el = np.interp(t, self._t_nodes, self._offset_el)

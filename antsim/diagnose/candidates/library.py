@@ -53,14 +53,14 @@ def _library() -> list[Candidate]:
                        blind_exclusion=in_span + " (W1, W6)"),
         TermsCandidate("collimation", ("CA",), "collimation error", "dA ~ sec E (xel constant)",
                        "the beam is not perpendicular to the elevation axis", pair=False,
-                       blind_exclusion=in_span + " (W2)"),
+                       blind_exclusion=in_span + " (W10)"),
         TermsCandidate("non_perpendicularity", ("NPAE",), "axis non-perpendicularity",
                        "dA ~ tan E", "the elevation axis is not perpendicular to the azimuth "
-                       "axis", pair=False, blind_exclusion=in_span + " (W3)"),
+                       "axis", pair=False, blind_exclusion=in_span + " (W9)"),
         TermsCandidate("azimuth_axis_tilt", ("AN", "AW"), "azimuth axis tilt",
                        "dE ~ cos A, sin A; dA ~ tan E sin A, tan E cos A",
                        "the azimuth axis is not vertical", pair=False,
-                       blind_exclusion=in_span + " (W7-W10)"),
+                       blind_exclusion=in_span + " (W2, W3, W7, W8)"),
         HarmonicFamilyCandidate(
             "el_periodic_el", "E", "E", range(3, 9),
             "periodic elevation error along the elevation axis (n cycles per turn)",
@@ -96,7 +96,7 @@ def _library() -> list[Candidate]:
     ]
     for c in lib:
         if isinstance(c, TermsCandidate) and c.name in ("el_nod_1a",):
-            c.blind_exclusion = in_span + " (W7, W8)"
+            c.blind_exclusion = in_span + " (W2, W3)"
     return lib
 
 

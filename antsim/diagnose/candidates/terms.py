@@ -170,7 +170,7 @@ class FeedOffsetCandidate(Candidate):
 
         self.explanation = FeedOffset.explanation
         self.blind_exclusion = ("with the 45-ft's fixed feed the feed offset is a constant "
-                                "collimation pair that CA (W2) and IE (W6) absorb")
+                                "collimation pair that CA (W10) and IE (W1) absorb")
 
     def columns(self, obs, theta=None):
         # the feed (rotator) angle: a TPOINT file's fifth column or the recordings'
