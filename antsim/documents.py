@@ -13,8 +13,9 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-__all__ = ["FOMALONT1973", "FOMALONT1973_COEFFICIENTS", "FOMALONT1973_EFFICIENCY", "GHIGO1990",
-           "GHIGO1990_GAIN_CURVE", "GHIGO1990_TABLE1_POINTS", "Reference", "reference_for"]
+__all__ = ["FOMALONT1973", "FOMALONT1973_COEFFICIENTS", "FOMALONT1973_DATES",
+           "FOMALONT1973_EFFICIENCY", "FOMALONT1973_SOURCES", "GHIGO1990", "GHIGO1990_GAIN_CURVE",
+           "GHIGO1990_TABLE1_POINTS", "GHIGO1990_TABLE1_POSITIONS", "Reference", "reference_for"]
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,19 @@ class Reference:
 #: 90% at 10 deg; (elevation deg, relative gain), linear in between
 GHIGO1990_GAIN_CURVE: tuple[tuple[float, float], ...] = (
     (10.0, 0.90), (20.0, 0.95), (30.0, 1.0), (90.0, 1.0))
+
+#: Ghigo 1990, Table 1: the calibration sources at their B1950 positions, as printed
+GHIGO1990_TABLE1_POSITIONS: dict[str, tuple[str, str]] = {
+    "3C84": ("03:16:29.6", "41:19:52"), "Taurus A": ("05:31:31.0", "21:59:00"),
+    "Orion A": ("05:32:49.0", "-05:25:15"), "3C273": ("12:26:33.3", "02:19:43"),
+    "Virgo A": ("12:28:17.6", "12:40:02"), "W31": ("18:06:25.6", "-20:19:36"),
+    "Cygnus A": ("19:57:44.4", "40:35:46"), "Cassiopeia A": ("23:21:09.0", "58:32:30"),
+}
+
+#: Fomalont 1973, introduction: the eight sources, in the memo's order and names ("3C274" is
+#: the report's Virgo A), and the dates of the survey
+FOMALONT1973_SOURCES = ("Tau A", "3C147.1", "3C274", "Cen A", "Sgr A", "W31", "Cyg A", "Cas A")
+FOMALONT1973_DATES = ("1973-02-28", "1973-03-02")
 
 #: Ghigo 1990, Table 1: points per source used in fit A (they add up to 282; its Tables 2
 #: and section III give 285 for fit A)

@@ -20,7 +20,9 @@ from antsim.cli import main as cli
 from antsim.documents import (
     FOMALONT1973,
     FOMALONT1973_COEFFICIENTS,
+    FOMALONT1973_DATES,
     FOMALONT1973_EFFICIENCY,
+    FOMALONT1973_SOURCES,
     GHIGO1990_GAIN_CURVE,
 )
 from antsim.world.effects import EFFECTS, PointingState
@@ -111,6 +113,35 @@ def test_the_feed_box_turns_through_the_protocol(quiet_path):
     # 90 deg at the default 2 deg/s, then the settle time
     assert env.now == pytest.approx(45.0 + scenario.mount.settle_s)
     assert antenna.feed_angle_deg() == 90.0
+
+
+@pytest.mark.parametrize("band", ["x", "s"])
+def test_the_scenarios_follow_the_memo(band):
+    """Memo, introduction: "between February 28 and March 2, 1973", the eight sources, "at
+    both S-Band and X-Band"; section II: one polarization per band (SR, XL) and the mean
+    efficiencies; section I: the feed terms' C6, C7, D6, D7 and D5 held at 1'.1."""
+    from antsim.scenario import load_scenario
+
+    s = load_scenario(SCENARIOS[band])
+    import datetime as dt
+
+    start = dt.datetime.fromisoformat(s.epoch_utc[:19])
+    end = start + dt.timedelta(seconds=s.duration_s)
+    assert start.date().isoformat() == FOMALONT1973_DATES[0]
+    assert end.isoformat() == FOMALONT1973_DATES[1] + "T23:00:00"  # 18:00 EST on 2 March
+    assert tuple(src.name for src in s.sources) == FOMALONT1973_SOURCES
+    assert [c.name for c in s.receiver.channels] == (["XL"] if band == "x" else ["SR"])
+    efficiency = 0.376 if band == "x" else 0.386
+    # K/Jy = eta pi (13.7 m / 2)^2 / 2k, rounded to 0.1 mK/Jy
+    assert s.beam.gain_k_per_jy == pytest.approx(efficiency * math.pi * 6.85**2 * 1e-26
+                                                  / (2 * 1.380649e-23), abs=6e-5)
+    assert set(s.beam.efficiency) == {1.0}
+    feed = next(e for e in s.effects if e.name == "feed_offset").params
+    assert (feed["offset_arcsec"], feed["angle_deg"], feed["el_offset_arcsec"],
+            feed["el_angle_deg"]) == pytest.approx((0.71 * 60, 152.0, 0.76 * 60, 250.0))
+    assert dict(s.controller.fit_fixed) == {"W5": pytest.approx(66.0)}
+    assert s.controller.model.as_dict()["W5"] == pytest.approx(66.0)
+    assert s.controller.refraction == "none"
 
 
 @pytest.fixture(scope="module")

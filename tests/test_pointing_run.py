@@ -69,25 +69,6 @@ def test_table3_of_the_1990_report_is_reproduced(ghigo, campaign):
         assert a.sigma_arcsec[j] / 60.0 == pytest.approx(se_arcmin, rel=0.25), name
 
 
-def _visible_hours(scenario) -> dict[str, float]:
-    """Hours each source spends inside the scheduler's elevation window during the run."""
-    from controller.astro.ephemeris import Ephemeris
-    from controller.astro.site import Site
-    from controller.astro.sources import FixedSource
-
-    c = scenario.controller
-    site = Site(c.site_latitude_deg, c.site_longitude_deg, c.site_height_m)
-    sources = [FixedSource(s.name, s.ra_deg, s.dec_deg, s.frame) for s in c.sources]
-    eph = Ephemeris(site, c.epoch_utc, c.duration_s, sources)
-    t = np.arange(0.0, c.duration_s, 60.0)
-    out = {}
-    for i, s in enumerate(sources):
-        el = np.degrees(eph.altaz_rad(i, t)[1])
-        inside = (el >= c.scheduler.elevation_min_deg) & (el <= c.scheduler.elevation_max_deg)
-        out[s.name] = inside.sum() / 60.0
-    return out
-
-
 def test_table1_points_per_source(ghigo, campaign):
     """Ghigo (1990) Table 1, points per source in fit A. The spread scheduler visits every
     source about equally often per hour it is up (2.6-2.9 scans per hour at seed 1, within
@@ -95,13 +76,13 @@ def test_table1_points_per_source(ghigo, campaign):
     1990 observers visited 3C84 (1.5 per visible hour) and Orion A (2.0) least and Cygnus A
     (3.7) most, for reasons the report does not give: our 3C84 and Orion A counts are the two
     more than 30% above it (docs/facts.md). Table 1 itself adds up to 282, its fit A to 285."""
-    from antsim.run.outputs import points_per_source
+    from antsim.run.outputs import points_per_source, visible_hours
 
     result, fits = campaign
     points = points_per_source(result.rows, fits["A"])
     report = GHIGO1990.source_points
     assert sum(report.values()) == 282 and GHIGO1990.points["A"] == 285
-    hours = _visible_hours(ghigo)
+    hours = visible_hours(ghigo)
     ours = {n: points[n] / hours[n] for n in report}
     mean = sum(ours.values()) / len(ours)
     assert all(abs(r / mean - 1.0) < 0.2 for r in ours.values()), ours

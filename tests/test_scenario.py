@@ -16,8 +16,10 @@ import sys
 import pytest
 
 from antsim.cli import main
+from antsim.documents import GHIGO1990_TABLE1_POSITIONS
 from antsim.run.runner import simulate
 from antsim.scenario import load_scenario
+from controller.astro.sources import dec_dms_to_deg, ra_hms_to_deg
 
 
 def test_ghigo1990_loads_as_documented(ghigo_path):
@@ -30,6 +32,14 @@ def test_ghigo1990_loads_as_documented(ghigo_path):
     assert s.epoch_utc.startswith("1990-02-08T17:00:00")
     assert [src.name for src in s.sources] == ["3C84", "Taurus A", "Orion A", "3C273",
                                                "Virgo A", "W31", "Cygnus A", "Cassiopeia A"]
+    # at the report's Table 1 positions (B1950), to the precision it prints
+    for src in s.sources:
+        ra, dec = GHIGO1990_TABLE1_POSITIONS[src.name]
+        assert (src.ra_deg, src.dec_deg) == pytest.approx(
+            (ra_hms_to_deg(ra), dec_dms_to_deg(dec)), abs=1e-9)
+        assert src.frame == "fk4"
+    # 8 Feb 1990 (section IV): 0 to 15 C by day, -4 to 3 C at night
+    assert (s.weather.air_min_c, s.weather.air_max_c) == (-4.0, 15.0)
     # Table 3 is given in arcmin and held in arcsec
     assert s.truth_model.as_dict()["W6"] == pytest.approx(12.24 * 60.0, abs=1e-9)
     assert [e.name for e in s.effects] == ["thermal", "tracking_jitter"]
