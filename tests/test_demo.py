@@ -96,6 +96,20 @@ def test_demo_numbers_tell_the_story(demo):
     assert "HESA2" in (out / "3-hidden-effect.toml").read_text()
 
 
+def test_the_readme_quotes_chapter_5(demo):
+    """The README quotes chapter 5's finding: the words and numbers the demo printed."""
+    _, stdout, numbers, _ = demo
+    best = numbers["diagnose"]["findings"][0]
+    readme = " ".join((Path(__file__).resolve().parents[1] / "README.md").read_text(
+        encoding="utf-8").split())
+    quote = (f"antsim diagnose names the effect: {best['effect']} (terms "
+             f"{', '.join(best['terms'])}). [...] Where: {best['where']}. Sky rms "
+             f"{best['sky_rms_before_arcsec']:.1f}\" before, {best['sky_rms_after_arcsec']:.1f}"
+             '" after.')
+    assert quote in readme
+    assert " ".join(quote.replace("[...] ", "").split()[-20:]) in " ".join(stdout.split())
+
+
 def test_demo_diagnose_chapter_is_honest(demo):
     """Either diagnose ran and its finding is quoted, or the chapter says plainly that it
     needs the diagnose feature; never silence."""

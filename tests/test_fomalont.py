@@ -419,3 +419,32 @@ def test_bad_feed_form_is_one_line(tmp_path, capsys):
     assert cli(["run", str(path), "--out", str(tmp_path / "out"), "--no-report"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "form" in err and "elliptic" in err
+
+
+def _published_row(text: str, band: str) -> list[str]:
+    """The cells of a ``| X | ... |`` row of the seed-3 results table."""
+    line = next(line for line in text.splitlines() if line.startswith(f"| {band} | "))
+    return [c.strip() for c in line.strip("|").split("|")]
+
+
+@pytest.mark.parametrize("band", ["x", "s"])
+def test_the_published_seed_3_numbers_are_the_runs(fomalont_runs, band):
+    """docs/telescopes.md (and the README's row) quote the runs of this module: each number
+    as the run gives it, rounded as printed."""
+    _, fit_a, fit_f = _fits(fomalont_runs[band])
+    table, _, _ = _recordings(fomalont_runs[band])
+    t = {k: v["value_arcsec"] for k, v in fit_a["terms"].items()}
+    c6, c7 = math.hypot(t["HSCF"], t["HSSF"]) / 60, math.degrees(math.atan2(t["HSSF"], t["HSCF"]))
+    d6 = math.hypot(t["HECF"], t["HESF"]) / 60
+    d7 = math.degrees(math.atan2(-t["HESF"], -t["HECF"])) % 360.0
+    scans = int((np.asarray(table["polarization"]) == "AVG").sum())
+    want = [band.upper(), f"{scans}",
+            f'{fit_f["xel_rms_arcsec"]:.1f}"/{fit_f["el_rms_arcsec"]:.1f}"',
+            f"{c6:.2f}' at {c7:.0f} deg", f"{d6:.2f}' at {d7:.0f} deg",
+            f"{(t['W2'] + t['W8']) / 120:.2f}', {(t['W3'] - t['W7']) / 120:.2f}'"]
+    docs = (REPO / "docs" / "telescopes.md").read_text(encoding="utf-8")
+    assert _published_row(docs, band.upper()) == want
+    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    row = next(line for line in readme.splitlines()
+               if line.startswith(f"| `fomalont1973_{band}.toml`"))
+    assert f"{scans} scans" in row and want[2] in row and want[3] in row and want[4] in row
