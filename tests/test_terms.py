@@ -307,22 +307,28 @@ def test_katpoint_offset_equals_ours(seed):
     np.testing.assert_allclose(our_el, kp_el, rtol=0, atol=1e-12)
 
 
+def assert_katpoint_parameter_is(parameter: str, ours, seed: int) -> None:
+    """katpoint's ``parameter`` alone (1e-3 rad), through katpoint's own offset, against our
+    terms ``ours`` ((name, sign) pairs) with coefficients sign * 1e-3 rad."""
+    katpoint = pytest.importorskip("katpoint")
+    rng = np.random.default_rng(seed)
+    az = rng.uniform(0.0, 2 * math.pi, 300)
+    el = rng.uniform(math.radians(3.0), math.radians(85.0), 300)
+    params = np.zeros(22)
+    params[int(parameter[1:]) - 1] = 1e-3
+    kp_az, kp_el = katpoint.PointingModel(params).offset(az, el)
+    model = PointingModel([n for n, _ in ours], [s * 1e-3 * ARCSEC_PER_RAD for _, s in ours])
+    our_az, our_el = model.offset_rad(az, el)
+    assert np.abs(kp_az).max() + np.abs(kp_el).max() > 0.5e-3
+    np.testing.assert_allclose(our_az, kp_az, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(our_el, kp_el, rtol=0, atol=1e-15)
+
+
 @pytest.mark.parametrize(("ours", "twin"), sorted(KATPOINT_EQUIVALENTS.items()))
 def test_katpoint_equivalents_against_katpoint_itself(ours, twin):
     """Each entry of the table checked against katpoint's own offset, one parameter at a time
     (not through our P terms)."""
-    katpoint = pytest.importorskip("katpoint")
-    name, sign = twin
-    rng = np.random.default_rng(12)
-    az = rng.uniform(0.0, 2 * math.pi, 300)
-    el = rng.uniform(math.radians(3.0), math.radians(85.0), 300)
-    params = np.zeros(22)
-    params[int(ours[1:]) - 1] = 1e-3
-    kp_az, kp_el = katpoint.PointingModel(params).offset(az, el)
-    our_az, our_el = PointingModel([name], [sign * 1e-3 * ARCSEC_PER_RAD]).offset_rad(az, el)
-    assert np.abs(kp_az).max() + np.abs(kp_el).max() > 0.5e-3
-    np.testing.assert_allclose(our_az, kp_az, rtol=0, atol=1e-15)
-    np.testing.assert_allclose(our_el, kp_el, rtol=0, atol=1e-15)
+    assert_katpoint_parameter_is(ours, [twin], seed=12)
 
 
 def test_named_models_resolve():
@@ -437,31 +443,11 @@ KATPOINT_OF_W = {"W1": ("P7", 1.0), "W2": ("P21", 1.0), "W3": ("P22", 1.0), "W4"
 
 @pytest.mark.parametrize(("w", "p"), sorted(KATPOINT_OF_W.items()))
 def test_w_terms_against_katpoint_itself(w, p):
-    katpoint = pytest.importorskip("katpoint")
     name, sign = p
-    rng = np.random.default_rng(22)
-    az = rng.uniform(0.0, 2 * math.pi, 300)
-    el = rng.uniform(math.radians(3.0), math.radians(85.0), 300)
-    params = np.zeros(22)
-    params[int(name[1:]) - 1] = 1e-3
-    kp_az, kp_el = katpoint.PointingModel(params).offset(az, el)
-    ours = PointingModel([w], [sign * 1e-3 * ARCSEC_PER_RAD]).offset_rad(az, el)
-    assert np.abs(kp_az).max() + np.abs(kp_el).max() > 0.5e-3
-    np.testing.assert_allclose(ours[0], kp_az, rtol=0, atol=1e-15)
-    np.testing.assert_allclose(ours[1], kp_el, rtol=0, atol=1e-15)
+    assert_katpoint_parameter_is(name, [(w, sign)], seed=22)
 
 
 @pytest.mark.parametrize(("p", "pair"), [("P5", (("W2", 1.0), ("W8", 1.0))),
                                          ("P6", (("W3", 1.0), ("W7", -1.0)))])
 def test_tied_pairs_against_katpoint_tilt(p, pair):
-    katpoint = pytest.importorskip("katpoint")
-    rng = np.random.default_rng(23)
-    az = rng.uniform(0.0, 2 * math.pi, 300)
-    el = rng.uniform(math.radians(3.0), math.radians(85.0), 300)
-    params = np.zeros(22)
-    params[int(p[1:]) - 1] = 1e-3
-    kp_az, kp_el = katpoint.PointingModel(params).offset(az, el)
-    ours = PointingModel([w for w, _ in pair],
-                         [s * 1e-3 * ARCSEC_PER_RAD for _, s in pair]).offset_rad(az, el)
-    np.testing.assert_allclose(ours[0], kp_az, rtol=0, atol=1e-15)
-    np.testing.assert_allclose(ours[1], kp_el, rtol=0, atol=1e-15)
+    assert_katpoint_parameter_is(p, pair, seed=23)
