@@ -4,12 +4,14 @@ It runs the control program (:mod:`controller`, which never imports antsim) agai
 simulated world. Each part imports only those listed before it, and :mod:`controller`
 (``tests/test_layout.py`` checks it):
 
-* :mod:`.tomlcheck`: TOML read with one-line errors;
+* :mod:`.tomlcheck`: TOML read with one-line errors; :mod:`.documents`: what the source
+  documents publish (numbers only, beside which a run prints its own);
 * :mod:`.world`: the simulated telescope (sky, weather, mount, physical effects, beam,
   receiver, camera) and the protocol's implementation;
 * :mod:`.scenario`: scenario files, read into the world's and the controller's settings
   (the world's parts' settings are below it, the world built from a scenario above it);
-* :mod:`.figures`: figures, by page; they draw values and import nothing else of antsim;
+* :mod:`.figures`: figures, by page; they draw values and import nothing else of antsim but
+  the documents' numbers;
 * :mod:`.studies`: the source reports' studies repeated (BIMA memo 23);
 * :mod:`.run`: a campaign run and the files it writes (recordings, fits, report);
 * :mod:`.serve`: the simulated antenna as a KATCP device, for control software outside

@@ -34,8 +34,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from antsim.documents import GHIGO1990  # noqa: E402
-from antsim.run.outputs import points_per_source, run_fits, visible_hours  # noqa: E402
+from antsim.run.outputs import run_fits  # noqa: E402
 from antsim.run.runner import simulate  # noqa: E402
+from antsim.run.sources import points_per_source, visible_hours  # noqa: E402
 from antsim.scenario import load_scenario  # noqa: E402
 
 SCENARIO = ROOT / "scenarios" / "ghigo1990.toml"

@@ -94,7 +94,7 @@ def test_table1_points_per_source(ghigo, campaign):
     1990 observers visited 3C84 (1.5 per visible hour) and Orion A (2.0) least and Cygnus A
     (3.7) most, for reasons the report does not give: our 3C84 and Orion A counts are the two
     more than 30% above it (docs/facts.md). Table 1 itself adds up to 282, its fit A to 285."""
-    from antsim.run.outputs import points_per_source, visible_hours
+    from antsim.run.sources import points_per_source, visible_hours
 
     result, fits = campaign
     points = points_per_source(result.rows, fits["A"])

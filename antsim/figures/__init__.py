@@ -14,7 +14,8 @@ recordings' corrections and of :class:`controller.pointing.data.PointingData`),
 cross-elevation = dA cos E, arcsec unless a label says otherwise; azimuth North = 0, East =
 90 deg.
 
-May import: :mod:`controller` (the fit results and recordings they draw) and matplotlib
-(inside the drawing, so that importing a page stays cheap). Figures are drawn from values,
-never from a simulation: nothing here imports the rest of :mod:`antsim`.
+May import: :mod:`controller` (the fit results and recordings they draw), matplotlib
+(inside the drawing, so that importing a page stays cheap) and :mod:`antsim.documents` (the
+published numbers drawn beside the run's). Figures are drawn from values, never from a
+simulation: nothing here imports the rest of :mod:`antsim`.
 """

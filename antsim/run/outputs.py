@@ -14,17 +14,16 @@ import math
 from collections.abc import Mapping
 from pathlib import Path
 
-import numpy as np
-
 from antsim.documents import Reference, reference_for
 from controller.astro.sun import NIGHT_SUN_MAX_DEG
 from controller.pointing.result import FitResult
 from controller.pointing.tpoint import TPointModel, write_mod
-from controller.pointing.variants import VARIANTS, columns, fit_variants, variant_mask
+from controller.pointing.variants import VARIANTS, fit_variants
 
 from .runner import RunResult
+from .sources import points_per_source
 
-__all__ = ["fit_tables", "points_per_source", "run_fits", "visible_hours", "write_outputs"]
+__all__ = ["fit_tables", "run_fits", "write_outputs"]
 
 
 def run_fits(result: RunResult) -> dict[str, FitResult | None]:
@@ -37,40 +36,6 @@ def run_fits(result: RunResult) -> dict[str, FitResult | None]:
 
 def _fmt(value: float, spec: str) -> str:
     return format(value, spec) if value is not None and math.isfinite(value) else "-"
-
-
-def points_per_source(rows, fit: FitResult | None) -> dict[str, int]:
-    """Observations of each source that fit A used (the 1990 report's Table 1), in the order
-    the sources first appear."""
-    if fit is None:
-        return {}
-    cols = columns(rows)
-    mask = variant_mask(cols, VARIANTS[0])
-    source = np.array([r["source"] for r in rows]) if isinstance(rows, list) else \
-        np.asarray(rows["source"])
-    used = source[mask][np.asarray(fit.used, dtype=bool)]
-    names = list(dict.fromkeys(source[mask].tolist()))
-    return {n: int((used == n).sum()) for n in names}
-
-
-def visible_hours(scenario, step_s: float = 60.0) -> dict[str, float]:
-    """Hours each catalogue source spends inside the scheduler's elevation window during the
-    campaign (sampled every ``step_s``): what a source's share of the scans is measured by."""
-    from controller.astro.ephemeris import Ephemeris
-    from controller.astro.site import Site
-    from controller.astro.sources import FixedSource
-
-    c = scenario.controller
-    site = Site(c.site_latitude_deg, c.site_longitude_deg, c.site_height_m)
-    sources = [FixedSource(s.name, s.ra_deg, s.dec_deg, s.frame) for s in c.sources]
-    ephemeris = Ephemeris(site, c.epoch_utc, c.duration_s, sources)
-    t = np.arange(0.0, c.duration_s, step_s)
-    out = {}
-    for i, s in enumerate(sources):
-        el = np.degrees(ephemeris.altaz_rad(i, t)[1])
-        inside = (el >= c.scheduler.elevation_min_deg) & (el <= c.scheduler.elevation_max_deg)
-        out[s.name] = float(inside.sum()) * step_s / 3600.0
-    return out
 
 
 def fit_tables(fits: dict[str, FitResult | None], title: str,

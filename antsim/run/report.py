@@ -148,7 +148,7 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
     """Figures (``DIR/figures/``) and ``DIR/report.html`` of a run; returns both."""
     from antsim.figures.run import run_figures
 
-    from .outputs import points_per_source
+    from .sources import points_per_source
 
     out = Path(out_dir if out_dir is not None else result.out_dir)
     scenario = result.scenario
