@@ -36,3 +36,55 @@ def test_the_what_if_answer_is_the_plans_output():
     for number in numbers:
         assert re.search(rf"(?<![\d.]){re.escape(number.lstrip('+'))}(?![\d])", output), number
     assert "cannot separate W6/W10 (-0.99), W9/W10" in flat_output
+
+
+def _recovery_table(output: str, title: str) -> dict[str, list[str]]:
+    """The rows of one case of benchmarks/recovery.py's output: term -> its fields."""
+    block = output[output.index(title):].split("\n\n")[0]
+    return {line.split()[0]: line.replace("|", " ").split() for line in block.splitlines()[2:]}
+
+
+def test_the_recovery_findings_are_the_benchmarks_output():
+    output = (RESULTS / "recovery.txt").read_text(encoding="utf-8")
+    section = " ".join(_section("### Are the error bars honest?",
+                                "`tests/test_recovery.py` repeats").split())
+    calibrated = _recovery_table(output, "ghigo1990 as calibrated (")
+    cold = _recovery_table(output, "ghigo1990 without its thermal effect")
+    heated = _recovery_table(output, "ghigo1990 as calibrated, heating modelled")
+
+    def span(table, column):
+        values = [float(row[column]) for row in table.values()]
+        return f"{min(values):.2f}-{max(values):.2f}"
+
+    # fields: term bias sd tpoint_sigma tpoint_spread tpoint_in3 honest_sigma honest_spread
+    # mean_pull honest_in3 verdict
+    assert f"spread by {span(cold, 4)} instead of 1 (without heating)" in section
+    assert f"pulls spread by {span(cold, 7)} (target 0.85-1.15)" in section
+    assert f"honest pulls spread by {span(heated, 7)}, with 99-100%" in section
+    worst = max(cold, key=lambda n: abs(float(cold[n][8])))
+    assert f"largest mean pull {abs(float(cold[worst][8])):.2f}, {worst}" in section
+    worst = max(heated, key=lambda n: abs(float(heated[n][8])))
+    assert f"largest mean pull {float(heated[worst][8]):.2f}, {worst}" in section
+    w1, w8 = calibrated["W1"], calibrated["W8"]
+    assert f"(W1 {w1[1]}\", W8 {w8[1]}\": mean pulls {w1[8]} and {w8[8]} honest sigma)" in section
+    assert f"only {w1[9]} of the W1 fits and {w8[9]} of the W8 fits" in section
+    assert f"({w1[5]} and {w8[5]} within 3 TPOINT sigma" in section
+    shifted = sorted((n for n, row in calibrated.items() if abs(float(row[8])) >= 2 / 3),
+                     key=lambda n: int(n[1:]))
+    assert f"{', '.join(shifted[:-1])} and {shifted[-1]} by two thirds of an honest sigma" \
+        in section
+
+
+def test_the_plan_accuracy_is_the_benchmarks_output():
+    output = (RESULTS / "plan_accuracy.txt").read_text(encoding="utf-8")
+    ratios = {}
+    for line in output.splitlines():
+        m = re.match(r"^(as run|night only|day only|8 hours)\s+(W\d+)\s+(\S+\s+){3}(\S+)", line)
+        if m:
+            ratios[(m.group(1), m.group(2))] = float(m.group(4))
+    assert len(ratios) == 40
+    worst = max(ratios, key=lambda k: abs(ratios[k] - 1.0))
+    section = " ".join(_section("Predicted and Monte Carlo sigmas agree", "TPOINT's sigma").split())
+    assert f"agree within {100 * abs(ratios[worst] - 1.0):.0f}% for every W term" in section
+    variant = worst[0].replace(" ", "-")
+    assert f"the worst is the {variant} {worst[1]}, MC/F {ratios[worst]:.2f}" in section
