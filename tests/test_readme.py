@@ -88,3 +88,21 @@ def test_the_plan_accuracy_is_the_benchmarks_output():
     assert f"agree within {100 * abs(ratios[worst] - 1.0):.0f}% for every W term" in section
     variant = worst[0].replace(" ", "-")
     assert f"the worst is the {variant} {worst[1]}, MC/F {ratios[worst]:.2f}" in section
+
+
+def test_the_sunset_drift_finding_is_the_benchmarks_output():
+    output = (RESULTS / "blind_fomalont.txt").read_text(encoding="utf-8")
+    seeds = re.findall(r"^seed (\d+): sunset_drift .*?tau (\d+) \+- (\d+) s \(([-+]\d+)%\); "
+                       r"Fit D el ([\d.]+) -> ([\d.]+)\", Fit E el ([\d.]+) -> ([\d.]+)\", "
+                       r"Fit A el ([\d.]+) -> ([\d.]+)\"", output, re.M)
+    named, within = re.search(r"named (\d+)/(\d+); time constant within 30% in (\d+)",
+                              output).group(1, 3)
+    section = " ".join(_section("Fomalont's 1' elevation change", "On real data").split())
+    first = seeds[0]
+    assert first[0] == "1" and len(seeds) == 16
+    assert f"named `sunset_drift` on {named} of 16 seeds" in section
+    assert f"time constant {first[1]} +- {first[2]} s against 5400 s ({first[3]}%)" in section
+    assert f"within 30% on {within} of 16 seeds" in section
+    assert all(float(s[9]) < float(s[8]) for s in seeds)  # fit A's el rms falls on every seed
+    assert f"({first[8]}\" -> {first[9]}\" at seed 1)" in section
+    assert f"(seed 1: E {first[6]}\" -> {first[7]}\", D {first[4]}\" -> {first[5]}\")" in section
