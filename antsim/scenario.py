@@ -482,6 +482,9 @@ def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, re
         enabled=search_t.boolean("enabled", dse.enabled),
         step_factor=search_t.number("step_factor", dse.step_factor, min=1.0, max=5.0),
         update_gain=search_t.number("update_gain", dse.update_gain, min=0.0, max=1.0),
+        correction=search_t.string("correction", dse.correction, choices=("sky", "encoders")),
+        max_cross_offset_beams=(search_t.number("max_cross_offset_beams", gt=0.0, max=10.0)
+                                if "max_cross_offset_beams" in search_t else None),
     )
     search_t.finish()
     refraction = t.string("refraction", "weather", choices=("weather", "standard", "none"))

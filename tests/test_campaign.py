@@ -163,8 +163,10 @@ def test_a_cold_start_searches_across_and_keeps_an_azimuth_offset(ghigo):
     collimation and axis terms) and 3' in elevation, so the first scan misses. The wide
     search's elevation half passes the source 9' to the side: only its cross-elevation offset
     is adopted, and the scan after it is centred to within half a beam in both axes (had the
-    search's elevation been adopted it would have been ~6' wrong). The correction is kept as
-    an azimuth offset: Cygnus A at 78 deg then gets it times cos E, and no search."""
+    search's elevation been adopted it would have been ~6' wrong: ``max_cross_offset_beams =
+    0.5``). The scenario keeps the
+    correction as an azimuth offset (``search.correction = "encoders"``): Cygnus A at 78 deg
+    then gets it times cos E, and no search; the default keeps it constant on the sky."""
     import simpy
 
     from antsim.world.world import World
@@ -184,7 +186,7 @@ def test_a_cold_start_searches_across_and_keeps_an_azimuth_offset(ghigo):
     # 1' tolerance: the wide search's 5 s integrations on its 14' grid
     assert row["applied_xel_arcmin"] == pytest.approx(true_xel, abs=1.0)
     assert abs(row["xel_arcmin"]) < 5.5 and abs(row["el_arcmin"]) < 5.5 and row["good"]
-    d_az = program.axis_correction_arcmin[0]
+    d_az = program.running_correction_arcmin[0]
     assert d_az == pytest.approx(row["applied_xel_arcmin"] / math.cos(math.radians(22.0)),
                                  rel=0.02)
     t0 = env.now
@@ -196,6 +198,24 @@ def test_a_cold_start_searches_across_and_keeps_an_azimuth_offset(ghigo):
     applied = program.correction_arcmin(target["Cygnus A"], t0)
     assert row2["applied_xel_arcmin"] == applied[0] and row2["applied_el_arcmin"] == 0.0
     assert applied[0] == pytest.approx(d_az * math.cos(math.radians(row2["el_deg"])), abs=0.2)
+    assert cold.controller.search.correction == "encoders"  # the scenario's choice
+    # the default keeps the correction constant on the sky: Cygnus A gets 3C84's offset
+    sky = replace(cold.controller, search=replace(cold.controller.search, correction="sky"))
+    env = simpy.Environment()
+    program = ControlProgram(sky, World(cold, env, cold.seed).antenna)
+    first = env.run(until=env.process(program.observe(env, target["3C84"])))
+    second = env.run(until=env.process(program.observe(env, target["Cygnus A"])))
+    assert second.rows[-1]["applied_xel_arcmin"] == first.rows[-1]["applied_xel_arcmin"] > 8.0
+    # and without the cross-offset limit the search's elevation, measured 9' aside, is
+    # adopted: more than 3' from the true elevation error (6' at seed 1)
+    every = replace(cold.controller, search=replace(cold.controller.search,
+                                                    max_cross_offset_beams=None))
+    env = simpy.Environment()
+    program = ControlProgram(every, World(cold, env, cold.seed).antenna)
+    row = env.run(until=env.process(program.observe(env, target["3C84"]))).rows[-1]
+    true_el = cold.truth_model.offset_rad(math.radians(row["az_deg"]),
+                                          math.radians(row["el_deg"]))[1] * 3437.75
+    assert abs(row["applied_el_arcmin"] - true_el) > 3.0
 
 
 def test_ghigo1990_gives_about_300_scans_over_all_sources(ghigo):

@@ -6,11 +6,11 @@ running correction), run a five-point cross scan, reduce it, and record one row 
 polarization. When a scan misses its source (large errors, e.g. a cold start with no model:
 the 45-ft's azimuth encoder offset alone, 12.24', is 11.5' on the sky at 20 deg elevation,
 more than the beam) the controller searches with a wider cross, adopts what it finds as a
-running correction, and scans again. The running correction is held as offsets of the two
-encoders (azimuth, elevation), as the errors of a cold start mostly are (encoder zero
-offsets): a cross-elevation offset x found at elevation E is an azimuth offset x / cos E,
-and is applied as that azimuth offset to every later source, x cos E' / cos E on the sky
-at elevation E'.
+running correction, and scans again. The running correction is an offset on the sky
+(cross-elevation, elevation; ``search.correction = "sky"``) or of the two encoders
+(``"encoders"``, as the errors of a cold start of the 45-ft are: an encoder zero offset): then
+a cross-elevation offset x found at elevation E is the azimuth offset x / cos E, applied to
+every later source as x cos E' / cos E on the sky at its elevation E'.
 
 It uses only the protocol (:mod:`controller.protocol`) and its own configuration.
 
@@ -106,9 +106,10 @@ class ControlProgram:
                          for t in self.targets}
         self.scheduler = make_scheduler(config.scheduler, self.observer, self.targets,
                                         self.scan_duration_s)
-        #: the running correction: offsets of the encoders (azimuth or hour angle, and
-        #: elevation or declination), arcmin
-        self.axis_correction_arcmin = (0.0, 0.0)
+        #: the running correction (arcmin): on the sky (cross-elevation, elevation) or, with
+        #: ``search.correction = "encoders"``, of the encoders (azimuth or hour angle, and
+        #: elevation or declination)
+        self.running_correction_arcmin = (0.0, 0.0)
         self.outcomes: list[ScanOutcome] = []
         self.scan_number = 0
         self.searches = 0
@@ -146,10 +147,12 @@ class ControlProgram:
 
     def correction_arcmin(self, target: Target, t_s: float) -> tuple[float, float]:
         """The running correction on the sky at ``target`` at ``t_s``: (cross-elevation,
-        elevation) arcmin, the azimuth offset times the cosine of the source's elevation
-        (cross-declination and declination on an equatorial mount)."""
-        d_lon, d_lat = self.axis_correction_arcmin
-        return d_lon * self._cos_lat(target, t_s), d_lat
+        elevation) arcmin (cross-declination and declination on an equatorial mount); an
+        encoders' correction's azimuth offset times the cosine of the source's elevation."""
+        d_lon, d_lat = self.running_correction_arcmin
+        if self.config.search.correction == "encoders":
+            d_lon *= self._cos_lat(target, t_s)
+        return d_lon, d_lat
 
     def _cos_lat(self, target: Target, t_s: float) -> float:
         az, el = self.ephemeris.altaz_rad(target.index, float(t_s))
@@ -159,9 +162,10 @@ class ControlProgram:
 
     def _adopt(self, target: Target, t_s: float, xel_arcmin: float, el_arcmin: float) -> None:
         """Add a sky offset found at ``target`` at ``t_s`` to the running correction."""
-        d_lon, d_lat = self.axis_correction_arcmin
-        self.axis_correction_arcmin = (d_lon + xel_arcmin / self._cos_lat(target, t_s),
-                                       d_lat + el_arcmin)
+        if self.config.search.correction == "encoders":
+            xel_arcmin /= self._cos_lat(target, t_s)
+        d_lon, d_lat = self.running_correction_arcmin
+        self.running_correction_arcmin = (d_lon + xel_arcmin, d_lat + el_arcmin)
 
     def position_altaz_deg(self) -> tuple[float, float]:
         """The encoder position as azimuth and elevation (deg), for the scheduler."""
@@ -249,10 +253,11 @@ class ControlProgram:
         source as far away as the other axis misses: an elevation scan made 9' beside the
         source in cross-elevation (a cold start of the 45-ft at low elevation: its 12.24'
         azimuth encoder offset is 12.24' cos E on the sky) sees a fifth of the peak and can
-        place it arcminutes wrong. An axis' offset is adopted only where the other axis'
-        offset found is within half a beam (if neither is, the larger: its half passed
-        nearer the source); the other is left to the next scan (or search), which is then
-        made on the source in the adopted axis."""
+        place it arcminutes wrong. With ``search.max_cross_offset_beams`` (0.5 for the 45-ft)
+        an axis' offset is adopted only where the other axis' offset found is within that
+        many beams (if neither is, the larger: its half passed nearer the source); the other
+        is left to the next scan (or search), which is then made on the source in the
+        adopted axis. Without it every axis found is adopted."""
         self.searches += 1
         scan = self.scan_for[target.name]
         step = scan.step_arcmin * self.config.search.step_factor
@@ -267,8 +272,10 @@ class ControlProgram:
             flags = int(red.flags[-1]) & ~int(SEARCH_TOLERATED)
             if flags == 0 and math.isfinite(float(red.offset_arcmin[-1])):
                 offsets[axis] = float(red.offset_arcmin[-1])
+        limit = self.config.search.max_cross_offset_beams
         beside = {"az": abs(offsets.get("el", 0.0)), "el": abs(offsets.get("az", 0.0))}
-        adopted = {a: d for a, d in offsets.items() if beside[a] <= 0.5 * scan.hpbw_arcmin}
+        adopted = {a: d for a, d in offsets.items()
+                   if limit is None or beside[a] <= limit * scan.hpbw_arcmin}
         if offsets and not adopted:
             farther = max(offsets, key=lambda a: abs(offsets[a]))
             adopted = {farther: offsets[farther]}

@@ -61,6 +61,14 @@ class SearchConfig:
     step_factor: float = 2.0
     #: smoothing of the running pointing correction (0: none, 1: last scan only)
     update_gain: float = 0.5
+    #: what the running correction is: an offset on the sky ("sky") or of the two encoders
+    #: ("encoders": a cross-elevation offset x found at elevation E is held as the azimuth
+    #: offset x / cos E, as an encoder zero offset is)
+    correction: str = "sky"
+    #: adopt a search's offset in one axis only where the offset it found in the other is
+    #: within this many beams (that half of the cross passed the source that far aside);
+    #: None: every axis found
+    max_cross_offset_beams: float | None = None
 
 
 @dataclass(frozen=True)
