@@ -17,24 +17,26 @@
 // 1982) with UTC for UT1; nutation, aberration and the FK4 E-terms are left out. Radio
 // refraction: refractivity from the antenna's weather (Smith & Weintraub 1953) times cot E.
 // Pointing model: the 1990 model in use (scenarios/ghigo1990.toml, [controller.terms]), in
-// the form of controller/terms.py, or --model W1=-1.6,W6=12.0,... (arcmin; terms not given
-// keep their defaults). The offsets printed are what the model leaves: truth minus model.
+// the form of controller/pointing/terms.py, or --model W1=-1.6,W6=12.0,... (arcmin; terms
+// not given keep their defaults). The offsets printed are what the model leaves: truth minus
+// model.
 
 import net from "node:net";
 
 // The 1990 run's sources (scenarios/ghigo1990.toml; Ghigo 1990, Table 1), B1950, degrees.
 const SOURCES = {
-  "3C84": [49.12321, 41.33108], "Taurus A": [82.88083, 21.98167],
-  "Orion A": [83.20417, -5.42111], "3C273": [186.63854, 2.32869],
-  "Virgo A": [187.07321, 12.66714], "W31": [271.875, -19.93333],
-  "Cygnus A": [299.43517, 40.59619], "Cassiopeia A": [350.27917, 58.54667],
+  "3C84": [49.12333, 41.33111], "Taurus A": [82.87917, 21.98333],
+  "Orion A": [83.20417, -5.42083], "3C273": [186.63875, 2.32861],
+  "Virgo A": [187.07333, 12.66722], "W31": [271.60667, -20.32667],
+  "Cygnus A": [299.435, 40.59611], "Cassiopeia A": [350.2875, 58.54167],
 };
 const BRIGHT = ["Cassiopeia A", "Taurus A", "Cygnus A", "Orion A"];
 const STEP_ARCMIN = 7.0, HPBW_ARCMIN = 11.0, INTEGRATION_S = 15.0, OFFSETS = [-4, -1, 0, 1, 4];
 const D2R = Math.PI / 180, AS2R = D2R / 3600;
-// Ghigo's W1..W10 in use (arcmin), indicated minus true, azimuth North-based:
-//   dA = W1 + W2 sec E + W3 tan E + W9 sin A tan E + W10 cos A tan E
-//   dE = W4 cos E + W5 cot E + W6 + W7 cos A + W8 sin A
+// Ghigo's W1..W10 in use (arcmin), the 1990 report's (section II), indicated minus true,
+// azimuth North-based:
+//   dE       = W1 + W2 cos A + W3 sin A + W4 cos E + W5 cot E
+//   dA cos E = W6 cos E + (W7 cos A + W8 sin A + W9) sin E + W10
 const MODEL = { W1: -1.6, W2: 0.0, W3: -1.8, W4: -2.0, W5: 0.6, W6: 12.0, W7: 1.5, W8: -0.5,
   W9: -3.0, W10: -1.5 };
 
@@ -134,9 +136,9 @@ function refractivity(weather) {
 // The model's offset (indicated minus true, deg) at azimuth and elevation (rad).
 function modelOffsetDeg(w, az, el) {
   const tanE = Math.tan(el);
-  const dA = w.W1 + w.W2 / Math.cos(el) + w.W3 * tanE + w.W9 * Math.sin(az) * tanE
-    + w.W10 * Math.cos(az) * tanE;
-  const dE = w.W4 * Math.cos(el) + w.W5 / tanE + w.W6 + w.W7 * Math.cos(az) + w.W8 * Math.sin(az);
+  const dA = w.W6 + (w.W7 * Math.cos(az) + w.W8 * Math.sin(az) + w.W9) * tanE
+    + w.W10 / Math.cos(el);
+  const dE = w.W1 + w.W2 * Math.cos(az) + w.W3 * Math.sin(az) + w.W4 * Math.cos(el) + w.W5 / tanE;
   return [dA / 60, dE / 60];
 }
 

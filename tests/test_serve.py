@@ -194,7 +194,8 @@ def test_controller_over_the_wire_records_the_same_bytes(tmp_path, ghigo_path, c
 
 
 @pytest.mark.parametrize(("name", "hours", "what"), [
-    ("fomalont1973.toml", 6.0, "feed angles"),
+    ("fomalont1973_x.toml", 6.0, "feed angles"),
+    ("fomalont1973_s.toml", 6.0, "feed angles, one channel"),
     ("crane1981_140ft_4990.toml", 6.0, "equatorial mount, idle beyond a track's table"),
     ("wright1992_bima_ant5.toml", 3.0, "optical camera"),
 ])
@@ -557,15 +558,30 @@ def test_serve_has_help(capsys):
 # ---------------------------------------------------------------------------------------------
 # a client in another language
 # ---------------------------------------------------------------------------------------------
+def test_node_client_knows_the_1990_sources_where_the_scenario_has_them(repo_root, ghigo_path):
+    """docs/katcp_client.mjs's source list (B1950 degrees, 5 decimals: 0.02" in declination,
+    0.02" cos dec in right ascension) is the scenario's, i.e. the 1990 report's Table 1."""
+    import re
+
+    text = (repo_root / "docs" / "katcp_client.mjs").read_text(encoding="utf-8")
+    listed = {name: (float(ra), float(dec)) for name, ra, dec in re.findall(
+        r'"([^"]+)": \[([-0-9.]+), ([-0-9.]+)\]', text.split("const SOURCES")[1].split("};")[0])}
+    scenario = {s.name: (s.ra_deg, s.dec_deg) for s in load_scenario(ghigo_path).sources}
+    assert listed.keys() == scenario.keys()
+    for name, (ra, dec) in scenario.items():
+        assert listed[name] == pytest.approx((ra, dec), abs=5e-6), name
+
+
 @pytest.mark.skipif(shutil.which("node") is None, reason="node is not installed")
 def test_node_client_scans_a_source_and_finds_what_its_model_misses(tmp_path, repo_root,
                                                                      ghigo_path):
     """docs/katcp_client.mjs tracks Cas A with its own ephemeris and the 1990 model in use,
-    deliberately put 4' off in azimuth zero (W1) and 3' in elevation zero (W6), runs one cross
-    scan and prints the offsets: they must be the injected truth minus its model, scaled
-    by 0.91 (Cas A's 3.46' size shrinks measured offsets by 11^2 / (11^2 + 3.46^2), DESIGN
-    section 5). Tolerance 0.5': the solar heating of the hour (about 0.3', not in the
-    truth's geometry) and the client's ephemeris (no nutation or aberration, about 0.3')."""
+    deliberately put 4' off in elevation zero (W1) and 3' in azimuth zero (W6; the report's
+    section II), runs one cross scan and prints the offsets: they must be the injected truth
+    minus its model, scaled by 0.91 (Cas A's 3.46' size shrinks measured offsets by 11^2 /
+    (11^2 + 3.46^2), DESIGN section 5). Tolerance 0.5': the solar heating of the hour (about
+    0.3', not in the truth's geometry) and the client's ephemeris (no nutation or aberration,
+    about 0.3')."""
     from controller.pointing.model import PointingModel
 
     model = {"W1": -5.6, "W2": 0.0, "W3": -1.8, "W4": -2.0, "W5": 0.6, "W6": 15.0, "W7": 1.5,
