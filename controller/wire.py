@@ -382,7 +382,11 @@ class KatcpAntenna:
         exact = set()
         look = now + self.wrap_margin_s  # where slew planning looks for the cable wrap
         if self.wrap_margin_s > 0 and not self._covers(trajectory, look):
+            # slew planning reads only the azimuth there; the elevation, an hour ahead, may
+            # be of a source that has set, where a model's cot E term diverges (the 1990
+            # model's W5 = 0.6' cot E is 106 deg at 0.005 deg): the table takes -90..90 deg
             a, e = trajectory(np.array([look]))
+            e = np.clip(e, -90.0, 90.0)
             points = [np.append(points[0], look), np.append(points[1], a),
                       np.append(points[2], e)]
             exact.add(look)
