@@ -27,6 +27,8 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "demo": ("antsim.commands.demo", "teaching walk-through: cold start to closed loop"),
     "serve": ("antsim.commands.serve", "the simulated antenna as a KATCP device, for "
               "closed-loop tests of control software"),
+    "scenarios": ("antsim.commands.scenarios", "list the scenarios and plans that come with "
+                  "antsim (run them by name)"),
 }
 
 EXIT_INPUT = 2

@@ -170,3 +170,65 @@ def probe_beam(world, index: int, trajectory, *, t_track_s: float = 600.0,
 def probe():
     """``(probe_beam, source_trajectory)``: see :func:`probe_beam`."""
     return probe_beam, source_trajectory
+
+
+# ---------------------------------------------------------------------------------------------
+# antsim as a user installs it: a wheel, in a fresh virtual environment, outside the clone
+class Installed:
+    """A fresh virtual environment holding antsim's wheel (``bin``: its scripts). Its
+    dependencies are this interpreter's (a ``.pth`` line, which imports nothing of antsim:
+    the ``.pth`` files of that folder, such as an editable install's, are not read), so that
+    no network and no minute of installing is needed; antsim itself comes from the wheel
+    only."""
+
+    def __init__(self, venv: Path, wheel: Path):
+        self.venv, self.wheel = venv, wheel
+        self.bin = venv / "bin"
+
+    def run(self, command: str, cwd: Path, timeout: float = 300.0):
+        """``command`` (a shell line, as a README writes it) in ``cwd`` with the venv's
+        ``bin`` first on PATH and no PYTHONPATH: what a user who installed the wheel runs."""
+        import os
+        import subprocess
+
+        env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+        env["PATH"] = f"{self.bin}{os.pathsep}{env.get('PATH', '')}"
+        env["VIRTUAL_ENV"] = str(self.venv)
+        return subprocess.run(["bash", "-c", command], cwd=cwd, env=env, capture_output=True,
+                              text=True, timeout=timeout)
+
+
+@pytest.fixture(scope="session")
+def built_wheel(tmp_path_factory) -> Path:
+    """antsim's wheel, built once per session from this tree (without build isolation, so
+    offline: hatchling comes with the test extras)."""
+    import subprocess
+    import sys
+
+    pytest.importorskip("hatchling", reason="building the wheel needs hatchling (test extras)")
+    out = tmp_path_factory.mktemp("wheel")
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation",
+                    "--no-index", "-q", "-w", str(out), str(REPO)], check=True,
+                   capture_output=True, text=True)
+    (wheel,) = out.glob("antsim-*.whl")
+    return wheel
+
+
+@pytest.fixture(scope="session")
+def installed(built_wheel, tmp_path_factory) -> Installed:
+    """:class:`Installed`: the wheel in a fresh virtual environment."""
+    import subprocess
+    import sys
+    import sysconfig
+    import venv
+
+    root = tmp_path_factory.mktemp("venv")
+    venv.create(root, with_pip=False)
+    (site,) = (root / "lib").glob("python*/site-packages")
+    (site / "_antsim_test_dependencies.pth").write_text(
+        sysconfig.get_paths()["purelib"] + "\n" + sysconfig.get_paths()["platlib"] + "\n",
+        encoding="utf-8")
+    subprocess.run([sys.executable, "-m", "pip", "--python", str(root / "bin" / "python"),
+                    "install", "--no-deps", "--no-index", "-q", str(built_wheel)], check=True,
+                   capture_output=True, text=True)
+    return Installed(root, built_wheel)

@@ -46,6 +46,12 @@ RULES: tuple[tuple[str, tuple[str, ...], str], ...] = (
                           "antsim.figures", "antsim.studies", "antsim.run", "antsim.serve",
                           "antsim.plan", "antsim.diagnose", "antsim.commands", "antsim.cli"),
      "the documents' numbers are a base of antsim: they import nothing of it"),
+    ("antsim.bundled", ("antsim.tomlcheck", "antsim.documents", "antsim.world",
+                        "antsim.scenario", "antsim.figures", "antsim.studies", "antsim.run",
+                        "antsim.serve", "antsim.plan", "antsim.diagnose", "antsim.commands",
+                        "antsim.cli"),
+     "finding the scenarios that come with antsim by name is a base of antsim: it reads no "
+     "scenario"),
     ("antsim.world", ("antsim.figures", "antsim.studies", "antsim.run", "antsim.serve",
                       "antsim.plan", "antsim.diagnose", "antsim.commands", "antsim.cli"),
      "the simulated world knows nothing of what is done with it"),

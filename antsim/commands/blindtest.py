@@ -14,7 +14,8 @@ from pathlib import Path
 
 from controller.errors import InputError
 
-DEFAULT_SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "ghigo1990.toml"
+#: the scenario the effects are hidden in unless --scenario says otherwise
+DEFAULT_SCENARIO = "ghigo1990"
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
@@ -22,8 +23,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="number of cases (default 100)")
     parser.add_argument("--seed", type=int, default=1, metavar="S",
                         help="seed of the draws (default 1)")
-    parser.add_argument("--scenario", metavar="SCENARIO.toml", default=None,
-                        help="scenario the effects are hidden in (default: the 1990 run)")
+    parser.add_argument("--scenario", metavar="SCENARIO", default=DEFAULT_SCENARIO,
+                        help="scenario the effects are hidden in: a name or a TOML file "
+                             f"(default: {DEFAULT_SCENARIO}, the 1990 run)")
     parser.add_argument("--sims", type=int, default=8, metavar="K",
                         help="baseline simulations that predict the noise (default 8)")
     parser.add_argument("--jobs", type=int, default=1, metavar="J",
@@ -40,6 +42,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
+    from antsim.bundled import find
     from antsim.diagnose.blind import run_blindtest
     from antsim.scenario import load_scenario
 
@@ -47,10 +50,7 @@ def main(args: argparse.Namespace) -> int:
         raise InputError("command line", "--n", args.n, "must be at least 1")
     if args.jobs < 1:
         raise InputError("command line", "--jobs", args.jobs, "must be at least 1")
-    path = Path(args.scenario) if args.scenario else DEFAULT_SCENARIO
-    if not path.exists():
-        raise InputError(str(path), "--scenario", str(path), "no such file")
-    scenario = load_scenario(path)
+    scenario = load_scenario(find(args.scenario, field="--scenario"))
     show = sys.stderr.isatty() and not args.json
 
     def progress(case) -> None:

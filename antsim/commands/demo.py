@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from antsim.bundled import find, shown
 from controller.errors import InputError
 from controller.units import ARCMIN_PER_RAD
 
@@ -53,9 +54,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", default="antsim-demo",
                         help="output directory (default: ./antsim-demo); an earlier demo's "
                              "directory is overwritten, any other non-empty one refused")
-    parser.add_argument("--scenario", default=None,
-                        help="the 1990 scenario (default: scenarios/ghigo1990.toml of this "
-                             "source tree)")
+    parser.add_argument("--scenario", default="ghigo1990",
+                        help="the 1990 scenario: a name or a TOML file (default: ghigo1990, "
+                             "the one that comes with antsim)")
     parser.epilog = ("Runs three campaigns (24 h, 12 h, 24 h of simulated time); about half a "
                      "minute. Writes DIR/demo.html, DIR/demo.json (the numbers quoted) and "
                      "DIR/figures/.")
@@ -63,7 +64,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def main(args: argparse.Namespace) -> int:
     out = Path(args.out)
-    scenario_path = Path(args.scenario) if args.scenario else _default_scenario()
+    scenario_path = find(args.scenario, field="--scenario")
     if out.exists() and not out.is_dir():
         raise InputError("command line", "--out", str(out), "exists and is not a directory")
     if out.is_dir() and any(out.iterdir()) and not (out / "demo.html").exists():
@@ -71,15 +72,6 @@ def main(args: argparse.Namespace) -> int:
                          "is not empty and holds no earlier demo", "choose a new directory")
     run_demo(out, scenario_path)
     return 0
-
-
-def _default_scenario() -> Path:
-    path = Path(__file__).resolve().parents[2] / "scenarios" / "ghigo1990.toml"
-    if not path.exists():
-        raise InputError("command line", "--scenario", "(default)",
-                         f"{path} does not exist (antsim installed without its scenarios)",
-                         "pass --scenario path/to/ghigo1990.toml")
-    return path
 
 
 # ---------------------------------------------------------------------------------------------
@@ -136,7 +128,7 @@ def _edit(text: str, old: str, new: str, where: str) -> str:
     if text.count(old) != 1:
         raise InputError(where, "scenario text", old,
                          f"occurs {text.count(old)} times (the demo expects it once)",
-                         "use the scenarios/ghigo1990.toml of this release")
+                         "use the ghigo1990 scenario that comes with antsim")
     return text.replace(old, new)
 
 
@@ -424,7 +416,7 @@ def _first_campaign(story: _Story, scenario, scenario_path: Path, out: Path):
         + f"The elevation error averages {el.mean() / 60:+.2f}'. These are not noise: they "
         "are the mount's geometry, repeatable, and therefore fittable. The full report of "
         f"this campaign is {run_dir / 'report.html'}."))
-    story.command(ch, f"antsim run {scenario_path} --out {run_dir} --model none")
+    story.command(ch, f"antsim run {shown(scenario_path)} --out {run_dir} --model none")
     sky = float(np.sqrt(np.mean(xel ** 2 + el ** 2)))
     return result, fits, {"first_scans": result.n_scans,
                           "first_searches": result.program.searches,
@@ -667,7 +659,7 @@ def _hidden_effect(story: _Story, base_text: str, scenario_path: Path, out: Path
     doc, why = run_diagnose_json(run_dir / "recordings.ecsv", scenario_path,
                                  run_dir / "diagnose")
     story.command(ch, f"antsim diagnose {run_dir / 'recordings.ecsv'} --scenario "
-                      f"{scenario_path} --out {run_dir / 'diagnose'}")
+                      f"{shown(scenario_path)} --out {run_dir / 'diagnose'}")
     if doc is None:
         story.say(ch, (
             "This chapter needs the diagnose feature (antsim diagnose), which this "

@@ -22,9 +22,10 @@ from controller.errors import InputError
 def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("recordings", metavar="RECORDINGS",
                         help="recordings.ecsv from 'antsim run', or a TPOINT pointing data file")
-    parser.add_argument("--scenario", metavar="SCENARIO.toml",
-                        help="the scenario that should explain the recordings: its simulation "
-                             "predicts the noise and the residual distribution")
+    parser.add_argument("--scenario", metavar="SCENARIO",
+                        help="the scenario that should explain the recordings (a name, e.g. "
+                             "ghigo1990, or a TOML file): its simulation predicts the noise "
+                             "and the residual distribution")
     parser.add_argument("--model", metavar="MODEL",
                         help="baseline terms: a named model (ghigo10, tpoint8, ...), a model "
                              "file, or T1,T2,... (default: the scenario's fit model, else the "
@@ -84,12 +85,10 @@ def main(args: argparse.Namespace) -> int:
         raise InputError("command line", "--resimulate", args.resimulate, "must be >= 0")
     scenario = None
     if args.scenario:
+        from antsim.bundled import find
         from antsim.scenario import load_scenario
 
-        path = Path(args.scenario)
-        if not path.exists():
-            raise InputError(str(path), "--scenario", str(path), "no such file")
-        scenario = load_scenario(path)
+        scenario = load_scenario(find(args.scenario, field="--scenario"))
         if Path(args.recordings).is_file():
             # a cold baseline's quiet campaign starts now, on the second core, while this
             # process imports the analysis and reads the recordings (antsim.plan.streaming)

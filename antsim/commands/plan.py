@@ -18,7 +18,8 @@ from controller.errors import InputError
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("plan", help="plan file (TOML), e.g. scenarios/plans/ghigo1990_whatif.toml")
+    parser.add_argument("plan", help="plan: a name (antsim scenarios lists them, e.g. "
+                                     "ghigo1990_whatif) or a TOML file")
     parser.add_argument("--json", action="store_true",
                         help="print the result as JSON ({\"plans\": [...], \"answers\": ...})")
     parser.add_argument("--out", default=None,
@@ -40,6 +41,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
+    from antsim.bundled import find
     from antsim.plan.planfile import MAX_MEMBERS, load_plan
     from antsim.plan.study import run_plan
 
@@ -55,7 +57,7 @@ def main(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else None
     if out is not None and out.exists() and not out.is_dir():
         raise InputError("command line", "--out", str(out), "exists and is not a directory")
-    plan = load_plan(args.plan)
+    plan = load_plan(find(args.plan, "plan"))
 
     def log(message: str) -> None:
         if args.progress or (args.progress is None and sys.stderr.isatty()):

@@ -10,7 +10,8 @@ from controller.errors import InputError
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("scenario", help="scenario file (TOML), e.g. scenarios/ghigo1990.toml")
+    parser.add_argument("scenario", help="a scenario's name (antsim scenarios lists them, "
+                                         "e.g. ghigo1990) or a scenario file (TOML)")
     parser.add_argument("--out", required=True, help="output directory")
     parser.add_argument("--seed", type=int, default=None,
                         help="random seed (default: the scenario's)")
@@ -30,13 +31,14 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
+    from antsim.bundled import find
     from antsim.run.outputs import write_outputs
     from antsim.run.runner import run_campaign
     from antsim.scenario import load_scenario
 
     if args.seed is not None and args.seed < 0:
         raise InputError("command line", "--seed", args.seed, "must be >= 0")
-    scenario = load_scenario(args.scenario)
+    scenario = load_scenario(find(args.scenario))
     model = None
     if args.model is not None and scenario.mount.kind == "equatorial":
         from controller.pointing.equatorial import load_equatorial_model

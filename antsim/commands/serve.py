@@ -9,7 +9,8 @@ from controller.errors import InputError
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("scenario", help="scenario file (TOML), e.g. scenarios/ghigo1990.toml")
+    parser.add_argument("scenario", help="a scenario's name (antsim scenarios lists them, "
+                                         "e.g. ghigo1990) or a scenario file (TOML)")
     parser.add_argument("--host", default="127.0.0.1",
                         help="address to listen on (default: 127.0.0.1, this machine only)")
     parser.add_argument("--port", type=int, default=5025,
@@ -27,6 +28,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 def main(args: argparse.Namespace) -> int:
     import asyncio
 
+    from antsim.bundled import find
     from antsim.scenario import load_scenario
     from antsim.serve.app import serve
     from antsim.serve.clock import parse_clock
@@ -42,6 +44,6 @@ def main(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out is not None else None
     if out is not None and out.exists() and not out.is_dir():
         raise InputError("command line", "--out", str(out), "exists and is not a directory")
-    scenario = load_scenario(args.scenario)
+    scenario = load_scenario(find(args.scenario))
     return asyncio.run(serve(scenario, clock, host=args.host, port=args.port, seed=args.seed,
                              out=out))

@@ -3,7 +3,7 @@
 A plan is TOML (see ``scenarios/plans/ghigo1990_whatif.toml``)::
 
     name = "ghigo1990_whatif"
-    scenario = "../ghigo1990.toml"     # relative to the plan file
+    scenario = "ghigo1990"             # a scenario's name, or a path relative to the plan file
     seed = 1990                        # plan seed: member seeds derive from it
     members = 200                      # Monte Carlo members per variant
 
@@ -13,7 +13,7 @@ A plan is TOML (see ``scenarios/plans/ghigo1990_whatif.toml``)::
     # duration_h or duration_days, start_utc, sources = [...], elevation_min_deg,
     # elevation_max_deg, step_arcmin, integration_s, estimator (clark | lsq),
     # model (scenario | none | truth | a .mod/.json file), fit_model, members,
-    # scenario (another base scenario for this variant, relative to the plan file),
+    # scenario (another base scenario for this variant, as the plan's scenario),
     # tipping = false (no tipping scans; their sky subtraction a priori)
 
     [[answers.duration]]               # the smallest duration reaching a target sigma
@@ -50,6 +50,7 @@ from controller.pointing.model import NAMED_MODELS, PointingModel
 from controller.pointing.terms import TermError, get_term
 from controller.scans.config import SkyConfig
 
+from ..bundled import find
 from ..scenario import ESTIMATORS, Scenario, load_scenario
 from ..tomlcheck import Table, load_toml
 
@@ -174,14 +175,8 @@ def load_plan(path: str | Path) -> Plan:
     root = load_toml(path)
     name = root.string("name")
     description = root.string("description", "")
-    scenario_ref = root.string("scenario")
-    scenario_path = Path(scenario_ref)
-    if not scenario_path.is_absolute():
-        scenario_path = path.parent / scenario_path
-    if not scenario_path.exists():
-        raise root.error("scenario", scenario_ref, "no such scenario file",
-                         "paths are relative to the plan file")
-    base = load_scenario(scenario_path)
+    base = load_scenario(find(root.string("scenario"), "scenario", str(path), "scenario",
+                              relative_to=path.parent))
     seed = root.integer("seed", base.seed, min=0)
     members = root.integer("members", 200, min=2, max=MAX_MEMBERS)
     block = root.integer("block_members", 0, min=0, max=4096)
@@ -217,13 +212,8 @@ def _variant_base(spec: VariantSpec, path: Path, base: Scenario) -> Scenario:
     """The scenario a variant changes: the plan's, or its own ``scenario``."""
     if spec.scenario is None:
         return base
-    ref = Path(spec.scenario)
-    if not ref.is_absolute():
-        ref = path.parent / ref
-    if not ref.exists():
-        raise InputError(str(path), f"{spec.key}.scenario", spec.scenario,
-                         "no such scenario file", "paths are relative to the plan file")
-    return load_scenario(ref)
+    return load_scenario(find(spec.scenario, "scenario", str(path), f"{spec.key}.scenario",
+                              relative_to=path.parent))
 
 
 def _terms(t: Table, key: str, default: Any = None, fitted: tuple[str, ...] = (),
