@@ -48,8 +48,9 @@ def find(spec: str | Path, kind: Kind = "scenario", where: str = "command line",
     """The file ``spec`` names: an existing path (relative to the directory ``relative_to``
     when given, as a plan names its scenario), else the scenario (or plan) of that name.
 
-    Anything else is one :class:`InputError` at ``where``/``field`` that lists the valid
-    names (and, for a path whose file name is one of them, says to use the name).
+    Anything else is one :class:`InputError` at ``where``/``field`` (a missing file given on
+    the command line: at that file) that lists the valid names (and, for a path whose file
+    name is one of them, says to use the name).
     """
     field = field or kind.upper()
     path = Path(spec)
@@ -69,7 +70,9 @@ def find(spec: str | Path, kind: Kind = "scenario", where: str = "command line",
     if path.name != text or text.endswith(".toml"):
         hint = (f"the {kind} that comes with antsim is named {stem}" if stem in known
                 else listing)
-        raise InputError(where, field, text, f"no such {kind} file", hint)
+        # the file first: a long path's value is shortened in the line
+        raise InputError(text if relative_to is None else where, field, text,
+                         f"no such {kind} file", hint)
     raise InputError(where, field, text, f"neither a file nor the name of a {kind}", listing)
 
 

@@ -46,6 +46,8 @@ def test_an_unknown_name_is_one_line_with_the_valid_names():
     with pytest.raises(InputError, match="no such scenario file; the scenario that comes with "
                                          "antsim is named ghigo1990"):
         find("elsewhere/ghigo1990.toml")
+    with pytest.raises(InputError, match=r"^/no/such/dir/x.toml: SCENARIO = "):
+        find("/no/such/dir/x.toml")
     with pytest.raises(InputError, match="plans that come with antsim: crane1981_days "
                                          "ghigo1990_whatif"):
         find("whatif", "plan")
