@@ -40,7 +40,7 @@ from antsim.run.runner import recording_meta, simulate  # noqa: E402
 from antsim.scenario import EffectSpec, load_scenario  # noqa: E402
 
 SCENARIO = ROOT / "scenarios" / "ghigo1990.toml"
-REAL = ROOT.parent / "shared" / "data" / "real"
+REAL = ROOT / "examples"
 
 
 def blind(args) -> None:
@@ -328,9 +328,6 @@ def bound(args) -> None:
     selection repeated inside each fold (compare ``--real --nested``'s automatic 22-term
     search, selected the same way)."""
     path = REAL / "auxtel_20200315.dat"
-    if not path.exists():
-        print(f"{path}: absent, skipped")
-        return
     obs = load_observations(path)
     base = list(EIGHT_TERMS)
     loo = np.arange(obs.n)
@@ -403,9 +400,6 @@ def real(args) -> None:
 
     for name in ("auxtel_20200315.dat", "mmt_20210821_k_and_e.dat"):
         path = REAL / name
-        if not path.exists():
-            print(f"{path}: absent, skipped")
-            continue
         obs = load_observations(path)
         t0 = time.perf_counter()
         d = diagnose(obs)

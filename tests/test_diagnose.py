@@ -2,7 +2,7 @@
 synthetic data of known noise, the JSON contract, the command line and the real TPOINT data.
 
 Synthetic data: random positions over the sky, the eight TPOINT terms, white noise of known
-rms, fixed seeds. Real data tests read ../shared/data/real and skip when it is absent.
+rms, fixed seeds. Real data tests read the files that ship in examples/.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from antsim.world.effects import EFFECTS
 from antsim.world.effects.harmonics import HARMONIC_EFFECTS, AzimuthTrack2A
 from controller.units import RAD_PER_ARCSEC
 
-REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
+REAL = Path(__file__).resolve().parents[1] / "examples"
 FINDING_KEYS = {"effect", "terms", "explanation", "where", "params", "significance",
                 "sky_rms_before_arcsec", "sky_rms_after_arcsec"}
 
@@ -257,7 +257,6 @@ def test_list_prints_the_library(capsys):
 
 
 # ------------------------------------------------------------------------------ real data
-@pytest.mark.skipif(not (REAL / "auxtel_20200315.dat").exists(), reason="no ../shared/data")
 def test_auxtel_stays_parsimonious_and_reports_the_degeneracy():
     d = diagnose(load_observations(REAL / "auxtel_20200315.dat"))
     assert d.baseline.terms == ("IA", "IE", "NPAE", "CA", "AN", "AW", "TF", "TX")
@@ -269,7 +268,6 @@ def test_auxtel_stays_parsimonious_and_reports_the_degeneracy():
     assert s["cv_sky_rms_after_arcsec"] < s["cv_sky_rms_before_arcsec"]
 
 
-@pytest.mark.skipif(not (REAL / "mmt_20210821_k_and_e.dat").exists(), reason="no ../shared/data")
 def test_mmt_needs_at_most_a_small_addition():
     d = diagnose(load_observations(REAL / "mmt_20210821_k_and_e.dat"))
     assert len(d.findings) <= 1

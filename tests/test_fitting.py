@@ -28,9 +28,10 @@ from controller.units import ARCSEC_PER_RAD
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO / "tests" / "data" / "tpoint"
-REAL = Path(__file__).parents[1] / ".." / "shared" / "data" / "real"
+#: the real data files that ship with antsim (examples/README.md: sources and licences)
+REAL = REPO / "examples"
 MMT_TERMS = ("IA", "IE", "NPAE", "CA", "AN", "AW", "TF", "TX")
-#: TPOINT's own fit of the MMT file (data/real/README.md): value, sigma in arcsec
+#: TPOINT's own fit of the MMT file (examples/README.md): value, sigma in arcsec
 TPOINT_MMT = {
     "IA": (1209.2612, 1.28477), "IE": (-2.9933, 0.30382), "NPAE": (-3.4724, 1.54670),
     "CA": (-5.9455, 1.86697), "AN": (2.4950, 0.11892), "AW": (-10.3347, 0.11843),
@@ -41,10 +42,7 @@ GHIGO_TABLE3_ARCSEC = np.array([-1.88, -0.17, -1.54, -2.16, 0.80, 12.24, 1.62, -
 
 
 def real_file(name: str) -> Path:
-    path = REAL / name
-    if not path.exists():
-        pytest.skip(f"real data {name} not present (../shared/data/real is not in a fresh clone)")
-    return path
+    return REAL / name
 
 
 def sky_positions(rng: np.random.Generator, n: int, el_min_deg: float = 10.0,
@@ -428,8 +426,12 @@ def test_result_is_immutable_json_clean_and_inputs_untouched():
     doc = result.to_json()
     text = json.dumps(doc, allow_nan=False)
     # DESIGN section 4's schema, extended (never changed) by the honest error bars
-    # (and by w_terms: which definition the W terms follow, controller/pointing/legacy.py)
+    # (and by w_terms: which definition the W terms follow, controller/pointing/legacy.py;
+    # sign_convention: the sign of the coefficients in words)
+    assert doc["sign_convention"].startswith("W1..W10 (Ghigo 1990, NRAO EDIR 288, section "
+                                             "II): indicated minus true")
     assert set(doc) == {"n_input", "n_used", "n_rejected", "model", "w_terms", "terms",
+                        "sign_convention",
                         "sky_rms_arcsec", "xel_rms_arcsec", "el_rms_arcsec", "popn_sd_arcsec",
                         "condition_number", "correlations", "unconstrained", "honest_sigma"}
     assert doc["model"] == "fitted" and list(doc["terms"]) == list(result.names)

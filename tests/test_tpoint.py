@@ -1,8 +1,8 @@
 """TPOINT file formats: the two real data files, hand-made edge cases, malformed lines, round
 trips (hypothesis) and format sniffing.
 
-Hand-made files are in ``tests/data/tpoint``; the real ones in ``../shared/data/real`` (tests
-that need them skip when that folder is absent, as in a fresh clone).
+Hand-made files are in ``tests/data/tpoint``; the real ones in ``examples/`` (their sources and
+licences in ``examples/README.md``).
 """
 
 from __future__ import annotations
@@ -35,14 +35,11 @@ from controller.pointing.tpoint import (
 
 HERE = Path(__file__).resolve().parent
 DATA = HERE / "data" / "tpoint"
-REAL = Path(__file__).parents[1] / ".." / "shared" / "data" / "real"
+REAL = HERE.parent / "examples"
 
 
 def real_file(name: str) -> Path:
-    path = REAL / name
-    if not path.exists():
-        pytest.skip(f"real data {name} not present (../shared/data/real is not in a fresh clone)")
-    return path
+    return REAL / name
 
 
 # ---------------------------------------------------------------------------------------------

@@ -24,7 +24,7 @@ means and rms are taken over the observations still in use; rejected observation
 rejected. No threshold goes below 1e-9 of the largest |datum|, so rounding noise in
 noise-free data is never "rejected".
 
-Statistics (TPOINT's, verified on the MMT data in ``../shared/data/real/README.md``), over
+Statistics (TPOINT's, verified on the MMT data in ``examples/README.md``), over
 the N used observations and the M fitted terms:
 
 * Sky RMS = sqrt(mean(xel_res^2 + el_res^2)); xel and el rms separately;

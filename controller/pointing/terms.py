@@ -11,7 +11,7 @@ position. Azimuth arguments are North-based (N = 0, E = 90 deg) everywhere in th
 Two facts fix the signs (both are tested):
 
 * TPOINT evaluates its basic terms with its own South-based azimuth ``A_S = A_N - 180 deg``.
-  Only then does a fit of ``../shared/data/real/mmt_20210821_k_and_e.dat`` reproduce
+  Only then does a fit of ``examples/mmt_20210821_k_and_e.dat`` reproduce
   TPOINT's published AN = +2.495" and AW = -10.335" (with North-based azimuth both flip).
   The harmonic generator has its own azimuth and result signs (below).
 * Ghigo (1990) and katpoint write the opposite quantity, "indicated minus true", which is
@@ -36,7 +36,7 @@ C1..C5 = W6..W10 and D1..D5 = W1..W5 (``FOMALONT_NAMES``), plus its feed terms.
 The harmonic generator follows TPOINT: ``H`` + result letter (A: azimuth, E: elevation,
 S: left-right on the sky = dA cos E, Z: zenith distance) + one or two factors, each ``S`` or
 ``C`` (sine, cosine) of ``A``, ``E`` or ``Z`` with an optional integer multiplier. Its signs
-are TPOINT's own, fixed by TPOINT's FAUTO fit of ``../shared/data/real/auxtel_20200315.dat``
+are TPOINT's own, fixed by TPOINT's FAUTO fit of ``examples/auxtel_20200315.dat``
 (22 terms, ten of them harmonics with results A, E and S and arguments up to 7A; tested):
 
 * the azimuth of a harmonic is ``A_H = 180 deg - A_S = -A_N`` (mod 360 deg), not ``A_S``;
