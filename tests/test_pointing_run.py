@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import html
 import json
 import math
 from pathlib import Path
@@ -10,11 +11,15 @@ import numpy as np
 import pytest
 
 from antsim.documents import GHIGO1990
+from antsim.run.inuse import pointing_in_use
 from antsim.run.outputs import run_fits, write_outputs
 from antsim.run.runner import run_campaign, simulate
 from antsim.scenario import load_scenario
 from controller.pointing.model import PointingModel
 from controller.pointing.modelio import load_model
+from controller.pointing.terms import GHIGO_EQUIVALENTS
+from controller.pointing.tpoint import TPointModel, write_mod
+from controller.pointing.vocabulary import in_tpoint_terms
 
 ROOT = Path(__file__).resolve().parents[1]
 GHIGO = ROOT / "scenarios" / "ghigo1990.toml"
@@ -144,18 +149,40 @@ def test_run_writes_fit_files_that_round_trip(ghigo, tmp_path):
     assert fit["model"] == "ghigo10" and list(fit["terms"]) == [f"W{i}" for i in range(1, 11)]
     text = (tmp_path / "fit.txt").read_text()
     assert "Table 2" in text and "Table 3" in text and "Table 1" in text
-    # the report's numbers beside ours: Table 3's W6 row ends with 12.24 and its s.e. 0.55
-    w6 = next(line for line in text.splitlines() if line.startswith("W6 "))
-    assert w6.split()[-2:] == ["+12.24", "0.55"]
+    # one unit in every table, stated, with the sign of the coefficients
+    assert "Units: arcsec in every table. Sign of the coefficients: W1..W10 (Ghigo 1990, " \
+        "NRAO EDIR 288, section II): indicated minus true" in text
+    # the report's numbers beside ours: Table 3's W6 row ends with 12.24' = 734.4" and its
+    # s.e. 0.55' = 33.0"; before them fit A's TPOINT sigma and honest sigma
+    w6 = next(line for line in text.splitlines() if line.startswith("W6 ")).split()
+    assert w6[-2:] == ["+734.4", "33.0"]
+    terms = fit["terms"]["W6"]
+    assert w6[1] == f"{terms['value_arcsec']:+.2f}"
+    assert w6[-4:-2] == [f"{terms['sigma_arcsec']:.2f}", f"{terms['sigma_honest_arcsec']:.2f}"]
+    assert terms["sigma_honest_arcsec"] != pytest.approx(terms["sigma_arcsec"], rel=0.05)
     assert next(line for line in text.splitlines() if line.startswith("Cassiopeia A")
                 ).split()[-1] == "64"
     for name in "ABCDEF":
         assert f"\n{name} " in text
-    # model.dat is fit A as a TPOINT .mod file that the controller can load back
+    # model.dat is fit A as a TPOINT .mod file in TPOINT's names and signs (W1 = -IE, ...),
+    # which the controller loads back: the same corrections everywhere
     model = load_model(tmp_path / "model.dat")
+    assert model.names == tuple(GHIGO_EQUIVALENTS[f"W{i}"][0] for i in range(1, 11))
     for name, entry in fit["terms"].items():
+        twin, sign = GHIGO_EQUIVALENTS[name]
         # the .mod format prints 4 decimals of an arcsec
-        assert model[name] == pytest.approx(entry["value_arcsec"], abs=6e-5)
+        assert model[twin] == pytest.approx(sign * entry["value_arcsec"], abs=6e-5)
+    assert model.fit_sky_rms_arcsec == pytest.approx(fit["sky_rms_arcsec"], abs=5e-4)
+    az, el = (a.ravel() for a in np.meshgrid(np.radians(np.arange(0.0, 360.0, 15.0)),
+                                             np.radians(np.arange(10.0, 90.0, 5.0))))
+    fitted = PointingModel(list(fit["terms"]),
+                           [t["value_arcsec"] for t in fit["terms"].values()])
+    sky = np.array([np.cos(el), np.ones_like(el)]) * 206264.8  # (dA cos E, dE) in arcsec
+    # each value is rounded to 5e-5"; on the sky the ten functions are at most 1, except
+    # W5's cot E (5.7 at 10 deg): at most 5e-5" x (9 + 5.7) = 7e-4"
+    np.testing.assert_allclose(sky * model.offset_rad(az, el), sky * fitted.offset_rad(az, el),
+                               rtol=0, atol=1e-3)
+    assert "W6 = IA (azimuth encoder offset" in (tmp_path / "model.dat").read_text()
 
 
 def sky_rms_of_pointing(rows) -> float:
@@ -166,15 +193,30 @@ def sky_rms_of_pointing(rows) -> float:
     return math.sqrt(float(np.mean(xel ** 2 + el ** 2)))
 
 
-def test_closed_loop_second_campaign_points_well(ghigo, campaign):
-    """The model fitted from one campaign, used in the next, leaves pointing errors close to
-    the first fit's residuals (issue 4: at most 1.3 times)."""
+def test_closed_loop_second_campaign_points_well(ghigo, campaign, tmp_path):
+    """The model fitted from one campaign, used in the next through its model.dat, leaves
+    pointing errors close to the first fit's residuals (issue 4: at most 1.3 times); the
+    second run says so in one line, in fit.txt and in its report."""
     _, fits = campaign
     first = fits["A"]
-    second = simulate(ghigo, seed=2, model=first.model)
+    path = tmp_path / "model.dat"
+    write_mod(in_tpoint_terms(TPointModel.from_fit(first, caption="first: fit A")), path)
+    second = run_campaign(ghigo, tmp_path / "second", seed=2, model=load_model(path),
+                          show_progress=False)
     ratio = sky_rms_of_pointing(second.rows) / first.sky_rms_arcsec
     assert ratio <= 1.3, ratio
     assert second.program.searches == 0
+    in_use = pointing_in_use(second.rows, second.model)
+    assert in_use.ratio == pytest.approx(ratio, rel=1e-4)  # model.dat's rms has 3 decimals
+    line = (f"pointing with the model in use (first: fit A): Sky RMS "
+            f"{sky_rms_of_pointing(second.rows):.1f}\"")
+    assert in_use.line().startswith(line)
+    assert in_use.line().endswith(f", {ratio:.2f} times the {first.sky_rms_arcsec:.1f}\" of "
+                                  f"the fit it came from ({first.n_used} points)")
+    summary = write_outputs(second, report=True)
+    assert in_use.line() in summary.splitlines()
+    assert in_use.line()[1:] + "." in (tmp_path / "second" / "fit.txt").read_text()
+    assert html.escape(in_use.line()[1:]) in (tmp_path / "second" / "report.html").read_text()
 
 
 def test_cold_start_converges_within_three_campaigns(ghigo):

@@ -483,7 +483,9 @@ def _the_fit(story: _Story, result, fits, out: Path) -> dict[str, Any]:
     story.say(ch, (
         f"Sky rms after the fit: {fit.sky_rms_arcsec:.1f}\" (xel {fit.xel_rms_arcsec:.1f}\", "
         f"el {fit.el_rms_arcsec:.1f}\"). The 1990 report found 23\" and 38\" for its fit A. "
-        f"The fitted model is written as {run_dir / 'model.dat'} (TPOINT format)."))
+        f"The fitted model is written as {run_dir / 'model.dat'}, a TPOINT model file in "
+        "TPOINT's term names and signs (W6 is IA, W1 is -IE: TPOINT writes the correction, "
+        "the report the error), each line saying which W it was."))
     story.command(ch, f"antsim fit {run_dir / 'recordings.ecsv'} --model ghigo10")
     return {"fit_sky_rms_arcsec": fit.sky_rms_arcsec,
             "fit_w6_arcmin": fit.values_arcsec[w6] / 60 if w6 is not None else math.nan}
@@ -497,6 +499,7 @@ def _closed_loop(story: _Story, base_text: str, scenario_path: Path, out: Path, 
     import numpy as np
 
     from antsim.figures.charts import histogram_figure
+    from antsim.run.inuse import pointing_errors, pointing_in_use
     from antsim.run.report import truth_terms_arcsec
     from antsim.scenario import load_scenario
     from controller.pointing.modelio import load_model
@@ -516,10 +519,10 @@ def _closed_loop(story: _Story, base_text: str, scenario_path: Path, out: Path, 
     model = load_model(model_path)
     result, refits = _campaign(load_scenario(scen_path), out / "2-closed-loop", SEEDS[1],
                                model, report=False)
-    rows = [r for r in result.rows if r["polarization"] == "AVG" and r["good"]]
-    xel = np.array([60 * r["xel_arcmin"] for r in rows])
-    el = np.array([60 * r["el_arcmin"] for r in rows])
-    sky = float(np.sqrt(np.mean(xel ** 2 + el ** 2))) if rows else math.nan
+    xel, el = pointing_errors(result.rows)
+    in_use = pointing_in_use(result.rows, model)
+    sky, xel_rms, el_rms = ((in_use.sky_rms_arcsec, in_use.xel_rms_arcsec, in_use.el_rms_arcsec)
+                            if in_use is not None else (math.nan,) * 3)
     fit = fits["A"]
     used = np.asarray(fit.used, bool)
     hpbw_arcsec = first.scenario.beam.hpbw_arcmin * 60.0
@@ -542,10 +545,10 @@ def _closed_loop(story: _Story, base_text: str, scenario_path: Path, out: Path, 
                "That is smaller than the fit's residuals: this campaign was kinder (fewer "
                "hours, less sunshine)")
     story.say(ch, (
-        f"{len(rows)} good scans, {searches} search(es)"
+        f"{xel.size} good scans, {searches} search(es)"
         + (": every source was in the beam at the first try. " if searches == 0 else ". ")
         + f"Pointing error rms with the fitted model: {sky:.1f}\" on the sky (xel "
-        f"{float(np.sqrt(np.mean(xel ** 2))):.1f}\", el {float(np.sqrt(np.mean(el ** 2))):.1f}"
+        f"{xel_rms:.1f}\", el {el_rms:.1f}"
         f"\"), against {fit.sky_rms_arcsec:.1f}\" left by the fit of the first campaign. "
         f"{verdict}. The error went from {first_sky / 60:.1f}' rms without a model to "
         f"{sky / 60:.2f}', "

@@ -38,6 +38,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "W5=66 (Fomalont 1973 held refraction at 1'.1)")
     parser.add_argument("--json", action="store_true",
                         help="print the fit as JSON (the 'antsim fit --json' schema)")
+    parser.add_argument("--write-model", metavar="FILE",
+                        help="also write the fitted model as a TPOINT .mod file, in TPOINT's "
+                             "term names and signs (usable as antsim run --model FILE)")
     parser.add_argument("--no-robust", action="store_true",
                         help="plain least squares on every observation (no outlier rejection)")
     parser.add_argument("--include-masked", action="store_true",
@@ -140,6 +143,10 @@ def main(args: argparse.Namespace) -> int:
     else:
         terms, model_name = _terms_from_model(args.model or DEFAULT_MODEL[fmt])
     fixed = _fixed_from_option(args.fixed, terms)
+    target = Path(args.write_model) if args.write_model else None
+    if target is not None and (target.is_dir() or not target.parent.is_dir()):
+        raise InputError("command line", "--write-model", str(target),
+                         "is a directory" if target.is_dir() else "its folder does not exist")
     data = _read_data(path, fmt, args.include_masked)
     try:
         result = fit_model(data, terms, robust=not args.no_robust, name=model_name,
@@ -148,12 +155,20 @@ def main(args: argparse.Namespace) -> int:
         raise
     except ValueError as err:  # too few observations, a term infinite at the zenith, ...
         raise InputError(str(path), "observations", len(data), str(err)) from None
+    if target is not None:
+        from controller.pointing.tpoint import TPointModel, write_mod
+        from controller.pointing.vocabulary import in_tpoint_terms
+
+        caption = f"{path.name}: antsim fit, model {model_name}"
+        write_mod(in_tpoint_terms(TPointModel.from_fit(result, caption=caption)), target)
     if args.json:
         json.dump(result.to_json(), sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
         print(f"{path} ({'TPOINT data' if fmt == 'tpoint' else 'recordings'})")
         print(result.summary())
+        if target is not None:
+            print(f"wrote {target} (TPOINT's term names and signs)")
     return 0
 
 

@@ -19,7 +19,9 @@ from controller.astro.sun import NIGHT_SUN_MAX_DEG
 from controller.pointing.result import FitResult
 from controller.pointing.tpoint import TPointModel, write_mod
 from controller.pointing.variants import VARIANTS, fit_variants
+from controller.pointing.vocabulary import UNITS, in_tpoint_terms, sign_convention
 
+from .inuse import Pointing, pointing_in_use
 from .runner import RunResult
 from .sources import points_per_source
 
@@ -41,13 +43,19 @@ def _fmt(value: float, spec: str) -> str:
 def fit_tables(fits: dict[str, FitResult | None], title: str,
                night_sun_max_deg: float = NIGHT_SUN_MAX_DEG,
                reference: Reference | None = None,
-               points: Mapping[str, int] | None = None) -> str:
+               points: Mapping[str, int] | None = None,
+               in_use: Pointing | None = None) -> str:
     """Text tables in the style of the report's Table 2 (rms per fit) and Table 3 (terms),
     with the document's numbers beside ours when ``reference`` is given, and the points
     per source in fit A (Table 1) when ``points`` is; fit E's night is the Sun below
-    ``night_sun_max_deg``."""
+    ``night_sun_max_deg``. Units and sign head the tables, then ``in_use``: how well the
+    model in use pointed."""
     ref_t2 = dict(reference.table2) if reference is not None else {}
-    lines = [title, "", "Table 2. Residuals of the fits (arcsec)"
+    names = next((f.names for f in fits.values() if f is not None), ())
+    lines = [title, f"Units: {UNITS} in every table. Sign of the coefficients: "
+             f"{sign_convention(names)}.",
+             *([in_use.line()[:1].upper() + in_use.line()[1:] + "."] if in_use else []),
+             "", "Table 2. Residuals of the fits (arcsec)"
              + (f"; {reference.citation}, Table 2, beside them" if ref_t2 else ""), "",
              f"{'fit':<4}{'data':<48}{'N':>5}{'used':>6}{'xel rms':>9}{'el rms':>8}"
              f"{'sky rms':>9}" + (f"{'report N':>10}{'xel':>6}{'el':>6}" if ref_t2 else "")]
@@ -83,20 +91,29 @@ def _coefficient_lines(fits, present: list[str], reference: Reference | None) ->
     names = fits[present[0]].names
     terms = dict(reference.terms) if reference is not None else {}
     labels = dict(reference.labels) if reference is not None else {}
-    fixed = fits["A"].fixed if fits.get("A") is not None else ()
-    lines = ["", "Table 3. Coefficients (arcmin); sigma of fit A in parentheses"
-             + (f"; {reference.citation} beside them" if terms else ""), "",
-             f"{'term':<8}" + "".join(f"{'fit ' + p:>10}" for p in present) + f"{'sigma A':>10}"
+    fit_a = fits.get("A")
+    fixed = fit_a.fixed if fit_a is not None else ()
+    honest = fit_a.sigma_honest_arcsec if fit_a is not None else None
+    lines = ["", "Table 3. Coefficients (arcsec); fit A's sigma, TPOINT's and the honest one "
+             "(jackknife)" + (f"; {reference.citation} beside them, its arcmin times 60"
+                              if terms else ""), "",
+             f"{'term':<8}" + "".join(f"{'fit ' + p:>10}" for p in present)
+             + f"{'sigma A':>10}{'honest A':>10}"
              + (f"{reference.column:>10}{'s.e.':>7}" if terms else "")]
     for j, term in enumerate(names):
         row = f"{term:<8}"
         for p in present:
-            row += f"{_fmt(fits[p].values_arcsec[j] / 60.0, '+.3f'):>10}"
-        sigma = fits["A"].sigma_arcsec[j] / 60.0 if fits.get("A") is not None else math.nan
-        row += f"{'fixed' if term in fixed else '(' + _fmt(sigma, '.3f') + ')':>10}"
+            row += f"{_fmt(fits[p].values_arcsec[j], '+.2f'):>10}"
+        if term in fixed:
+            row += f"{'fixed':>10}{'':>10}"
+        else:
+            sigma = fit_a.sigma_arcsec[j] if fit_a is not None else math.nan
+            row += (f"{_fmt(sigma, '.2f'):>10}"
+                    f"{_fmt(honest[j] if honest is not None else math.nan, '.2f'):>10}")
         if term in terms:
             value, se = terms[term]
-            row += (f"{value:>+10.2f}{_fmt(se if se is not None else math.nan, '.2f'):>7}  "
+            row += (f"{60.0 * value:>+10.1f}"
+                    f"{_fmt(60.0 * se if se is not None else math.nan, '.1f'):>7}  "
                     f"{labels.get(term, ''):<10}")
         lines.append(row.rstrip())
     return lines
@@ -128,7 +145,8 @@ def write_outputs(result: RunResult, report: bool = True) -> str:
         (out / "fit.json").write_text(json.dumps(fit_a.to_json(), indent=2) + "\n",
                                       encoding="utf-8")
         caption = f"{result.scenario.name} seed {result.seed}: fit A"
-        write_mod(TPointModel.from_fit(fit_a, caption=caption), out / "model.dat")
+        write_mod(in_tpoint_terms(TPointModel.from_fit(fit_a, caption=caption)),
+                  out / "model.dat")
     from controller.scans.gaincurve import calibrate
 
     result.calibration = calibrate(result.rows, result.scenario.controller, result.tippings)
@@ -139,9 +157,10 @@ def write_outputs(result: RunResult, report: bool = True) -> str:
     title = (f"{result.scenario.name}, seed {result.seed}: {result.n_scans} {what}, "
              f"model in use {result.model.name}")
     reference = reference_for(result.scenario.name)
+    in_use = pointing_in_use(result.rows, result.model)
     (out / "fit.txt").write_text(
         fit_tables(fits, title, result.scenario.controller.night_sun_max_deg, reference,
-                   points_per_source(result.rows, fit_a)),
+                   points_per_source(result.rows, fit_a), in_use),
         encoding="utf-8")
     good = sum(1 for r in result.rows if r["polarization"] == "AVG" and r["good"])
     summary = (f"{result.scenario.name}: {result.n_scans} {what} ({good} good) in "
@@ -149,6 +168,8 @@ def write_outputs(result: RunResult, report: bool = True) -> str:
     if fit_a is not None:
         summary += (f"; fit A: {fit_a.n_used} points, xel rms {fit_a.xel_rms_arcsec:.1f}\", "
                     f"el rms {fit_a.el_rms_arcsec:.1f}\"")
+    if in_use is not None and in_use.ratio is not None:
+        summary += "\n" + in_use.line()
     written = "recordings.ecsv truth.json fit.json fit_variants.json fit.txt model.dat"
     if not result.truth:  # an antenna over the wire: its server keeps the truth
         written = written.replace(" truth.json", "")
@@ -157,6 +178,6 @@ def write_outputs(result: RunResult, report: bool = True) -> str:
     if report:
         from .report import write_run_report
 
-        _, figures = write_run_report(result, fits, out)
+        _, figures = write_run_report(result, fits, out, in_use)
         written += f" report.html figures/ ({len(figures)} figures)"
     return summary + f"\nwrote {out}/: {written}"

@@ -17,12 +17,14 @@ from antsim.documents import Reference, reference_for
 from controller.astro.sun import NIGHT_SUN_MAX_DEG
 from controller.pointing.result import FitResult
 from controller.pointing.variants import VARIANTS
+from controller.pointing.vocabulary import sign_convention
 
 from .html import Block, Figure, Paragraph, Preformatted, Section, Table, write_report
 
 if TYPE_CHECKING:
     from antsim.figures.style import FigureFile
 
+    from .inuse import Pointing
     from .runner import RunResult
 
 __all__ = ["coefficient_table", "fit_summary_table", "source_points_table", "truth_pull_table",
@@ -60,8 +62,9 @@ def fit_summary_table(fits: Mapping[str, FitResult | None],
 
 def coefficient_table(fits: Mapping[str, FitResult | None],
                       reference: Reference | None = None) -> Table:
-    """Table 3 style: coefficients (arcmin) of each fit present, fit A's TPOINT sigma, and
-    the document's value and standard error beside them when ``reference`` is given."""
+    """Table 3 style: coefficients (arcsec) of each fit present, fit A's TPOINT sigma and
+    honest sigma, and the document's value and standard error (its arcmin times 60) beside
+    them when ``reference`` is given."""
     present = [v.name for v in VARIANTS if fits.get(v.name) is not None]
     if not present:
         return Table(["term"], [], caption="Coefficients: no fit had enough observations")
@@ -69,26 +72,34 @@ def coefficient_table(fits: Mapping[str, FitResult | None],
     fit_a = fits.get("A")
     terms = dict(reference.terms) if reference is not None else {}
     labels = dict(reference.labels) if reference is not None else {}
+    honest = fit_a.sigma_honest_arcsec if fit_a is not None else None
     rows = []
     for j, term in enumerate(names):
         row: list[Any] = [term]
         for p in present:
             fit = fits[p]
-            row.append(float(fit.values_arcsec[fit.names.index(term)]) / 60.0
+            row.append(float(fit.values_arcsec[fit.names.index(term)])
                        if term in fit.names else None)
-        row.append(float(fit_a.sigma_arcsec[j]) / 60.0 if fit_a is not None else None)
+        row.append(float(fit_a.sigma_arcsec[j]) if fit_a is not None else None)
+        row.append(float(honest[j]) if honest is not None else None)
         if terms:
             value, se = terms.get(term, (None, None))
-            row += [value, se] + ([labels.get(term, "")] if labels else [])
+            row += [_arcsec(value), _arcsec(se)] + ([labels.get(term, "")] if labels else [])
         rows.append(row)
-    header = ["term", *(f"fit {p} (')" for p in present), "sigma A (')"]
+    header = ["term", *(f"fit {p} (\")" for p in present), "TPOINT sigma A (\")",
+              "honest sigma A (\")"]
     if terms:
-        header += [f"{reference.column} (')", f"{reference.column} s.e. (')"] \
+        header += [f"{reference.column} (\")", f"{reference.column} s.e. (\")"] \
             + (["its name"] if labels else [])
-    caption = "Coefficients (arcmin; the 1990 report's Table 3)"
+    caption = (f"Coefficients (arcsec; the 1990 report's Table 3). Sign: "
+               f"{sign_convention(names)}")
     if terms:
-        caption += f", beside {reference.citation}'s"
-    return Table(header, rows, caption=caption, number_format="+.3f")
+        caption += f". Beside them {reference.citation}'s, its arcmin times 60"
+    return Table(header, rows, caption=caption, number_format="+.2f")
+
+
+def _arcsec(arcmin: float | None) -> float | None:
+    return None if arcmin is None else 60.0 * arcmin
 
 
 def source_points_table(points: Mapping[str, int], reference: Reference | None) -> Table:
@@ -144,8 +155,10 @@ def truth_terms_arcsec(truth: Mapping[str, Any] | None) -> dict[str, float]:
 
 
 def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
-                     out_dir: str | Path | None = None) -> tuple[Path, list[FigureFile]]:
-    """Figures (``DIR/figures/``) and ``DIR/report.html`` of a run; returns both."""
+                     out_dir: str | Path | None = None, in_use: Pointing | None = None
+                     ) -> tuple[Path, list[FigureFile]]:
+    """Figures (``DIR/figures/``) and ``DIR/report.html`` of a run; returns both. ``in_use``:
+    how well the model in use pointed (:mod:`antsim.run.inuse`)."""
     from antsim.figures.run import run_figures
 
     from .sources import points_per_source
@@ -171,6 +184,10 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
                     f"{fit_a.el_rms_arcsec:.1f}\", sky rms {fit_a.sky_rms_arcsec:.1f}\".")
     else:
         summary += " Too few observations for fit A."
+    if in_use is not None:
+        summary += f" The {in_use.line()[:1].lower()}{in_use.line()[1:]}."
+    summary += (" Every angle on this page is in arcsec; the offsets are corrections to "
+                "apply, indicated minus true.")
     sections = [Section("Summary", [Paragraph(summary), Paragraph(
         "Files in this directory: recordings.ecsv (one row per scan and polarization), "
         "truth.json (the injected truth), fit.json and fit_variants.json (the fits), fit.txt "

@@ -46,6 +46,7 @@ from controller.astro.ephemeris import Ephemeris
 from controller.astro.frames import ALTAZ, MountFrame, altaz_to_hadec
 from controller.astro.sources import FixedSource
 from controller.pointing.legacy import w_terms_marker
+from controller.pointing.vocabulary import sign_convention
 from controller.protocol import (
     AntennaError,
     ChannelValues,
@@ -180,6 +181,7 @@ class World:
             "seed": int(self.seed),
             "model": model.name,
             **w_terms_marker(model.names),
+            "sign_convention": sign_convention(model.names),
             "terms": {n: {"value_arcsec": float(v)} for n, v in model.as_dict().items()},
             "effects": [e.truth() for e in self.effects[1:]],
         }

@@ -8,7 +8,8 @@
   :mod:`.jackknife` (honest error bars), :mod:`.result`; :mod:`.variants`: the report's fits
   A-F of one campaign;
 * files: :mod:`.tpoint` (TPOINT data and ``.mod`` files), :mod:`.modelio` (named models,
-  ``.mod`` files and ``fit.json`` loaded as models).
+  ``.mod`` files and ``fit.json`` loaded as models), :mod:`.vocabulary` (a model in TPOINT's
+  names and signs for a file; the sign convention of any model in words).
 
 May import: :mod:`controller.astro`, :mod:`controller.errors`, :mod:`controller.units`;
 never the scans, the program or the protocol.

@@ -20,7 +20,10 @@ def model_to_json(model: PointingModel) -> dict:
 
 
 def model_from_json(data: dict, where: str) -> PointingModel:
-    """A model from ``{"model": name, "terms": {"IA": {"value_arcsec": x}, ...}}``."""
+    """A model from ``{"model": name, "terms": {"IA": {"value_arcsec": x}, ...}}``; from a
+    fit's document (``fit.json``, with ``sky_rms_arcsec``) a
+    :class:`~controller.pointing.tpoint.TPointModel` that remembers the fit's Sky RMS,
+    observations and sigmas."""
     if not isinstance(data, dict) or "terms" not in data:
         raise InputError(where, "terms", "<missing>", "a model JSON needs a 'terms' object")
     terms = data["terms"]
@@ -36,9 +39,25 @@ def model_from_json(data: dict, where: str) -> PointingModel:
         values_of = relabel_reconstructed(values_of, where)
     names, values = list(values_of), list(values_of.values())
     try:
-        return PointingModel(names, values, name=str(data.get("model", "custom")))
+        model = PointingModel(names, values, name=str(data.get("model", "custom")))
     except TermError as err:
         raise InputError(where, "terms", names, str(err)) from None
+    rms = data.get("sky_rms_arcsec")
+    if isinstance(rms, int | float) and not isinstance(rms, bool):
+        from .tpoint import TPointModel
+
+        sigmas = [_number_or_nan(terms.get(n)) for n in names] if names == list(terms) \
+            else None  # renamed from an old file: its sigmas are left out
+        n_used = data.get("n_used", 0)
+        return TPointModel.from_model(model, sigmas, n_obs=n_used if isinstance(n_used, int)
+                                      else 0, sky_rms_arcsec=float(rms))
+    return model
+
+
+def _number_or_nan(entry) -> float:
+    value = entry.get("sigma_arcsec") if isinstance(entry, dict) else None
+    return float(value) if isinstance(value, int | float) and not isinstance(value, bool) \
+        else float("nan")
 
 
 def load_model(spec: str | Path) -> PointingModel:

@@ -12,6 +12,7 @@ import numpy as np
 from .data import LinearModel
 from .jackknife import JackknifeResult
 from .legacy import w_terms_marker
+from .vocabulary import UNITS, sign_convention
 
 __all__ = ["FitResult"]
 
@@ -121,6 +122,7 @@ class FitResult:
             "n_rejected": int(self.n_rejected),
             "model": self.model.name,
             **w_terms_marker(names),
+            "sign_convention": sign_convention(names),
             "terms": {
                 n: {"value_arcsec": _json_float(v), "sigma_arcsec": _json_float(s),
                     "sigma_honest_arcsec": _json_float(h)}
@@ -139,17 +141,7 @@ class FitResult:
             "unconstrained": list(self.unconstrained),
             **({"fixed": list(self.fixed)} if self.fixed else {}),
             "honest_sigma": {
-                "method": "cluster jackknife (CV3) of the same least-squares coefficients, "
-                          "clusters = observations"
-                          + (f" within {self.honest_block_s:g} s time blocks"
-                             + (f", variances averaged over {self.honest_phases} block grids "
-                                f"shifted by 1/{self.honest_phases} block"
-                                if self.honest_phases > 1 else "")
-                             if self.honest_block_s else "")
-                          + (", scaled by the mean variance ratio of replicates that repeat the "
-                             "fit's outlier rejection" if self.robust and self.honest_block_s
-                             else "")
-                          + ", times sqrt(dof/(dof-2)) for its Satterthwaite degrees of freedom",
+                "method": self.honest_method(),
                 "clusters": int(self.honest_clusters),
                 "dof": {n: _json_float(v) for n, v in zip(
                     names, self.honest_dof if self.honest_dof is not None
@@ -157,20 +149,37 @@ class FitResult:
             },
         }
 
+    def honest_method(self) -> str:
+        """How the honest sigma is computed, in words."""
+        return ("cluster jackknife (CV3) of the same least-squares coefficients, "
+                "clusters = observations"
+                + (f" within {self.honest_block_s:g} s time blocks"
+                   + (f", variances averaged over {self.honest_phases} block grids "
+                      f"shifted by 1/{self.honest_phases} block"
+                      if self.honest_phases > 1 else "")
+                   if self.honest_block_s else "")
+                + (", scaled by the mean variance ratio of replicates that repeat the "
+                   "fit's outlier rejection" if self.robust and self.honest_block_s else "")
+                + ", times sqrt(dof/(dof-2)) for its Satterthwaite degrees of freedom")
+
     def _honest(self) -> np.ndarray:
         if self.sigma_honest_arcsec is None:
             return np.full(len(self.names), np.nan)
         return self.sigma_honest_arcsec
 
     def table(self) -> str:
-        """Fixed-width text table of term, value and sigma (arcsec) for humans."""
+        """Fixed-width text table of term, value, TPOINT's sigma and the honest sigma
+        (arcsec) for humans."""
         width = max([8, *(len(n) for n in self.names)])
-        value_head, sigma_head = 'value (")', 'sigma (")'
-        lines = [f"{'term':<{width}}  {value_head:>12}  {sigma_head:>10}"]
-        for n, v, s in zip(self.names, self.model.values_arcsec, self.sigma_arcsec, strict=True):
-            sigma = (f"{s:10.4f}" if math.isfinite(s) else
-                     f"{'fixed' if n in self.fixed else 'not fitted':>10}")
-            lines.append(f"{n:<{width}}  {v:+12.4f}  {sigma}")
+        heads = ('value (")', 'sigma (")', 'honest sigma (")')
+        lines = [f"{'term':<{width}}  {heads[0]:>12}  {heads[1]:>10}  {heads[2]:>16}"]
+        for n, v, s, h in zip(self.names, self.model.values_arcsec, self.sigma_arcsec,
+                              self._honest(), strict=True):
+            if math.isfinite(s):
+                sigma = f"{s:10.4f}  {h:16.4f}" if math.isfinite(h) else f"{s:10.4f}"
+            else:
+                sigma = f"{'fixed' if n in self.fixed else 'not fitted':>10}"
+            lines.append(f"{n:<{width}}  {v:+12.4f}  {sigma}".rstrip())
         return "\n".join(lines)
 
     def summary(self) -> str:
@@ -179,10 +188,13 @@ class FitResult:
         lines = [
             f"model {self.model.name}: {self.n_used} of {self.n_input} observations used, "
             f"{self.n_rejected} rejected; {how}{', weighted' if self.weighted else ''}",
+            f"units: {UNITS}; sign: {sign_convention(self.names)}",
             self.table(),
             f"Sky RMS = {self.sky_rms_arcsec:.3f}\"   Popn SD = {self.popn_sd_arcsec:.3f}\"   "
             f"(xel rms {self.xel_rms_arcsec:.3f}\", el rms {self.el_rms_arcsec:.3f}\")",
             f"condition number {self.condition_number:.3g}",
         ]
+        if self.sigma_honest_arcsec is not None:
+            lines.append(f"honest sigma: {self.honest_method()}")
         lines += [f"warning: {w}" for w in self.warnings]
         return "\n".join(lines)

@@ -1,6 +1,6 @@
 """TPOINT file formats: pointing data files and ``.mod`` model files.
 
-Pointing data (TPOINT's ``INDAT`` input), as in ``../shared/data/real/*.dat``::
+Pointing data (TPOINT's ``INDAT`` input), as in ``examples/*.dat``::
 
     ! comment lines, anywhere; "!" also starts a trailing comment
     Caption line (free text)
@@ -598,7 +598,9 @@ class TPointModel(PointingModel):
     ``fixed`` ("=" flag) and ``parallel`` ("&" flag), and for the file the ``caption`` and
     the second record ``parameters`` kept verbatim (RTS2 reads it as method, number of
     observations, sky RMS, refraction constants A and B; ``None`` when a hand-written file
-    leaves it out). The model's ``name`` defaults to the caption.
+    leaves it out). The model's ``name`` defaults to the caption. Written, not read back:
+    ``comments`` (lines after the caption, each starting with ``!``) and per term ``notes``
+    (a comment at the end of its line; empty: none).
     """
 
     sigma_arcsec: np.ndarray
@@ -606,6 +608,8 @@ class TPointModel(PointingModel):
     parallel: tuple[bool, ...]
     caption: str
     parameters: tuple[str, ...] | None
+    comments: tuple[str, ...]
+    notes: tuple[str, ...]
 
     def __init__(
         self,
@@ -618,6 +622,8 @@ class TPointModel(PointingModel):
         parallel: Sequence[bool] | None = None,
         caption: str | None = None,
         parameters: tuple[str, ...] | None = _DEFAULT_PARAMETERS,
+        comments: Sequence[str] = (),
+        notes: Sequence[str] | None = None,
     ):
         super().__init__(terms, values_arcsec, name or caption)
         m = len(self.terms)
@@ -639,6 +645,30 @@ class TPointModel(PointingModel):
         object.__setattr__(self, "parallel", flags["parallel"])
         object.__setattr__(self, "caption", caption if caption is not None else self.name)
         object.__setattr__(self, "parameters", None if parameters is None else tuple(parameters))
+        notes = ("",) * m if notes is None else tuple(str(n) for n in notes)
+        if len(notes) != m:
+            raise ValueError(f"{len(notes)} notes for {m} terms")
+        object.__setattr__(self, "comments", tuple(comments))
+        object.__setattr__(self, "notes", notes)
+
+    @property
+    def fit_sky_rms_arcsec(self) -> float | None:
+        """The Sky RMS (arcsec) of the fit this model came from, as the parameters record
+        gives it (method, observations, sky RMS, ...); None when it gives none."""
+        try:
+            rms = float(self.parameters[2]) if self.parameters else 0.0
+        except (IndexError, ValueError):
+            return None
+        return rms if rms > 0 and math.isfinite(rms) else None
+
+    @property
+    def fit_observations(self) -> int | None:
+        """The observations of the fit this model came from (parameters record), or None."""
+        try:
+            n = int(self.parameters[1]) if self.parameters else 0
+        except (IndexError, ValueError):
+            return None
+        return n if n > 0 else None
 
     @classmethod
     def from_model(
@@ -773,7 +803,7 @@ def format_mod(model: PointingModel) -> str:
     """
     if not isinstance(model, TPointModel):
         model = TPointModel.from_model(model)
-    lines = [model.caption or model.name]
+    lines = [model.caption or model.name, *model.comments]
     if names_w_terms(model.names):
         lines.append(W_TERMS_COMMENT)
     if model.parameters is not None:
@@ -784,6 +814,8 @@ def format_mod(model: PointingModel) -> str:
         line = f"{flags}{term.name:<8}{model.values_arcsec[i]:+10.4f}"
         if math.isfinite(model.sigma_arcsec[i]):
             line += f"{model.sigma_arcsec[i]:12.5f}"
+        if model.notes[i]:
+            line = f"{line:<34}! {model.notes[i]}"
         lines.append(line)
     lines.append("END")
     return "\n".join(lines) + "\n"
