@@ -15,9 +15,10 @@ from antsim.cli import main
 from controller.pointing.legacy import RelabelledTermsWarning
 from controller.pointing.model import PointingModel
 from controller.pointing.modelio import load_model
+from controller.pointing.signs import sign_convention
 from controller.pointing.terms import GHIGO_EQUIVALENTS, KATPOINT_EQUIVALENTS, WRIGHT_EQUIVALENTS
 from controller.pointing.tpoint import TPointModel, format_mod, parse_mod
-from controller.pointing.vocabulary import in_tpoint_terms, sign_convention
+from controller.pointing.vocabulary import in_tpoint_terms
 from controller.units import ARCSEC_PER_RAD
 
 RNG = np.random.default_rng(27)

@@ -220,7 +220,7 @@ def test_truth_lists_terms_in_arcsec_and_effects(ghigo_path):
     scenario = load_scenario(ghigo_path)
     world = World(scenario, simpy.Environment(), seed=11)
     truth = world.truth()
-    assert set(truth) == {"seed", "model", "w_terms", "terms", "effects"}
+    assert set(truth) == {"seed", "model", "w_terms", "sign_convention", "terms", "effects"}
     assert truth["w_terms"] == "Ghigo 1990 (NRAO EDIR 288) section II"
     assert truth["seed"] == 11
     assert truth["model"] == "ghigo10"

@@ -16,8 +16,8 @@ from typing import TYPE_CHECKING, Any
 from antsim.documents import Reference, reference_for
 from controller.astro.sun import NIGHT_SUN_MAX_DEG
 from controller.pointing.result import FitResult
+from controller.pointing.signs import sign_convention
 from controller.pointing.variants import VARIANTS
-from controller.pointing.vocabulary import sign_convention
 
 from .html import Block, Figure, Paragraph, Preformatted, Section, Table, write_report
 

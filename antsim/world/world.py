@@ -46,7 +46,7 @@ from controller.astro.ephemeris import Ephemeris
 from controller.astro.frames import ALTAZ, MountFrame, altaz_to_hadec
 from controller.astro.sources import FixedSource
 from controller.pointing.legacy import w_terms_marker
-from controller.pointing.vocabulary import sign_convention
+from controller.pointing.signs import sign_convention
 from controller.protocol import (
     AntennaError,
     ChannelValues,

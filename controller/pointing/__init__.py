@@ -9,7 +9,7 @@
   A-F of one campaign;
 * files: :mod:`.tpoint` (TPOINT data and ``.mod`` files), :mod:`.modelio` (named models,
   ``.mod`` files and ``fit.json`` loaded as models), :mod:`.vocabulary` (a model in TPOINT's
-  names and signs for a file; the sign convention of any model in words).
+  names and signs for a file), :mod:`.signs` (the units and sign of any model in words).
 
 May import: :mod:`controller.astro`, :mod:`controller.errors`, :mod:`controller.units`;
 never the scans, the program or the protocol.

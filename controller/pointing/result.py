@@ -12,7 +12,7 @@ import numpy as np
 from .data import LinearModel
 from .jackknife import JackknifeResult
 from .legacy import w_terms_marker
-from .vocabulary import UNITS, sign_convention
+from .signs import UNITS, sign_convention
 
 __all__ = ["FitResult"]
 

@@ -15,16 +15,14 @@ with TPOINT's sign, and says in a comment on its line which term it was:
 
 The model points exactly as before (each renamed column is the old one times its sign). Terms
 with no TPOINT twin (Crane's, katpoint's scale factors P9, P12) keep their names.
-:func:`sign_convention` is the sentence every output prints beside its numbers.
+The sign of any model in words is :func:`controller.pointing.signs.sign_convention`.
 """
 
 from __future__ import annotations
 
-import re
-from collections.abc import Iterable
-
 import numpy as np
 
+from .signs import INDICATED_MINUS_TRUE, UNITS, sign_convention
 from .terms import (
     GHIGO_EQUIVALENTS,
     GHIGO_TILT,
@@ -34,39 +32,11 @@ from .terms import (
 )
 from .tpoint import TPointModel
 
-__all__ = ["TPOINT_EQUIVALENTS", "TPOINT_SIGN", "UNITS", "in_tpoint_terms", "sign_convention"]
+__all__ = ["TPOINT_EQUIVALENTS", "in_tpoint_terms"]
 
 #: term -> (TPOINT's term, sign): term = sign * TPOINT's coefficient
 TPOINT_EQUIVALENTS: dict[str, tuple[str, float]] = {
     **GHIGO_EQUIVALENTS, **KATPOINT_EQUIVALENTS, **WRIGHT_EQUIVALENTS}
-
-UNITS = "arcsec"
-TPOINT_SIGN = "true (observed) = raw (encoder) + correction"
-
-#: (pattern, the vocabulary's name): each writes "indicated minus true"
-_INDICATED_MINUS_TRUE = (
-    (re.compile(r"^W([1-9]|10)$"), "W1..W10 (Ghigo 1990, NRAO EDIR 288, section II)"),
-    (re.compile(r"^P([1-9]|1\d|2[0-2])$"), "P1..P22 (katpoint)"),
-    (re.compile(r"^[AB][1-7]$"), "A1..A7, B1..B7 (Wright 1992, BIMA memo 23, a(i), b(i))"),
-    (re.compile(r"^C([1-9]|1[01])$"), "C1..C11 (Crane 1981, NRAO Engineering Memo 147)"),
-)
-
-
-def sign_convention(names: Iterable[str]) -> str:
-    """The sign of the terms ``names`` in words: TPOINT's, or "indicated minus true" for the
-    vocabularies of the source documents and katpoint (the units are :data:`UNITS`)."""
-    names = [str(n).strip().upper() for n in names]
-    theirs = [label for pattern, label in _INDICATED_MINUS_TRUE
-              if any(pattern.match(n) for n in names)]
-    others = [n for n in names if not any(p.match(n) for p, _ in _INDICATED_MINUS_TRUE)]
-    parts = []
-    if theirs:
-        parts.append(f"{', '.join(theirs)}: indicated minus true (the negative of TPOINT's "
-                     "correction)")
-    if others or not theirs:
-        parts.append(f"{'the other terms ' if theirs else ''}TPOINT's: {TPOINT_SIGN}")
-    return "; ".join(parts)
-
 
 def in_tpoint_terms(model: TPointModel) -> TPointModel:
     """``model`` with every term TPOINT has under TPOINT's name and sign (its sigma, fixed
@@ -106,7 +76,7 @@ def in_tpoint_terms(model: TPointModel) -> TPointModel:
     written = [getattr(t, "name", t) for t in out_names]
     comments = (f"! Units: {UNITS}. Sign: {sign_convention(written)}.",)
     was = [names[i] for i, note in zip(keep, notes, strict=True) if note]
-    renamed = [label for pattern, label in _INDICATED_MINUS_TRUE
+    renamed = [label for pattern, label in INDICATED_MINUS_TRUE
                if any(pattern.match(n) for n in was)]
     if renamed:
         comments += (f"! Renamed from {', '.join(renamed)}, which write indicated minus true: "
