@@ -6,7 +6,8 @@ simulated world. Each part imports only those listed before it, and :mod:`contro
 
 * :mod:`.tomlcheck`: TOML read with one-line errors; :mod:`.documents`: what the source
   documents publish (numbers only, beside which a run prints its own); :mod:`.bundled`:
-  the scenarios and plans that come with antsim, found by name;
+  the scenarios and plans that come with antsim, found by name; :mod:`.progress`: progress
+  of long work, on a terminal and off one;
 * :mod:`.world`: the simulated telescope (sky, weather, mount, physical effects, beam,
   receiver, camera) and the protocol's implementation;
 * :mod:`.scenario`: scenario files, read into the world's and the controller's settings

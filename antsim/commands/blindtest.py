@@ -37,6 +37,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
     parser.add_argument("--out", metavar="FILE", default=None,
                         help="also write the JSON report to FILE")
+    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                        help="a progress bar and a line per case, or none (default: on a "
+                             "terminal; off one, a line every few seconds to stderr)")
     parser.epilog = ("Scores: confusion table by effect, correct identification of non-null "
                      "cases, false alarms on null cases, amplitude recovered within 3 sigma.")
 
@@ -44,6 +47,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 def main(args: argparse.Namespace) -> int:
     from antsim.bundled import find
     from antsim.diagnose.blind import run_blindtest
+    from antsim.progress import Progress
     from antsim.scenario import load_scenario
 
     if args.n < 1:
@@ -51,17 +55,19 @@ def main(args: argparse.Namespace) -> int:
     if args.jobs < 1:
         raise InputError("command line", "--jobs", args.jobs, "must be at least 1")
     scenario = load_scenario(find(args.scenario, field="--scenario"))
-    show = sys.stderr.isatty() and not args.json
+    with Progress("blindtest", args.progress) as shown:
+        shown.stage("cases", total=args.n, unit="case")
 
-    def progress(case) -> None:
-        if show:
-            mark = "ok" if case.correct else ("group" if case.group_ok else "MISS")
-            print(f"case {case.index:4d}: hidden {case.hidden:<24} named {case.named:<24} "
-                  f"{mark}", file=sys.stderr)
+        def progress(case) -> None:
+            if shown.mode == "bar":
+                mark = "ok" if case.correct else ("group" if case.group_ok else "MISS")
+                shown.write(f"case {case.index:4d}: hidden {case.hidden:<24} named "
+                            f"{case.named:<24} {mark}", file=sys.stderr)
+            shown.advance()
 
-    report = run_blindtest(scenario, n=args.n, seed=args.seed, n_sims=args.sims,
-                           cache_dir=args.cache, use_cache=not args.no_cache, jobs=args.jobs,
-                           progress=progress)
+        report = run_blindtest(scenario, n=args.n, seed=args.seed, n_sims=args.sims,
+                               cache_dir=args.cache, use_cache=not args.no_cache,
+                               jobs=args.jobs, progress=progress)
     doc = report.to_json()
     if args.out:
         Path(args.out).write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")

@@ -57,6 +57,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scenario", default="ghigo1990",
                         help="the 1990 scenario: a name or a TOML file (default: ghigo1990, "
                              "the one that comes with antsim)")
+    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                        help="a progress bar, or none (default: a bar on a terminal, a line "
+                             "every few seconds to stderr off one)")
     parser.epilog = ("Runs three campaigns (24 h, 12 h, 24 h of simulated time); about half a "
                      "minute. Writes DIR/demo.html, DIR/demo.json (the numbers quoted) and "
                      "DIR/figures/.")
@@ -70,7 +73,10 @@ def main(args: argparse.Namespace) -> int:
     if out.is_dir() and any(out.iterdir()) and not (out / "demo.html").exists():
         raise InputError("command line", "--out", str(out),
                          "is not empty and holds no earlier demo", "choose a new directory")
-    run_demo(out, scenario_path)
+    from antsim.progress import Progress
+
+    with Progress("demo", args.progress) as progress:
+        run_demo(out, scenario_path, echo=progress.write, on_chapter=progress.stage)
     return 0
 
 
@@ -88,11 +94,15 @@ class Chapter:
 class _Story:
     """Collects chapters for demo.html and prints their captions as they are told."""
 
-    def __init__(self, echo: Callable[[str], None]):
+    def __init__(self, echo: Callable[[str], None],
+                 on_chapter: Callable[[str], None] | None = None):
         self.echo = echo
+        self.on_chapter = on_chapter
         self.chapters: list[Chapter] = []
 
     def chapter(self, title: str) -> Chapter:
+        if self.on_chapter is not None:
+            self.on_chapter(title)
         self.chapters.append(Chapter(title))
         self.echo("")
         self.echo(title)
@@ -133,15 +143,17 @@ def _edit(text: str, old: str, new: str, where: str) -> str:
 
 
 def run_demo(out: Path, scenario_path: Path,
-             echo: Callable[[str], None] = print) -> dict[str, Any]:
-    """Tell the story into ``out``; returns the numbers a test or a teacher may want."""
+             echo: Callable[[str], None] = print,
+             on_chapter: Callable[[str], None] | None = None) -> dict[str, Any]:
+    """Tell the story into ``out``; returns the numbers a test or a teacher may want.
+    ``on_chapter`` is told each chapter's title as it starts (the command's progress)."""
     from antsim.run.html import Section, write_report
     from antsim.scenario import load_scenario
 
     t0 = time.perf_counter()
     out.mkdir(parents=True, exist_ok=True)
     figdir = out / "figures"
-    story = _Story(echo)
+    story = _Story(echo, on_chapter)
     base_text = scenario_path.read_text(encoding="utf-8")
     scenario = load_scenario(scenario_path)
     numbers: dict[str, Any] = {}
@@ -589,7 +601,7 @@ def run_diagnose_json(recordings: Path, scenario: Path, out_dir: Path
 
     stdout, stderr = io.StringIO(), io.StringIO()
     argv = ["diagnose", str(recordings), "--scenario", str(scenario), "--json",
-            "--out", str(out_dir)]
+            "--out", str(out_dir), "--no-progress"]
     with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(stderr):
         try:
             status = cli_main(argv)

@@ -50,6 +50,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="neither read nor write the cache")
     parser.add_argument("--list", action="store_true",
                         help="print the candidate library (effects, terms, signatures) and exit")
+    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                        help="a progress bar, or none (default: a bar on a terminal, a line "
+                             "every few seconds to stderr off one)")
     parser.epilog = (
         "Selection: forward addition by a family-corrected chi^2 or F test (sin/cos pairs "
         "jointly), refusing effects correlated above 0.95 with the model, confirmed on held-out "
@@ -95,28 +98,36 @@ def main(args: argparse.Namespace) -> int:
             from antsim.plan.streaming import prestart
 
             prestart(args.jobs, scenario)
-    from antsim.diagnose import diagnose, load_observations
+    from antsim.progress import Progress
 
-    obs = load_observations(args.recordings)
-    if scenario is not None and obs.kind == "tpoint":
-        raise InputError(args.recordings, "--scenario", args.scenario,
-                         "a TPOINT data file has no times or sources to simulate against",
-                         "diagnose it without --scenario")
-    try:
-        diag = diagnose(obs, scenario, args.model, n_sims=args.sims, cache_dir=args.cache,
-                        use_cache=not args.no_cache, jobs=args.jobs)
-    except ValueError as err:
-        if isinstance(err, InputError):
-            raise
-        raise InputError(args.recordings, "observations", obs.n, str(err)) from None
-    written = None
-    if args.out:
-        from antsim.diagnose.modelit import resimulation_words, write_outputs
+    with Progress("diagnose", args.progress) as progress:
+        progress.stage("reading the recordings")
+        from antsim.diagnose import diagnose, load_observations
 
-        resim = 4 if args.resimulate is None else args.resimulate
-        written = write_outputs(diag, args.out, scenario, resim if scenario else 0,
-                                cache_dir=args.cache, use_cache=not args.no_cache,
-                                jobs=args.jobs)
+        obs = load_observations(args.recordings)
+        if scenario is not None and obs.kind == "tpoint":
+            raise InputError(args.recordings, "--scenario", args.scenario,
+                             "a TPOINT data file has no times or sources to simulate against",
+                             "diagnose it without --scenario")
+        progress.stage("the noise the scenario predicts (simulations) and the candidate "
+                       "effects" if scenario is not None else "testing the candidate effects")
+        try:
+            diag = diagnose(obs, scenario, args.model, n_sims=args.sims, cache_dir=args.cache,
+                            use_cache=not args.no_cache, jobs=args.jobs)
+        except ValueError as err:
+            if isinstance(err, InputError):
+                raise
+            raise InputError(args.recordings, "observations", obs.n, str(err)) from None
+        written = None
+        if args.out:
+            from antsim.diagnose.modelit import resimulation_words, write_outputs
+
+            resim = 4 if args.resimulate is None else args.resimulate
+            progress.stage("writing the outputs" + (f" and re-simulating {resim} times"
+                                                    if scenario and resim else ""))
+            written = write_outputs(diag, args.out, scenario, resim if scenario else 0,
+                                    cache_dir=args.cache, use_cache=not args.no_cache,
+                                    jobs=args.jobs)
     if args.json:
         doc = diag.to_json()
         if written is not None:

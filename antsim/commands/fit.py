@@ -45,6 +45,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="plain least squares on every observation (no outlier rejection)")
     parser.add_argument("--include-masked", action="store_true",
                         help="also fit the observations a TPOINT file masks with ';'")
+    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                        help="a progress bar, or none (default: a bar on a terminal, a line "
+                             "every few seconds to stderr off one)")
     parser.epilog = (
         "Robust by default: least-absolute-deviation fit, reject beyond 4x the mean absolute "
         "deviation, least squares, reject beyond 3x the rms, final least squares (Ghigo 1990). "
@@ -147,14 +150,21 @@ def main(args: argparse.Namespace) -> int:
     if target is not None and (target.is_dir() or not target.parent.is_dir()):
         raise InputError("command line", "--write-model", str(target),
                          "is a directory" if target.is_dir() else "its folder does not exist")
-    data = _read_data(path, fmt, args.include_masked)
-    try:
-        result = fit_model(data, terms, robust=not args.no_robust, name=model_name,
-                           fixed=fixed)
-    except InputError:
-        raise
-    except ValueError as err:  # too few observations, a term infinite at the zenith, ...
-        raise InputError(str(path), "observations", len(data), str(err)) from None
+    from antsim.progress import Progress
+
+    with Progress("fit", args.progress) as progress:
+        progress.stage("reading")
+        data = _read_data(path, fmt, args.include_masked)
+        progress.stage(f"fitting {len(data)} observations")
+        try:
+            result = fit_model(data, terms, robust=not args.no_robust, name=model_name,
+                               fixed=fixed)
+        except InputError:
+            raise
+        except ValueError as err:  # too few observations, a term infinite at the zenith, ...
+            raise InputError(str(path), "observations", len(data), str(err)) from None
+        progress.stage("the honest sigma (jackknife)")
+        result.sigma_honest_arcsec  # noqa: B018 (computed on first use: computed here)
     if target is not None:
         from controller.pointing.tpoint import TPointModel, write_mod
         from controller.pointing.vocabulary import in_tpoint_terms

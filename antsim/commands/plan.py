@@ -35,7 +35,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-answers", action="store_true",
                         help="skip the plan's questions (duration, sources, coverage)")
     parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
-                        help="progress bar (default: when stderr is a terminal)")
+                        help="a progress bar, or none (default: a bar on a terminal, a line "
+                             "every few seconds to stderr off one)")
     parser.epilog = ("Results are the same for any --workers or --scheduler: member seeds "
                      "derive from the plan seed and the member index.")
 
@@ -44,6 +45,7 @@ def main(args: argparse.Namespace) -> int:
     from antsim.bundled import find
     from antsim.plan.planfile import MAX_MEMBERS, load_plan
     from antsim.plan.study import run_plan
+    from antsim.progress import Progress
 
     if args.members is not None and not 2 <= args.members <= MAX_MEMBERS:
         raise InputError("command line", "--members", args.members,
@@ -57,25 +59,28 @@ def main(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else None
     if out is not None and out.exists() and not out.is_dir():
         raise InputError("command line", "--out", str(out), "exists and is not a directory")
-    plan = load_plan(find(args.plan, "plan"))
+    with Progress("plan", args.progress) as progress:
+        progress.stage("reading the plan")
+        plan = load_plan(find(args.plan, "plan"))
 
-    def log(message: str) -> None:
-        if args.progress or (args.progress is None and sys.stderr.isatty()):
-            print(message, file=sys.stderr)
+        def log(message: str) -> None:
+            if progress.mode != "off":
+                progress.write(message, file=sys.stderr)
 
-    result = run_plan(plan, workers=args.workers, scheduler=args.scheduler,
-                      members=args.members, progress=args.progress,
-                      answers=not args.no_answers, log=log)
-    doc = result.to_json()
-    text = result.text()
-    if out is not None:
-        from antsim.figures.plan import plan_figures
+        result = run_plan(plan, workers=args.workers, scheduler=args.scheduler,
+                          members=args.members, progress=progress,
+                          answers=not args.no_answers, log=log)
+        doc = result.to_json()
+        text = result.text()
+        if out is not None:
+            from antsim.figures.plan import plan_figures
 
-        out.mkdir(parents=True, exist_ok=True)
-        (out / "plan.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
-        (out / "plan.txt").write_text(result.text(timing=False), encoding="utf-8")
-        figures = plan_figures(doc, out)
-        text += f"wrote {out}/: plan.json plan.txt and {len(figures)} figures\n"
+            progress.stage("figures")
+            out.mkdir(parents=True, exist_ok=True)
+            (out / "plan.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+            (out / "plan.txt").write_text(result.text(timing=False), encoding="utf-8")
+            figures = plan_figures(doc, out)
+            text += f"wrote {out}/: plan.json plan.txt and {len(figures)} figures\n"
     if args.json:
         print(json.dumps(doc, indent=2))
     else:

@@ -22,7 +22,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--resume", action="store_true",
                         help="continue an interrupted run in DIR (byte-identical result)")
     parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
-                        help="progress bar (default: when stderr is a terminal)")
+                        help="a progress bar, or none (default: a bar on a terminal, a line "
+                             "every few seconds to stderr off one)")
     parser.add_argument("--no-report", action="store_true",
                         help="skip the figures and report.html (faster)")
     parser.add_argument("--connect", default=None, metavar="HOST:PORT",
@@ -32,6 +33,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def main(args: argparse.Namespace) -> int:
     from antsim.bundled import find
+    from antsim.progress import Progress
     from antsim.run.outputs import write_outputs
     from antsim.run.runner import run_campaign
     from antsim.scenario import load_scenario
@@ -64,16 +66,18 @@ def main(args: argparse.Namespace) -> int:
                 raise InputError("command line", option, True, "not with --connect",
                                  "the simulation is the server's (antsim serve --seed)")
         antenna, seed = connect(scenario, args.connect)
-    try:
-        result = run_campaign(scenario, out, seed=seed, model=model, resume=args.resume,
-                              show_progress=args.progress, antenna=antenna)
-    except ConnectionError as err:  # controller.wire.ConnectionLostError, mid-campaign
-        print(f"antsim run: error: {err}; the scans recorded so far are in "
-              f"{out / 'recordings.ecsv'}", file=sys.stderr)
-        return 1
-    finally:
-        if antenna is not None:
-            antenna.close()
-    summary = write_outputs(result, report=not args.no_report)
+    with Progress("run", args.progress) as progress:
+        try:
+            result = run_campaign(scenario, out, seed=seed, model=model, resume=args.resume,
+                                  show_progress=progress, antenna=antenna)
+        except ConnectionError as err:  # controller.wire.ConnectionLostError, mid-campaign
+            progress.close()
+            print(f"antsim run: error: {err}; the scans recorded so far are in "
+                  f"{out / 'recordings.ecsv'}", file=sys.stderr)
+            return 1
+        finally:
+            if antenna is not None:
+                antenna.close()
+        summary = write_outputs(result, report=not args.no_report, progress=progress)
     print(summary, file=sys.stdout)
     return 0

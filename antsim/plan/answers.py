@@ -30,6 +30,7 @@ from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 from controller.errors import InputError
 from controller.pointing.model import PointingModel
 
+from ..progress import Progress
 from .ensemble import Executor, Job, task_noise, task_record
 from .fisher import predict, truth_vector
 from .planfile import CoverageQuestion, DurationQuestion, Plan, SourcesQuestion
@@ -47,10 +48,12 @@ MAX_EXHAUSTIVE = 12
 
 
 def answer_questions(plan: Plan, variants: list, executor: Executor,
-                     log: Callable[[str], None] | None = None) -> dict[str, list]:
+                     log: Callable[[str], None] | None = None,
+                     progress: Progress | None = None) -> dict[str, list]:
     """Every question of the plan, answered. The deterministic runs the answers need (the
     long campaigns of the duration questions, the candidate source lists) are all submitted
-    at once, so they run in parallel."""
+    at once, so they run in parallel; ``progress`` counts their steps (a schedule, then a
+    noise model, per run)."""
     out: dict[str, list] = {"duration": [], "sources": [], "coverage": [], "separation": []}
     todo: list[Any] = []
     # the coverage questions need only the long deterministic runs, submitted first
@@ -70,7 +73,13 @@ def answer_questions(plan: Plan, variants: list, executor: Executor,
         short = sources_shortlist(q, vr)
         todo.append(("sources", q, short))
     scenarios = [sc for _, _, items in todo for sc in _scenarios(items)]
-    prepared = iter(prepare(executor, scenarios, plan))
+    if progress is not None:
+        progress.stage(f"answering {len(todo) + len(cover)} questions: "
+                       f"{len(scenarios) + len(cover)} deterministic runs",
+                       total=2 * len(scenarios) + len(cover), unit="step")
+    prepared = iter(prepare(executor, scenarios, plan, progress))
+    if progress is not None:
+        progress.stage("answering: the predicted sigmas of every duration and source list")
     for kind, q, items in todo:
         if kind == "duration":
             out["duration"].append(duration_answer(q, items[0], *next(prepared)))
@@ -82,6 +91,8 @@ def answer_questions(plan: Plan, variants: list, executor: Executor,
         if log:
             log(f"answering {q.key}: coverage below dec {q.dec_max_deg:g} deg ({q.based_on})")
         out["coverage"].append(coverage_answer(q, sc, done.result()))
+        if progress is not None:
+            progress.advance()
     for v in variants:
         out["separation"].append({"variant": v.spec.name, "level": plan.separation_level,
                                   "pairs": v.cannot_separate()})
@@ -94,9 +105,10 @@ def _scenarios(items: Any) -> list:
     return list(items)
 
 
-def prepare(executor: Executor, scenarios: list, plan: Plan) -> list[tuple]:
+def prepare(executor: Executor, scenarios: list, plan: Plan,
+            progress: Progress | None = None) -> list[tuple]:
     """(shared schedule, noise model, fitted terms) of each scenario's deterministic run,
-    computed in parallel on the executor."""
+    computed in parallel on the executor; ``progress`` advances by one per step done."""
     pending: dict[Any, tuple[str, int]] = {}
     jobs: list[Any] = [None] * len(scenarios)
     out: list[Any] = [None] * len(scenarios)
@@ -105,8 +117,12 @@ def prepare(executor: Executor, scenarios: list, plan: Plan) -> list[tuple]:
         pending[executor.submit(task_record, q)] = ("record", i)
     token = uuid.uuid4().hex
     while pending:
+        if progress is not None:
+            progress.detail(_running(pending.values(), scenarios))
         done = next(iter(executor.as_completed(list(pending))))
         kind, i = pending.pop(done)
+        if progress is not None:
+            progress.advance()
         if kind == "record":
             terms, fit_name = scenarios[i].controller.fit_spec()
             job = Job(f"answer:{token}:{i}", scenarios[i], quiet[i], done.result(),
@@ -117,6 +133,20 @@ def prepare(executor: Executor, scenarios: list, plan: Plan) -> list[tuple]:
         else:
             out[i] = (jobs[i].shared, done.result()[0], jobs[i].terms)
     return out
+
+
+def _span(duration_s: float) -> str:
+    return (f"{duration_s / 86400.0:.3g}-day" if duration_s >= 2 * 86400.0
+            else f"{duration_s / 3600.0:.3g}-hour")
+
+
+def _running(pending, scenarios: list) -> str:
+    """What :func:`prepare` still waits for, in words (the longest schedules first)."""
+    steps = sorted(pending, key=lambda p: (p[0] != "record", -scenarios[p[1]].duration_s))
+    words = [f"{_span(scenarios[i].duration_s)} schedule" if kind == "record"
+             else "noise model" for kind, i in steps]
+    shown = ", ".join(words[:3]) + (f" and {len(words) - 3} more" if len(words) > 3 else "")
+    return f"running {shown}"
 
 
 # ---------------------------------------------------------------------------------------------

@@ -9,7 +9,6 @@ blocks report them. It returns a :class:`PlanResult` whose :meth:`~PlanResult.to
 from __future__ import annotations
 
 import math
-import sys
 import time
 import uuid
 from collections.abc import Callable
@@ -18,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from ..progress import Progress, progress_for
 from ..scenario import Scenario
 from .ensemble import (
     Executor,
@@ -251,36 +251,42 @@ def _f(x: float | None, spec: str) -> str:
 
 
 def run_plan(plan: Plan, workers: int | None = None, scheduler: str | None = None,
-             members: int | None = None, progress: bool | None = None,
+             members: int | None = None, progress: Progress | bool | None = None,
              executor: Executor | None = None, answers: bool = True,
              log: Callable[[str], None] | None = None) -> PlanResult:
-    """Predictions and Monte Carlo of every variant of ``plan`` (and its answers)."""
+    """Predictions and Monte Carlo of every variant of ``plan`` (and its answers).
+    ``progress``: the command's :class:`~antsim.progress.Progress`, or whether to show one
+    (None: a bar on a terminal, lines off one)."""
     t0 = time.perf_counter()
+    shown, owned = progress_for(progress, "plan")
     own = executor is None
-    executor = executor or make_executor(workers, scheduler)
     try:
-        variants = _run_variants(plan, executor, members, progress)
+        if own:
+            shown.stage(f"starting {workers if workers is not None else 'the'} workers"
+                        if scheduler is None else f"connecting to {scheduler}")
+        executor = executor or make_executor(workers, scheduler)
+        variants = _run_variants(plan, executor, members, shown)
         result = PlanResult(plan, variants, engine=executor.description)
         if answers and (plan.durations or plan.sources or plan.coverage):
             from .answers import answer_questions
 
-            result.answers = answer_questions(plan, variants, executor, log=log)
+            result.answers = answer_questions(plan, variants, executor, log=log,
+                                              progress=shown)
     finally:
-        if own:
+        if own and executor is not None:
             executor.close()
+        if owned:
+            shown.close()
     result.wall_s = time.perf_counter() - t0
     return result
 
 
 def _run_variants(plan: Plan, executor: Executor, members: int | None,
-                  progress: bool | None) -> list[VariantResult]:
+                  progress: Progress) -> list[VariantResult]:
     n_var = len(plan.variants)
     counts = [members or spec.members or plan.members for spec in plan.variants]
-    show = sys.stderr.isatty() if progress is None else progress
-    from tqdm import tqdm
-
-    bar = tqdm(total=sum(counts), unit="member", desc=f"plan {plan.name}", disable=not show,
-               leave=False)
+    progress.stage(f"{n_var} variants: schedules, noise models and members",
+                   total=sum(counts), unit="member")
     token = uuid.uuid4().hex
     quiet = [quiet_scenario(s) for s in plan.scenarios]
     pending: dict[Any, tuple[str, int, Any]] = {}
@@ -290,35 +296,37 @@ def _run_variants(plan: Plan, executor: Executor, members: int | None,
     shared: list[SharedSchedule | None] = [None] * n_var
     noise: list[Any] = [None] * n_var
     parts: list[list[MemberResults]] = [[] for _ in range(n_var)]
-    try:
-        while pending:
-            done = next(iter(executor.as_completed(list(pending))))
-            kind, v, extra = pending.pop(done)
-            value = done.result()
-            if kind == "record":
-                shared[v] = value
-                terms, fit_name = plan.scenarios[v].controller.fit_spec()
-                job = Job(f"{token}:{v}", plan.scenarios[v], quiet[v], value, tuple(terms),
-                          fit_name, plan.seed)
-                jobs[v] = executor.share(job)
-                pending[executor.submit(task_noise, jobs[v], N_THERMAL)] = ("noise", v, None)
-                size = block_size(plan.scenarios[v].duration_s, plan.block_members)
-                for start in range(0, counts[v], size):
-                    block = tuple(range(start, min(counts[v], start + size)))
-                    pending[executor.submit(task_block, jobs[v], block)] = ("block", v, block)
-            elif kind == "noise":
-                noise[v] = value
-            elif kind == "block":
-                results, diverged = value
-                parts[v].append(results)
-                bar.update(len(extra) - len(diverged))
-                for m in diverged:
-                    pending[executor.submit(task_full, jobs[v], m)] = ("full", v, m)
-            else:
-                parts[v].append(value)
-                bar.update(1)
-    finally:
-        bar.close()
+    while pending:
+        kinds = [kind for kind, _, _ in pending.values()]
+        progress.detail(", ".join(f"{kinds.count(k)} {word} to go" for k, word in
+                                  (("record", "schedules"), ("noise", "noise models"))
+                                  if k in kinds))
+        done = next(iter(executor.as_completed(list(pending))))
+        kind, v, extra = pending.pop(done)
+        value = done.result()
+        if kind == "record":
+            shared[v] = value
+            terms, fit_name = plan.scenarios[v].controller.fit_spec()
+            job = Job(f"{token}:{v}", plan.scenarios[v], quiet[v], value, tuple(terms),
+                      fit_name, plan.seed)
+            jobs[v] = executor.share(job)
+            pending[executor.submit(task_noise, jobs[v], N_THERMAL)] = ("noise", v, None)
+            size = block_size(plan.scenarios[v].duration_s, plan.block_members)
+            for start in range(0, counts[v], size):
+                block = tuple(range(start, min(counts[v], start + size)))
+                pending[executor.submit(task_block, jobs[v], block)] = ("block", v, block)
+        elif kind == "noise":
+            noise[v] = value
+        elif kind == "block":
+            results, diverged = value
+            parts[v].append(results)
+            progress.advance(len(extra) - len(diverged))
+            for m in diverged:
+                pending[executor.submit(task_full, jobs[v], m)] = ("full", v, m)
+        else:
+            parts[v].append(value)
+            progress.advance(1)
+    progress.stage("predictions (Fisher)")
     out = []
     for v, spec in enumerate(plan.variants):
         nm, unshareable = noise[v]

@@ -15,11 +15,13 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from antsim.documents import Reference, reference_for
+from antsim.progress import Progress
 from controller.astro.sun import NIGHT_SUN_MAX_DEG
 from controller.pointing.result import FitResult
+from controller.pointing.signs import UNITS, sign_convention
 from controller.pointing.tpoint import TPointModel, write_mod
 from controller.pointing.variants import VARIANTS, fit_variants
-from controller.pointing.vocabulary import UNITS, in_tpoint_terms, sign_convention
+from controller.pointing.vocabulary import in_tpoint_terms
 
 from .inuse import Pointing, pointing_in_use
 from .runner import RunResult
@@ -132,11 +134,14 @@ def _points_lines(points: Mapping[str, int], reference: Reference | None) -> lis
     return lines
 
 
-def write_outputs(result: RunResult, report: bool = True) -> str:
+def write_outputs(result: RunResult, report: bool = True,
+                  progress: Progress | None = None) -> str:
     """Write the products of a run into its output directory; return a short summary.
     With ``report`` also the figures (``figures/``) and ``report.html``
-    (:mod:`antsim.run.report`)."""
+    (:mod:`antsim.run.report`); ``progress``: the command's, told each stage."""
     out = Path(result.out_dir)
+    if progress is not None:
+        progress.stage("fits A-F")
     fits = run_fits(result)
     doc = {k: (v.to_json() if v is not None else None) for k, v in fits.items()}
     fit_a = fits.get("A")
@@ -178,6 +183,8 @@ def write_outputs(result: RunResult, report: bool = True) -> str:
     if report:
         from .report import write_run_report
 
+        if progress is not None:
+            progress.stage("figures and report")
         _, figures = write_run_report(result, fits, out, in_use)
         written += f" report.html figures/ ({len(figures)} figures)"
     return summary + f"\nwrote {out}/: {written}"

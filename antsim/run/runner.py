@@ -8,7 +8,6 @@ and ``truth.json`` into an output directory. Same scenario and seed give the sam
 from __future__ import annotations
 
 import json
-import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -17,6 +16,7 @@ from pathlib import Path
 import simpy
 
 from antsim._version import __version__
+from antsim.progress import Progress, progress_for
 from antsim.scenario import Scenario
 from antsim.world.world import World
 from controller.astro.earth import UtcLabeller
@@ -166,17 +166,25 @@ def check_scenario(scenario: Scenario, observer=None, targets=None) -> None:
 
 def run_campaign(scenario: Scenario, out_dir: str | Path, seed: int | None = None,
                  model: PointingModel | None = None, resume: bool = False,
-                 show_progress: bool | None = None,
+                 show_progress: Progress | bool | None = None,
                  antenna: Antenna | None = None) -> RunResult:
     """Simulate into ``out_dir``: recordings.ecsv (scan by scan) and truth.json (not with
-    ``antenna``, see :func:`simulate`: the truth is the antenna's)."""
+    ``antenna``, see :func:`simulate`: the truth is the antenna's). ``show_progress``: the
+    command's :class:`~antsim.progress.Progress`, or whether to show one (None: a bar on a
+    terminal, lines off one)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     seed = scenario.seed if seed is None else int(seed)
     use_model = model if model is not None else scenario.controller.model
     meta = recording_meta(scenario, seed, use_model)
     check_scenario(scenario)  # refuse before anything is written
-    progress, close_bar = _progress(scenario.duration_s, show_progress)
+    shown, owned = progress_for(show_progress, "run")
+    hours = round(scenario.duration_s / 3600.0, 2)
+    shown.stage("campaign", total=hours, unit="h")
+
+    def progress(t_s: float) -> None:
+        shown.set(round(min(t_s, scenario.duration_s) / 3600.0, 2))
+
     columns = recording_columns(scenario.controller.mount,
                                 bool(scenario.controller.feed_angles_deg))
     with RecordingWriter(out / "recordings.ecsv", meta, resume=resume,
@@ -185,7 +193,8 @@ def run_campaign(scenario: Scenario, out_dir: str | Path, seed: int | None = Non
             result = simulate(scenario, seed, model, sink=writer.write_scan, progress=progress,
                               antenna=antenna)
         finally:
-            close_bar()
+            if owned:
+                shown.close()
     result.out_dir = out
     if antenna is None:
         (out / "truth.json").write_text(json.dumps(result.truth, indent=2) + "\n",
@@ -193,19 +202,3 @@ def run_campaign(scenario: Scenario, out_dir: str | Path, seed: int | None = Non
     return result
 
 
-def _progress(total_s: float, show: bool | None):
-    """A tqdm bar over campaign hours on a terminal; nothing otherwise."""
-    if show is None:
-        show = sys.stderr.isatty()
-    if not show:
-        return None, lambda: None
-    from tqdm import tqdm
-
-    bar = tqdm(total=round(total_s / 3600.0, 2), unit="h", desc="campaign", leave=False,
-               bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total:.1f} h")
-
-    def update(t_s: float) -> None:
-        bar.n = round(min(t_s, total_s) / 3600.0, 2)
-        bar.refresh()
-
-    return update, bar.close
