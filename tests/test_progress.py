@@ -5,6 +5,7 @@ for whole commands, so that no test waits for seconds to pass."""
 from __future__ import annotations
 
 import io
+import json
 import re
 
 import pytest
@@ -103,6 +104,12 @@ def test_plan_writes_lines_through_every_stage(fast_lines, repo_root, tmp_path, 
     stages = {x.split(": ")[1].split(":")[0].split(",")[0]
               for x in _lines(capsys.readouterr().err, "plan")}
     assert {"1 variants", "answering 1 questions", "figures"} <= stages, stages
+    # its outputs say their units and sign
+    doc = json.loads((tmp_path / "out" / "plan.json").read_text())
+    assert doc["units"] == "arcsec"
+    assert doc["sign_convention"] == "TPOINT's: true (observed) = raw (encoder) + correction"
+    assert "all arcsec; sign of the terms: TPOINT's: true (observed) = raw (encoder) + " \
+        "correction" in (tmp_path / "out" / "plan.txt").read_text()
 
 
 def test_diagnose_writes_lines(fast_lines, repo_root, capsys):

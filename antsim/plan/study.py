@@ -17,6 +17,8 @@ from typing import Any
 
 import numpy as np
 
+from controller.pointing.signs import UNITS, sign_convention
+
 from ..progress import Progress, progress_for
 from ..scenario import Scenario
 from .ensemble import (
@@ -203,9 +205,15 @@ class PlanResult:
             "description": self.plan.description,
             "scenario": self.plan.scenario.name,
             "seed": self.plan.seed,
+            "units": UNITS,
+            "sign_convention": self.sign(),
             "plans": [v.to_json() for v in self.variants],
             "answers": self.answers,
         }
+
+    def sign(self) -> str:
+        """The sign convention of the variants' fitted terms, in words."""
+        return sign_convention(dict.fromkeys(n for v in self.variants for n in v.terms))
 
     def text(self, timing: bool = True) -> str:
         """The printed tables and answers (``timing``: with the wall time and the engine,
@@ -216,7 +224,7 @@ class PlanResult:
                  "sig_F: predicted from the design and the noise model (Fisher); sig_MC: "
                  "scatter of the Monte Carlo fits (+- its sampling error); bias_MC: mean fit "
                  "minus truth (+- its error), bias_F: predicted; TPOINT/honest: mean of the "
-                 "fitter's own sigmas; all arcsec", ""]
+                 f"fitter's own sigmas; all {UNITS}; sign of the terms: {self.sign()}", ""]
         for v in self.variants:
             lines += [v.text(), ""]
         from .answers import answers_text
