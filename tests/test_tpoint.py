@@ -129,6 +129,65 @@ def test_equatorial_decimal_records_parse_but_do_not_fit():
     assert data.lon_obs_deg[1] == 190.0  # not converted: not South-based azimuth
     with pytest.raises(InputError, match="not supported by the alt-az term set"):
         data.pointing_data()
+    # the user may say otherwise (--mount altaz): then the records are South-based Az/El
+    forced = read_tpoint(DATA / "equat_decimal.dat", mount="altaz")
+    assert forced.coordinates == "azel" and forced.notes == ()
+    assert forced.lon_obs_deg[1] == 10.0
+    assert len(forced.pointing_data()) == 2
+
+
+def test_decimal_records_without_a_mount_option_are_read_as_altaz_with_a_note(tmp_path):
+    """Many TPOINT files (the MMT's among them) carry no ': ALTAZ' line although their
+    records are Az/El: read so, with a one-line note naming the file; the same numbers as
+    the file with the line, or with mount="altaz" (no note then)."""
+    with_line = parse_tpoint(BASE, "with.dat")
+    without = parse_tpoint(BASE.replace(": ALTAZ\n", ""), "without.dat")
+    assert without.options == () and without.coordinates == "azel"
+    assert without.mount == "ALTAZ"
+    assert len(without.notes) == 1 and "\n" not in without.notes[0]
+    assert without.notes[0].startswith("without.dat: no mount option line")
+    a, b = with_line.pointing_data(), without.pointing_data()
+    for name in ("az_rad", "el_rad", "xel_arcsec", "el_arcsec"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    told = parse_tpoint(BASE.replace(": ALTAZ\n", ""), "told.dat", mount="altaz")
+    assert told.coordinates == "azel" and told.notes == ()
+    with pytest.raises(InputError, match="--mount"):
+        parse_tpoint(BASE, "x.dat", mount="equat")
+
+
+def test_a_file_that_cannot_be_altaz_keeps_the_clear_error():
+    """No mount option, but a second coordinate below 0 deg (a declination, not an
+    elevation): TPOINT's default, equatorial, and the one-line error; sexagesimal RA/Dec
+    records cannot be read as Az/El even when asked."""
+    text = BASE.replace(": ALTAZ\n", "").replace("190.0 45.0 190.01 45.004",
+                                                  "190.0 -45.0 190.01 -45.004")
+    data = parse_tpoint(text, "dec.dat")
+    assert data.coordinates == "decimal" and data.mount == "EQUAT" and data.notes == ()
+    with pytest.raises(InputError, match="without a mount option") as info:
+        data.pointing_data()
+    assert "\n" not in str(info.value)
+    with pytest.raises(InputError, match="cannot be read as Az/El"):
+        read_tpoint(DATA / "radec_sexagesimal.dat", mount="altaz")
+
+
+def test_fit_and_diagnose_print_the_note_in_one_line(tmp_path, capsys):
+    from antsim.cli import main as cli
+
+    path = tmp_path / "no_option.dat"
+    lines = BASE.replace(": ALTAZ\n", "").splitlines()
+    rng = np.random.default_rng(5)
+    body = [f"{a:.5f} {e:.5f} {a + rng.normal(0, 0.003):.5f} {e + rng.normal(0, 0.003):.5f}"
+            for a, e in zip(rng.uniform(0, 360, 30), rng.uniform(15, 85, 30), strict=True)]
+    path.write_text("\n".join([*lines[:3], *body, "END"]) + "\n", encoding="utf-8")
+    for argv in (["fit", str(path), "--json"], ["diagnose", str(path), "--json"]):
+        assert cli(argv) == 0
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith(f"note: {path}: no mount option"), err
+        assert cli([*argv, "--mount", "altaz"]) == 0
+        assert capsys.readouterr().err == ""
+    assert cli(["fit", str(DATA / "equat_decimal.dat")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "mount = 'EQUAT'" in err[0]
 
 
 # ---------------------------------------------------------------------------------------------

@@ -30,6 +30,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="baseline terms: a named model (ghigo10, tpoint8, ...), a model "
                              "file, or T1,T2,... (default: the scenario's fit model, else the "
                              "recordings' model in use, else IA IE NPAE CA AN AW TF TX)")
+    parser.add_argument("--mount", choices=("altaz",), default=None,
+                        help="a TPOINT file's decimal records are Az/El whatever its options "
+                             "say (a file without a mount option is read so, with a note)")
     parser.add_argument("--json", action="store_true",
                         help="print the result as JSON (DESIGN section 4)")
     parser.add_argument("--out", metavar="DIR",
@@ -104,7 +107,9 @@ def main(args: argparse.Namespace) -> int:
         progress.stage("reading the recordings")
         from antsim.diagnose import diagnose, load_observations
 
-        obs = load_observations(args.recordings)
+        obs = load_observations(args.recordings, mount=args.mount)
+        for note in obs.meta.get("notes", ()):
+            print(f"note: {note}", file=sys.stderr)
         if scenario is not None and obs.kind == "tpoint":
             raise InputError(args.recordings, "--scenario", args.scenario,
                              "a TPOINT data file has no times or sources to simulate against",

@@ -48,6 +48,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                         help="a progress bar, or none (default: a bar on a terminal, a line "
                              "every few seconds to stderr off one)")
+    parser.add_argument("--mount", choices=("altaz",), default=None,
+                        help="a TPOINT file's decimal records are Az/El whatever its options "
+                             "say (a file without a mount option is read so, with a note)")
     parser.epilog = (
         "Robust by default: least-absolute-deviation fit, reject beyond 4x the mean absolute "
         "deviation, least squares, reject beyond 3x the rms, final least squares (Ghigo 1990). "
@@ -112,11 +115,17 @@ def _terms_from_model(spec: str) -> tuple[tuple[str, ...], str]:
     return model.names, path.stem
 
 
-def _read_data(path: Path, fmt: str, include_masked: bool):
+def _read_data(path: Path, fmt: str, include_masked: bool, mount: str | None = None):
     if fmt == "tpoint":
         from controller.pointing.tpoint import read_tpoint
 
-        return read_tpoint(path).pointing_data(include_masked=include_masked)
+        data = read_tpoint(path, mount=mount)
+        for note in data.notes:
+            print(f"note: {note}", file=sys.stderr)
+        return data.pointing_data(include_masked=include_masked)
+    if mount is not None:
+        raise InputError(str(path), "--mount", mount, "applies to TPOINT data files only",
+                         "recordings name their mount in their metadata")
     try:
         recordings = importlib.import_module("controller.program.recordings")
     except ModuleNotFoundError as err:
@@ -154,7 +163,7 @@ def main(args: argparse.Namespace) -> int:
 
     with Progress("fit", args.progress) as progress:
         progress.stage("reading")
-        data = _read_data(path, fmt, args.include_masked)
+        data = _read_data(path, fmt, args.include_masked, args.mount)
         progress.stage(f"fitting {len(data)} observations")
         try:
             result = fit_model(data, terms, robust=not args.no_robust, name=model_name,

@@ -208,17 +208,22 @@ def _model_from_meta(meta: Mapping[str, Any]) -> PointingModel | None:
         return None
 
 
-def from_tpoint(path: str | Path, include_masked: bool = False) -> Observations:
-    """Observations from a TPOINT pointing data file (no time, source or weather columns)."""
+def from_tpoint(path: str | Path, include_masked: bool = False,
+                mount: str | None = None) -> Observations:
+    """Observations from a TPOINT pointing data file (no time, source or weather columns);
+    ``meta["notes"]`` carries the reader's notes (how a file without a mount option was
+    read)."""
     from controller.pointing.tpoint import read_tpoint
 
-    data = read_tpoint(path)
+    data = read_tpoint(path, mount=mount)
     pd = data.pointing_data(include_masked=include_masked)
     keep = np.ones(len(data), dtype=bool) if include_masked else ~data.masked
     rot = data.rotator_deg[keep] if data.has_rotator else None
     n = len(pd)
-    meta = {"latitude_deg": float(data.run.latitude_deg)} \
+    meta: dict[str, Any] = {"latitude_deg": float(data.run.latitude_deg)} \
         if hasattr(data.run, "latitude_deg") else {}
+    if data.notes:
+        meta["notes"] = list(data.notes)
     return Observations(
         t_s=np.arange(n, dtype=float), az_rad=np.asarray(pd.az_rad), el_rad=np.asarray(pd.el_rad),
         xel_arcsec=np.asarray(pd.xel_arcsec), el_arcsec=np.asarray(pd.el_arcsec),
@@ -226,8 +231,9 @@ def from_tpoint(path: str | Path, include_masked: bool = False) -> Observations:
         meta=meta, kind="tpoint", path=str(path))
 
 
-def load_observations(path: str | Path) -> Observations:
-    """Recordings (``.ecsv``) or TPOINT data, detected by content; InputError if neither."""
+def load_observations(path: str | Path, mount: str | None = None) -> Observations:
+    """Recordings (``.ecsv``) or TPOINT data, detected by content; InputError if neither.
+    ``mount="altaz"`` reads a TPOINT file's decimal records as Az/El (``--mount altaz``)."""
     from controller.pointing.tpoint import sniff_format
 
     path = Path(path)
@@ -239,7 +245,10 @@ def load_observations(path: str | Path) -> Observations:
                          "is a TPOINT model (.mod) file, not pointing data",
                          "pass a model with --model")
     if fmt == "tpoint":
-        return from_tpoint(path)
+        return from_tpoint(path, mount=mount)
+    if mount is not None:
+        raise InputError(str(path), "--mount", mount, "applies to TPOINT data files only",
+                         "recordings name their mount in their metadata")
     from controller.program.recordings import read_recordings
 
     table = read_recordings(path)

@@ -227,8 +227,12 @@ class TPointData:
       fifth column when present (NaN where absent);
     * ``"radec"`` (sexagesimal records): right ascension (hours converted to degrees) and
       declination, with ``lst_hours`` the sidereal time (NaN if absent);
-    * ``"decimal"`` (decimal records in a file without ``: ALTAZ``): the two coordinates as
-      written, degrees, not converted.
+    * ``"decimal"`` (decimal records in a file whose options name another mount, such as
+      ``: EQUAT``): the two coordinates as written, degrees, not converted.
+
+    A file of decimal records with no mount option at all (TPOINT would assume ``EQUAT``) is
+    read as alt-az when its second coordinate lies within 0..90 deg, as an elevation must,
+    and says so in ``notes``; ``mount="altaz"`` (``--mount altaz``) asks for it outright.
 
     ``obs`` is the true (catalogue) position and ``raw`` the indicated (encoder) one. Masked
     (``;``) observations are kept with ``masked`` true; ``line_numbers`` are 1-based.
@@ -250,6 +254,8 @@ class TPointData:
     source: str = "<memory>"
     has_end: bool = True
     comments: tuple[str, ...] = field(default=())
+    #: one-line notes for the user (e.g. how a file without a mount option was read)
+    notes: tuple[str, ...] = field(default=())
 
     def __len__(self) -> int:
         return int(self.lon_obs_deg.size)
@@ -323,12 +329,12 @@ class TPointData:
 
     @property
     def mount(self) -> str:
-        """``"ALTAZ"``, ``"EQUAT"`` or another mount option; TPOINT assumes EQUAT if none."""
-        for option in self.options:
-            word = option.split()[0].upper() if option.split() else ""
-            if word in ("ALTAZ", "EQUAT", "GIMBAL"):
-                return word
-        return "EQUAT"
+        """``"ALTAZ"``, ``"EQUAT"`` or another mount option; without one, ``"ALTAZ"`` when
+        the records were read as Az/El, else ``"EQUAT"`` (TPOINT's default)."""
+        word = _mount_option(self.options)
+        if word is not None:
+            return word
+        return "ALTAZ" if self.coordinates == "azel" else "EQUAT"
 
     @property
     def has_rotator(self) -> bool:
@@ -346,10 +352,13 @@ class TPointData:
 
         if self.coordinates != "azel":
             kind = "equatorial (RA/Dec)" if self.coordinates == "radec" else "non-alt-az"
+            if _mount_option(self.options) is None and self.coordinates == "decimal":
+                kind = "without a mount option and with second coordinates below 0 deg " \
+                       "(not elevations), TPOINT's default equatorial"
             raise InputError(
                 self.source, "mount", self.mount,
                 f"{kind} data are not supported by the alt-az term set yet",
-                "only ': ALTAZ' files with decimal Az/El records can be fitted",
+                "only decimal Az/El records (': ALTAZ', or --mount altaz) can be fitted",
             )
         keep = np.ones(len(self), dtype=bool) if include_masked else ~self.masked
         az_obs = self.lon_obs_deg[keep]
@@ -421,17 +430,47 @@ def _sexagesimal_record(tokens: list[str], where: str, content: str
     return (ra_obs, dec_obs, ra_raw, dec_raw, math.nan, lst), tuple(rest)
 
 
-def _coordinates(kind: str | None, options: list[str]) -> Literal["azel", "radec", "decimal"]:
-    """What the records' angles are: RA/Dec for sexagesimal records, else azimuth and
-    elevation with ``: ALTAZ``, else unspecified decimal degrees."""
+#: TPOINT's mount options (the first word of an option record)
+_MOUNT_OPTIONS = ("ALTAZ", "EQUAT", "GIMBAL")
+MOUNTS = ("altaz",)
+
+
+def _mount_option(options: Sequence[str]) -> str | None:
+    for option in options:
+        word = option.split()[0].upper() if option.split() else ""
+        if word in _MOUNT_OPTIONS:
+            return word
+    return None
+
+
+def _coordinates(kind: str | None, options: list[str], rows: np.ndarray, mount: str | None,
+                 source: str) -> tuple[Literal["azel", "radec", "decimal"], tuple[str, ...]]:
+    """What the records' angles are, and a note when that was assumed: RA/Dec for
+    sexagesimal records; azimuth and elevation with ``: ALTAZ`` or ``mount="altaz"``, or
+    with no mount option when every second coordinate is a possible elevation (0..90 deg);
+    else unspecified decimal degrees."""
     if kind == "sexagesimal":
-        return "radec"
-    first_words = [o.split()[0] for o in options if o.split()]
-    return "azel" if "ALTAZ" in first_words else "decimal"
+        if mount == "altaz":
+            raise InputError(source, "--mount", mount,
+                             "the records are sexagesimal RA/Dec, which cannot be read as "
+                             "Az/El")
+        return "radec", ()
+    option = _mount_option(options)
+    if option == "ALTAZ" or mount == "altaz":
+        return "azel", ()
+    if option is None and rows.size and (rows[:, 1] >= 0.0).all() \
+            and (rows[:, 3] >= 0.0).all():
+        return "azel", (f"{source}: no mount option line (': ALTAZ'); its decimal records "
+                        "were read as Az/El (alt-az), as their elevations allow; "
+                        "--mount altaz says so outright",)
+    return "decimal", ()
 
 
-def parse_tpoint(text: str, source: str = "<string>") -> TPointData:
-    """Parse the text of a TPOINT pointing data file; ``source`` names it in errors."""
+def parse_tpoint(text: str, source: str = "<string>", mount: str | None = None) -> TPointData:
+    """Parse the text of a TPOINT pointing data file; ``source`` names it in errors.
+    ``mount="altaz"`` reads decimal records as Az/El whatever the options say."""
+    if mount is not None and mount not in MOUNTS:
+        raise InputError(source, "--mount", mount, f"must be one of {', '.join(MOUNTS)}")
     caption: str | None = None
     options: list[str] = []
     comments: list[str] = []
@@ -503,8 +542,8 @@ def parse_tpoint(text: str, source: str = "<string>") -> TPointData:
     if run is None:
         raise InputError(source, "run parameters", "",
                          "no run-parameters record (latitude d m s ...) after the caption")
-    coordinates = _coordinates(kind, options)
     table = np.array(rows, dtype=float).reshape(-1, 6)
+    coordinates, notes = _coordinates(kind, options, table, mount, source)
     if coordinates == "azel":
         # South-based (TPOINT) to North-based azimuth: the only place this happens.
         table[:, 0] = (table[:, 0] + 180.0) % 360.0
@@ -519,7 +558,7 @@ def parse_tpoint(text: str, source: str = "<string>") -> TPointData:
         lon_obs_deg=arrays[0], lat_obs_deg=arrays[1], lon_raw_deg=arrays[2],
         lat_raw_deg=arrays[3], rotator_deg=arrays[4], lst_hours=arrays[5],
         masked=masked_arr, line_numbers=lines_arr, extra_fields=tuple(extras),
-        source=source, has_end=has_end, comments=tuple(comments),
+        source=source, has_end=has_end, comments=tuple(comments), notes=notes,
     )
 
 
@@ -538,9 +577,9 @@ def _read_text(path: str | Path) -> str:
         raise InputError(str(p), "file", str(p), err.strerror or str(err)) from None
 
 
-def read_tpoint(path: str | Path) -> TPointData:
-    """Read a TPOINT pointing data file (see the module docstring)."""
-    return parse_tpoint(_read_text(path), source=str(path))
+def read_tpoint(path: str | Path, mount: str | None = None) -> TPointData:
+    """Read a TPOINT pointing data file (see the module docstring and :func:`parse_tpoint`)."""
+    return parse_tpoint(_read_text(path), source=str(path), mount=mount)
 
 
 def format_tpoint(data: TPointData, decimals: int = 7) -> str:
