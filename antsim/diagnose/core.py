@@ -21,7 +21,7 @@ from .baseline import (
 from .candidates.terms import TermsCandidate
 from .data import Observations
 from .locate import Location, locate, where_signal
-from .problem import Prediction, Problem, _lstsq, folds_for
+from .problem import Prediction, Problem, _lstsq, folds_for, term_columns
 from .select import Selection, Step, select
 
 __all__ = ["Diagnosis", "Finding", "diagnose"]
@@ -110,24 +110,35 @@ class Diagnosis:
 
     def updated_model(self) -> PointingModel:
         """The baseline terms refitted together with the findings, plus the findings' TPOINT
-        terms (an unweighted least-squares fit of the raw total errors, as TPOINT does)."""
+        terms (an unweighted least-squares fit of the raw total errors, as TPOINT does); a
+        finding with a simplest form (one term explaining as much as its pair) enters in
+        that form."""
         p = self.problem
-        cols = p.current_columns()
-        rows = p.rows()
-        coef, _ = _lstsq(cols[rows], p.y_raw[rows])
-        names = list(p.base_terms)
-        values = list(coef[: len(names)])
-        k = len(names)
+        cols = [p.base]
+        term_names: list[tuple[str, ...] | None] = []
         for f in self.findings:
             r = f.result
             if r.candidate.kind != "offsets":
                 continue
-            q = r.columns.shape[1]
             if isinstance(r.candidate, TermsCandidate):
-                for name, v in zip(r.comp_names, coef[k:k + q], strict=True):
-                    if name not in names:
-                        names.append(name)
-                        values.append(float(v))
+                terms = f.step.simplest.terms if f.step.simplest else tuple(r.comp_names)
+                cols.append(p.cand(term_columns(terms, p.obs)))
+                term_names.append(terms)
+            else:
+                cols.append(r.columns)
+                term_names.append(None)
+        x = np.column_stack(cols)
+        rows = p.rows()
+        coef, _ = _lstsq(x[rows], p.y_raw[rows])
+        names = list(p.base_terms)
+        values = list(coef[: len(names)])
+        k = len(names)
+        for terms, block in zip(term_names, cols[1:], strict=True):
+            q = block.shape[1]
+            for name, v in zip(terms or (), coef[k:k + q], strict=False):
+                if name not in names:
+                    names.append(name)
+                    values.append(float(v))
             k += q
         return PointingModel(names, values, name=f"{self.baseline_name()}+diagnose")
 
@@ -137,7 +148,8 @@ class Diagnosis:
     def degeneracies(self) -> list[str]:
         """TPOINT-style warnings for the final model (coefficient correlations over 0.95:
         "cannot reliably be distinguished"; 0.85-0.95: "strongly correlated"), and the
-        candidates refused because the model mimics them."""
+        refused candidates (held-out data not predicted; mimicked by the model and below
+        detection)."""
         p = self.problem
         cols = p.current_columns()
         names = list(p.current_names)
@@ -175,6 +187,14 @@ class Diagnosis:
             "alternatives": [{"finding": f.effect, "alternative": a.result.name,
                               "correlation": round(a.correlation, 3), "words": a.reason}
                              for f in self.findings for a in f.step.alternatives],
+            "separations": [{"finding": f.effect, "r": round(float(sp.r), 4),
+                             "with": list(sp.partners), "sigma": round(float(sp.sigma), 2),
+                             "words": sp.words}
+                            for f in self.findings if (sp := f.step.separation) is not None],
+            "simplest_forms": [{"finding": f.effect, "terms": list(sf.terms),
+                                "sky_rms_after_arcsec": round(float(sf.sky_rms_after), 4),
+                                "words": sf.words}
+                               for f in self.findings if (sf := f.step.simplest) is not None],
             "refused": [{"effect": r.result.name, "words": r.reason} for r in sel.refused],
             "degeneracies": self.degeneracies(),
             "absorbed": [{"effect": r.name, "components": list(r.absorbed)}
@@ -197,14 +217,22 @@ class Diagnosis:
                          "nothing beyond the baseline terms is warranted by these data")
         for i, f in enumerate(self.findings, 1):
             j = f.to_json()
-            params = ", ".join(f"{k} = {_fmt(v)}" for k, v in j["params"].items()
-                               if not isinstance(v, dict))
+            shown = {k: v for k, v in j["params"].items() if not isinstance(v, dict)}
+            if "amplitude_arcsec" not in shown:  # single terms: their coefficients
+                shown = {**j["params"].get("terms_arcsec", {}), **shown}
+            params = ", ".join(f"{k} = {_fmt(v)}" for k, v in shown.items())
             terms = f" [{' '.join(j['terms'])}]" if j["terms"] else ""
             lines.append(f"{i}. {f.effect}{terms}: {params} "
                          f"({j['significance']:.1f} sigma; Sky RMS {j['sky_rms_before_arcsec']:.2f}"
                          f"\" -> {j['sky_rms_after_arcsec']:.2f}\")")
             lines.append(f"   where: {j['where']}")
             lines.append(f"   why: {j['explanation']}")
+            sp = f.step.separation
+            if sp is not None and sp.words:
+                lines.append(f"   correlated: {sp.words}; the data separate it by "
+                             f"{sp.sigma:.1f} sigma")
+            if f.step.simplest is not None:
+                lines.append(f"   simplest form: {f.step.simplest.words}")
             for a in f.step.alternatives:
                 lines.append(f"   alternative: {a.reason}")
         for r in self.selection.refused:

@@ -1,23 +1,32 @@
 """Honest selection: forward addition of candidate effects, one at a time.
 
-Each round every applicable candidate is tested against the current model (a chi^2 test when
-the simulation predicts the noise, an F test when the noise is estimated from the data; a
-sin/cos pair is one joint test with 2 degrees of freedom; nonlinear parameters pay for the
-look-elsewhere effect with an effective number of trials). The family of candidates is
-corrected together (Bonferroni over the candidates tested in the first round), so that data
-explained to the noise yield no finding with probability at least 1 - ``ALPHA``; with the
-library's 20-odd candidates the criterion is stricter than BIC (``q ln N``) at every N here.
+Each round every applicable candidate is tested against the current model by what the model
+cannot absorb: its signature's component orthogonal to the fitted terms (an added-variable,
+or partial, test: a chi^2 test when the simulation predicts the noise, an F test when the
+noise is estimated from the data; a sin/cos pair is one joint test with 2 degrees of freedom;
+nonlinear parameters pay for the look-elsewhere effect with an effective number of trials).
+The family of candidates is corrected together (Bonferroni over the candidates tested in the
+first round), so that data explained to the noise yield no finding with probability at least
+1 - ``ALPHA``; with the library's 20-odd candidates the criterion is stricter than BIC
+(``q ln N``) at every N here.
 
 The most significant candidate is then
 
-* refused when its signature correlates with the model above 0.95 (TPOINT's level): "X and Y
-  cannot reliably be distinguished";
 * refused when it does not lower the chi^2 of held-out data (another night when the data
   span several, else 5-fold cross-validation interleaved in time; nonlinear parameters are
   re-derived on each training set);
-* otherwise accepted, and its near-degenerate alternatives (candidates whose fitted
-  signatures correlate with it above 0.9, or that fit within 2 of its BIC) are reported
-  beside it.
+* otherwise accepted, however closely the model mimics it (issue 24): its correlation with
+  the model is reported in TPOINT's words ("X and Y cannot reliably be distinguished",
+  r above 0.95; "strongly correlated", above 0.85) beside how many sigma the data separate
+  it by (the local significance of its orthogonal part). A candidate the model mimics is
+  refused only when that part is below detection (and said so when it shows a hint, 3 sigma
+  locally);
+* replaced by a simpler candidate (fewer parameters) that the data cannot distinguish from it
+  (fitted signatures correlated above 0.95) when that one explains as much (the extra
+  parameters add at most Akaike's 2 of chi^2 each: it predicts as well); the other is reported
+  beside it, as are all near-degenerate alternatives (fitted signatures correlated above
+  0.9, or within 2 of its BIC). A pair whose improvement one TPOINT term matches (by the
+  same rule) is offered in that simplest form.
 
 Selection stops when no candidate passes, or as soon as the residuals match the predicted
 noise on both axes (p > 0.05), or after ``MAX_FINDINGS``. The polarization and beam-width
@@ -32,17 +41,25 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import pvalues
-from .candidates.base import DISTINGUISH_R, Candidate, TestResult
+from .candidates.base import DISTINGUISH_R, Candidate, TestResult, p_value
 from .candidates.library import CANDIDATES
 from .problem import Problem, folds_for
 
-__all__ = ["ALPHA", "Selection", "Step", "select", "sigma_from_p"]
+__all__ = ["ALPHA", "Selection", "Step", "correlation_words", "select", "sigma_from_p"]
 
 #: family-wise false-alarm probability of the whole selection
 ALPHA = 0.005
 MAX_FINDINGS = 5
 #: fitted signatures this correlated are "near-degenerate alternatives"
 ALTERNATIVE_R = 0.9
+#: TPOINT's lower level: coefficients this correlated are "strongly correlated"
+STRONG_R = 0.85
+#: a simpler form "explains as much" when each parameter it lacks would add at most this
+#: much chi^2 (Akaike's 2)
+AKAIKE_PER_PARAMETER = 2.0
+#: a candidate the model mimics, not accepted, is reported as below detection when the part
+#: the model cannot absorb reaches this local significance (sigma)
+HINT_SIGMA = 3.0
 
 
 def sigma_from_p(p: float, log_p: float | None = None) -> float:
@@ -66,11 +83,73 @@ def log_p_family(problem: Problem, res: TestResult, n_family: int) -> float:
     return min(0.0, base + math.log(max(res.trials, 1.0)) + math.log(n_family))
 
 
+def local_sigma(problem: Problem, res: TestResult) -> float:
+    """How many sigma the data separate a candidate from the model: the local significance
+    (no look-elsewhere or family correction) of the part of its signature the model cannot
+    absorb, as the two-sided Gaussian equivalent of its p-value (for one parameter with
+    known noise, |value| / sigma of that part: sqrt(chi^2 decrease))."""
+    if problem.pred.known_noise:
+        log_p = float(pvalues.chi2_logsf(res.delta_chi2, max(res.dof, 1)))
+    else:
+        p = p_value(problem, res.delta_chi2, res.dof, res.chi2_now, res.mask)
+        log_p = math.log(p) if p > 0 else -745.0
+    half = log_p - math.log(2.0)
+    return sigma_from_p(math.exp(half) if half > -700 else 0.0, half)
+
+
+def correlation_words(name: str, r: float, partners: tuple[str, ...]) -> str:
+    """TPOINT's words for how closely the model mimics a candidate ("" below 0.85)."""
+    who = ", ".join(partners) or "the model"
+    if r > DISTINGUISH_R:
+        return f"{name} and {who} cannot reliably be distinguished (r = {r:.2f})"
+    if r > STRONG_R:
+        return f"{name} and {who} are strongly correlated (r = {r:.2f})"
+    return ""
+
+
+def explains_as_much(problem: Problem, simple_dchi2: float, simple_dof: int,
+                     full: TestResult) -> bool:
+    """Whether a form with fewer parameters explains as much as ``full``: the chi^2 the
+    extra parameters add is at most 2 per parameter (Akaike's criterion: the simpler form
+    then predicts new data as well, to first order as leave-one-out cross-validation
+    judges). Without a noise prediction the chi^2 is in units of the fuller model's residual
+    variance (the noise the data show once both are fitted)."""
+    extra = max(full.dof - simple_dof, 1)
+    gap = full.delta_chi2 - simple_dchi2
+    if not problem.pred.known_noise:
+        n_used = int((problem.used if full.mask is None else full.mask).sum())
+        dof = 2 * n_used - problem.current_columns().shape[1] - full.dof
+        if dof <= 0:
+            return False
+        gap /= max(full.chi2_now - full.delta_chi2, 1e-12) / dof
+    return gap <= AKAIKE_PER_PARAMETER * extra
+
+
 @dataclass
 class Alternative:
     result: TestResult
     correlation: float
     reason: str
+
+
+@dataclass
+class Separation:
+    """How closely the model mimics a finding, and how far the data separate them."""
+
+    r: float
+    partners: tuple[str, ...]
+    sigma: float
+    words: str
+
+
+@dataclass
+class SimplestForm:
+    """One TPOINT term that explains as much as a finding's pair."""
+
+    terms: tuple[str, ...]
+    delta_chi2: float
+    sky_rms_after: float
+    words: str
 
 
 @dataclass
@@ -87,6 +166,8 @@ class Step:
     alternatives: list[Alternative] = field(default_factory=list)
     gof_after: dict | None = None
     signal: np.ndarray | None = None  # fitted error of the finding (2n, arcsec)
+    separation: Separation | None = None
+    simplest: SimplestForm | None = None
 
     @property
     def significance(self) -> float:
@@ -137,6 +218,96 @@ def _signal_corr(problem: Problem, perp, a: TestResult, b: TestResult) -> float:
     return num / den if den > 0 else 0.0
 
 
+def _model_terms(problem: Problem) -> set[str]:
+    """The TPOINT terms the current model holds (base terms and accepted term findings)."""
+    return set(problem.base_terms) | {n.split(":", 1)[1] for n in problem.extra_names}
+
+
+def _single_terms(candidates: tuple[Candidate, ...]) -> list[str]:
+    """Every TPOINT term the library's linear candidates are made of (each order of the
+    harmonic families), in library order: the vocabulary of one-term forms."""
+    from .candidates.terms import HarmonicFamilyCandidate, TermsCandidate
+
+    out: list[str] = []
+    for c in candidates:
+        if isinstance(c, HarmonicFamilyCandidate):
+            names = [t for n in c.orders for t in c._pair(n)]
+        elif isinstance(c, TermsCandidate):
+            names = list(c.terms)
+        else:
+            continue
+        out += [t for t in names if t not in out]
+    return out
+
+
+def _simplest_form(problem: Problem, res: TestResult, vocabulary: list[str]
+                   ) -> SimplestForm | None:
+    """One TPOINT term that explains as much as the finding's terms (None if none does, or
+    the finding is one term already)."""
+    from .candidates.terms import TermsCandidate
+    from .problem import term_columns
+
+    if not isinstance(res.candidate, TermsCandidate) or len(res.comp_names) < 2:
+        return None
+    names = [t for t in vocabulary if t not in _model_terms(problem)]
+    if not names:
+        return None
+    cols = problem.cand(term_columns(names, problem.obs))
+    perp, z_perp = problem.perp_for(res.mask)
+    xp = perp(cols)
+    norm2 = np.einsum("ij,ij->j", xp, xp)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        gain = np.where(norm2 > 1e-9 * max(float(norm2.max()), 1e-300),
+                        (xp.T @ z_perp) ** 2 / norm2, 0.0)
+    best = int(np.argmax(gain))
+    if not explains_as_much(problem, float(gain[best]), 1, res):
+        return None
+    term = names[best]
+    rms = problem.sky_rms(np.column_stack([problem.current_columns(), cols[:, best]]))
+    pair = problem.sky_rms(np.column_stack([problem.current_columns(), res.columns]))
+    return SimplestForm((term,), float(gain[best]), rms,
+                        f"{term} alone explains as much as {' '.join(res.comp_names)} "
+                        f"(Sky RMS {rms:.3f}\" against {pair:.3f}\"; chi2 decrease "
+                        f"{gain[best]:.1f} against {res.delta_chi2:.1f})")
+
+
+def _alternatives(problem: Problem, perp, r: TestResult, ranked: list[TestResult],
+                  n_family: int, alpha: float) -> list[Alternative]:
+    out = []
+    n_obs = 2 * int(problem.used.sum())
+    for other in ranked:
+        if other is r or log_p_family(problem, other, n_family) >= math.log(alpha):
+            continue
+        corr = _signal_corr(problem, perp, r, other)
+        bic_gap = (r.delta_chi2 - r.dof * math.log(n_obs)) \
+            - (other.delta_chi2 - other.dof * math.log(n_obs))
+        if corr > DISTINGUISH_R:
+            out.append(Alternative(other, corr, f"{r.name} and {other.name} cannot reliably "
+                                                f"be distinguished (r = {corr:.2f})"))
+        elif corr > ALTERNATIVE_R or bic_gap < 2.0:
+            out.append(Alternative(other, corr, f"{other.name} fits almost as well (chi2 "
+                                                f"decrease {other.delta_chi2:.1f} against "
+                                                f"{r.delta_chi2:.1f}; r = {corr:.2f})"))
+    return out
+
+
+def _simpler_equivalent(problem: Problem, perp, r: TestResult, ranked: list[TestResult],
+                        n_family: int, alpha: float) -> TestResult | None:
+    """A significant candidate with fewer parameters that the data cannot distinguish from
+    ``r`` and that explains as much (the best such), else None."""
+    best = None
+    for other in ranked:
+        if other is r or other.dof >= r.dof \
+                or log_p_family(problem, other, n_family) >= math.log(alpha):
+            continue
+        if _signal_corr(problem, perp, r, other) <= DISTINGUISH_R:
+            continue
+        if explains_as_much(problem, other.delta_chi2, other.dof, r) and (
+                best is None or other.delta_chi2 > best.delta_chi2):
+            best = other
+    return best
+
+
 def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
            alpha: float = ALPHA, max_findings: int = MAX_FINDINGS) -> Selection:
     """Forward selection on ``problem`` (modified in place: accepted columns are added)."""
@@ -146,6 +317,7 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
     gof_before = problem.gof()
     usable = [c for c in candidates if c.applicable(obs, known)]
     not_applicable = [c.name for c in candidates if c not in usable]
+    vocabulary = _single_terms(tuple(usable))
     folds = folds_for(obs)
     steps: list[Step] = []
     refused: list[Refusal] = []
@@ -155,6 +327,24 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
     first_round: list[TestResult] = []
     stop = "no further candidate is significant"
     channel_results: list[TestResult] = []
+    offsets: list[TestResult] = []
+
+    def confirmed(r: TestResult) -> tuple[float, float] | None:
+        """Held-out chi^2 without and with ``r`` if it predicts held-out data better."""
+        cur = problem.current_columns()
+        cv_without = problem.cv_chi2(cur, folds, used=r.mask)
+        refit = None
+        if r.refit is not None:
+            def refit(train, _r=r, _cur=cur):
+                return np.column_stack([_cur, _r.refit(train)])
+        cv_with = problem.cv_chi2(np.column_stack([cur, r.columns]), folds, refit, used=r.mask)
+        r.note = f"held-out chi2 {cv_without:.1f} -> {cv_with:.1f}"
+        if not cv_with < cv_without:
+            refused.append(Refusal(r, f"{r.name} is significant in-sample but does not "
+                                      f"predict held-out data ({r.note})"))
+            return None
+        return cv_without, cv_with
+
     for round_no in range(max_findings + 1):
         perp, z_perp = problem.perp_for(problem.used)
         chi2_now = float(z_perp @ z_perp)
@@ -184,45 +374,23 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
             lp = log_p_family(problem, r, n_family)
             if lp >= math.log(alpha):
                 break
-            if r.r_model > DISTINGUISH_R:
-                partners = ", ".join(r.partners) or "the model"
-                refused.append(Refusal(r, f"{r.name} and {partners} cannot reliably be "
-                                          f"distinguished (r = {r.r_model:.2f})"))
+            cv = confirmed(r)
+            if cv is None:
                 continue
-            cv_without = problem.cv_chi2(problem.current_columns(), folds, used=r.mask)
-            cur = problem.current_columns()
-            refit = None
-            if r.refit is not None:
-                def refit(train, _r=r, _cur=cur):
-                    return np.column_stack([_cur, _r.refit(train)])
-            cv_with = problem.cv_chi2(np.column_stack([cur, r.columns]), folds, refit,
-                                      used=r.mask)
-            r.note = f"held-out chi2 {cv_without:.1f} -> {cv_with:.1f}"
-            if not cv_with < cv_without:
-                refused.append(Refusal(r, f"{r.name} is significant in-sample but does not "
-                                          f"predict held-out data ({r.note})"))
-                continue
-            chosen = (r, lp, cv_without, cv_with)
+            chosen = (r, lp, *cv)
             break
         if chosen is None:
             break
+        simpler = _simpler_equivalent(problem, perp, chosen[0], ranked, n_family, alpha)
+        if simpler is not None:
+            cv = confirmed(simpler)
+            if cv is not None:
+                chosen = (simpler, log_p_family(problem, simpler, n_family), *cv)
         r, lp, cv0, cv1 = chosen
-        alternatives = []
-        for other in ranked:
-            if other is r or log_p_family(problem, other, n_family) >= math.log(alpha):
-                continue
-            corr = _signal_corr(problem, perp, r, other)
-            n_obs = 2 * int(problem.used.sum())
-            bic_gap = (r.delta_chi2 - r.dof * math.log(n_obs)) \
-                - (other.delta_chi2 - other.dof * math.log(n_obs))
-            if corr > DISTINGUISH_R:
-                alternatives.append(Alternative(other, corr, f"{r.name} and {other.name} "
-                                                f"cannot reliably be distinguished "
-                                                f"(r = {corr:.2f})"))
-            elif corr > ALTERNATIVE_R or bic_gap < 2.0:
-                alternatives.append(Alternative(other, corr, f"{other.name} fits almost as well "
-                                                f"(chi2 decrease {other.delta_chi2:.1f} against "
-                                                f"{r.delta_chi2:.1f}; r = {corr:.2f})"))
+        alternatives = _alternatives(problem, perp, r, ranked, n_family, alpha)
+        separation = Separation(r.r_model, r.partners, local_sigma(problem, r),
+                                correlation_words(r.name, r.r_model, r.partners))
+        simplest = _simplest_form(problem, r, vocabulary)
         before = problem.sky_rms()
         signal = _fitted_signal(problem, r)
         after = problem.sky_rms(np.column_stack([problem.current_columns(), r.columns]))
@@ -231,7 +399,7 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
         accepted.add(r.name)
         problem.update_outliers()
         step = Step(r, min(1.0, math.exp(lp)), lp, before, after, cv0, cv1, alternatives,
-                    problem.gof(), signal)
+                    problem.gof(), signal, separation, simplest)
         steps.append(step)
         if len(steps) >= max_findings:
             stop = f"the limit of {max_findings} findings"
@@ -239,6 +407,8 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
         if problem.matches_noise():
             stop = "the residuals match the predicted noise"
             break
+    if stop == "no further candidate is significant":
+        refused += _below_detection(problem, offsets, n_family, alpha)
     # channel candidates (other recorded quantities): decided once, in the same family
     sky = problem.sky_rms()
     for r in channel_results:
@@ -248,3 +418,21 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
     steps.sort(key=lambda s: s.log_p)
     return Selection(steps, refused, absorbed, first_round, not_applicable, n_family,
                      gof_before, problem.gof(), stop)
+
+
+def _below_detection(problem: Problem, results: list[TestResult], n_family: int,
+                     alpha: float) -> list[Refusal]:
+    """Candidates the final model mimics (r > 0.95) whose orthogonal part shows a hint
+    (``HINT_SIGMA`` locally) but stays below detection: said in words."""
+    out = []
+    for r in results:
+        if r.r_model <= DISTINGUISH_R or log_p_family(problem, r, n_family) < math.log(alpha):
+            continue
+        sigma = local_sigma(problem, r)
+        if sigma < HINT_SIGMA:
+            continue
+        needed = sigma_from_p(alpha / (2.0 * n_family * max(r.trials, 1.0)))
+        out.append(Refusal(r, f"{correlation_words(r.name, r.r_model, r.partners)}: the part "
+                              f"they cannot absorb is {sigma:.1f} sigma, below detection "
+                              f"({needed:.1f} sigma here)"))
+    return out
