@@ -222,9 +222,12 @@ class Diagnosis:
                 shown = {**j["params"].get("terms_arcsec", {}), **shown}
             params = ", ".join(f"{k} = {_fmt(v)}" for k, v in shown.items())
             terms = f" [{' '.join(j['terms'])}]" if j["terms"] else ""
-            lines.append(f"{i}. {f.effect}{terms}: {params} "
-                         f"({j['significance']:.1f} sigma; Sky RMS {j['sky_rms_before_arcsec']:.2f}"
-                         f"\" -> {j['sky_rms_after_arcsec']:.2f}\")")
+            how = (f"{j['significance']:.1f} sigma" if f.step.heldout is None else
+                   f"kept by cross-validation: held-out Sky RMS {f.step.heldout[0]:.2f}\" -> "
+                   f"{f.step.heldout[1]:.2f}\", {j['significance']:.1f} sigma alone")
+            lines.append(f"{i}. {f.effect}{terms}: {params} ({how}; Sky RMS "
+                         f"{j['sky_rms_before_arcsec']:.2f}\" -> "
+                         f"{j['sky_rms_after_arcsec']:.2f}\")")
             lines.append(f"   where: {j['where']}")
             lines.append(f"   why: {j['explanation']}")
             sp = f.step.separation

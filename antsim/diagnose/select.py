@@ -43,6 +43,8 @@ import numpy as np
 from . import pvalues
 from .candidates.base import DISTINGUISH_R, Candidate, TestResult, p_value
 from .candidates.library import CANDIDATES
+from .candidates.terms import TermsCandidate
+from .crossval import MAX_FINDINGS_CV, cv_stage
 from .problem import Problem, folds_for
 
 __all__ = ["ALPHA", "Selection", "Step", "correlation_words", "select", "sigma_from_p"]
@@ -63,11 +65,12 @@ HINT_SIGMA = 3.0
 
 
 def sigma_from_p(p: float, log_p: float | None = None) -> float:
-    """One-sided Gaussian equivalent of a p-value (handles underflow through log p)."""
+    """One-sided Gaussian equivalent of a p-value (handles underflow through log p); 0 for
+    p >= 0.5 (no evidence at all)."""
     if log_p is None:
         log_p = math.log(p) if p > 0 else -745.0
     if log_p > -700:
-        return float(pvalues.norm_isf(math.exp(log_p)))
+        return max(0.0, float(pvalues.norm_isf(math.exp(log_p))))
     x = -2.0 * log_p
     return float(math.sqrt(max(x - math.log(x) - math.log(2 * math.pi), 0.0)))
 
@@ -168,6 +171,9 @@ class Step:
     signal: np.ndarray | None = None  # fitted error of the finding (2n, arcsec)
     separation: Separation | None = None
     simplest: SimplestForm | None = None
+    #: (before, after) held-out Sky RMS (arcsec) of a finding the cross-validated stage
+    #: added (data without a noise prediction: :mod:`.crossval`), else None
+    heldout: tuple[float, float] | None = None
 
     @property
     def significance(self) -> float:
@@ -226,7 +232,7 @@ def _model_terms(problem: Problem) -> set[str]:
 def _single_terms(candidates: tuple[Candidate, ...]) -> list[str]:
     """Every TPOINT term the library's linear candidates are made of (each order of the
     harmonic families), in library order: the vocabulary of one-term forms."""
-    from .candidates.terms import HarmonicFamilyCandidate, TermsCandidate
+    from .candidates.terms import HarmonicFamilyCandidate
 
     out: list[str] = []
     for c in candidates:
@@ -244,7 +250,6 @@ def _simplest_form(problem: Problem, res: TestResult, vocabulary: list[str]
                    ) -> SimplestForm | None:
     """One TPOINT term that explains as much as the finding's terms (None if none does, or
     the finding is one term already)."""
-    from .candidates.terms import TermsCandidate
     from .problem import term_columns
 
     if not isinstance(res.candidate, TermsCandidate) or len(res.comp_names) < 2:
@@ -276,7 +281,8 @@ def _alternatives(problem: Problem, perp, r: TestResult, ranked: list[TestResult
     out = []
     n_obs = 2 * int(problem.used.sum())
     for other in ranked:
-        if other is r or log_p_family(problem, other, n_family) >= math.log(alpha):
+        if other is r or log_p_family(problem, other, n_family) >= math.log(alpha) \
+                or _contains(other, r):
             continue
         corr = _signal_corr(problem, perp, r, other)
         bic_gap = (r.delta_chi2 - r.dof * math.log(n_obs)) \
@@ -291,19 +297,33 @@ def _alternatives(problem: Problem, perp, r: TestResult, ranked: list[TestResult
     return out
 
 
+def _contains(big: TestResult, small: TestResult) -> bool:
+    """Whether ``big``'s terms include all of ``small``'s (a fuller form of the same
+    terms, not an alternative to them)."""
+    return (isinstance(big.candidate, TermsCandidate) and isinstance(small.candidate,
+                                                                     TermsCandidate)
+            and set(small.comp_names) <= set(big.comp_names))
+
+
 def _simpler_equivalent(problem: Problem, perp, r: TestResult, ranked: list[TestResult],
                         n_family: int, alpha: float) -> TestResult | None:
-    """A significant candidate with fewer parameters that the data cannot distinguish from
-    ``r`` and that explains as much (the best such), else None."""
+    """A significant candidate with fewer parameters to choose instead of ``r`` (the best
+    such), else None: one made of part of ``r``'s terms when the rest of ``r`` is not
+    significant on its own (at the family's level: a fuller form must earn its extra terms
+    as a finding would), or one the data cannot distinguish from ``r`` that explains as
+    much."""
     best = None
     for other in ranked:
         if other is r or other.dof >= r.dof \
                 or log_p_family(problem, other, n_family) >= math.log(alpha):
             continue
-        if _signal_corr(problem, perp, r, other) <= DISTINGUISH_R:
-            continue
-        if explains_as_much(problem, other.delta_chi2, other.dof, r) and (
-                best is None or other.delta_chi2 > best.delta_chi2):
+        if _contains(r, other):
+            rest = float(pvalues.chi2_logsf(r.delta_chi2 - other.delta_chi2, r.dof - other.dof))
+            ok = rest + math.log(n_family) >= math.log(alpha)
+        else:
+            ok = _signal_corr(problem, perp, r, other) > DISTINGUISH_R \
+                and explains_as_much(problem, other.delta_chi2, other.dof, r)
+        if ok and (best is None or other.delta_chi2 > best.delta_chi2):
             best = other
     return best
 
@@ -409,6 +429,15 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
             break
     if stop == "no further candidate is significant":
         refused += _below_detection(problem, offsets, n_family, alpha)
+    if not known and steps and len(steps) < MAX_FINDINGS_CV:
+        added = _cross_validated(problem, usable, accepted, n_family,
+                                 MAX_FINDINGS_CV - len(steps))
+        steps += added
+        kept = {s.result.name for s in added}
+        refused = [r for r in refused if r.result.name not in kept]
+        if added:
+            stop = (f"the limit of {MAX_FINDINGS_CV} findings" if len(steps) >= MAX_FINDINGS_CV
+                    else "no further candidate lowers the held-out Sky RMS")
     # channel candidates (other recorded quantities): decided once, in the same family
     sky = problem.sky_rms()
     for r in channel_results:
@@ -418,6 +447,21 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
     steps.sort(key=lambda s: s.log_p)
     return Selection(steps, refused, absorbed, first_round, not_applicable, n_family,
                      gof_before, problem.gof(), stop)
+
+
+def _cross_validated(problem: Problem, usable: list[Candidate], accepted: set[str],
+                     n_family: int, room: int) -> list[Step]:
+    """The cross-validated stage (:mod:`.crossval`) as findings, with their statistics (the
+    family-corrected p-value of each, every option tried counted as a trial)."""
+    out = []
+    for res, heldout, (before, after), signal in cv_stage(
+            problem, usable, accepted, _model_terms(problem), room, _fitted_signal):
+        lp = math.log(max(min(1.0, res.p * n_family), 1e-300))
+        separation = Separation(res.r_model, res.partners, local_sigma(problem, res),
+                                correlation_words(res.name, res.r_model, res.partners))
+        out.append(Step(res, math.exp(lp), lp, before, after, gof_after=problem.gof(),
+                        signal=signal, separation=separation, heldout=heldout))
+    return out
 
 
 def _below_detection(problem: Problem, results: list[TestResult], n_family: int,

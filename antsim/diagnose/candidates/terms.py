@@ -64,9 +64,13 @@ class TermsCandidate(Candidate):
         if len(names) == 1:
             return ({"terms_arcsec": values}, float(coef[0]),
                     float(math.sqrt(max(cov[0, 0], 0.0))))
-        return super().params_from(obs, theta, coef, cov, names)
+        _, amp, amp_sig = super().params_from(obs, theta, coef, cov, names)
+        return {"amplitude_arcsec": amp, "terms_arcsec": values}, amp, amp_sig
 
     def draw_shape(self, rng, obs):
+        if len(self.terms) > 2:  # several orders at once: a random direction among them
+            v = rng.standard_normal(len(self.terms))
+            return {"direction": tuple(float(x) for x in v / np.linalg.norm(v))}
         return {"phase_deg": float(rng.uniform(0.0, 360.0))}
 
     def unit_signal(self, obs, shape):
@@ -74,12 +78,22 @@ class TermsCandidate(Candidate):
         if self.pair:
             phi = math.radians(shape["phase_deg"])
             return cols @ np.array([self.signs[0] * math.cos(phi), self.signs[1] * math.sin(phi)])
+        if "direction" in shape:
+            return cols @ np.array(shape["direction"])
         return cols[:, 0]
 
     def effect_params(self, shape, amplitude):
         if self.pair and self.effect != "terms":
             return {"amplitude_arcsec": float(amplitude), "phase_deg": float(shape["phase_deg"])}
+        if "direction" in shape:
+            return {"terms_arcsec": {t: float(amplitude * x) for t, x
+                                     in zip(self.terms, shape["direction"], strict=True)}}
         return {"terms_arcsec": {self.terms[0]: float(amplitude)}}
+
+    def hidden_amplitude(self, params):
+        if "terms_arcsec" in params and len(self.terms) > 2:
+            return float(np.hypot.reduce(list(params["terms_arcsec"].values())))
+        return super().hidden_amplitude(params)
 
     def model_terms(self, params: dict[str, Any]) -> dict[str, float]:
         return dict(params.get("terms_arcsec", {}))

@@ -1,0 +1,188 @@
+"""The cross-validated selection stage, for data without a noise prediction (TPOINT files,
+recordings diagnosed without a scenario).
+
+The significance tests of :mod:`.select` estimate the noise from the residuals. Once they
+have shown a mismatch (at least one finding), those residuals still hold whatever else the
+model leaves out, and the tests lose power exactly where it matters; a further effect is
+then judged by prediction instead (issue 24). Forward, the stage adds the library's linear
+candidate (each order of a family, each value of a nonlinear parameter, as a separate
+option) that most lowers the held-out Sky RMS of an unweighted fit of the raw errors
+(TPOINT's statistic), while it lowers the held-out losses by more than half a standard
+error (:data:`MARGIN_T`), up to :data:`MAX_FINDINGS_CV` findings in all.
+Held out: each star in turn for TPOINT files (its two rows together; closed form, exactly
+what refitting without it gives), else the folds of :func:`.problem.folds_for`. Without a
+significant finding it adds nothing: data the model explains stay silent, and the
+false-alarm rate is that of the significance tests.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from .candidates.base import Candidate, TestResult, p_value, with_trials
+from .problem import Problem, _lstsq, folds_for
+
+__all__ = ["MAX_FINDINGS_CV", "heldout_losses", "heldout_sky_rms", "loo_blocks", "loo_residuals",
+           "loo_rms", "orthonormal"]
+
+#: findings in all (significant and cross-validated) for data without a noise prediction
+MAX_FINDINGS_CV = 4
+#: a cross-validated finding must lower the held-out losses (paired, per observation) by
+#: this many standard errors of their mean: a guard against options that win by a hair.
+#: Measured (benchmarks/blind.py --real --nested and 20 single-effect TPOINT files of the
+#: 45-ft's 282 positions per effect): at 0 the AuxTel procedure cross-validates at 10.39"
+#: and 60% of the single-effect files get spurious extra findings, at 0.5 10.39" and 40%,
+#: at 1.0 11.04" (the automatic 22-term search: 11.11") and 5-10%, at 1.5 12.49" and none
+MARGIN_T = 0.5
+
+
+def orthonormal(x: np.ndarray) -> np.ndarray | None:
+    """An orthonormal basis of the columns of ``x`` (QR), or None when they are not
+    independent (a column in the span of the others)."""
+    if x.shape[1] == 0:
+        return x
+    q, r = np.linalg.qr(x)
+    diag = np.abs(np.diag(r))
+    return None if diag.min() < 1e-8 * max(diag.max(), 1e-300) else q
+
+
+def loo_blocks(q: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-observation 2x2 blocks (xel-xel, el-el, xel-el) of the hat matrix q q^T (rows
+    stacked as n xel rows, then n el rows)."""
+    return (np.einsum("ij,ij->i", q[:n], q[:n]), np.einsum("ij,ij->i", q[n:], q[n:]),
+            np.einsum("ij,ij->i", q[:n], q[n:]))
+
+
+def loo_residuals(h: tuple, e: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """Each star's held-out (xel, el) residuals of a least-squares fit from its residuals
+    ``e`` (2n,) and hat-matrix blocks ``h``: (I - H_ii)^-1 e_i, exactly what refitting
+    without its two rows gives; None when a star alone determines a term."""
+    a, d, b = 1.0 - h[0], 1.0 - h[1], -h[2]
+    det = a * d - b * b
+    if np.any(det < 1e-9):
+        return None
+    return (d * e[:n] - b * e[n:]) / det, (a * e[n:] - b * e[:n]) / det
+
+
+def loo_rms(h: tuple, e: np.ndarray, n: int) -> float:
+    """Leave-one-star-out Sky RMS from :func:`loo_residuals` (inf where it has none)."""
+    r = loo_residuals(h, e, n)
+    return math.inf if r is None else math.sqrt(float(np.mean(r[0] ** 2 + r[1] ** 2)))
+
+
+def heldout_losses(x: np.ndarray, y: np.ndarray, used: np.ndarray,
+                   folds: np.ndarray | None) -> np.ndarray:
+    """Squared held-out residual (xel^2 + el^2, arcsec^2) of each ``used`` observation under
+    an unweighted fit of ``y`` (2n,) on ``x`` (2n, k): each left out in turn (``folds``
+    None, closed form) or each fold predicted from the others. Infinite where an
+    observation alone determines a term."""
+    n = used.size
+    rows = np.concatenate([used, used])
+    if folds is None:
+        m = int(used.sum())
+        q = orthonormal(x[rows])
+        if q is None:
+            return np.full(m, np.inf)
+        yy = y[rows]
+        r = loo_residuals(loo_blocks(q, m), yy - q @ (q.T @ yy), m)
+        return np.full(m, np.inf) if r is None else r[0] ** 2 + r[1] ** 2
+    out = np.zeros(n)
+    for k in np.unique(folds[used]):
+        test = used & (folds == k)
+        train = used & (folds != k)
+        coef, _ = _lstsq(x[np.concatenate([train, train])], y[np.concatenate([train, train])])
+        r = (y - x @ coef).reshape(2, n)
+        out[test] = r[0, test] ** 2 + r[1, test] ** 2
+    return out[used]
+
+
+def heldout_sky_rms(x: np.ndarray, y: np.ndarray, used: np.ndarray,
+                    folds: np.ndarray | None) -> float:
+    """Held-out Sky RMS (arcsec) of :func:`heldout_losses`."""
+    return math.sqrt(float(np.mean(heldout_losses(x, y, used, folds))))
+
+
+def improves(now: np.ndarray, new: np.ndarray) -> bool:
+    """Whether held-out losses ``new`` beat ``now`` by more than their scatter allows: the
+    mean paired improvement exceeds ``MARGIN_T`` times its standard error."""
+    d = now - new
+    if not np.all(np.isfinite(d)) or d.size < 3:
+        return False
+    se = float(np.std(d, ddof=1)) / math.sqrt(d.size)
+    return float(np.mean(d)) > MARGIN_T * se
+
+
+def _options(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
+             model_terms: set[str]):
+    """(candidate, theta, raw columns, component names) of every linear option not yet in
+    the model. Options the model mimics (r > 0.95) stay in, judged like the others by what
+    they predict, their correlation reported in TPOINT's words: leaving them out costs the
+    AuxTel procedure 10.39" -> 11.68" (benchmarks/blind.py --real --nested), whose
+    elevation structure only such terms describe."""
+    obs = problem.obs
+    for c in candidates:
+        if c.kind != "offsets" or c.name in taken:
+            continue
+        for theta in c.thetas(obs):
+            try:
+                cols, names = c.columns(obs, theta)
+            except NotImplementedError:  # a nonlinear signature (exact tilt)
+                break
+            if set(names) <= model_terms:
+                continue
+            yield c, theta, cols, names
+
+
+def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
+             model_terms: set[str], room: int, signal_of):
+    """Up to ``room`` cross-validated findings (see the module docstring), added to
+    ``problem``; returns [(TestResult, (held-out Sky RMS before, after), (in-sample Sky RMS
+    before, after), ``signal_of(problem, result)`` before it was added)]."""
+    obs = problem.obs
+    folds = None if obs.kind == "tpoint" else folds_for(obs)
+    out = []
+    while len(out) < room:
+        cur = problem.current_columns()
+        now = heldout_losses(cur, problem.y_raw, problem.used, folds)
+        best = None
+        tried = 0
+        for c, theta, raw, names in _options(problem, candidates, taken, model_terms):
+            tried += 1
+            new = heldout_losses(np.column_stack([cur, problem.cand(raw)]), problem.y_raw,
+                                 problem.used, folds)
+            if best is None or new.sum() < best[0].sum():
+                best = (new, c, theta, raw, names)
+        if best is None or not improves(now, best[0]):
+            break
+        new, c, theta, raw, names = best
+        perp, z_perp = problem.perp_for(problem.used)
+        res = _tested(problem, c, theta, raw, names, perp, z_perp, tried)
+        if not res.testable:
+            break
+        sky_before = problem.sky_rms()
+        signal = signal_of(problem, res)
+        taken.add(c.name)
+        model_terms |= set(res.comp_names)
+        problem.extra.append(res.columns)
+        problem.extra_names.extend(f"{c.name}:{n}" for n in res.comp_names)
+        problem.update_outliers()
+        out.append((res, (math.sqrt(float(np.mean(now))), math.sqrt(float(np.mean(new)))),
+                    (sky_before, problem.sky_rms()), signal))
+    return out
+
+
+def _tested(problem: Problem, c: Candidate, theta, raw: np.ndarray, names: tuple[str, ...],
+            perp, z_perp: np.ndarray, tried: int) -> TestResult:
+    """The option's added-variable test, its parameters and its p-value with the
+    look-elsewhere effect of every option tried."""
+    res = c._linear(problem, perp, z_perp, raw, tuple(names), theta)
+    if res.testable:
+        res.trials = float(tried)
+        res.p = with_trials(p_value(problem, res.delta_chi2, res.dof, res.chi2_now, res.mask),
+                            res.trials)
+        c._finish(problem, res)
+    return res
+
