@@ -178,6 +178,8 @@ SMOKE = {
                     "el_eccentricity", "el_eccentricity_2e")},
     "feed_offset": ({"offset_arcsec": 10.0, "angle_deg": 45.0}, None),
     "temperature_drift": ({"arcsec_per_k": 2.0, "tau_s": 3600.0, "reference_c": 5.0}, None),
+    # issue 24's change at one instant (antsim/world/effects/steps.py)
+    "step": ({"t_s": 3600.0, "az_arcsec": 20.0, "el_arcsec": -30.0}, None),
 }
 
 

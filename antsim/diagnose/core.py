@@ -295,7 +295,7 @@ def diagnose(obs: Observations, scenario=None, model: str | None = None,
     for step in selection.steps:
         if step.signal is not None:
             where = where_signal(obs, step.signal, problem.used)
-            special = _special_where(step)
+            special = _special_where(step, obs)
             if special:
                 where = f"{special}; {where}"
         else:
@@ -333,7 +333,7 @@ def daily_air_curve(scenario):
     return model.daily_curve_c
 
 
-def _special_where(step: Step) -> str:
+def _special_where(step: Step, obs: Observations) -> str:
     """Words for the time-like effects, whose signature is best said in time."""
     r = step.result
     p = r.params
@@ -342,6 +342,16 @@ def _special_where(step: Step) -> str:
         return (f"elevation changes by {p['amplitude_arcsec']:+.0f}\" after sunset, "
                 f"{100 * (1 - math.exp(-4.0 / tau_h)):.0f}% of it in the first 4 hours "
                 f"(time constant {tau_h:.1f} h), and relaxes back after sunrise")
+    if r.name == "sunset_transient":
+        tau_h = p["tau_s"] / 3600.0
+        return (f"elevation changes by {p['amplitude_arcsec']:+.0f}\" at sunset and dies away "
+                f"with time constant {tau_h:.1f} h (95% of it gone {3 * tau_h:.1f} h later)")
+    if r.name == "step":
+        zero = "azimuth" if p["axis"] == "az" else "elevation"
+        return (f"the {zero} zero point changes by {p['step_arcsec']:+.1f}\" at "
+                f"{_clock(obs, p['t_s'])} and stays changed (95% interval "
+                f"{_clock(obs, p['t_low_s'])} to {_clock(obs, p['t_high_s'])}): a step, "
+                "not a drift")
     if r.name == "temperature_drift":
         return (f"elevation follows the air temperature, {p['arcsec_per_k']:+.2f}\"/K, "
                 f"lagging it by {p['tau_s'] / 3600.0:.1f} h")
@@ -351,6 +361,22 @@ def _special_where(step: Step) -> str:
     if r.name == "source_structure":
         return f"on {p['source']} only"
     return ""
+
+
+def _clock(obs: Observations, t_s: float) -> str:
+    """A campaign time (s) in words: UTC when the recordings name their epoch, and hours
+    after the start."""
+    epoch = obs.meta.get("epoch_utc")
+    hours = f"{t_s / 3600.0:.2f} h after the start"
+    if not epoch:
+        return hours
+    import datetime
+
+    try:
+        start = datetime.datetime.fromisoformat(str(epoch))
+    except ValueError:
+        return hours
+    return f"{(start + datetime.timedelta(seconds=float(t_s))):%H:%M} UTC ({hours})"
 
 
 def _channel_where(step: Step) -> str:

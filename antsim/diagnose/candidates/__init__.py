@@ -19,7 +19,9 @@ harmonics. Each candidate knows
 
 One family per module: :mod:`.base` (the base class, its test and shared helpers),
 :mod:`.terms` (linear pointing terms: TPOINT's, harmonic pairs and families, the feed
-offset), :mod:`.thermal` (sunset and temperature drifts), :mod:`.dynamics` (clock, servo
-lag, backlash), :mod:`.optics` (source structure, exact tilt and collimation, squint, beam
-width); :mod:`.library` lists them all (:data:`~.library.CANDIDATES`).
+offset), :mod:`.thermal` (sunset drifts and transients, temperature drifts),
+:mod:`.changes` (a step at an unknown time), :mod:`.dynamics` (clock, servo lag, backlash),
+:mod:`.optics` (source structure, exact tilt and collimation, squint, beam width);
+:mod:`.library` lists them all (:data:`~.library.CANDIDATES`), the term families as tables
+(rows of DESIGN's signature table, TPOINT's harmonic generator) that a new family extends.
 """

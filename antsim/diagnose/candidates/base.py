@@ -17,8 +17,9 @@ from .. import pvalues
 from ..data import Observations
 from ..problem import Problem, _lstsq
 
-__all__ = ["DISTINGUISH_R", "Candidate", "TestResult", "obs_key", "p_value", "periodic_interp",
-           "source_rates_arcsec_s", "stacked", "sun_el_grid_deg", "time_grid", "with_trials"]
+__all__ = ["DISTINGUISH_R", "Candidate", "TestResult", "nyholt_trials", "obs_key", "p_value",
+           "periodic_interp", "source_rates_arcsec_s", "stacked", "sun_el_grid_deg",
+           "time_grid", "with_trials"]
 
 SIDEREAL_RATE_RAD_S = 7.2921158553e-5
 GRID_STEP_S = 60.0
@@ -54,6 +55,24 @@ class TestResult:
     note: str = ""
     mask: np.ndarray | None = None  # the scans this test kept (outliers of model+candidate out)
     chi2_now: float = float("nan")  # chi^2 of the current model on those scans
+    #: the effective number of trials as a function of the chi^2 decrease, for a family
+    #: whose look-elsewhere factor depends on the level (a change at an unknown time);
+    #: None: ``trials`` at every level
+    trials_at: Callable[[float], float] | None = None
+
+    def critical_chi2(self, level: float) -> float:
+        """The chi^2 decrease whose p-value, look-elsewhere effect included, is ``level``
+        (known noise): the candidate's detection threshold at that level."""
+        if self.trials_at is None:
+            return float(pvalues.chi2_isf(level / max(self.trials, 1.0), self.dof))
+        lo, hi = 0.0, 400.0  # with_trials(sf(c), trials(c)) falls as c grows
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            if with_trials(pvalues.chi2_sf(mid, self.dof), self.trials_at(mid)) > level:
+                lo = mid
+            else:
+                hi = mid
+        return hi
 
     @property
     def name(self) -> str:
@@ -151,7 +170,7 @@ def sun_el_grid_deg(obs: Observations, t_grid: np.ndarray) -> np.ndarray:
     return out
 
 
-def _nyholt_trials(cols: np.ndarray) -> float:
+def nyholt_trials(cols: np.ndarray) -> float:
     """Effective number of independent tests among correlated 1-column tests (Nyholt 2004)."""
     m = cols.shape[1]
     if m <= 1:
@@ -208,6 +227,9 @@ class Candidate:
     amplitude_param: str = ""
     #: why the blind harness must not draw it (None: it may)
     blind_exclusion: str | None = None
+    #: its signature depends on the direction only (a pointing-model term): an observatory
+    #: that fitted its model has the part the model's terms can take in the model in use
+    static: bool = False
     needs_simulation: bool = False
 
     def applicable(self, obs: Observations, known_noise: bool) -> bool:
@@ -254,7 +276,7 @@ class Candidate:
                 best = res
         assert best is not None
         best = self.refine(problem, perp, z_perp, best)
-        best.trials = _nyholt_trials(np.column_stack(grid_cols)) if len(grid_cols) > 1 else 1.0
+        best.trials = nyholt_trials(np.column_stack(grid_cols)) if len(grid_cols) > 1 else 1.0
         best.p = with_trials(p_value(problem, best.delta_chi2, best.dof, best.chi2_now,
                                      best.mask), best.trials)
         if best.dof > 0:

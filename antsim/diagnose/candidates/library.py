@@ -8,10 +8,11 @@ cause; :data:`CANDIDATES` is the library in the order the selection tries them, 
 from __future__ import annotations
 
 from .base import Candidate
+from .changes import StepCandidate
 from .dynamics import BacklashCandidate, ClockCandidate, ServoLagCandidate
 from .optics import BeamWidthCandidate, ExactTiltCandidate, SourceCandidate, SquintCandidate
 from .terms import FeedOffsetCandidate, HarmonicFamilyCandidate, TermsCandidate
-from .thermal import SunsetCandidate, TemperatureCandidate
+from .thermal import SunsetCandidate, SunsetTransientCandidate, TemperatureCandidate
 
 __all__ = ["CANDIDATES", "candidate"]
 
@@ -109,7 +110,9 @@ def _library() -> list[Candidate]:
     lib += [
         FeedOffsetCandidate(),
         SunsetCandidate(),
+        SunsetTransientCandidate(),
         TemperatureCandidate(),
+        StepCandidate(),
         ClockCandidate(),
         ServoLagCandidate(),
         BacklashCandidate(),

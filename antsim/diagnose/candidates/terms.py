@@ -24,6 +24,8 @@ __all__ = ['FeedOffsetCandidate', 'HarmonicFamilyCandidate', 'TermsCandidate']
 class TermsCandidate(Candidate):
     """An effect expressed exactly by TPOINT terms (a harmonic pair or single terms)."""
 
+    static = True
+
     def __init__(self, name: str, terms: Sequence[str], title: str, signature: str,
                  explanation: str, effect: str | None = None, pair: bool = True,
                  blind_exclusion: str | None = None, signs: tuple[float, float] = (1.0, 1.0)):

@@ -23,7 +23,7 @@ from .base import (
     time_grid,
 )
 
-__all__ = ['SunsetCandidate', 'TemperatureCandidate']
+__all__ = ['SunsetCandidate', 'SunsetTransientCandidate', 'TemperatureCandidate']
 
 
 class _LaggedCandidate(Candidate):
@@ -69,6 +69,9 @@ class SunsetCandidate(_LaggedCandidate):
     TAUS = (600.0, 900.0, 1200.0, 1800.0, 2400.0, 3600.0, 4800.0, 6000.0, 7200.0, 9000.0,
             10800.0, 14400.0, 18000.0)
 
+    #: the simulator effect's ``shape`` (antsim.world.effects.thermal.sunset_level)
+    shape = "relaxation"
+
     def __init__(self):
         from antsim.world.effects.thermal import SunsetDrift
 
@@ -81,7 +84,7 @@ class SunsetCandidate(_LaggedCandidate):
             obs.sun_el_deg is not None or "epoch_utc" in obs.meta) and np.ptp(obs.t_s) > 4 * 3600
 
     def level(self, obs: Observations, tau_s: float) -> np.ndarray:
-        from antsim.world.effects.thermal import relax
+        from antsim.world.effects.thermal import sunset_level
 
         t = time_grid(obs)
         key = (obs_key(obs), round(tau_s, 3))
@@ -89,7 +92,7 @@ class SunsetCandidate(_LaggedCandidate):
             if len(self._cache) > 512:
                 self._cache.clear()
             night = (sun_el_grid_deg(obs, t) < 0.0).astype(float)
-            lev = relax(night, GRID_STEP_S, tau_s, float(night[0]))
+            lev = sunset_level(night, GRID_STEP_S, tau_s, self.shape)
             self._cache[key] = np.interp(obs.t_s, t, lev)
         return self._cache[key]
 
@@ -145,10 +148,36 @@ class SunsetCandidate(_LaggedCandidate):
 
     def effect_params(self, shape, amplitude):
         return {"amplitude_arcsec": float(shape.get("sign", 1.0) * amplitude),
-                "tau_s": float(shape["tau_s"])}
+                "tau_s": float(shape["tau_s"]), "shape": self.shape}
 
     def effect_from_params(self, params: dict[str, Any]) -> dict[str, Any]:
-        return {"amplitude_arcsec": params["amplitude_arcsec"], "tau_s": params["tau_s"]}
+        return {"amplitude_arcsec": params["amplitude_arcsec"], "tau_s": params["tau_s"],
+                "shape": self.shape}
+
+    def hidden_label(self, params: dict[str, Any]) -> str:
+        return self.name
+
+
+class SunsetTransientCandidate(SunsetCandidate):
+    """A change the evening sets off and that dies away: ``a exp(-(t - t_set) / tau)`` after
+    each sunset (the simulator's sunset drift with ``shape = "transient"``)."""
+
+    name = "sunset_transient"
+    title = "a transient after sunset"
+    signature = ("elevation residuals that jump at sunset and die away as exp(-t/tau), back "
+                 "to the daytime level within a few tau")
+    params_doc: ClassVar[dict[str, str]] = {
+        "amplitude_arcsec": "elevation change at sunset (arcsec)",
+        "tau_s": "time constant of its decay (s)"}
+    shape = "transient"
+    TAUS = (600.0, 900.0, 1200.0, 1800.0, 2400.0, 3600.0, 4800.0, 6000.0, 7200.0, 9000.0,
+            10800.0)
+
+    def __init__(self):
+        super().__init__()
+        self.explanation = ("at sunset the structure's sunlit side starts to cool before the "
+                            "rest: a temperature difference appears and dies away as the "
+                            "structure settles, and the elevation error with it")
 
 
 class TemperatureCandidate(_LaggedCandidate):

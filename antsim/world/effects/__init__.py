@@ -3,9 +3,9 @@
 One family per module: :mod:`.base` (the interface), :mod:`.geometric` (pointing-model
 terms), :mod:`.harmonics` (harmonic errors, the feed offset), :mod:`.thermal` (solar heating,
 sunset drift), :mod:`.drifts` (temperature drift), :mod:`.tracking` (wind and servo jitter),
-:mod:`.dynamics` (clock, servo lag, backlash), :mod:`.optics` (squint, beam width, source
-structure, refraction anomaly, exact tilt and collimation). :data:`EFFECTS` names them as
-scenarios do.
+:mod:`.dynamics` (clock, servo lag, backlash), :mod:`.steps` (a change at one instant),
+:mod:`.optics` (squint, beam width, source structure, refraction anomaly, exact tilt and
+collimation). :data:`EFFECTS` names them as scenarios do.
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ from .optics import (
     RefractionAnomaly,
     SourceStructure,
 )
+from .steps import Step
 from .thermal import SunsetDrift, ThermalEffect
 from .tracking import TrackingJitter
 
@@ -46,5 +47,6 @@ EFFECTS: dict[str, type[Effect]] = {
         *HARMONIC_EFFECTS,
         FeedOffset,
         TemperatureDrift,
+        Step,
     )
 }

@@ -58,6 +58,7 @@ class Param:
     min: float | None = None
     max: float | None = None
     kind: str = "number"  # "number", "string", "table" (name -> number)
+    choices: tuple[str, ...] | None = None  # the values a string may take
 
 
 def _instant(value):
@@ -96,7 +97,7 @@ class Effect:
         params: dict[str, Any] = {}
         for key, spec in cls.PARAMS.items():
             if spec.kind == "string":
-                params[key] = table.string(key, spec.default)
+                params[key] = table.string(key, spec.default, choices=spec.choices)
             elif spec.kind == "table":
                 sub = table.table(key, spec.default if spec.default is not None else {})
                 params[key] = {k: sub.number(k) for k in sub}

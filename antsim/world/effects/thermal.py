@@ -47,7 +47,8 @@ from controller.units import RAD_PER_ARCSEC
 
 from .base import Effect, Param, PointingState
 
-__all__ = ["OUProcess", "SunsetDrift", "ThermalEffect", "interp_rows", "ou_series", "relax"]
+__all__ = ["SUNSET_SHAPES", "OUProcess", "SunsetDrift", "ThermalEffect", "interp_rows",
+           "ou_series", "relax", "sunset_level"]
 
 GRID_STEP_S = 60.0
 SPINUP_S = 86400.0
@@ -452,11 +453,35 @@ class ThermalEffect(Effect):
         return np.array(fb), np.array(lr)
 
 
+#: the shapes of a drift after sunset (SunsetDrift's ``shape``)
+SUNSET_SHAPES = ("relaxation", "transient")
+
+
+def sunset_level(night: np.ndarray, step_s: float, tau_s: float,
+                 shape: str = "relaxation") -> np.ndarray:
+    """The unit drift after sunset on an even grid (``night``: 1 where the Sun is below the
+    horizon, else 0). ``"relaxation"``: relaxing towards 1 at night and 0 by day, the
+    exponential approach after each sunset and the return after each sunrise.
+    ``"transient"``: 1 at each sunset, decaying as exp(-(t - t_set) / tau) (a disturbance
+    the evening sets off and the structure forgets), 0 before the grid's first sunset."""
+    if shape == "relaxation":
+        return relax(night, step_s, tau_s, float(night[0]))
+    if shape != "transient":
+        raise ValueError(f"unknown sunset drift shape {shape!r}; known: {SUNSET_SHAPES}")
+    idx = np.arange(night.size)
+    sets = np.zeros(night.size, dtype=bool)
+    sets[1:] = (night[1:] > 0.5) & (night[:-1] < 0.5)
+    last = np.maximum.accumulate(np.where(sets, idx, -1))
+    return np.where(last >= 0, np.exp(-(idx - last) * step_s / tau_s), 0.0)
+
+
 class SunsetDrift(Effect):
     """Elevation drift after sunset: ``a (1 - exp(-(t - t_set) / tau))``, relaxing back
-    with the same time constant after sunrise (Fomalont 1973's 1' in 4 hours). With
-    ``nights`` > 0 only after the first ``nights`` sunsets of the campaign (Fomalont saw it
-    "for a period of 4 hours after sunset on February 28", the first of his run)."""
+    with the same time constant after sunrise (Fomalont 1973's 1' in 4 hours); or, with
+    ``shape = "transient"``, ``a exp(-(t - t_set) / tau)``: a change the evening sets off
+    and that dies away (see :func:`sunset_level`). With ``nights`` > 0 only after the first
+    ``nights`` sunsets of the campaign (Fomalont saw it "for a period of 4 hours after sunset
+    on February 28", the first of his run)."""
 
     name: ClassVar[str] = "sunset_drift"
     explanation: ClassVar[str] = (
@@ -468,6 +493,9 @@ class SunsetDrift(Effect):
         "tau_s": Param(5400.0, "time constant of the drift (s)", min=60.0),
         "nights": Param(0.0, "after the first this many sunsets of the campaign only "
                              "(0: every night)", min=0.0),
+        "shape": Param("relaxation", "relaxation (a lasting change, back after sunrise) or "
+                       "transient (a change at sunset that dies away)", kind="string",
+                       choices=SUNSET_SHAPES),
     }
 
     def start(self, world, rng: np.random.Generator) -> None:
@@ -482,10 +510,8 @@ class SunsetDrift(Effect):
                 end = np.flatnonzero(night[i:] == 0.0)
                 keep[i:i + (end[0] if end.size else night.size)] = 1.0
             night = keep
-        # relaxing towards 1 at night and 0 by day gives the exponential approach after
-        # each sunset and the return after each sunrise
         self.t_grid = t
-        self.level = relax(night, step, self.p["tau_s"], float(night[0]))
+        self.level = sunset_level(night, step, self.p["tau_s"], self.p["shape"])
 
     def error_arcsec(self, t_s) -> np.ndarray:
         return self.p["amplitude_arcsec"] * np.interp(t_s, self.t_grid, self.level)

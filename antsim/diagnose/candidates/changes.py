@@ -1,0 +1,175 @@
+"""Changes at one instant: a step (changepoint) in either axis at an unknown time.
+
+The azimuth or the elevation zero point changes between two scans and stays changed (an
+encoder slip, a moved subreflector or feed, a re-levelling; DESIGN section 5's "step change
+at an unknown time"). Every gap between consecutive scans (with at least ``MIN_SIDE`` scans
+on each side) on either axis is one trial; all are tested at once, vectorized (one
+projection of every step column), and the look-elsewhere effect is paid with the effective
+number of independent trials among them (Nyholt 2004, as for the drifts' time constants).
+The time is located with its uncertainty: every change time whose chi^2 decrease lies
+within the 95% point of chi^2_1 (3.84) of the best (a profile-likelihood interval).
+
+The test: the largest chi^2 decrease over every change time of either axis, each a
+one-parameter added-variable test. Its null distribution is that of the maximum of a
+chi^2_1 process along the sequence of change times, whose tail the tube formula bounds
+(Davies 1987, Biometrika 74, 33, for one parameter): P(max > u) <= k P(chi^2_1 > u) +
+(L / pi) exp(-u / 2), with k = 2 ends (one per axis) and L the length of the curve the
+unit-normalized projected step columns trace on the sphere (the sum of the angles between
+neighbours). Nyholt's eigenvalue count, right for the drifts' few time constants, is five
+times too conservative here; the tube formula, 1.5-2 times (a Monte Carlo of the maximum
+on the 1990 campaign's 282 scans: 0.0065 against 0.0117 at u = 16, 0.0010 against 0.0016
+at u = 20; tests/test_diagnose.py checks it on a smaller design).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar
+
+import numpy as np
+
+from .. import pvalues
+from ..problem import Problem
+from .base import Candidate, TestResult, p_value, stacked, with_trials
+
+__all__ = ["StepCandidate", "curve_length", "tube_trials"]
+
+#: chi^2_1's 95% point: the profile-likelihood interval of the change time
+PROFILE_95 = 3.841458820694124
+
+
+def curve_length(xp: np.ndarray, split: int) -> float:
+    """Length (radians) of the curve the unit-normalized columns of ``xp`` trace, in order,
+    as two curves: columns [0, split) and [split, end)."""
+    u = xp / np.linalg.norm(xp, axis=0)
+    total = 0.0
+    for part in (u[:, :split], u[:, split:]):
+        if part.shape[1] > 1:
+            cos = np.abs(np.einsum("ij,ij->j", part[:, 1:], part[:, :-1]))
+            total += float(np.arccos(np.clip(cos, 0.0, 1.0)).sum())
+    return total
+
+
+def tube_trials(u: float, length: float, ends: int) -> float:
+    """The tube formula's bound on P(max of a chi^2_1 process > u) over curves of total
+    ``length`` with ``ends`` ends, as a number of trials: bound / P(chi^2_1 > u) (>= 1)."""
+    sf = float(pvalues.chi2_sf(u, 1))
+    if sf <= 0.0:  # far in the tail: the ratio's limit, L sqrt(u / (2 pi)) / ... + ends
+        return ends + length / math.pi * math.sqrt(math.pi * u / 2.0)
+    return max(1.0, (ends * sf + length / math.pi * math.exp(-u / 2.0)) / sf)
+
+
+class StepCandidate(Candidate):
+    name = "step"
+    effect = "step"
+    title = "step (a change at an unknown time)"
+    signature = ("the azimuth or the elevation zero point jumps between two scans and stays "
+                 "changed (a changepoint at an unknown time, not a drift)")
+    params_doc: ClassVar[dict[str, str]] = {
+        "axis": "az (azimuth zero point: xel ~ cos E) or el (elevation zero point)",
+        "t_s": "time of the change (s after the start: midway between two scans)",
+        "t_low_s": "earliest change time within the 95% interval (s)",
+        "t_high_s": "latest change time within the 95% interval (s)",
+        "step_arcsec": "size of the change (arcsec of azimuth or of elevation)"}
+    amplitude_param = "step_arcsec"
+    needs = ("time",)
+    AXES = ("az", "el")
+    #: scans required on each side of a change
+    MIN_SIDE = 3
+
+    def __init__(self):
+        from antsim.world.effects.steps import Step
+
+        self.explanation = Step.explanation
+
+    def change_times(self, obs) -> np.ndarray:
+        """Candidate change times (s): midway between consecutive distinct scan times, with
+        ``MIN_SIDE`` good scans on each side."""
+        t = np.unique(obs.t_s[obs.good])
+        if t.size < 2 * self.MIN_SIDE:
+            return np.zeros(0)
+        mid = 0.5 * (t[1:] + t[:-1])
+        return mid[self.MIN_SIDE - 1: t.size - self.MIN_SIDE]
+
+    def applicable(self, obs, known_noise):
+        return super().applicable(obs, known_noise) and self.change_times(obs).size > 0
+
+    def thetas(self, obs):
+        return [(axis, float(t)) for axis in self.AXES for t in self.change_times(obs)]
+
+    def _all_columns(self, obs) -> np.ndarray:
+        """Every step column (2n, 2 m): azimuth steps at each change time, then elevation."""
+        times = self.change_times(obs)
+        after = (obs.t_s[:, None] > times[None, :]).astype(float)
+        zero = np.zeros_like(after)
+        az = np.vstack([after * np.cos(obs.el_rad)[:, None], zero])
+        el = np.vstack([zero, after])
+        return np.hstack([az, el])
+
+    def columns(self, obs, theta=None):
+        axis, t0 = theta
+        after = (obs.t_s > t0).astype(float)
+        if axis == "az":
+            return stacked(after * np.cos(obs.el_rad), None, obs.n)[:, None], ("az_arcsec",)
+        return stacked(None, after, obs.n)[:, None], ("el_arcsec",)
+
+    def test(self, problem: Problem, perp, z_perp, chi2_now) -> TestResult:
+        obs = problem.obs
+        thetas = self.thetas(obs)
+        xp = perp(problem.cand(self._all_columns(obs)))
+        norm2 = np.einsum("ij,ij->j", xp, xp)
+        ok = norm2 > 1e-9 * max(float(norm2.max()), 1e-300)
+        gain = np.where(ok, (xp.T @ z_perp) ** 2 / np.where(ok, norm2, 1.0), 0.0)
+        best = int(np.argmax(gain))
+        cols, names = self.columns(obs, thetas[best])
+        res = self._linear(problem, perp, z_perp, cols, names, thetas[best])
+        if not res.testable:
+            return res
+        length = curve_length(xp[:, ok], split=int(ok[: len(thetas) // 2].sum()))
+        res.trials_at = lambda u, _l=length: tube_trials(u, _l, ends=2)
+        res.trials = res.trials_at(res.delta_chi2)
+        res.p = with_trials(p_value(problem, res.delta_chi2, res.dof, res.chi2_now, res.mask),
+                            res.trials)
+        # the profile over the change time on the chosen axis: a 95% interval
+        m = len(thetas) // 2
+        axis_gain = gain[:m] if best < m else gain[m:]
+        times = np.array([t for _, t in thetas[:m]])
+        inside = times[axis_gain >= axis_gain.max() - PROFILE_95]
+        res.theta = (thetas[best][0], thetas[best][1], float(inside.min()), float(inside.max()))
+        self._finish(problem, res)
+        return res
+
+    def params_from(self, obs, theta, coef, cov, names):
+        axis, t0, lo, hi = theta if len(theta) == 4 else (*theta, theta[1], theta[1])
+        step = float(coef[0])
+        return ({"axis": axis, "t_s": float(t0), "t_low_s": float(lo), "t_high_s": float(hi),
+                 "step_arcsec": step}, step, math.sqrt(max(float(cov[0, 0]), 0.0)))
+
+    def label(self, theta: Any) -> str:
+        return f"{self.name}[{theta[0]}]"
+
+    # -- blind harness ------------------------------------------------------------------------
+    def draw_shape(self, rng, obs):
+        times = self.change_times(obs)
+        lo, hi = np.quantile(times, [0.1, 0.9])
+        return {"axis": str(rng.choice(self.AXES)), "t_s": float(rng.uniform(lo, hi)),
+                "sign": float(rng.choice([-1.0, 1.0]))}
+
+    def unit_signal(self, obs, shape):
+        return shape["sign"] * self.columns(obs, (shape["axis"], shape["t_s"]))[0][:, 0]
+
+    def effect_params(self, shape, amplitude):
+        size = float(shape["sign"] * amplitude)
+        return {"t_s": float(shape["t_s"]), "az_arcsec": size if shape["axis"] == "az" else 0.0,
+                "el_arcsec": size if shape["axis"] == "el" else 0.0}
+
+    def hidden_amplitude(self, params):
+        return float(params["az_arcsec"] or params["el_arcsec"])
+
+    def hidden_label(self, params):
+        return f"{self.name}[{'az' if params['az_arcsec'] else 'el'}]"
+
+    def effect_from_params(self, params):
+        size = params["step_arcsec"]
+        return {"t_s": params["t_s"], "az_arcsec": size if params["axis"] == "az" else 0.0,
+                "el_arcsec": size if params["axis"] == "el" else 0.0}
