@@ -57,9 +57,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="a progress bar, or none (default: a bar on a terminal, a line "
                              "every few seconds to stderr off one)")
     parser.epilog = (
-        "Selection: forward addition by a family-corrected chi^2 or F test (sin/cos pairs "
-        "jointly), refusing effects correlated above 0.95 with the model, confirmed on held-out "
-        "data, stopping when the residuals match the predicted noise.")
+        "Selection: forward addition by a family-corrected chi^2 or F test of what the model "
+        "cannot absorb (sin/cos pairs jointly; correlations with the model reported in "
+        "TPOINT's words), confirmed on held-out data, stopping when the residuals match the "
+        "predicted noise. Without a noise prediction (a TPOINT file, no --scenario), once "
+        "something is significant, effects that lower the held-out Sky RMS follow, up to 4 "
+        "findings.")
 
 
 def _library_text() -> str:

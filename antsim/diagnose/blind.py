@@ -468,9 +468,11 @@ def score(case: BlindCase, c: Candidate | None, params: dict[str, Any],
 _HARNESS: Harness | None = None
 
 
-def _init_worker(scenario, n_sims: int, cache_dir, use_cache: bool) -> None:
+def _init_worker(scenario, n_sims: int, cache_dir, use_cache: bool,
+                 null_fraction: float) -> None:
     global _HARNESS
-    _HARNESS = Harness(scenario, n_sims, cache_dir, use_cache, jobs=1)
+    _HARNESS = Harness(scenario, n_sims, cache_dir, use_cache, jobs=1,
+                       null_fraction=null_fraction)
 
 
 def _worker(args):
@@ -481,16 +483,19 @@ def _worker(args):
 
 def run_blindtest(scenario, n: int = 100, seed: int = 1, n_sims: int = 8, cache_dir=None,
                   use_cache: bool = True, jobs: int = 1, progress=None,
-                  harness: Harness | None = None) -> BlindReport:
-    """Run ``n`` blind cases (see the module docstring)."""
+                  harness: Harness | None = None, null_fraction: float = 0.2) -> BlindReport:
+    """Run ``n`` blind cases (see the module docstring); ``null_fraction`` of them, on
+    average, hide nothing (1: a false-alarm study)."""
     t0 = time.perf_counter()
-    harness = harness or Harness(scenario, n_sims, cache_dir, use_cache, jobs)
+    harness = harness or Harness(scenario, n_sims, cache_dir, use_cache, jobs,
+                                 null_fraction=null_fraction)
     cases: list[BlindCase] = []
     if jobs > 1:
         from concurrent.futures import ProcessPoolExecutor
 
         with ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker,
-                                 initargs=(scenario, n_sims, cache_dir, use_cache)) as pool:
+                                 initargs=(scenario, n_sims, cache_dir, use_cache,
+                                           harness.null_fraction)) as pool:
             for case in pool.map(_worker, [(i, seed) for i in range(n)]):
                 cases.append(case)
                 if progress:

@@ -444,7 +444,9 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
         lp = log_p_family(problem, r, n_family)
         if lp < math.log(alpha):
             steps.append(Step(r, min(1.0, math.exp(lp)), lp, sky, sky))
-    steps.sort(key=lambda s: s.log_p)
+    # best first; the cross-validated findings after the significant ones, in the order
+    # they were added (each one's held-out figures continue the previous one's)
+    steps.sort(key=lambda s: (s.heldout is not None, s.log_p if s.heldout is None else 0.0))
     return Selection(steps, refused, absorbed, first_round, not_applicable, n_family,
                      gof_before, problem.gof(), stop)
 
