@@ -135,7 +135,8 @@ class BlindReport:
         code = {n: f"{i + 1:>2}" if n != NULL else " 0" for i, n in enumerate(names)}
         width = max(len(n) for n in names) + 6
         lines = ["confusion table by effect (rows: hidden, columns: first finding; families "
-                 "of periodic errors pooled over their order n, whose misses are listed below)"]
+                 "of periodic errors pooled over their order n; every case named wrongly is "
+                 "listed below it)"]
         lines.append(" " * width + " ".join(f"{code[n]:>3}" for n in names))
         table: dict[str, Counter] = {}
         for c in self.cases:
@@ -146,10 +147,13 @@ class BlindReport:
             row = table[h]
             lines.append(f"{code[h]} {h:<{width - 3}}" + " ".join(f"{row.get(n, 0) or '.':>3}"
                                                              for n in names))
-        wrong_order = [c for c in self.cases if c.hidden != c.named
-                       and fam[c.hidden] == fam[c.named]]
-        for c in wrong_order:
-            lines.append(f"   order missed: hidden {c.hidden}, named {c.named}")
+        for c in self.cases:
+            if c.hidden == c.named:
+                continue
+            how = ("order missed" if fam[c.hidden] == fam[c.named] else
+                   "false alarm" if c.hidden == NULL else "missed")
+            said = " (reported as one it cannot be distinguished from)" if c.group_ok else ""
+            lines.append(f"   {how}: case {c.index}, hidden {c.hidden}, named {c.named}{said}")
         lines += [
             "",
             f"cases {r['cases']} ({r['effect_cases']} with a hidden effect, {r['null_cases']} "
