@@ -5,6 +5,7 @@
     python benchmarks/blind.py --fomalont [--seeds 16]   # the after-sunset drift, many seeds
     python benchmarks/blind.py --changes [--seeds 16]    # steps, the transient after sunset
     python benchmarks/blind.py --tpoint [--n 90]         # held-out-style TPOINT files
+    python benchmarks/blind.py --tpoint --n 100 --null-fraction 1   # ... without an effect
     python benchmarks/blind.py --tilt                    # exact tilt at 25-40' (not drawn)
     python benchmarks/blind.py --real                    # auxtel and MMT, no simulation
     python benchmarks/blind.py --bound                   # auxtel: best of <= 4 findings
@@ -133,7 +134,7 @@ def tpoint(args) -> None:
 
     full = load_scenario(SCENARIO)
     scenario = full.with_effects(tuple(e for e in full.effects if e.name != "thermal"))
-    labels = list(TPOINT_CASES)
+    labels = ["none"] if args.null_fraction >= 1.0 else list(TPOINT_CASES)
     tally: dict[str, list[int]] = {k: [0, 0, 0, 0] for k in labels}  # cases, named, group, extra
     with tempfile.TemporaryDirectory() as tmp:
         for i in range(args.n):
@@ -631,7 +632,8 @@ def main() -> None:
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--out", default=None)
     parser.add_argument("--null-fraction", type=float, default=0.2,
-                        help="share of blind cases that hide nothing (1: false alarms only)")
+                        help="share of blind cases that hide nothing (1: false alarms only; "
+                        "with --tpoint, 1 writes only files without an effect)")
     parser.add_argument("--seeds", type=int, default=16)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--nested", action="store_true",
