@@ -174,8 +174,8 @@ def tpoint(args) -> None:
             t[0] += 1
             t[1] += named == label
             t[2] += named == label or (first is not None and any(
-                a.result.candidate.label(a.result.theta).split("[")[0] == label.split("[")[0]
-                and a.correlation > 0.95 for a in first.step.alternatives))
+                a.result.candidate.label(a.result.theta) == label and a.correlation > 0.95
+                for a in first.step.alternatives))
             t[3] += sum(f.step.heldout is not None for f in d.findings)
             print(f"case {i:3d} {label:20s} -> {named}", file=sys.stderr, flush=True)
     effect = [v for k, v in tally.items() if k != "none"]

@@ -258,6 +258,23 @@ def test_held_out_style_effects_are_named(extra, effect):
     assert np.linalg.norm(fitted - hidden) < 3 * max(r.amplitude_sigma, 1e-9) + 1e-9
 
 
+def test_orders_of_a_family_the_data_cannot_tell_apart_are_reported():
+    """Three cycles of elevation error (HESE3/HECE3, 10" in 1" noise, seed 3): over 15-85 deg
+    the elevation-only effects left by IE, TF and TX are alike (r > 0.95 between their
+    fitted signatures), and the simplest of them is named; the hidden order is among the
+    alternatives, the family's orders said in one line, each its own entry in the JSON."""
+    d = diagnose(synthetic(extra={"HESE3": 6.0, "HECE3": 8.0}, seed=3))
+    first = d.findings[0]
+    assert first.effect in ("el_eccentricity", "el_eccentricity_2e")
+    orders = {a.result.candidate.label(a.result.theta): a for a in first.step.alternatives
+              if a.sibling}
+    assert "el_periodic_el[3]" in orders and orders["el_periodic_el[3]"].correlation > 0.95
+    lines = [w for w in d.text().splitlines() if "and el_periodic_el with n = " in w]
+    assert len(lines) == 1 and "3" in lines[0].split("n = ")[1], lines
+    doc = d.to_json()
+    assert "el_periodic_el[3]" in [a["alternative"] for a in doc["alternatives"]]
+
+
 def test_a_mimicked_term_below_detection_is_refused_in_words():
     """The same sin E at 3.6 sigma of orthogonal part expected (11.3" in 1" noise), below
     the family's detection level (3.5-3.7 sigma two-sided for one parameter and 14-18

@@ -184,7 +184,8 @@ class Diagnosis:
             "located": {"words": self.location.words,
                         "ratio_to_noise": _plain(self.location.ratio),
                         "p": _plain(self.location.p)},
-            "alternatives": [{"finding": f.effect, "alternative": a.result.name,
+            "alternatives": [{"finding": f.effect,
+                              "alternative": a.result.candidate.label(a.result.theta),
                               "correlation": round(a.correlation, 3), "words": a.reason}
                              for f in self.findings for a in f.step.alternatives],
             "separations": [{"finding": f.effect, "r": round(float(sp.r), 4),
@@ -236,8 +237,9 @@ class Diagnosis:
                              f"{sp.sigma:.1f} sigma")
             if f.step.simplest is not None:
                 lines.append(f"   simplest form: {f.step.simplest.words}")
-            for a in f.step.alternatives:
-                lines.append(f"   alternative: {a.reason}")
+            lines += [f"   alternative: {a.reason}" for a in f.step.alternatives
+                      if not a.sibling]
+            lines += _orders_line(f)
         for r in self.selection.refused:
             lines.append(f"refused: {r.reason}")
         for w in self.degeneracies():
@@ -361,6 +363,25 @@ def _special_where(step: Step, obs: Observations) -> str:
     if r.name == "source_structure":
         return f"on {p['source']} only"
     return ""
+
+
+def _orders_line(f: Finding) -> list[str]:
+    """One line per harmonic family for its orders the data cannot tell from the finding
+    (each is an alternative of its own in the JSON)."""
+    by: dict[str, list] = {}
+    for a in f.step.alternatives:
+        if a.sibling:
+            by.setdefault(a.result.candidate.name, []).append(a)
+    r = f.result
+    out = []
+    for name, alts in by.items():
+        alts.sort(key=lambda a: int(a.result.theta))
+        orders = ", ".join(str(int(a.result.theta)) for a in alts)
+        lo, hi = min(a.correlation for a in alts), max(a.correlation for a in alts)
+        out.append(f"   alternative: {r.candidate.label(r.theta)} and {name} with n = "
+                   f"{orders} cannot reliably be distinguished (r = "
+                   + (f"{lo:.2f})" if f"{lo:.2f}" == f"{hi:.2f}" else f"{lo:.2f}-{hi:.2f})"))
+    return out
 
 
 def _clock(obs: Observations, t_s: float) -> str:

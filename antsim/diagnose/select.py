@@ -133,6 +133,8 @@ class Alternative:
     result: TestResult
     correlation: float
     reason: str
+    #: another order of a harmonic family (said in one line with the family's others)
+    sibling: bool = False
 
 
 @dataclass
@@ -276,11 +278,19 @@ def _simplest_form(problem: Problem, res: TestResult, vocabulary: list[str]
                         f"{gain[best]:.1f} against {res.delta_chi2:.1f})")
 
 
+def _label(r: TestResult) -> str:
+    return r.candidate.label(r.theta)
+
+
 def _alternatives(problem: Problem, perp, r: TestResult, ranked: list[TestResult],
                   n_family: int, alpha: float) -> list[Alternative]:
+    """The significant candidates the data cannot distinguish from ``r`` or that fit almost
+    as well, and the other orders of a harmonic family (``TestResult.siblings``, of ``r``'s
+    own or of another candidate's) that the data cannot distinguish from it."""
     out = []
     n_obs = 2 * int(problem.used.sum())
-    for other in ranked:
+    siblings = [s for o in ranked for s in o.siblings]
+    for other in [*ranked, *siblings]:
         if other is r or log_p_family(problem, other, n_family) >= math.log(alpha) \
                 or _contains(other, r):
             continue
@@ -288,10 +298,13 @@ def _alternatives(problem: Problem, perp, r: TestResult, ranked: list[TestResult
         bic_gap = (r.delta_chi2 - r.dof * math.log(n_obs)) \
             - (other.delta_chi2 - other.dof * math.log(n_obs))
         if corr > DISTINGUISH_R:
-            out.append(Alternative(other, corr, f"{r.name} and {other.name} cannot reliably "
-                                                f"be distinguished (r = {corr:.2f})"))
+            out.append(Alternative(other, corr, f"{_label(r)} and {_label(other)} cannot "
+                                                f"reliably be distinguished (r = {corr:.2f})",
+                                   sibling=other in siblings))
+        elif other in siblings:
+            continue
         elif corr > ALTERNATIVE_R or bic_gap < 2.0:
-            out.append(Alternative(other, corr, f"{other.name} fits almost as well (chi2 "
+            out.append(Alternative(other, corr, f"{_label(other)} fits almost as well (chi2 "
                                                 f"decrease {other.delta_chi2:.1f} against "
                                                 f"{r.delta_chi2:.1f}; r = {corr:.2f})"))
     return out

@@ -55,6 +55,10 @@ class TestResult:
     note: str = ""
     mask: np.ndarray | None = None  # the scans this test kept (outliers of model+candidate out)
     chi2_now: float = float("nan")  # chi^2 of the current model on those scans
+    #: the other values of a family's parameter that were tested (a harmonic family's other
+    #: orders n), with their own p-values: the selection reports those the data cannot tell
+    #: from the best as alternatives
+    siblings: list[TestResult] = field(default_factory=list)
     #: the effective number of trials as a function of the chi^2 decrease, for a family
     #: whose look-elsewhere factor depends on the level (a change at an unknown time);
     #: None: ``trials`` at every level

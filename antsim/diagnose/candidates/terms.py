@@ -129,15 +129,16 @@ class HarmonicFamilyCandidate(TermsCandidate):
         return term_columns(pair, obs), pair
 
     def test(self, problem, perp, z_perp, chi2_now):
-        best = None
+        results = []
         for n in self.orders:
             cols, names = self.columns(problem.obs, n)
-            res = self._linear(problem, perp, z_perp, cols, names, n)
-            if best is None or res.delta_chi2 > best.delta_chi2:
-                best = res
-        best.trials = float(len(self.orders))
-        best.p = with_trials(p_value(problem, best.delta_chi2, best.dof, best.chi2_now,
-                                     best.mask), best.trials)
+            results.append(self._linear(problem, perp, z_perp, cols, names, n))
+        for res in results:
+            res.trials = float(len(self.orders))
+            res.p = with_trials(p_value(problem, res.delta_chi2, res.dof, res.chi2_now,
+                                        res.mask), res.trials)
+        best = max(results, key=lambda res: res.delta_chi2)
+        best.siblings = [res for res in results if res is not best and res.dof > 0]
         if best.dof > 0:
             self._finish(problem, best)
         return best
