@@ -468,6 +468,16 @@ def test_auxtel_stays_parsimonious_and_reports_the_degeneracy():
     assert any("TF" in w and "TX" in w for w in d.degeneracies()), d.degeneracies()
     s = d.summary
     assert s["cv_sky_rms_after_arcsec"] < s["cv_sky_rms_before_arcsec"]
+    # the data's README: a good selector keeps no term whose size is set by a near-degenerate
+    # partner; what prediction alone keeps is never one the model mimics
+    kept = [f for f in d.findings if f.step.heldout is not None]
+    assert all(f.step.separation.r <= 0.95 for f in kept)
+    # the README quotes the findings as the command prints them
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    headlines = [line for line in text.splitlines() if line[:3] in ("1. ", "2. ", "3. ", "4. ")]
+    assert len(headlines) == len(d.findings)
+    for line in headlines:
+        assert f"    {line}\n" in readme, line
 
 
 def test_auxtel_procedure_predicts_held_out_stars():
