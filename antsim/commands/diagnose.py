@@ -112,7 +112,7 @@ def main(args: argparse.Namespace) -> int:
 
         obs = load_observations(args.recordings, mount=args.mount)
         for note in obs.meta.get("notes", ()):
-            print(f"note: {note}", file=sys.stderr)
+            progress.write(f"note: {note}", file=sys.stderr)
         if scenario is not None and obs.kind == "tpoint":
             raise InputError(args.recordings, "--scenario", args.scenario,
                              "a TPOINT data file has no times or sources to simulate against",

@@ -115,13 +115,15 @@ def _terms_from_model(spec: str) -> tuple[tuple[str, ...], str]:
     return model.names, path.stem
 
 
-def _read_data(path: Path, fmt: str, include_masked: bool, mount: str | None = None):
+def _read_data(path: Path, fmt: str, include_masked: bool, mount: str | None, say):
+    """The pointing data of a TPOINT file or recordings; a TPOINT reader's notes (how a file
+    without a mount option was read) go to ``say``."""
     if fmt == "tpoint":
         from controller.pointing.tpoint import read_tpoint
 
         data = read_tpoint(path, mount=mount)
         for note in data.notes:
-            print(f"note: {note}", file=sys.stderr)
+            say(f"note: {note}")
         return data.pointing_data(include_masked=include_masked)
     if mount is not None:
         raise InputError(str(path), "--mount", mount, "applies to TPOINT data files only",
@@ -163,7 +165,8 @@ def main(args: argparse.Namespace) -> int:
 
     with Progress("fit", args.progress) as progress:
         progress.stage("reading")
-        data = _read_data(path, fmt, args.include_masked, args.mount)
+        data = _read_data(path, fmt, args.include_masked, args.mount,
+                          say=lambda text: progress.write(text, file=sys.stderr))
         progress.stage(f"fitting {len(data)} observations")
         try:
             result = fit_model(data, terms, robust=not args.no_robust, name=model_name,
