@@ -43,9 +43,9 @@ import numpy as np
 from . import pvalues
 from .candidates.base import DISTINGUISH_R, Candidate, TestResult, p_value
 from .candidates.library import CANDIDATES
-from .candidates.terms import TermsCandidate
+from .candidates.terms import HarmonicFamilyCandidate, TermsCandidate
 from .crossval import MAX_FINDINGS_CV, cv_stage
-from .problem import Problem, folds_for
+from .problem import Problem, folds_for, term_columns
 
 __all__ = ["ALPHA", "Selection", "Step", "correlation_words", "select", "sigma_from_p"]
 
@@ -234,8 +234,6 @@ def _model_terms(problem: Problem) -> set[str]:
 def _single_terms(candidates: tuple[Candidate, ...]) -> list[str]:
     """Every TPOINT term the library's linear candidates are made of (each order of the
     harmonic families), in library order: the vocabulary of one-term forms."""
-    from .candidates.terms import HarmonicFamilyCandidate
-
     out: list[str] = []
     for c in candidates:
         if isinstance(c, HarmonicFamilyCandidate):
@@ -252,8 +250,6 @@ def _simplest_form(problem: Problem, res: TestResult, vocabulary: list[str]
                    ) -> SimplestForm | None:
     """One TPOINT term that explains as much as the finding's terms (None if none does, or
     the finding is one term already)."""
-    from .problem import term_columns
-
     if not isinstance(res.candidate, TermsCandidate) or len(res.comp_names) < 2:
         return None
     names = [t for t in vocabulary if t not in _model_terms(problem)]
