@@ -53,7 +53,9 @@ ESTIMATORS = ("clark", "lsq")
 #: effects that an equatorial mount accepts: the others model an alt-az mount's geometry,
 #: its elevation-dependent structure or its azimuth track
 EQUATORIAL_EFFECTS = ("tracking_jitter", "clock_error", "polarization_squint", "beam_width",
-                      "source_structure", "refraction_anomaly")
+                      "source_structure", "refraction_anomaly", "terms", "polar_torsion")
+#: effects that model an equatorial mount's structure (refused on an alt-az mount)
+EQUATORIAL_ONLY_EFFECTS = ("polar_torsion",)
 
 
 @dataclass(frozen=True)
@@ -148,7 +150,7 @@ def load_scenario(path: str | Path) -> Scenario:
             raise root.error(f"sources[{i}].name", s, "duplicate source name")
     truth = root.table("truth", {})
     truth_model = _model(truth, default="none", base=path.parent, mount=mount, site=site)
-    effects = tuple(_effect(t, mount) for t in truth.tables("effects", []))
+    effects = tuple(_effect(t, mount, site) for t in truth.tables("effects", []))
     _check_effect_sources(effects, names, truth)
     truth.finish()
     controller = _controller(root.table("controller", {}), site, epoch, duration_s, sources,
@@ -398,18 +400,29 @@ def _model_file(t: Table, spec: str, base: Path) -> PointingModel:
     return load_model(path)
 
 
-def _effect(t: Table, mount: MountConfig | None = None) -> EffectSpec:
+def _effect(t: Table, mount: MountConfig | None = None, site: Site | None = None) -> EffectSpec:
     name = t.string("effect")
     cls = EFFECTS.get(name)
     if cls is None:
         raise t.error("effect", name, "unknown effect",
                       f"known effects: {', '.join(sorted(EFFECTS))}")
-    if mount is not None and mount.kind == "equatorial" and name not in EQUATORIAL_EFFECTS:
+    equatorial = mount is not None and mount.kind == "equatorial"
+    if equatorial and name not in EQUATORIAL_EFFECTS:
         raise t.error("effect", name, "models an alt-az mount; not available on an "
                       "equatorial mount", f"use truth.terms or: {', '.join(EQUATORIAL_EFFECTS)}")
+    if not equatorial and name in EQUATORIAL_ONLY_EFFECTS:
+        raise t.error("effect", name, "models an equatorial mount; not available on an "
+                      "alt-az mount")
+    if name == "terms":
+        if equatorial:  # the mount's own vocabulary (controller.pointing.equatorial)
+            from controller.pointing.equatorial import equatorial_term
+
+            effect = cls.from_table(t, lambda n: equatorial_term(n, site.latitude_deg))
+        else:
+            effect = cls.from_table(t)
+        return EffectSpec(name, {"terms_arcsec": dict(effect.values_arcsec)})
     effect = cls.from_table(t)
-    params = effect.params() if name != "terms" else {"terms_arcsec": effect.model.as_dict()}
-    return EffectSpec(name, params)
+    return EffectSpec(name, effect.params())
 
 
 def _check_effect_sources(effects, names, truth: Table) -> None:

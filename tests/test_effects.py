@@ -180,7 +180,12 @@ SMOKE = {
     "temperature_drift": ({"arcsec_per_k": 2.0, "tau_s": 3600.0, "reference_c": 5.0}, None),
     # issue 24's change at one instant (antsim/world/effects/steps.py)
     "step": ({"t_s": 3600.0, "az_arcsec": 20.0, "el_arcsec": -30.0}, None),
+    # issue 23's equatorial effect (antsim/world/effects/equatorial.py), run on the 140-ft
+    "polar_torsion": ({"amplitude_arcsec": 30.0, "phase_deg": 315.0}, None),
 }
+#: the effects of an equatorial mount: smoke-tested in the 140-ft's 4990 MHz scenario cut to
+#: 6 hours (about 20 scans)
+EQUATORIAL_ONLY = {"polar_torsion"}
 
 
 def test_every_registered_effect_has_a_smoke_test():
@@ -194,13 +199,20 @@ def _toml_value(value) -> str:
 @pytest.mark.parametrize("name", sorted(SMOKE))
 def test_effect_runs_in_a_scenario_and_reports_its_truth(short_ghigo_text, write_scenario,
                                                          name):
-    """The 3-hour 1990 scenario with its own effects replaced by this one alone."""
+    """The 3-hour 1990 scenario (an equatorial mount's effect: the 140-ft's 4990 MHz run)
+    with its own effects replaced by this one alone."""
     given, expected_params = SMOKE[name]
-    start = short_ghigo_text.index("[[truth.effects]]")
-    end = short_ghigo_text.index("[controller]")
+    base = short_ghigo_text
+    if name in EQUATORIAL_ONLY:
+        from tests.conftest import REPO, edit_text
+
+        base = edit_text((REPO / "scenarios" / "crane1981_140ft_4990.toml").read_text(),
+                         (("duration_h = 96.0", "duration_h = 6.0"),))
+    start = base.index("[[truth.effects]]")
+    end = base.index("[controller]")
     table = f'[[truth.effects]]\neffect = "{name}"\n' + "".join(
         f"{k} = {_toml_value(v)}\n" for k, v in given.items())
-    text = short_ghigo_text[:start] + table + "\n" + short_ghigo_text[end:]
+    text = base[:start] + table + "\n" + base[end:]
     scenario = load_scenario(write_scenario(text))
     assert [e.name for e in scenario.effects] == [name]
     result = simulate(scenario)

@@ -5,7 +5,8 @@ terms), :mod:`.harmonics` (harmonic errors, the feed offset), :mod:`.thermal` (s
 sunset drift), :mod:`.drifts` (temperature drift), :mod:`.tracking` (wind and servo jitter),
 :mod:`.dynamics` (clock, servo lag, backlash), :mod:`.steps` (a change at one instant),
 :mod:`.optics` (squint, beam width, source structure, refraction anomaly, exact tilt and
-collimation). :data:`EFFECTS` names them as scenarios do.
+collimation), :mod:`.equatorial` (an equatorial mount's structure: the polar drive's
+torsion). :data:`EFFECTS` names them as scenarios do.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from __future__ import annotations
 from .base import Effect, Param, PointingState
 from .drifts import TemperatureDrift
 from .dynamics import Backlash, ClockError, ServoLag
+from .equatorial import EQUATORIAL_HARMONIC_EFFECTS
 from .geometric import GeometricEffect, TermsEffect
 from .harmonics import HARMONIC_EFFECTS, FeedOffset
 from .optics import (
@@ -45,6 +47,7 @@ EFFECTS: dict[str, type[Effect]] = {
         RefractionAnomaly,
         ExactTiltCollimation,
         *HARMONIC_EFFECTS,
+        *EQUATORIAL_HARMONIC_EFFECTS,
         FeedOffset,
         TemperatureDrift,
         Step,

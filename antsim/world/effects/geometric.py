@@ -43,7 +43,11 @@ class GeometricEffect(Effect):
 
 
 class TermsEffect(GeometricEffect):
-    """Extra geometric terms by name, e.g. ``HESA2 = 6.0`` (arcsec, TPOINT sign)."""
+    """Extra geometric terms by name, e.g. ``HESA2 = 6.0`` (arcsec, TPOINT sign).
+
+    On an equatorial mount the names are TPOINT's equatorial terms (``HHSHCD``, ``NP``...,
+    :mod:`controller.pointing.equatorial`), bound to the mount's latitude when the effect
+    starts (a name both vocabularies know, such as TF, means the mount's)."""
 
     name: ClassVar[str] = "terms"
     explanation: ClassVar[str] = "additional geometric terms given by their TPOINT names"
@@ -52,16 +56,38 @@ class TermsEffect(GeometricEffect):
     def __init__(self, terms_arcsec: dict[str, float] | None = None, **named: Any):
         values = dict(terms_arcsec or {})
         values.update(named)
-        super().__init__(PointingModel(list(values), list(values.values()), name="terms"))
+        self.values_arcsec = {str(k).upper(): float(v) for k, v in values.items()}
+        try:
+            model = PointingModel(list(values), list(values.values()), name="terms")
+        except TermError:  # an equatorial mount's terms: bound in start()
+            model = None
+        self.model = model
+        self.p = {"model": "terms", "terms_arcsec": dict(self.values_arcsec)}
+
+    @property
+    def terms(self) -> tuple[str, ...]:  # type: ignore[override]
+        return tuple(self.values_arcsec)
+
+    def start(self, world, rng) -> None:
+        if not world.frame.is_altaz:
+            from controller.pointing.equatorial import equatorial_model
+
+            self.model = equatorial_model(list(self.values_arcsec), world.frame.latitude_deg,
+                                          list(self.values_arcsec.values()), name="terms")
+        elif self.model is None:
+            raise TermError(f"effect terms: {', '.join(self.values_arcsec)} are not all "
+                            "alt-az pointing terms")
 
     @classmethod
-    def from_table(cls, table):
+    def from_table(cls, table, lookup=get_term):
+        """``lookup(name)`` resolves a term name (an equatorial mount's: its own vocabulary
+        at the site's latitude)."""
         values = {}
         for key in table:
             if key == "effect":
                 continue
             try:
-                get_term(key)
+                lookup(key)
             except TermError as err:
                 raise table.error(key, table.raw(key), "not a pointing term", str(err)) from None
             values[key.upper()] = table.number(key)
