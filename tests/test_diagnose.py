@@ -532,13 +532,22 @@ def _short_run(tmp_path: Path, scenario: str) -> tuple[Path, Path]:
     return path, out / "recordings.ecsv"
 
 
-def test_equatorial_recordings_are_refused_in_one_line(tmp_path, capsys):
+def test_equatorial_recordings_are_diagnosed_on_their_axes(tmp_path, capsys):
+    """An equatorial mount's recordings (the 140-ft's) are read in hour angle and
+    declination with the model in their metadata (Crane's C1..C11); a mount diagnose does
+    not know is refused in one line."""
     _, recordings = _short_run(tmp_path, "crane1981_140ft_3245.toml")
     capsys.readouterr()
-    assert cli(["diagnose", str(recordings)]) == 2
+    assert cli(["diagnose", str(recordings)]) == 0
+    out = capsys.readouterr().out
+    assert "baseline C1 C2 C3 C4 C5 C6 C7 C8 C9 C10 C11" in out and "RA/Dec rms" in out
+    assert "cross-declination" in out and "azimuth" not in out
+    bad = tmp_path / "gimbal.ecsv"
+    bad.write_text(recordings.read_text().replace("mount: equatorial", "mount: gimbal"))
+    assert cli(["diagnose", str(bad)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1
-    assert "mount = 'equatorial'" in err and "alt-az recordings only" in err
+    assert "mount = 'gimbal'" in err and "altaz, equatorial" in err
 
 
 def test_feed_angle_terms_in_the_baseline_are_refused_in_one_line(tmp_path, capsys):

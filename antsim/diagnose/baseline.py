@@ -3,7 +3,9 @@
 Rules (issue 5): the pointing-model terms are those of ``--model`` when given; else, with a
 scenario, the scenario's ``controller.fit_model`` (or the terms of its model in use); else the
 model in the recordings' metadata; else, for a TPOINT file, TPOINT's eight terms IA IE NPAE CA
-AN AW TF TX.
+AN AW TF TX. Recordings of an equatorial mount take their terms from TPOINT's equatorial
+vocabulary (``--model crane1981``, ``crane11``, or IH,ID,NP,...; default ``crane11``, as
+``antsim fit``).
 
 With a scenario the noise is predicted by simulating it: ``n_sims`` campaigns with seeds other
 than the recordings' are run, each is fitted with the baseline terms, and for every recorded
@@ -63,8 +65,12 @@ class BaselineSpec:
     model_in_use: PointingModel | None = None
 
 
-def parse_model_option(spec: str) -> tuple[tuple[str, ...], str]:
-    """``--model``: a named model, a ``.mod``/JSON model file, or comma-separated terms."""
+def parse_model_option(spec: str, obs: Observations | None = None
+                       ) -> tuple[tuple[str, ...], str]:
+    """``--model``: a named model, a ``.mod``/JSON model file, or comma-separated terms (on
+    an equatorial mount's recordings ``obs``, of its equatorial vocabulary)."""
+    if obs is not None and obs.mount == "equatorial":
+        return _parse_equatorial_model(spec, obs)
     from controller.pointing.terms import is_term_name
 
     if spec in NAMED_MODELS:
@@ -85,13 +91,35 @@ def parse_model_option(spec: str) -> tuple[tuple[str, ...], str]:
     return names, "the terms given with --model"
 
 
+def _parse_equatorial_model(spec: str, obs: Observations) -> tuple[tuple[str, ...], str]:
+    from controller.pointing.equatorial import (
+        EQUATORIAL_MODELS,
+        is_equatorial_term,
+        load_equatorial_model,
+    )
+
+    if spec in EQUATORIAL_MODELS:
+        return EQUATORIAL_MODELS[spec], f"the named equatorial model {spec}"
+    if Path(spec).is_file():
+        model = load_equatorial_model(spec, math.degrees(obs.latitude_rad))
+        return model.names, f"the terms of {spec}"
+    names = tuple(t.strip().upper() for t in spec.split(",") if t.strip())
+    if not names or not all(is_equatorial_term(n) for n in names):
+        raise InputError("command line", "--model", spec,
+                         "is neither a named equatorial model, a model file nor a list of "
+                         "equatorial terms (these recordings are from an equatorial mount)",
+                         f"equatorial models: {', '.join(sorted(EQUATORIAL_MODELS))}; or e.g. "
+                         "IH,ID,CH,NP,MA,ME,TF")
+    return names, "the terms given with --model"
+
+
 def resolve_baseline(obs: Observations, scenario=None, model: str | None = None) -> BaselineSpec:
     """The baseline terms by the rules in the module docstring."""
     in_use = obs.model_in_use
     if scenario is not None:
         in_use = scenario.controller.model
     if model:
-        terms, origin = parse_model_option(model)
+        terms, origin = parse_model_option(model, obs)
     elif scenario is not None:
         c = scenario.controller
         if c.fit_terms:
@@ -104,10 +132,15 @@ def resolve_baseline(obs: Observations, scenario=None, model: str | None = None)
             terms, origin = NAMED_MODELS["tpoint8"], "TPOINT's eight terms (scenario has none)"
     elif obs.model_in_use is not None and len(obs.model_in_use.names):
         terms = tuple(obs.model_in_use.names)
-        for named in NAMED_MODELS.values():  # metadata may have sorted the names
+        for named in _named_models(obs):  # metadata may have sorted the names
             if named and set(named) == set(terms):
                 terms = tuple(named)
         origin = f"the model in the recordings' metadata ({obs.model_in_use.name})"
+    elif obs.mount == "equatorial":
+        from controller.pointing.equatorial import EQUATORIAL_MODELS
+
+        terms = EQUATORIAL_MODELS["crane11"]
+        origin = "the equatorial model crane11 (IH ID CH NP MA ME TF FO DAF TX HCES)"
     else:
         terms = NAMED_MODELS["tpoint8"]
         origin = "TPOINT's eight terms IA IE NPAE CA AN AW TF TX"
@@ -120,6 +153,15 @@ def resolve_baseline(obs: Observations, scenario=None, model: str | None = None)
                          "give --model with the terms without them (e.g. --model ghigo10): "
                          "its feed_offset candidate then looks for the feed terms")
     return BaselineSpec(tuple(terms), origin, scenario, in_use)
+
+
+def _named_models(obs: Observations):
+    """The named models' term lists in the recordings' vocabulary."""
+    if obs.mount == "equatorial":
+        from controller.pointing.equatorial import EQUATORIAL_MODELS
+
+        return EQUATORIAL_MODELS.values()
+    return NAMED_MODELS.values()
 
 
 def _needs_feed_angle(name: str) -> bool:
@@ -163,7 +205,8 @@ class SimProducts:
     el_rad: np.ndarray
 
 
-def _products(obs: Observations, terms: Sequence[str]) -> SimProducts:
+def _products(obs: Observations, terms: Sequence) -> SimProducts:
+    """One simulation's products; ``terms``: names or Term objects (an equatorial mount's)."""
     from controller.pointing.data import PointingData
     from controller.pointing.fitting import fit_model
 
@@ -238,6 +281,13 @@ class SimulatedBaseline:
             raise InputError("command line", "--sims", n_sims, "needs at least 2 simulations")
         self.scenario = scenario if model is None else scenario.with_controller_model(model)
         self.terms = tuple(terms)
+        self.mount = scenario.mount.kind
+        #: the terms each simulation is fitted with (an equatorial mount's own vocabulary)
+        self.fit_terms = self.terms
+        if self.mount == "equatorial":
+            from controller.pointing.equatorial import equatorial_terms
+
+            self.fit_terms = equatorial_terms(self.terms, scenario.site.latitude_deg)
         seeds = []
         k = 0
         avoid = {int(s) for s in avoid_seeds}
@@ -288,7 +338,7 @@ class SimulatedBaseline:
 
             shared = shared_schedule_columns(self.scenario, todo, self.jobs)
             for seed, cols in shared.items():
-                prod = _products(from_columns(cols), self.terms)
+                prod = _products(from_columns(cols), self.fit_terms)
                 out[seed] = prod
                 if self.use_cache:
                     self._save(seed, prod)
@@ -303,7 +353,7 @@ class SimulatedBaseline:
             else:
                 results = [_simulate_rows(a) for a in args]
             for seed, (rows, meta) in zip(todo, results, strict=True):
-                prod = _products(from_rows(rows, meta), self.terms)
+                prod = _products(from_rows(rows, meta), self.fit_terms)
                 out[seed] = prod
                 if self.use_cache:
                     self._save(seed, prod)
@@ -436,7 +486,8 @@ class SimulatedBaseline:
         n = p.t_s.size
         return Observations(t_s=p.t_s, az_rad=p.az_rad, el_rad=p.el_rad,
                             xel_arcsec=np.zeros(n), el_arcsec=np.zeros(n), good=good,
-                            source=p.source, kind="ecsv", path="<baseline simulation>")
+                            source=p.source, kind="ecsv", path="<baseline simulation>",
+                            mount=self.mount)
 
 
 def _mean_and_sigma(values: np.ndarray, t_s: np.ndarray, clip: float = 4.0):
@@ -478,7 +529,9 @@ def _mean_and_sigma_once(values: np.ndarray, t_s: np.ndarray):
         smooth[order, axis] = s
     var_i = np.where(dof > 0, (SHRINK_DOF * smooth + dof * np.nan_to_num(var)) /
                      (SHRINK_DOF + dof), smooth)
-    sigma = np.sqrt(np.where(np.isfinite(var_i), var_i, np.nanmedian(var_i)))
+    # a quantity no simulation has (the XR - XL offsets of a one-channel receiver) stays NaN
+    fill = np.nanmedian(var_i) if np.isfinite(var_i).any() else np.nan
+    sigma = np.sqrt(np.where(np.isfinite(var_i), var_i, fill))
     mean = np.where(np.isfinite(mean), mean, 0.0)
     return mean, sigma, count
 

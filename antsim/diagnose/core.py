@@ -21,7 +21,7 @@ from .baseline import (
 from .candidates.terms import TermsCandidate
 from .data import Observations
 from .locate import Location, locate, where_signal
-from .problem import Prediction, Problem, _lstsq, folds_for, term_columns
+from .problem import Prediction, Problem, _lstsq, folds_for, folds_words, term_columns
 from .select import Selection, Step, select
 
 __all__ = ["Diagnosis", "Finding", "diagnose"]
@@ -140,10 +140,16 @@ class Diagnosis:
                     names.append(name)
                     values.append(float(v))
             k += q
-        return PointingModel(names, values, name=f"{self.baseline_name()}+diagnose")
+        return PointingModel(p.obs.terms(names), values,
+                             name=f"{self.baseline_name()}+diagnose")
 
     def baseline_name(self) -> str:
         return "baseline"
+
+    def axes_label(self) -> str:
+        """The two offsets in words: "xel/el", or on an equatorial mount "RA/Dec" (the
+        cross-declination error is the right-ascension error on the sky)."""
+        return "RA/Dec" if self.obs.mount == "equatorial" else "xel/el"
 
     def degeneracies(self) -> list[str]:
         """TPOINT-style warnings for the final model (coefficient correlations over 0.95:
@@ -249,13 +255,19 @@ class Diagnosis:
             f"Sky RMS in-sample {s['sky_rms_before_arcsec']:.2f}\" -> "
             f"{s['sky_rms_after_arcsec']:.2f}\"; held out {s['cv_sky_rms_before_arcsec']:.2f}\" "
             f"-> {s['cv_sky_rms_after_arcsec']:.2f}\" ({s['held_out']})")
+        axes = self.axes_label()
+        ib, ia = s["axis_rms_before_arcsec"], s["axis_rms_after_arcsec"]
+        hb, ha = s["cv_axis_rms_before_arcsec"], s["cv_axis_rms_after_arcsec"]
+        lines.append(f"{axes} rms in-sample {ib[0]:.1f}/{ib[1]:.1f}\" -> {ia[0]:.1f}/"
+                     f"{ia[1]:.1f}\"; held out {hb[0]:.1f}/{hb[1]:.1f}\" -> {ha[0]:.1f}/"
+                     f"{ha[1]:.1f}\"")
         for name, v in self.variants.items():
             if name == "E-D":
                 b, a = v["before"], v["after"]
                 lines.append(f"Fit E - Fit D ({v['window']}): {b['difference']:+.1f} +- "
                              f"{b['sigma']:.1f}\" -> {a['difference']:+.1f} +- {a['sigma']:.1f}\"")
                 continue
-            lines.append(f"Fit {name} ({v['window']}): N {v['n']}, xel/el rms "
+            lines.append(f"Fit {name} ({v['window']}): N {v['n']}, {self.axes_label()} rms "
                          f"{v['before']['xel']:.1f}/{v['before']['el']:.1f}\" -> "
                          f"{v['after']['xel']:.1f}/{v['after']['el']:.1f}\"")
         lines.append(f"stopped: {self.selection.stop_reason}")
@@ -305,14 +317,23 @@ def diagnose(obs: Observations, scenario=None, model: str | None = None,
         findings.append(Finding(step, where))
     folds = folds_for(obs)
     final = problem.current_columns()
+
+    def axis_rms(r: np.ndarray) -> list[float]:  # (2, n) residuals -> rms per axis
+        return [float(np.sqrt(np.mean(r[a] ** 2))) if r.shape[1] else float("nan")
+                for a in range(2)]
+
     summary = {
         "n_used": int(problem.used.sum()),
         "sky_rms_before_arcsec": problem.sky_rms(base_cols),
         "sky_rms_after_arcsec": problem.sky_rms(final),
         "cv_sky_rms_before_arcsec": problem.cv_sky_rms(base_cols, folds),
         "cv_sky_rms_after_arcsec": problem.cv_sky_rms(final, folds),
-        "held_out": "nights held out in turn" if np.unique(folds).size < 5
-        else f"{np.unique(folds).size}-fold cross-validation interleaved in time",
+        # per axis (cross-axis, then elevation or declination): in-sample and held out
+        "axis_rms_before_arcsec": axis_rms(problem.raw_residuals(base_cols)),
+        "axis_rms_after_arcsec": axis_rms(problem.raw_residuals(final)),
+        "cv_axis_rms_before_arcsec": axis_rms(problem.heldout_residuals(base_cols, folds)),
+        "cv_axis_rms_after_arcsec": axis_rms(problem.heldout_residuals(final, folds)),
+        "held_out": folds_words(obs),
         "gof_before": selection.gof_before, "gof_after": selection.gof_after,
         "n_candidates_tested": selection.n_family,
     }
@@ -444,7 +465,7 @@ def fit_variants_before_after(diag: Diagnosis) -> dict[str, Any]:
             data = PointingData(obs.az_rad[m], obs.el_rad[m],
                                 (obs.xel_arcsec - sx)[m], (obs.el_arcsec - se)[m])
             try:
-                f = fit_model(data, list(p.base_terms), robust=True)
+                f = fit_model(data, obs.terms(p.base_terms), robust=True)
             except ValueError:
                 break
             res[label] = {"xel": f.xel_rms_arcsec, "el": f.el_rms_arcsec,
@@ -463,7 +484,7 @@ def fit_variants_before_after(diag: Diagnosis) -> dict[str, Any]:
         data = PointingData(obs.az_rad[m], obs.el_rad[m], (obs.xel_arcsec - sx)[m],
                             (obs.el_arcsec - se)[m])
         try:
-            f = fit_model(data, list(p.base_terms), robust=True)
+            f = fit_model(data, obs.terms(p.base_terms), robust=True)
         except ValueError:
             split = {}
             break

@@ -6,6 +6,12 @@ position, and the context columns the recordings carry: time, source, Sun elevat
 temperature, direction of the last slew, measured beam widths and the XR - XL offset
 difference. TPOINT data files give only positions (and a rotator angle); the context columns
 are then absent (None) and candidates that need them are not tried.
+
+Recordings of an equatorial mount (metadata ``mount: equatorial``) are read on the mount's
+axes: ``az_rad``/``el_rad`` hold the hour angle (positive West) and the declination, the
+offsets are cross-declination (dH cos Dec) and declination, and pointing terms are TPOINT's
+equatorial ones (:meth:`Observations.terms`), as everywhere a model works on "the mount's
+two axes" (:mod:`controller.astro.frames`).
 """
 
 from __future__ import annotations
@@ -30,10 +36,13 @@ _ARCSEC_PER_ARCMIN = 60.0
 class Observations:
     """Per-scan arrays (length n; angles in radians, offsets in arcsec; units in the names).
 
-    ``good``: the reduction flagged nothing and the offsets are finite. ``pol_*_arcsec``: XR
-    minus XL measured offsets of the same scan (NaN where either is flagged). ``width_*``:
-    beam FWHM measured on the polarization average (arcmin). ``meta``: site (latitude_deg,
-    longitude_deg), epoch_utc, beam_hpbw_arcmin, seed, scenario, model in use.
+    ``az_rad``/``el_rad``: the position on the mount's axes, azimuth and elevation, or on an
+    equatorial mount (``mount``) hour angle and declination; ``xel_arcsec`` is then the
+    cross-declination error. ``good``: the reduction flagged nothing and the offsets are
+    finite. ``pol_*_arcsec``: XR minus XL measured offsets of the same scan (NaN where either
+    is flagged). ``width_*``: beam FWHM measured on the polarization average (arcmin).
+    ``meta``: site (latitude_deg, longitude_deg), epoch_utc, beam_hpbw_arcmin, seed,
+    scenario, model in use.
     """
 
     t_s: np.ndarray
@@ -56,6 +65,8 @@ class Observations:
     meta: dict[str, Any] = field(default_factory=dict)
     kind: str = "ecsv"
     path: str = "<memory>"
+    #: the mount whose axes ``az_rad``/``el_rad`` are: "altaz" or "equatorial"
+    mount: str = "altaz"
     #: the daily air-temperature curve (C) at campaign times (s), when a scenario gives it:
     #: it extends the recorded temperatures back over the day before the campaign
     air_daily_c: Any = field(default=None, compare=False, repr=False)
@@ -84,6 +95,24 @@ class Observations:
     def latitude_rad(self) -> float:
         return math.radians(float(self.meta.get("latitude_deg", float("nan"))))
 
+    @property
+    def axis_names(self) -> tuple[str, str]:
+        """The two axes in words: ("azimuth", "elevation") or ("hour angle", "declination")."""
+        return ("hour angle", "declination") if self.mount == "equatorial" \
+            else ("azimuth", "elevation")
+
+    def terms(self, names) -> list:
+        """Pointing terms by name in the mount's vocabulary: TPOINT's alt-az names (passed
+        through), or on an equatorial mount its equatorial terms at the site's latitude
+        (:mod:`controller.pointing.equatorial`, Crane's C1..C11 included). Term objects pass
+        through."""
+        names = list(names)
+        if self.mount != "equatorial":
+            return names
+        from controller.pointing.equatorial import equatorial_terms
+
+        return list(equatorial_terms(names, math.degrees(self.latitude_rad)))
+
     def select(self, mask: np.ndarray) -> Observations:
         """The observations where ``mask`` is true (every per-scan array cut alike)."""
         mask = np.asarray(mask, dtype=bool)
@@ -108,8 +137,12 @@ def _col(table: Any, name: str) -> np.ndarray | None:
 
 def from_columns(cols: Mapping[str, np.ndarray], meta: Mapping[str, Any] | None = None,
                  path: str = "<memory>", kind: str = "ecsv") -> Observations:
-    """Observations from recording columns (one row per scan and polarization)."""
+    """Observations from recording columns (one row per scan and polarization); an
+    equatorial mount's (metadata ``mount``, or the columns ``ha_deg``/``dec_deg``) on its
+    axes."""
     meta = dict(meta or {})
+    mount = str(meta.get("mount") or ("equatorial" if "ha_deg" in cols else "altaz"))
+    lon, lat = ("ha_deg", "dec_deg") if mount == "equatorial" else ("az_deg", "el_deg")
     pol = np.asarray(cols["polarization"]).astype(str)
     scan = np.asarray(cols["scan"]).astype(int) if "scan" in cols else None
     if scan is None:  # rows of one scan share their time
@@ -155,8 +188,8 @@ def from_columns(cols: Mapping[str, np.ndarray], meta: Mapping[str, Any] | None 
     source = cols.get("source")
     return Observations(
         t_s=np.asarray(cols["t_s"], dtype=float)[avg],
-        az_rad=np.radians(np.asarray(cols["az_deg"], dtype=float)[avg]),
-        el_rad=np.radians(np.asarray(cols["el_deg"], dtype=float)[avg]),
+        az_rad=np.radians(np.asarray(cols[lon], dtype=float)[avg]),
+        el_rad=np.radians(np.asarray(cols[lat], dtype=float)[avg]),
         xel_arcsec=xel, el_arcsec=el, good=good,
         source=None if source is None else np.asarray(source).astype(str)[avg],
         sun_el_deg=f("sun_el_deg"), air_temp_c=f("air_temp_c"),
@@ -164,7 +197,8 @@ def from_columns(cols: Mapping[str, np.ndarray], meta: Mapping[str, Any] | None 
         width_xel_arcmin=f("xel_width_arcmin"), width_el_arcmin=f("el_width_arcmin"),
         pol_xel_arcsec=pol_x, pol_el_arcsec=pol_e,
         rotator_deg=f("feed_angle_deg"),
-        model_in_use=_model_from_meta(meta), meta=_flat_meta(meta), kind=kind, path=path,
+        model_in_use=_model_from_meta(meta, mount), meta=_flat_meta(meta), kind=kind,
+        path=path, mount=mount,
     )
 
 
@@ -195,7 +229,7 @@ def _flat_meta(meta: Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
-def _model_from_meta(meta: Mapping[str, Any]) -> PointingModel | None:
+def _model_from_meta(meta: Mapping[str, Any], mount: str = "altaz") -> PointingModel | None:
     model = meta.get("model")
     if isinstance(model, PointingModel):
         return model
@@ -203,8 +237,13 @@ def _model_from_meta(meta: Mapping[str, Any]) -> PointingModel | None:
         return None
     terms = model.get("terms_arcsec") or {}
     try:
+        if mount == "equatorial":
+            from controller.pointing.equatorial import equatorial_model
+
+            return equatorial_model(list(terms), float(meta["site"]["latitude_deg"]),
+                                    list(terms.values()), name=str(model.get("name")))
         return PointingModel(list(terms), list(terms.values()), name=str(model.get("name")))
-    except (KeyError, ValueError):
+    except (KeyError, TypeError, ValueError):
         return None
 
 
@@ -249,15 +288,23 @@ def load_observations(path: str | Path, mount: str | None = None) -> Observation
     if mount is not None:
         raise InputError(str(path), "--mount", mount, "applies to TPOINT data files only",
                          "recordings name their mount in their metadata")
+    from controller.astro.frames import MOUNT_KINDS
     from controller.program.recordings import read_recordings
 
     table = read_recordings(path)
     mount = table.meta.get("mount", "altaz")
-    if mount != "altaz":
-        raise InputError(str(path), "mount", mount,
-                         "diagnose knows alt-az recordings only (its signatures and candidate "
-                         "effects are in azimuth and elevation)",
-                         "fit these recordings with 'antsim fit'")
+    if mount not in MOUNT_KINDS:
+        raise InputError(str(path), "mount", mount, "is not a mount diagnose knows",
+                         f"mounts: {', '.join(MOUNT_KINDS)}")
+    if mount == "equatorial":
+        for need in ("ha_deg", "dec_deg"):
+            if need not in table.colnames:
+                raise InputError(str(path), "columns", need,
+                                 "an equatorial mount's recordings need it")
+        site = table.meta.get("site")
+        if not isinstance(site, Mapping) or "latitude_deg" not in site:
+            raise InputError(str(path), "site.latitude_deg", "<missing>",
+                             "an equatorial mount's terms need the site's latitude")
     cols = {name: np.asarray(table[name]) for name in table.colnames if name != "time"}
     for need in ("t_s",):
         if need not in cols:

@@ -3,12 +3,13 @@
 The residuals of the baseline fit are divided by the noise the baseline predicts (whitened),
 so that each is N(0, 1) when the baseline explains the data. Per axis the rms of these
 whitened residuals is the ratio to the expected noise. The scans are then grouped by azimuth
-sector, elevation band, local time of day, time since sunset, air temperature, source,
-direction of the last slew; in each group the chi^2 of the whitened residuals, against the
-rest of the scans (an F test: is the excess concentrated there?) and against the prediction,
-and the group's mean residual (is it offset there?), give a p-value corrected for the number
-of groups looked at. Polarization is located by the XR - XL test
-of the squint candidate. Everything is also reported in words.
+sector and elevation band (on an equatorial mount: hour angle and declination), local time
+of day, time since sunset, air temperature, source, direction of the last slew; in each
+group the chi^2 of the whitened residuals, against the rest of the scans (an F test: is the
+excess concentrated there?) and against the prediction, and the group's mean residual (is
+it offset there?), give a p-value corrected for the number of groups looked at.
+Polarization is located by the XR - XL test of the squint candidate. Everything is also
+reported in words.
 """
 
 from __future__ import annotations
@@ -25,6 +26,13 @@ from .problem import Problem
 __all__ = ["Group", "Location", "groupings", "locate", "where_signal"]
 
 AXIS_WORDS = {"xel": "cross-elevation", "el": "elevation"}
+#: an equatorial mount's axes (its offsets are cross-declination and declination)
+EQUATORIAL_AXIS_WORDS = {"xel": "cross-declination", "el": "declination"}
+
+
+def axis_words(obs: Observations) -> dict[str, str]:
+    """The offsets' axes in words for the recordings' mount."""
+    return EQUATORIAL_AXIS_WORDS if obs.mount == "equatorial" else AXIS_WORDS
 SECTORS = ("north", "north-east", "east", "south-east", "south", "south-west", "west",
            "north-west")
 
@@ -77,16 +85,7 @@ def _hours_since_sunset(obs: Observations) -> np.ndarray | None:
 
 def groupings(obs: Observations) -> list[Group]:
     """All the groups scans are examined in (each a mask over the observations)."""
-    groups: list[Group] = []
-    az = np.degrees(obs.az_rad) % 360.0
-    sector = ((az + 22.5) // 45.0).astype(int) % 8
-    for k, name in enumerate(SECTORS):
-        groups.append(Group("azimuth", f"towards the {name} (azimuth {45 * k - 22.5:.0f} to "
-                                       f"{45 * k + 22.5:.0f} deg)", sector == k))
-    el = np.degrees(obs.el_rad)
-    for lo, hi in ((0, 20), (20, 35), (35, 50), (50, 65), (65, 90)):
-        groups.append(Group("elevation", f"at elevations {lo} to {hi} deg",
-                            (el >= lo) & (el < hi)))
+    groups = _direction_groups(obs)
     if obs.has_time:
         lon = float(obs.meta.get("longitude_deg", float("nan")))
         epoch = obs.meta.get("epoch_utc")
@@ -121,7 +120,7 @@ def groupings(obs: Observations) -> list[Group]:
     if obs.source is not None:
         for src in np.unique(obs.source):
             groups.append(Group("source", f"on {src}", obs.source == src))
-    for col, axis in (("slew_az", "azimuth"), ("slew_el", "elevation")):
+    for col, axis in zip(("slew_az", "slew_el"), obs.axis_names, strict=True):
         v = getattr(obs, col)
         if v is not None and np.unique(v[np.isfinite(v)]).size > 1:
             word_pos = "clockwise" if axis == "azimuth" else "upwards"
@@ -129,6 +128,33 @@ def groupings(obs: Observations) -> list[Group]:
             groups.append(Group("last slew", f"after slewing {word_pos} in {axis}", v > 0))
             groups.append(Group("last slew", f"after slewing {word_neg} in {axis}", v < 0))
     return [g for g in groups if g.mask.any()]
+
+
+def _direction_groups(obs: Observations) -> list[Group]:
+    """Where on the sky: azimuth sectors and elevation bands, or on an equatorial mount
+    hour-angle ranges and declination bands."""
+    groups: list[Group] = []
+    if obs.mount == "equatorial":
+        ha = np.degrees(obs.az_rad) / 15.0
+        for lo, hi in ((-12, -4), (-4, -2), (-2, 0), (0, 2), (2, 4), (4, 12)):
+            side = "East" if hi <= 0 else "West"
+            groups.append(Group("hour angle", f"at hour angles {lo:+d} to {hi:+d} h ({side})",
+                                (ha >= lo) & (ha < hi)))
+        dec = np.degrees(obs.el_rad)
+        for lo, hi in ((-90, -20), (-20, 0), (0, 20), (20, 40), (40, 60), (60, 90)):
+            groups.append(Group("declination", f"at declinations {lo:+d} to {hi:+d} deg",
+                                (dec >= lo) & (dec < hi)))
+        return groups
+    az = np.degrees(obs.az_rad) % 360.0
+    sector = ((az + 22.5) // 45.0).astype(int) % 8
+    for k, name in enumerate(SECTORS):
+        groups.append(Group("azimuth", f"towards the {name} (azimuth {45 * k - 22.5:.0f} to "
+                                       f"{45 * k + 22.5:.0f} deg)", sector == k))
+    el = np.degrees(obs.el_rad)
+    for lo, hi in ((0, 20), (20, 35), (35, 50), (50, 65), (65, 90)):
+        groups.append(Group("elevation", f"at elevations {lo} to {hi} deg",
+                            (el >= lo) & (el < hi)))
+    return groups
 
 
 def locate(problem: Problem, min_scans: int = 5) -> Location:
@@ -177,9 +203,10 @@ def locate(problem: Problem, min_scans: int = 5) -> Location:
 def location_words(problem: Problem, loc: Location) -> str:
     known = problem.pred.known_noise
     parts = []
+    words = axis_words(problem.obs)
     for axis in ("el", "xel"):
         r = loc.ratio[axis]
-        head = AXIS_WORDS[axis]
+        head = words[axis]
         spots = [h for h in loc.hotspots if h.axis == axis]
         if known:
             if loc.p[axis] > 0.05 and not spots:
@@ -216,14 +243,15 @@ def where_signal(obs: Observations, signal: np.ndarray, used: np.ndarray) -> str
     with the group where it is largest."""
     n = obs.n
     sx, se = signal[:n], signal[n:]
-    axis_rms = {"cross-elevation": float(np.sqrt(np.mean(sx[used] ** 2))),
-                "elevation": float(np.sqrt(np.mean(se[used] ** 2)))}
+    cross, along = axis_words(obs)["xel"], axis_words(obs)["el"]
+    axis_rms = {cross: float(np.sqrt(np.mean(sx[used] ** 2))),
+                along: float(np.sqrt(np.mean(se[used] ** 2)))}
     axis = max(axis_rms, key=axis_rms.get)
-    s = sx if axis == "cross-elevation" else se
+    s = sx if axis == cross else se
     total = float(np.mean(s[used] ** 2))
     if total == 0:
         return "nowhere"
-    other = "cross-elevation" if axis == "elevation" else "elevation"
+    other = cross if axis == along else along
     both = axis_rms[other] > 0.3 * axis_rms[axis]
     head = f"{axis}{' and ' + other if both else ''} ({axis_rms[axis]:.1f}\" rms"
     head += f", {axis_rms[other]:.1f}\" in {other})" if both else ")"

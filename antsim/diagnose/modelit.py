@@ -132,7 +132,7 @@ def _ks(diag: Diagnosis, baseline) -> dict[str, Any]:
     good = obs.good
     data = PointingData(obs.az_rad[good], obs.el_rad[good], obs.xel_arcsec[good],
                         obs.el_arcsec[good])
-    fit = fit_model(data, list(diag.problem.base_terms), robust=True)
+    fit = fit_model(data, obs.terms(diag.problem.base_terms), robust=True)
     used = np.asarray(fit.used)
     rec = (np.asarray(fit.residual_xel_arcsec)[used], np.asarray(fit.residual_el_arcsec)[used])
     out = {}
@@ -199,24 +199,32 @@ def _before_after_fits(diag: Diagnosis):
     after_data = PointingData(obs.az_rad[good], obs.el_rad[good],
                               (obs.xel_arcsec - nonterm[:n])[good],
                               (obs.el_arcsec - nonterm[n:])[good], t_s=obs.t_s[good])
-    before = fit_model(data, list(p.base_terms), robust=True, name="baseline")
-    after = fit_model(after_data, [*p.base_terms, *term_names], robust=True,
+    before = fit_model(data, obs.terms(p.base_terms), robust=True, name="baseline")
+    after = fit_model(after_data, obs.terms([*p.base_terms, *term_names]), robust=True,
                       name="baseline+findings")
     return before, after, data, after_data
 
 
-def _minimal_plot(before, after, data, after_data, path: Path) -> None:
+def _minimal_plot(before, after, data, after_data, path: Path,
+                  equatorial: bool = False) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    if equatorial:  # the mount's axes: hour angle and declination
+        offsets = ("cross-declination", "declination")
+        positions = (("hour angle (h, West +)", np.degrees(data.az_rad) / 15.0),
+                     ("declination (deg)", np.degrees(data.el_rad)))
+    else:
+        offsets = ("cross-elevation", "elevation")
+        positions = (("azimuth (deg)", np.degrees(data.az_rad)),
+                     ("elevation (deg)", np.degrees(data.el_rad)))
     fig, axes = plt.subplots(2, 3, figsize=(13, 7), constrained_layout=True)
     for row, (axis, r_b, r_a) in enumerate((
-            ("cross-elevation", before.residual_xel_arcsec, after.residual_xel_arcsec),
-            ("elevation", before.residual_el_arcsec, after.residual_el_arcsec))):
-        for col, (xlab, x) in enumerate((("azimuth (deg)", np.degrees(data.az_rad)),
-                                         ("elevation (deg)", np.degrees(data.el_rad)),
+            (offsets[0], before.residual_xel_arcsec, after.residual_xel_arcsec),
+            (offsets[1], before.residual_el_arcsec, after.residual_el_arcsec))):
+        for col, (xlab, x) in enumerate((*positions,
                                          ("time (h)", np.asarray(data.t_s) / 3600.0))):
             ax = axes[row, col]
             ax.plot(x, r_b, ".", ms=4, alpha=0.6, label=f"before ({before.sky_rms_arcsec:.1f}\")")
@@ -233,6 +241,10 @@ def _minimal_plot(before, after, data, after_data, path: Path) -> None:
 def plots(diag: Diagnosis, out_dir: Path) -> list[str]:
     """Before/after residual plots into ``out_dir``; returns the file names written."""
     before, after, data, after_data = _before_after_fits(diag)
+    if diag.obs.mount == "equatorial":  # the shared figures draw an alt-az sky
+        path = out_dir / "diagnose_residuals.png"
+        _minimal_plot(before, after, data, after_data, path, equatorial=True)
+        return [path.name]
     try:
         from antsim.figures.diagnose import before_after_figures
     except ImportError:

@@ -61,10 +61,12 @@ class Prediction:
 
 def term_columns(terms: Sequence[str], obs: Observations) -> np.ndarray:
     """Error-convention columns (2n, m) of TPOINT/W terms: the error (indicated - true,
-    arcsec) each term makes per arcsec of coefficient, xel rows then el rows."""
+    arcsec) each term makes per arcsec of coefficient, xel rows then el rows (on an
+    equatorial mount's recordings: its equatorial terms, cross-declination and declination
+    rows)."""
     if not terms:
         return np.zeros((2 * obs.n, 0))
-    model = PointingModel(list(terms))
+    model = PointingModel(obs.terms(terms))
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         ba, be = model.design_matrix(obs.az_rad, obs.el_rad)
     return -np.vstack([ba * np.cos(obs.el_rad)[:, None], be])
@@ -308,12 +310,18 @@ class Problem:
     def sky_rms(self, columns: np.ndarray | None = None, used: np.ndarray | None = None) -> float:
         """TPOINT Sky RMS (arcsec) of the raw total errors after an unweighted fit of
         ``columns`` (default: the current model) over the used scans."""
+        r = self.raw_residuals(columns, used)
+        return math.sqrt(float(np.mean(r[0] ** 2 + r[1] ** 2)))
+
+    def raw_residuals(self, columns: np.ndarray | None = None,
+                      used: np.ndarray | None = None) -> np.ndarray:
+        """(2, n_used) raw residuals (arcsec; cross-axis, then along the second axis) of the
+        used scans after an unweighted fit of ``columns`` (default: the current model)."""
         columns = self.current_columns() if columns is None else columns
         used = self.used if used is None else used
         rows = self.rows(used)
         coef, _ = _lstsq(columns[rows], self.y_raw[rows])
-        r = (self.y_raw - columns @ coef).reshape(2, -1)[:, used]
-        return math.sqrt(float(np.mean(r[0] ** 2 + r[1] ** 2)))
+        return (self.y_raw - columns @ coef).reshape(2, -1)[:, used]
 
     def cv_chi2(self, columns: np.ndarray, folds: np.ndarray,
                 refit=None, used: np.ndarray | None = None) -> float:
@@ -333,17 +341,20 @@ class Problem:
     def cv_sky_rms(self, columns: np.ndarray, folds: np.ndarray) -> float:
         """Held-out Sky RMS (arcsec): raw residuals of each fold predicted from an
         unweighted fit to the others."""
-        sq = 0.0
-        count = 0
+        r = self.heldout_residuals(columns, folds)
+        return math.sqrt(float(np.sum(r**2)) / max(r.shape[1], 1))
+
+    def heldout_residuals(self, columns: np.ndarray, folds: np.ndarray) -> np.ndarray:
+        """(2, n_used) raw residuals (arcsec) of each fold's used scans predicted from an
+        unweighted fit to the other folds."""
+        parts = []
         for k in np.unique(folds[self.used]):
             test = self.used & (folds == k)
             train = self.used & (folds != k)
             rows = self.rows(train)
             coef, _ = _lstsq(columns[rows], self.y_raw[rows])
-            r = (self.y_raw - columns @ coef).reshape(2, -1)[:, test]
-            sq += float(np.sum(r**2))
-            count += int(test.sum())
-        return math.sqrt(sq / max(count, 1))
+            parts.append((self.y_raw - columns @ coef).reshape(2, -1)[:, test])
+        return np.concatenate(parts, axis=1) if parts else np.zeros((2, 0))
 
 
 def _lstsq(a: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -362,14 +373,30 @@ def _lstsq(a: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def folds_for(obs: Observations, k: int = 5) -> np.ndarray:
     """Held-out folds: whole nights when the data span more than a day and a half, else k
     folds interleaved in time order (deterministic)."""
+    nights = _night_folds(obs)
+    if nights is not None:
+        return nights
     n = obs.n
+    order = np.argsort(obs.t_s, kind="stable")
+    folds = np.empty(n, dtype=int)
+    folds[order] = np.arange(n) % k
+    return folds
+
+
+def folds_words(obs: Observations, k: int = 5) -> str:
+    """What :func:`folds_for` holds out, in words."""
+    if _night_folds(obs) is not None:
+        return "nights held out in turn"
+    return f"{k}-fold cross-validation interleaved in time"
+
+
+def _night_folds(obs: Observations) -> np.ndarray | None:
+    """One fold per local day (noon to noon) when the data span more than a day and a
+    half, else None."""
     if obs.has_time and np.ptp(obs.t_s) > 1.5 * 86400.0:
         lon = float(obs.meta.get("longitude_deg", 0.0))
         local_day = np.floor((obs.t_s / 3600.0 + lon / 15.0 - 12.0) / 24.0)
         _, folds = np.unique(local_day, return_inverse=True)
         if folds.max() >= 1:
             return folds
-    order = np.argsort(obs.t_s, kind="stable")
-    folds = np.empty(n, dtype=int)
-    folds[order] = np.arange(n) % k
-    return folds
+    return None

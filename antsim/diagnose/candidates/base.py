@@ -97,7 +97,12 @@ def stacked(xel: np.ndarray | None, el: np.ndarray | None, n: int) -> np.ndarray
 
 
 def source_rates_arcsec_s(obs: Observations) -> tuple[np.ndarray, np.ndarray]:
-    """Apparent motion of a fixed source at (A, E): (dA/dt cos E, dE/dt), arcsec per s."""
+    """Apparent motion of a fixed source at (A, E): (dA/dt cos E, dE/dt), arcsec per s; on
+    an equatorial mount's axes (H, Dec): (dH/dt cos Dec, 0), the hour angle growing at the
+    sidereal rate."""
+    if obs.mount == "equatorial":
+        return (SIDEREAL_RATE_RAD_S * np.cos(obs.el_rad) * ARCSEC_PER_RAD,
+                np.zeros(obs.n))
     phi = obs.latitude_rad
     a, e = obs.az_rad, obs.el_rad
     d_e = SIDEREAL_RATE_RAD_S * math.cos(phi) * np.sin(a)
@@ -235,8 +240,12 @@ class Candidate:
     #: that fitted its model has the part the model's terms can take in the model in use
     static: bool = False
     needs_simulation: bool = False
+    #: the mounts whose recordings it is tried on (its signature is written on their axes)
+    mounts: tuple[str, ...] = ("altaz",)
 
     def applicable(self, obs: Observations, known_noise: bool) -> bool:
+        if obs.mount not in self.mounts:
+            return False
         if self.needs_simulation and not known_noise:
             return False
         for need in self.needs:
@@ -374,4 +383,4 @@ class Candidate:
         return {"effect": self.effect or self.name, "candidate": self.name, "title": self.title,
                 "terms": list(self.terms), "signature": self.signature,
                 "parameters": dict(self.params_doc), "explanation": self.explanation,
-                "blind": self.blind_exclusion or "drawn"}
+                "blind": self.blind_exclusion or "drawn", "mounts": list(self.mounts)}

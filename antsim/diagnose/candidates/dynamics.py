@@ -28,6 +28,8 @@ class ClockCandidate(Candidate):
     amplitude_param = "drift_s_per_day"
     needs = ("time", "latitude")
 
+    mounts = ("altaz", "equatorial")
+
     def __init__(self):
         from antsim.world.effects.dynamics import ClockError
 

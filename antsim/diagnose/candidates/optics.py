@@ -40,6 +40,8 @@ class SourceCandidate(Candidate):
     needs = ("source",)
     MIN_SCANS = 4
 
+    mounts = ("altaz", "equatorial")
+
     def __init__(self):
         from antsim.world.effects.optics import SourceStructure
 
@@ -258,6 +260,8 @@ class SquintCandidate(Candidate):
     amplitude_param = "separation_arcsec"
     needs = ("pol_xel_arcsec",)
 
+    mounts = ("altaz", "equatorial")
+
     def __init__(self):
         from antsim.world.effects.optics import PolarizationSquint
 
@@ -327,6 +331,8 @@ class BeamWidthCandidate(Candidate):
     amplitude_param = "scale"
     needs_simulation = True
     needs = ("width_xel_arcmin",)
+
+    mounts = ("altaz", "equatorial")
 
     def __init__(self):
         from antsim.world.effects.optics import BeamWidthError

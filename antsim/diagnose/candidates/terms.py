@@ -28,8 +28,11 @@ class TermsCandidate(Candidate):
 
     def __init__(self, name: str, terms: Sequence[str], title: str, signature: str,
                  explanation: str, effect: str | None = None, pair: bool = True,
-                 blind_exclusion: str | None = None, signs: tuple[float, float] = (1.0, 1.0)):
+                 blind_exclusion: str | None = None, signs: tuple[float, float] = (1.0, 1.0),
+                 mounts: tuple[str, ...] = ("altaz",)):
         self.name = name
+        #: the vocabulary its terms are in: TPOINT's alt-az one, or its equatorial one
+        self.mounts = tuple(mounts)
         self.terms = tuple(terms)
         self.title = title
         self.signature = signature
@@ -45,6 +48,7 @@ class TermsCandidate(Candidate):
             sign = ["" if x > 0 else "-" for x in self.signs]
             self.params_doc = {
                 "amplitude_arcsec": "amplitude of the harmonic (arcsec)",
+                "amplitude_sigma_arcsec": "its standard error (arcsec)",
                 "phase_deg": f"phase: {self.terms[0]} = {sign[0]}a cos(phase), "
                              f"{self.terms[1]} = {sign[1]}a sin(phase)"}
         else:
@@ -61,8 +65,8 @@ class TermsCandidate(Candidate):
             grad = np.array([s, c]) / amp if amp > 0 else np.zeros(2)
             amp_sig = float(np.sqrt(grad @ cov @ grad)) if amp > 0 else float("nan")
             phase = math.degrees(math.atan2(self.signs[1] * c, self.signs[0] * s)) % 360.0
-            return ({"amplitude_arcsec": amp, "phase_deg": phase, "terms_arcsec": values},
-                    amp, amp_sig)
+            return ({"amplitude_arcsec": amp, "amplitude_sigma_arcsec": amp_sig,
+                     "phase_deg": phase, "terms_arcsec": values}, amp, amp_sig)
         if len(names) == 1:
             return ({"terms_arcsec": values}, float(coef[0]),
                     float(math.sqrt(max(cov[0, 0], 0.0))))
@@ -107,10 +111,10 @@ class HarmonicFamilyCandidate(TermsCandidate):
     over ``orders`` (the look-elsewhere effect paid as that many trials)."""
 
     def __init__(self, name: str, result: str, arg: str, orders: Sequence[int], title: str,
-                 signature: str, explanation: str):
+                 signature: str, explanation: str, mounts: tuple[str, ...] = ("altaz",)):
         self.result, self.arg, self.orders = result, arg, tuple(orders)
         super().__init__(name, (self._pair(self.orders[0])), title, signature, explanation,
-                         effect="terms")
+                         effect="terms", mounts=mounts)
         #: the pattern (a finding names its actual terms, e.g. HESE7 HECE7)
         self.terms = (f"H{result}S{arg}n", f"H{result}C{arg}n")
         self.params_doc = {"n": "cycles per turn", "amplitude_arcsec": "amplitude (arcsec)",
