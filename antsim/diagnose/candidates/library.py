@@ -2,7 +2,9 @@
 
 Each row names the simulator effect it reproduces, its title, signature and the physical
 cause; :data:`CANDIDATES` is the library in the order the selection tries them, and
-:func:`candidate` looks one up by name.
+:func:`candidate` looks one up by name. An equatorial mount's rows (its TPOINT terms, the
+polar drive's torsion, harmonic families in hour angle and declination) come last; each
+candidate is tried only on recordings of the mounts it names (``Candidate.mounts``).
 """
 
 from __future__ import annotations
@@ -17,12 +19,13 @@ from .thermal import SunsetCandidate, SunsetTransientCandidate, TemperatureCandi
 __all__ = ["CANDIDATES", "candidate"]
 
 
-def _harmonic(name: str, title: str, signature: str) -> TermsCandidate:
+def _harmonic(name: str, title: str, signature: str,
+              mounts: tuple[str, ...] = ("altaz",)) -> TermsCandidate:
     from antsim.world.effects import EFFECTS
 
     cls = EFFECTS[name]
     return TermsCandidate(name, (cls.sin_term, cls.cos_term), title, signature,
-                          cls.explanation, effect=name, signs=cls.signs)
+                          cls.explanation, effect=name, signs=cls.signs, mounts=mounts)
 
 
 IN_SPAN = "already in the 45-ft's ten-term model (W terms), so invisible with that baseline"
@@ -79,6 +82,91 @@ HARMONIC_FAMILIES = (
 )
 
 
+EQUATORIAL = ("equatorial",)
+
+#: an equatorial mount's rows (TPOINT's equatorial vocabulary, controller.pointing.equatorial;
+#: x = dH cos(dec), the cross-declination error): the simulator effect's harmonic pairs
+EQUATORIAL_HARMONIC_ROWS = (
+    ("polar_torsion", "polar-drive torsion under the dish's imbalance",
+     "x ~ sin H cos(dec) cos(dec + psi): dH ~ sin H cos(dec), sin H sin(dec) (HHSHCD, "
+     "HHSHSD)"),
+)
+
+#: an equatorial mount's geometry and flexure as TPOINT terms: name, terms, title, signature,
+#: physical cause, whether the two terms are one harmonic pair (amplitude and phase)
+EQUATORIAL_TERM_ROWS = (
+    ("ha_index", ("IH",), "hour-angle encoder zero", "dH constant (x ~ cos dec)",
+     "the hour-angle encoder's zero point (or the program's sidereal time) is off", False),
+    ("dec_index", ("ID",), "declination encoder zero", "dDec constant",
+     "the declination encoder's zero point is off", False),
+    ("ew_collimation", ("CH",), "east-west collimation", "x constant (dH ~ sec dec)",
+     "the beam is not perpendicular to the declination axis", False),
+    ("ha_dec_nonperpendicularity", ("NP",), "polar and declination axes not perpendicular",
+     "x ~ sin dec (dH ~ tan dec)",
+     "the declination axis is not perpendicular to the polar axis", False),
+    ("polar_axis_misalignment", ("MA", "ME"), "polar axis misaligned",
+     "dH ~ cos H tan dec, sin H tan dec; dDec ~ sin H, cos H",
+     "the polar axis does not point at the pole: to its left or right (MA) or above or "
+     "below it (ME)", False),
+    ("tube_flexure", ("TF",), "tube flexure", "sin Z law on both axes (TF)",
+     "the tube (dish and feed support) bends under its own weight, most when horizontal",
+     False),
+    ("refraction_tan_z", ("TX",), "refraction error or tan Z flexure",
+     "tan Z law on both axes (TX)",
+     "the refraction the controller corrects differs from the refraction present, or the "
+     "tube bends as tan Z", False),
+    ("fork_flexure", ("FO",), "fork (yoke) flexure", "dDec ~ cos H",
+     "the yoke's arms bend under the dish's weight as the polar axis turns", False),
+    ("dec_axis_flexure", ("DAF",), "declination-axis flexure",
+     "dH ~ cos(phi) cos H + sin(phi) tan dec",
+     "the declination shaft bends under the weight it carries (on a counterweighted mount, "
+     "the tube and its counterweight)", False),
+    ("ha_encoder_eccentricity", ("HCES", "HCEC"), "hour-angle encoder eccentricity",
+     "dH ~ sin H, cos H",
+     "the hour-angle encoder (or the polar gear) is off the polar axis: the reading is off "
+     "by an amount that varies once per turn", True),
+    ("dec_encoder_eccentricity", ("DCES", "DCEC"), "declination encoder eccentricity",
+     "dDec ~ sin dec, cos dec",
+     "the declination encoder (or its gear) is off the declination axis: once per turn",
+     True),
+)
+
+#: an equatorial mount's harmonic families (as HARMONIC_FAMILIES below; result H: dH,
+#: D: dDec, X: dH cos dec; argument H: hour angle, D: declination)
+EQUATORIAL_FAMILIES = (
+    ("ha_periodic_ha", "H", "H", range(2, 9),
+     "periodic hour-angle error along the polar axis (n cycles per turn)",
+     "dH ~ sin nH, cos nH (n = 2..8)",
+     "a polar gear, pinion or encoder error that repeats n times per turn of the polar axis"),
+    ("dec_periodic_ha", "D", "H", range(1, 9),
+     "declination error varying with hour angle (n cycles per turn)",
+     "dDec ~ sin nH, cos nH (n = 1..8)",
+     "the declination axis nods as the polar axis turns: a bent polar shaft, an uneven "
+     "bearing or a yoke that flexes"),
+    ("dec_periodic_dec", "D", "D", range(2, 9),
+     "periodic declination error along the declination axis (n cycles per turn)",
+     "dDec ~ sin n dec, cos n dec (n = 2..8)",
+     "a declination gear or encoder error that repeats n times per turn of the declination "
+     "axis"),
+    ("xdec_periodic_dec", "X", "D", range(1, 9),
+     "cross-declination error varying with declination (n cycles per turn)",
+     "dH cos dec ~ sin n dec, cos n dec (n = 1..8)",
+     "a collimation that changes with declination: the optics shift sideways as the dish "
+     "turns about the declination axis"),
+)
+
+
+def _equatorial_rows() -> list[Candidate]:
+    lib: list[Candidate] = [_harmonic(*row, mounts=EQUATORIAL)
+                            for row in EQUATORIAL_HARMONIC_ROWS]
+    lib += [TermsCandidate(name, terms, title, signature, cause, pair=pair, mounts=EQUATORIAL)
+            for name, terms, title, signature, cause, pair in EQUATORIAL_TERM_ROWS]
+    lib += [HarmonicFamilyCandidate(*row, mounts=EQUATORIAL) for row in EQUATORIAL_FAMILIES]
+    for c in lib:
+        c.blind_exclusion = "an equatorial mount's (the blind harness runs the 45-ft)"
+    return lib
+
+
 def _library() -> list[Candidate]:
     lib: list[Candidate] = [_harmonic(*row) for row in HARMONIC_ROWS]
     lib += [TermsCandidate(name, terms, title, signature, cause, pair=False)
@@ -124,7 +212,7 @@ def _library() -> list[Candidate]:
     for c in lib:
         if isinstance(c, TermsCandidate) and c.name in ("el_nod_1a",):
             c.blind_exclusion = IN_SPAN + " (W2, W3)"
-    return lib
+    return lib + _equatorial_rows()
 
 
 CANDIDATES: tuple[Candidate, ...] = tuple(_library())
