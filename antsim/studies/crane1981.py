@@ -18,7 +18,11 @@ simulated runs of ``scenarios/crane1981_140ft_*.toml``:
 * :func:`good_rows`: a run's rows that enter a fit, all or at night; :func:`table4_datasets`:
   Table 4's columns against runs;
 * :func:`search_declination_terms`: the best declination terms C7..C11 from a library of
-  functions, by the same standard-error pattern.
+  functions, by the same standard-error pattern;
+* :func:`absorbed_by_crane`: the part of an effect that a fit of C1..C11 takes (the memo's
+  open question as a diagnose case: ``scenarios/crane1981_140ft_4990_torsion.toml`` carries
+  a polar-drive torsion with Table 4's coefficients less that part, so that its fit gives
+  Table 4's).
 """
 
 from __future__ import annotations
@@ -32,8 +36,8 @@ import numpy as np
 from controller.pointing.crane import CANDIDATES, CRANE_NAMES, candidate_terms
 from controller.pointing.terms import evaluate_basis
 
-__all__ = ["BANDS", "DEC_LIBRARY", "TABLE4", "TABLE5", "Dataset", "channel_gain",
-           "difference_chi2", "good_rows", "rounding_ratio", "search_declination_terms",
+__all__ = ["BANDS", "DEC_LIBRARY", "TABLE4", "TABLE5", "Dataset", "absorbed_by_crane",
+           "channel_gain", "difference_chi2", "good_rows", "rounding_ratio", "search_declination_terms",
            "sigma_pattern", "table4_datasets", "worst_factor"]
 
 BANDS = (3245, 4990, 10500)
@@ -231,3 +235,25 @@ def channel_gain(cols: Mapping[str, np.ndarray], channel: str, flux_jy: Mapping[
 def table4_arcmin(band: int, which: str = "all") -> dict[str, tuple[float, float]]:
     """Table 4 as {C1: (value, sigma)} in arcmin."""
     return dict(zip(CRANE_NAMES, TABLE4[band][which]["c"], strict=True))
+
+
+def absorbed_by_crane(ha_rad: np.ndarray, dec_rad: np.ndarray, latitude_deg: float,
+                      terms_arcsec: Mapping[str, float]) -> dict[str, float]:
+    """The part of an effect given as equatorial TPOINT terms (``terms_arcsec``, e.g. the
+    polar torsion's HHSHCD and HHSHSD) that C1..C11 take at the rows' hour angles and
+    declinations (rad): the least-squares fit of its errors (cross-declination and
+    declination, both axes alike as fit A) by C1..C11, in arcmin (Crane's sign; C5 in its
+    own unit, a refraction scale)."""
+    from controller.pointing.equatorial import equatorial_model
+    from controller.units import ARCSEC_PER_RAD
+
+    ha = np.asarray(ha_rad, float)
+    dec = np.asarray(dec_rad, float)
+    effect = equatorial_model(list(terms_arcsec), latitude_deg, list(terms_arcsec.values()))
+    d_h, d_dec = effect.offset_rad(ha, dec)  # indicated - true (rad)
+    error = np.concatenate([d_h * np.cos(dec), d_dec]) * ARCSEC_PER_RAD
+    b_h, b_d = evaluate_basis(candidate_terms("crane1981", latitude_deg), ha, dec)
+    a = -np.vstack([b_h * np.cos(dec)[:, None], b_d])  # the error per arcsec of each C
+    coef, *_ = np.linalg.lstsq(a, error, rcond=None)
+    return {name: float(c) / 60.0 for name, c in zip(CRANE_NAMES, coef, strict=True)}
+
