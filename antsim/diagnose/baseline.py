@@ -177,8 +177,9 @@ def _needs_feed_angle(name: str) -> bool:
 # ---------------------------------------------------------------------------------------------
 # White noise (no simulation)
 # ---------------------------------------------------------------------------------------------
-def white_prediction(obs: Observations) -> Prediction:
-    """Zero systematic residual and unit noise (each axis' level is estimated in the fit)."""
+def white_prediction(obs: Observations, why: str = "") -> Prediction:
+    """Zero systematic residual and unit noise (each axis' level is estimated in the fit);
+    ``why``: words for the description (why no simulation predicts it)."""
     n = obs.n
     ones = np.ones(n)
     hpbw = float(obs.meta.get("beam_hpbw_arcmin", np.nan))
@@ -186,7 +187,8 @@ def white_prediction(obs: Observations) -> Prediction:
     return Prediction(kind="white", sys_xel=np.zeros(n), sys_el=np.zeros(n), sig_xel=ones,
                       sig_el=ones.copy(), pol_mean=np.zeros((n, 2)), pol_sig=None,
                       width_mean=width_mean, width_sig=None,
-                      description="white noise, one level per axis estimated from the data")
+                      description="white noise, one level per axis estimated from the data"
+                      + (f" ({why})" if why else ""))
 
 
 # ---------------------------------------------------------------------------------------------

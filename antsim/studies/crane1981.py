@@ -37,8 +37,8 @@ from controller.pointing.crane import CANDIDATES, CRANE_NAMES, candidate_terms
 from controller.pointing.terms import evaluate_basis
 
 __all__ = ["BANDS", "DEC_LIBRARY", "TABLE4", "TABLE5", "Dataset", "absorbed_by_crane",
-           "channel_gain", "difference_chi2", "good_rows", "rounding_ratio", "search_declination_terms",
-           "sigma_pattern", "table4_datasets", "worst_factor"]
+           "channel_gain", "difference_chi2", "good_rows", "rounding_ratio",
+           "search_declination_terms", "sigma_pattern", "table4_datasets", "worst_factor"]
 
 BANDS = (3245, 4990, 10500)
 
