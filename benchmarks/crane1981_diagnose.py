@@ -89,6 +89,18 @@ def variant(torsion) -> None:
         print(f"   {name:<5} {value:+7.2f} +- {sigma:.2f}   {t_value:+6.2f} +- {t_sigma:.2f}   "
               f"{pull:+5.1f}")
     print(f"   largest |pull| {worst:.1f}")
+    torsion_terms = next(e.truth()["coefficients_arcsec"] for e in _effects(torsion)
+                         if e.name == "polar_torsion")
+    absorbed = absorbed_by_crane(obs.az_rad[good], obs.el_rad[good],
+                                 math.degrees(obs.latitude_rad), torsion_terms)
+    print("   the torsion's part that C1..C11 take (the truth is Table 4 less it): "
+          + " ".join(f"{n} {v:+.2f}" for n, v in absorbed.items()))
+
+
+def _effects(scenario):
+    from antsim.world.effects import EFFECTS
+
+    return [EFFECTS[e.name](**e.params) for e in scenario.effects]
 
 
 def psi_choice(torsion) -> None:
@@ -134,9 +146,10 @@ def named_cases(torsion, plain, seeds, n_sims, jobs) -> None:
           f"{truth['amplitude_arcsec']:.0f}\", psi = {truth['phase_deg']:.0f} deg")
     print("   seed  named (sigma)            W +- sigma     psi     RA/Dec in sample       "
           "RA/Dec held out (nights)")
-    amplitudes, named, within = [], 0, 0
+    amplitudes, named, within, plain_fits = [], 0, 0, []
     for seed in seeds:
         obs = _recordings(torsion, seed)
+        plain_fits.append(_lsq_amplitude(obs))
         t0 = time.perf_counter()
         d = diagnose(obs, plain, sim_baseline=base)
         dt = time.perf_counter() - t0
@@ -164,7 +177,20 @@ def named_cases(torsion, plain, seeds, n_sims, jobs) -> None:
           f"in {within}/{named}")
     if len(amplitudes) > 1:
         print(f"   amplitude over the seeds {statistics.mean(amplitudes):.1f} +- "
-              f"{statistics.stdev(amplitudes):.1f}\" (truth {truth['amplitude_arcsec']:.0f}\")")
+              f"{statistics.stdev(amplitudes):.1f}\" (truth {truth['amplitude_arcsec']:.0f}\"); "
+              f"plain least squares of C1..C11 and HHSHCD, HHSHSD on the same recordings "
+              f"{statistics.mean(plain_fits):.1f} +- {statistics.stdev(plain_fits):.1f}\"")
+
+
+def _lsq_amplitude(obs) -> float:
+    """W from an unweighted least-squares fit of C1..C11 with the torsion's two terms."""
+    from controller.pointing.data import PointingData
+    from controller.pointing.fitting import fit_model
+
+    g = obs.good
+    data = PointingData(obs.az_rad[g], obs.el_rad[g], obs.xel_arcsec[g], obs.el_arcsec[g])
+    fit = fit_model(data, obs.terms([*CRANE_NAMES, "HHSHCD", "HHSHSD"]), robust=False)
+    return math.hypot(*fit.values_arcsec[-2:])
 
 
 def false_alarms(seeds, n_sims, jobs) -> None:

@@ -27,9 +27,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "ghigo1990, or a TOML file): its simulation predicts the noise "
                              "and the residual distribution")
     parser.add_argument("--model", metavar="MODEL",
-                        help="baseline terms: a named model (ghigo10, tpoint8, ...), a model "
+                        help="baseline terms: a named model (ghigo10, tpoint8, ...; for an "
+                             "equatorial mount's recordings crane1981, crane11, ...), a model "
                              "file, or T1,T2,... (default: the scenario's fit model, else the "
-                             "recordings' model in use, else IA IE NPAE CA AN AW TF TX)")
+                             "recordings' model in use, else IA IE NPAE CA AN AW TF TX, or "
+                             "crane11 on an equatorial mount)")
     parser.add_argument("--mount", choices=("altaz",), default=None,
                         help="a TPOINT file's decimal records are Az/El whatever its options "
                              "say (a file without a mount option is read so, with a note)")
@@ -77,6 +79,8 @@ def _library_text() -> str:
         params = ", ".join(f"{k} ({v})" for k, v in d["parameters"].items())
         lines.append(f"    parameters: {params}")
         lines.append(f"    cause: {d['explanation']}")
+        if d["mounts"] != ["altaz"]:
+            lines.append(f"    mounts: {', '.join(d['mounts'])}")
     return "\n".join(lines)
 
 
