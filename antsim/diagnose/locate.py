@@ -28,13 +28,13 @@ __all__ = ["Group", "Location", "groupings", "locate", "where_signal"]
 AXIS_WORDS = {"xel": "cross-elevation", "el": "elevation"}
 #: an equatorial mount's axes (its offsets are cross-declination and declination)
 EQUATORIAL_AXIS_WORDS = {"xel": "cross-declination", "el": "declination"}
+SECTORS = ("north", "north-east", "east", "south-east", "south", "south-west", "west",
+           "north-west")
 
 
 def axis_words(obs: Observations) -> dict[str, str]:
     """The offsets' axes in words for the recordings' mount."""
     return EQUATORIAL_AXIS_WORDS if obs.mount == "equatorial" else AXIS_WORDS
-SECTORS = ("north", "north-east", "east", "south-east", "south", "south-west", "west",
-           "north-west")
 
 
 @dataclass

@@ -162,8 +162,6 @@ def _equatorial_rows() -> list[Candidate]:
     lib += [TermsCandidate(name, terms, title, signature, cause, pair=pair, mounts=EQUATORIAL)
             for name, terms, title, signature, cause, pair in EQUATORIAL_TERM_ROWS]
     lib += [HarmonicFamilyCandidate(*row, mounts=EQUATORIAL) for row in EQUATORIAL_FAMILIES]
-    for c in lib:
-        c.blind_exclusion = "an equatorial mount's (the blind harness runs the 45-ft)"
     return lib
 
 
