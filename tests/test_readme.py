@@ -234,3 +234,25 @@ def test_the_real_data_procedures_are_the_benchmarks_output():
     best = re.search(r"^  best with 4 finding\(s\) of (\d+): ([\d.]+)\"", bound, re.M).groups()
     assert f"better than {best[1]}\" with the held-out stars in view" in section
     assert f"every combination of {best[0]} findings" in section
+
+def test_the_crane_diagnose_case_is_the_benchmarks_output():
+    """The Diagnose section's equatorial paragraph and docs/telescopes.md's table of the case
+    (Crane's open question) quote benchmarks/crane1981_diagnose.py's kept output."""
+    output = (RESULTS / "crane1981_diagnose.txt").read_text(encoding="utf-8")
+    flat = " ".join(output.split())
+    paragraph = _section("**Equatorial mounts.**", "\n\n")
+    docs = (REPO / "docs" / "telescopes.md").read_text(encoding="utf-8")
+    case = docs[docs.index("### The memo's open question as a diagnose case"):]
+    case = case[:case.index("\n### ")]
+    table = "\n".join(line for line in case.splitlines() if line.startswith("|"))
+    for text in (paragraph, table):
+        numbers = re.findall(r"(?<![\d.])\d+\.\d+", text)
+        assert len(numbers) >= 10
+        for number in numbers:
+            assert re.search(rf"(?<![\d.]){re.escape(number)}(?![\d])", output), number
+    assert "named polar_torsion first in 10/10" in flat and "10 of 10 seeds" in paragraph
+    assert "findings in 0 of 18 recordings" in flat and "0 of 18" in paragraph
+    absorbed = case[case.index("C2 takes"):case.index("so that its fit")]
+    for name, value in (("C2", "-2.06"), ("C6", "+0.89"), ("C5", "-0.08")):
+        assert f"{name} {value}" in flat and value.lstrip("+") in absorbed, name
+
