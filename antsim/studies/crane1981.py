@@ -256,4 +256,3 @@ def absorbed_by_crane(ha_rad: np.ndarray, dec_rad: np.ndarray, latitude_deg: flo
     a = -np.vstack([b_h * np.cos(dec)[:, None], b_d])  # the error per arcsec of each C
     coef, *_ = np.linalg.lstsq(a, error, rcond=None)
     return {name: float(c) / 60.0 for name, c in zip(CRANE_NAMES, coef, strict=True)}
-
