@@ -11,6 +11,7 @@ modules importing each other.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -30,7 +31,8 @@ class LinearModel(Protocol):
     @property
     def values_arcsec(self) -> np.ndarray: ...
 
-    def design_matrix(self, az_rad, el_rad, feed_rad=None) -> tuple[np.ndarray, np.ndarray]:
+    def design_matrix(self, az_rad, el_rad, feed_rad=None,
+                      aux=None) -> tuple[np.ndarray, np.ndarray]:
         """TPOINT-sign correction basis ``(dA, dE)`` per radian, each of shape (N, M)."""
         ...
 
@@ -70,7 +72,10 @@ class PointingData:
     ``t_s``: optional observation times (s); with them the honest error bars allow for
     residuals correlated in time (see :func:`~controller.pointing.fitting.fit_model`). ``feed_rad``:
     optional feed (rotator) angle of each observation (rad), the regressor of feed terms such as
-    ``HSCF``. For an equatorial mount ``az_rad``/``el_rad`` hold hour angle and declination and
+    ``HSCF``. ``aux``: optional recorded quantities of each observation for thermal terms
+    (:mod:`controller.pointing.thermal`): name -> (value for the cross-elevation row, value for
+    the elevation row), e.g. a structure temperature read during each half of the cross scan
+    (C). For an equatorial mount ``az_rad``/``el_rad`` hold hour angle and declination and
     ``xel_arcsec`` the cross-declination error dH cos(dec) (see
     :mod:`controller.pointing.equatorial`).
 
@@ -86,6 +91,7 @@ class PointingData:
     weight_el: np.ndarray | None = None
     t_s: np.ndarray | None = None
     feed_rad: np.ndarray | None = None
+    aux: Mapping[str, tuple[np.ndarray, np.ndarray]] | None = None
 
     def __post_init__(self) -> None:
         names = ("az_rad", "el_rad", "xel_arcsec", "el_arcsec")
@@ -105,6 +111,16 @@ class PointingData:
             arrays["t_s"] = _float_vector(self.t_s, "t_s")
         if self.feed_rad is not None:
             arrays["feed_rad"] = _float_vector(self.feed_rad, "feed_rad")
+        aux = None
+        if self.aux is not None:
+            aux = {}
+            for name, pair in self.aux.items():
+                if len(pair) != 2:
+                    raise ValueError(f"aux[{name!r}] must be a pair (cross-elevation rows, "
+                                     "elevation rows)")
+                aux[name] = tuple(_float_vector(v, f"aux[{name!r}]") for v in pair)
+                arrays[f"aux[{name!r}]"] = aux[name][0]
+                arrays[f"aux[{name!r}] (elevation)"] = aux[name][1]
         lengths = {n: a.size for n, a in arrays.items()}
         if len(set(lengths.values())) > 1:
             detail = ", ".join(f"{n} {k}" for n, k in lengths.items())
@@ -120,7 +136,9 @@ class PointingData:
                 "(degrees given where radians are expected?)"
             )
         for n, a in arrays.items():
-            object.__setattr__(self, n, a)
+            if not n.startswith("aux["):
+                object.__setattr__(self, n, a)
+        object.__setattr__(self, "aux", aux)
 
     def __len__(self) -> int:
         return int(self.az_rad.size)
@@ -141,6 +159,8 @@ class PointingData:
             None if self.weight_el is None else self.weight_el[keep],
             None if self.t_s is None else self.t_s[keep],
             None if self.feed_rad is None else self.feed_rad[keep],
+            None if self.aux is None else {n: (x[keep], e[keep]) for n, (x, e) in
+                                           self.aux.items()},
         )
 
 

@@ -23,7 +23,7 @@ from .result import FitResult, _readonly
 from .robust import fit_terms
 from .terms import Term
 
-__all__ = ["fit_model"]
+__all__ = ["fit_model", "without_fixed"]
 
 
 def _resolve_terms(terms: Sequence[str | Term] | str, name: str) -> PointingModel:
@@ -94,13 +94,20 @@ def fit_model(
     if unknown:
         raise ValueError(f"fixed term(s) {', '.join(unknown)} are not among the terms fitted "
                          f"({', '.join(start.names)})")
+    free = PointingModel([n for n in start.names if n not in fixed], name=start.name)
+    return _with_fixed(fit_terms(without_fixed(data, fixed), free, **options), start, fixed)
+
+
+def without_fixed(data: PointingData, fixed: Mapping[str, float] | None) -> PointingData:
+    """``data`` less the offsets of the ``fixed`` terms (names upper case, values in arcsec):
+    what the other terms are fitted to."""
+    if not fixed:
+        return data
     held = PointingModel(list(fixed), list(fixed.values()))
-    d_az, d_el = held.offset_rad(data.az_rad, data.el_rad, data.feed_rad)
-    rest = dataclasses.replace(
+    d_az, d_el = held.offset_rad(data.az_rad, data.el_rad, data.feed_rad, data.aux)
+    return dataclasses.replace(
         data, xel_arcsec=data.xel_arcsec - np.degrees(d_az) * 3600.0 * np.cos(data.el_rad),
         el_arcsec=data.el_arcsec - np.degrees(d_el) * 3600.0)
-    free = PointingModel([n for n in start.names if n not in fixed], name=start.name)
-    return _with_fixed(fit_terms(rest, free, **options), start, fixed)
 
 
 def _with_fixed(result: FitResult, start: PointingModel, fixed: Mapping[str, float]) -> FitResult:

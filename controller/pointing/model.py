@@ -134,30 +134,45 @@ class PointingModel:
             object.__setattr__(self, "_needs_feed", cached)
         return cached
 
-    def design_matrix(self, az_rad, el_rad, feed_rad=None) -> tuple[np.ndarray, np.ndarray]:
+    @property
+    def regressors(self) -> frozenset[str]:
+        """The recorded quantities the model's thermal terms read (``aux`` of
+        :meth:`design_matrix`); empty for a model of the position alone."""
+        cached = self.__dict__.get("_regressors")
+        if cached is None:
+            from .thermal import thermal_regressors
+
+            cached = frozenset(thermal_regressors(self.terms))
+            object.__setattr__(self, "_regressors", cached)
+        return cached
+
+    def design_matrix(self, az_rad, el_rad, feed_rad=None,
+                      aux=None) -> tuple[np.ndarray, np.ndarray]:
         """TPOINT-sign correction basis, each of shape ``(N, M)``: dA and dE per radian.
-        ``feed_rad``: feed angle(s), needed only by feed terms (see :attr:`needs_feed`)."""
+        ``feed_rad``: feed angle(s), needed only by feed terms (see :attr:`needs_feed`);
+        ``aux``: recorded quantities, name -> (cross-elevation, elevation) arrays, needed only
+        by thermal terms (see :attr:`regressors`)."""
         az, el = np.broadcast_arrays(np.atleast_1d(np.asarray(az_rad, dtype=float)),
                                      np.atleast_1d(np.asarray(el_rad, dtype=float)))
         if feed_rad is not None:
             feed_rad = np.broadcast_to(np.asarray(feed_rad, dtype=float), az.shape).reshape(-1)
-        return evaluate_basis(self.terms, az.reshape(-1), el.reshape(-1), feed_rad)
+        return evaluate_basis(self.terms, az.reshape(-1), el.reshape(-1), feed_rad, aux)
 
-    def offset_rad(self, az_rad, el_rad, feed_rad=None) -> tuple[np.ndarray, np.ndarray]:
+    def offset_rad(self, az_rad, el_rad, feed_rad=None, aux=None) -> tuple[np.ndarray, np.ndarray]:
         """Indicated minus true (daz, del) in radians at true position(s), plain floats."""
         shape = np.broadcast(np.asarray(az_rad), np.asarray(el_rad)).shape
         if not self.terms:
             return np.zeros(shape), np.zeros(shape)
-        basis_az, basis_el = self.design_matrix(az_rad, el_rad, feed_rad)
+        basis_az, basis_el = self.design_matrix(az_rad, el_rad, feed_rad, aux)
         coeff_rad = self.values_arcsec * RAD_PER_ARCSEC
         return -(basis_az @ coeff_rad).reshape(shape), -(basis_el @ coeff_rad).reshape(shape)
 
     def offset_scalar_rad(self, az_rad: float, el_rad: float,
-                          feed_rad: float | None = None) -> tuple[float, float]:
+                          feed_rad: float | None = None, aux=None) -> tuple[float, float]:
         """:meth:`offset_rad` without a basis matrix (a fast path for simulations): plain
         floats at one point, element by element for arrays (an ensemble's member axis)."""
         combine = combine_arrays if np.ndim(az_rad) or np.ndim(el_rad) else combine_scalar
-        corr_az, corr_el = combine(self.terms, self._coeff_rad, az_rad, el_rad, feed_rad)
+        corr_az, corr_el = combine(self.terms, self._coeff_rad, az_rad, el_rad, feed_rad, aux)
         return -corr_az, -corr_el
 
     @property

@@ -85,7 +85,8 @@ class Equations:
         n, m = len(data), len(names)
         cos_el = np.cos(data.el_rad)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # checked below
-            basis_az, basis_el = start.design_matrix(data.az_rad, data.el_rad, data.feed_rad)
+            basis_az, basis_el = start.design_matrix(data.az_rad, data.el_rad, data.feed_rad,
+                                                         data.aux)
         design = np.empty((2 * n, m), order="F")  # column-major, as LAPACK works on it
         np.multiply(basis_az, cos_el[:, None], out=design[:n])
         design[n:] = basis_el

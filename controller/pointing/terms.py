@@ -61,6 +61,14 @@ result signs follow the same rule, so ``HSCF`` is dA cos E = -c cos F and ``HECF
 dE = +c cos F (the feed angle itself is used as it is, not negated). Terms with an ``F``
 factor need the feed angle (``feed_rad``) wherever they are evaluated.
 
+Beyond TPOINT too, a factor's argument may be a :class:`Regressor`: a quantity recorded with
+each observation rather than a function of the position, such as the difference of two
+structure temperatures (K) or a proxy for them (:mod:`controller.pointing.thermal`). Each
+axis' rows read their own recording of it (the cross-elevation rows the reading taken during
+the azimuth scan, the elevation rows the one taken during the elevation scan): ``aux`` maps
+the recorded name to its (cross-elevation, elevation) arrays wherever such terms are
+evaluated.
+
 Extension for other mounts (:mod:`controller.pointing.equatorial`): a factor's argument may also be
 a hashable callable ``(lon_rad, lat_rad) -> array`` of the two coordinates the terms are
 evaluated at (for an equatorial model: hour angle and declination, passed in place of azimuth
@@ -89,6 +97,7 @@ __all__ = [
     "GHIGO_TILT",
     "KATPOINT_EQUIVALENTS",
     "WRIGHT_EQUIVALENTS",
+    "Regressor",
     "Term",
     "TermError",
     "combine_arrays",
@@ -104,8 +113,9 @@ __all__ = [
 # (function, argument, multiplier): functions sin cos tan sec cot lin csc; arguments
 # "AS" (TPOINT's South-based azimuth A_N - pi, of its basic terms AN, AW...), "AH" (the
 # azimuth of TPOINT's harmonic generator, pi - A_S = -A_N), "AN" (North-based azimuth), "E"
-# (elevation), "Z" (zenith distance), "F" (feed angle) or a hashable callable (see the module
-# docstring). Models evaluate each distinct factor once (see ``evaluate_basis``).
+# (elevation), "Z" (zenith distance), "F" (feed angle), a Regressor (a recorded quantity) or a
+# hashable callable (see the module docstring). Models evaluate each distinct factor once
+# (see ``evaluate_basis``; a Regressor's once per axis).
 Factor = tuple[str, str, int]
 Component = tuple[str, float, tuple[Factor, ...]]
 
@@ -137,6 +147,36 @@ class Term:
                                      np.asarray(el_rad, dtype=float))
         basis_az, basis_el = evaluate_basis((self,), az.reshape(-1), el.reshape(-1))
         return basis_az[:, 0].reshape(az.shape), basis_el[:, 0].reshape(az.shape)
+
+
+@dataclass(frozen=True)
+class Regressor:
+    """A recorded quantity a term is linear in: the value recorded as ``plus``, less the one
+    recorded as ``minus`` when given (e.g. two structure temperatures, K; a proxy alone).
+    ``aux`` maps each recorded name to its (cross-elevation rows, elevation rows) values."""
+
+    plus: str
+    minus: str | None = None
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return (self.plus,) if self.minus is None else (self.plus, self.minus)
+
+    def value(self, aux, side: int):
+        """The regressor on one side (0: cross-elevation rows, 1: elevation rows)."""
+        if aux is None or any(n not in aux for n in self.names):
+            missing = [n for n in self.names if aux is None or n not in aux]
+            raise ValueError(
+                f"a thermal term needs the recorded {', '.join(missing)}: give aux (the "
+                "recordings' structure temperature columns, or the proxies of "
+                "controller.pointing.proxies)")
+        out = aux[self.plus][side]
+        return out if self.minus is None else out - aux[self.minus][side]
+
+
+def _side(axis: str) -> int:
+    """Which recording of a Regressor an axis' rows use: 0 cross-elevation, 1 elevation."""
+    return 1 if axis == "E" else 0
 
 
 def _argument(arg, az: np.ndarray, el: np.ndarray, feed=None) -> np.ndarray:
@@ -174,24 +214,29 @@ def _feed(feed):
 
 
 def evaluate_basis(terms: Sequence[Term], az_rad: np.ndarray,
-                   el_rad: np.ndarray, feed_rad=None) -> tuple[np.ndarray, np.ndarray]:
+                   el_rad: np.ndarray, feed_rad=None, aux=None) -> tuple[np.ndarray, np.ndarray]:
     """TPOINT-sign correction basis of ``terms`` at 1-D arrays of points: two (N, M) arrays.
-    ``feed_rad``: feed angle(s) (rad), needed only by terms with an ``F`` factor."""
+    ``feed_rad``: feed angle(s) (rad), needed only by terms with an ``F`` factor; ``aux``:
+    recorded quantities, needed only by terms with a :class:`Regressor` factor."""
     n = az_rad.shape[0]
     basis_az = np.zeros((n, len(terms)))
     basis_el = np.zeros((n, len(terms)))
-    cache: dict[Factor, np.ndarray] = {}
+    cache: dict = {}
     sec_el = None
     for j, term in enumerate(terms):
         for axis, sign, factors in term.components:
             value = None
             for factor in factors:
-                arr = cache.get(factor)
+                func, arg, mult = factor
+                key = (factor, _side(axis)) if isinstance(arg, Regressor) else factor
+                arr = cache.get(key)
                 if arr is None:
-                    func, arg, mult = factor
-                    x = _argument(arg, az_rad, el_rad, feed_rad)
+                    if isinstance(arg, Regressor):
+                        x = np.broadcast_to(np.asarray(arg.value(aux, _side(axis)), float), (n,))
+                    else:
+                        x = _argument(arg, az_rad, el_rad, feed_rad)
                     arr = _FUNCTIONS[func](x if mult == 1 else mult * x)
-                    cache[factor] = arr
+                    cache[key] = arr
                 value = arr if value is None else value * arr
             if value is None:
                 value = 1.0
@@ -228,21 +273,25 @@ def _argument_scalar(arg, az: float, el: float, feed=None) -> float:
 
 
 def combine_scalar(terms: Sequence[Term], coeffs: Sequence[float], az_rad: float,
-                   el_rad: float, feed_rad: float | None = None) -> tuple[float, float]:
-    """``sum_j coeffs[j] * basis_j`` at one point, with plain floats (fast for scalars)."""
-    return _combine(terms, coeffs, az_rad, el_rad, feed_rad, _MATH, _argument_scalar, math.cos)
+                   el_rad: float, feed_rad: float | None = None,
+                   aux=None) -> tuple[float, float]:
+    """``sum_j coeffs[j] * basis_j`` at one point, with plain floats (fast for scalars);
+    ``aux`` as for :func:`evaluate_basis`, with one value per side."""
+    return _combine(terms, coeffs, az_rad, el_rad, feed_rad, _MATH, _argument_scalar, math.cos,
+                    aux)
 
 
 def combine_arrays(terms: Sequence[Term], coeffs: Sequence[float], az_rad: np.ndarray,
-                   el_rad: np.ndarray, feed_rad=None) -> tuple[np.ndarray, np.ndarray]:
+                   el_rad: np.ndarray, feed_rad=None, aux=None) -> tuple[np.ndarray, np.ndarray]:
     """:func:`combine_scalar` on arrays of any (common) shape, element by element: no basis
     matrix (the fast path for a few points, e.g. an ensemble's members at one instant)."""
     az, el = np.broadcast_arrays(np.asarray(az_rad, dtype=float), np.asarray(el_rad, dtype=float))
-    total_az, total_el = _combine(terms, coeffs, az, el, feed_rad, _FUNCTIONS, _argument, np.cos)
+    total_az, total_el = _combine(terms, coeffs, az, el, feed_rad, _FUNCTIONS, _argument, np.cos,
+                                  aux)
     return total_az + np.zeros(az.shape), total_el + np.zeros(az.shape)
 
 
-def _combine(terms, coeffs, az, el, feed, functions, argument, cos):
+def _combine(terms, coeffs, az, el, feed, functions, argument, cos, aux=None):
     cache: dict[Factor, Any] = {}
     total_az = total_el = 0.0
     for term, coeff in zip(terms, coeffs, strict=True):
@@ -254,8 +303,11 @@ def _combine(terms, coeffs, az, el, feed, functions, argument, cos):
                 f = cache.get(factor)
                 if f is None:
                     func, arg, mult = factor
-                    f = functions[func](mult * argument(arg, az, el, feed))
-                    cache[factor] = f
+                    if isinstance(arg, Regressor):  # one value per side: not cached
+                        f = functions[func](mult * arg.value(aux, _side(axis)))
+                    else:
+                        f = functions[func](mult * argument(arg, az, el, feed))
+                        cache[factor] = f
                 value = value * f
             if axis == "A":
                 total_az = total_az + value
@@ -519,17 +571,22 @@ KATPOINT_EQUIVALENTS: dict[str, tuple[str, float]] = {
 
 @lru_cache(maxsize=512)
 def get_term(name: str) -> Term:
-    """The term called ``name`` (TPOINT name, harmonic, W1..W10, P1..P22 or Wright's
-    A1..A7, B1..B7)."""
+    """The term called ``name`` (TPOINT name, harmonic, W1..W10, P1..P22, Wright's
+    A1..A7, B1..B7, or a thermal term of :mod:`controller.pointing.thermal`)."""
+    from .thermal import THERMAL_TERMS  # it builds its terms from this module's pieces
+
     key = name.strip().upper()
     if key in _FIXED:
         return _FIXED[key]
+    if key in THERMAL_TERMS:
+        return THERMAL_TERMS[key]
     term = _harmonic(key)
     if term is None:
         raise TermError(
             f"unknown pointing term {name!r}: use a TPOINT name (IA IE CA NPAE AN AW TF TX "
-            "ACEC ACES ECEC ECES), a harmonic such as HESA2 or HSCA2CE, W1..W10, P1..P22 or "
-            "A1..A7, B1..B7"
+            "ACEC ACES ECEC ECES), a harmonic such as HESA2 or HSCA2CE, W1..W10, P1..P22, "
+            "A1..A7, B1..B7, or a thermal term (TEDFB TSDRL TEYFB TSYRL TNPNS TWPEW, "
+            "proxies TESUN TEFACE TSSIDE TNSUN TWSUN TEAIR)"
         )
     return term
 
