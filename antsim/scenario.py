@@ -43,6 +43,7 @@ from .world.camera import CameraConfig, synthetic_stars
 from .world.effects import EFFECTS
 from .world.mount import AxisConfig, MountConfig
 from .world.receiver import ChannelConfig, ReceiverConfig
+from .world.sensors import SensorConfig
 from .world.sky import SourceConfig
 from .world.weather import WeatherConfig
 
@@ -89,6 +90,8 @@ class Scenario:
     text: str = field(default="", repr=False)
     #: the TV camera of optical pointing (None: radio five-point scans only)
     camera: CameraConfig | None = None
+    #: structure temperature sensors (None: none, as on the 1990 antenna)
+    structure_sensors: SensorConfig | None = None
 
     def with_controller_model(self, model: PointingModel) -> Scenario:
         """The same scenario with another pointing model in use by the controller (on an
@@ -153,14 +156,24 @@ def load_scenario(path: str | Path) -> Scenario:
     effects = tuple(_effect(t, mount, site) for t in truth.tables("effects", []))
     _check_effect_sources(effects, names, truth)
     truth.finish()
+    sensors = (_sensors(root.table("structure_sensors"), mount)
+               if "structure_sensors" in root else None)
     controller = _controller(root.table("controller", {}), site, epoch, duration_s, sources,
                              receiver, mount, name, path.parent, camera)
+    if sensors is not None:
+        if controller.method != "five_point":
+            raise InputError(str(path), "structure_sensors", "(table)",
+                             "the controller reads structure temperatures during cross scans; "
+                             f"it points by {controller.method!r}",
+                             "remove [structure_sensors]")
+        controller = replace(controller, structure_sensors=sensors.names,
+                             structure_lag_s=sensors.lag_s)
     root.finish()
     return Scenario(name=name, path=str(path), description=description, seed=seed, site=site,
                     epoch_utc=epoch, duration_s=duration_s, mount=mount, beam=beam,
                     receiver=receiver, atmosphere=atmosphere, weather=weather, sources=sources,
                     truth_model=truth_model, effects=effects, controller=controller, text=text,
-                    camera=camera)
+                    camera=camera, structure_sensors=sensors)
 
 
 def _site(t: Table) -> Site:
@@ -385,7 +398,52 @@ def _model(t: Table, default: str, base: Path, mount: MountConfig | None = None,
         raise values_table.error(name, values[name] / scale,
                                  f"is not a term of model {model.name!r}",
                                  f"its terms are {' '.join(model.names) or '(none)'}")
+    thermal = thermal_terms_of(model)
+    if thermal:
+        raise t.error("model", spec, f"has thermal terms ({', '.join(thermal)}), which need "
+                      "structure temperatures at every instant",
+                      "the thermal effect is a [[truth.effects]] table; fit thermal terms, "
+                      "do not give them as a model")
     return model.with_values(values) if values else model
+
+
+def thermal_terms_of(model: PointingModel) -> list[str]:
+    """The model's terms in recorded quantities (structure temperatures, proxies): a truth
+    model and the controller's model in use must be functions of the position alone."""
+    from controller.pointing.thermal import thermal_regressors
+
+    return [t.name for t in model.terms if thermal_regressors((t,))]
+
+
+def _sensors(t: Table, mount: MountConfig) -> SensorConfig:
+    """``[structure_sensors]``: which sensors, their noise, resolution and lag, and how far a
+    sensor's member departs from its part's mean in sunshine (antsim.world.sensors)."""
+    from controller.pointing.thermal import STRUCTURE_SENSORS
+
+    if mount.kind != "altaz":
+        raise t.error("names", "(table)", "structure sensors are modelled on an alt-az "
+                      "antenna's dish, yoke and pedestal", "remove [structure_sensors]")
+    d = SensorConfig()
+    names = tuple(t.strings("names", list(d.names)))
+    for i, name in enumerate(names):
+        if name not in STRUCTURE_SENSORS:
+            raise t.error("names", name, "unknown structure temperature sensor",
+                          f"sensors are {', '.join(STRUCTURE_SENSORS)}")
+        if names.index(name) != i:
+            raise t.error("names", name, "listed more than once")
+    if not names:
+        raise t.error("names", [], "lists no sensor", "remove [structure_sensors] instead")
+    config = SensorConfig(
+        names=names,
+        noise_k=t.number("noise_k", d.noise_k, min=0.0, max=10.0),
+        resolution_k=t.number("resolution_k", d.resolution_k, min=0.0, max=10.0),
+        lag_s=t.number("lag_s", d.lag_s, min=0.0, max=86400.0),
+        local_k=t.number("local_k", d.local_k, min=0.0, max=20.0),
+        local_timescale_s=t.number("local_timescale_s", d.local_timescale_s, min=60.0,
+                                   max=864000.0),
+    )
+    t.finish()
+    return config
 
 
 def _model_file(t: Table, spec: str, base: Path) -> PointingModel:

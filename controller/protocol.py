@@ -13,9 +13,10 @@ mount the encoder frame is (hour angle, declination): "azimuth" and "elevation" 
 read hour angle (positive West) and declination, and cross-axis steps are cross-declination.
 
 Optional capabilities, each its own protocol: :class:`CameraAntenna` (a TV camera boresighted
-on the optical axis measures a star's offset directly, as BIMA's optical pointing did) and
+on the optical axis measures a star's offset directly, as BIMA's optical pointing did),
 :class:`FeedAntenna` (a feed box that the controller turns to a feed angle, as the 45-ft's in
-Fomalont 1973).
+Fomalont 1973) and :class:`StructureAntenna` (thermometers on the structure, which the 1990
+antenna did not have).
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ __all__ = [
     "FeedAntenna",
     "Integration",
     "OffsetReading",
+    "StructureAntenna",
     "Trajectory",
     "WeatherReading",
 ]
@@ -188,3 +190,15 @@ class FeedAntenna(Antenna, Protocol):
 
     def feed_angle_deg(self) -> float:
         """The feed angle now (degrees)."""
+
+
+@runtime_checkable
+class StructureAntenna(Antenna, Protocol):
+    """An antenna with structure temperature sensors (thermometers on the dish, the yoke,
+    the pedestal: :data:`controller.pointing.thermal.STRUCTURE_SENSORS`)."""
+
+    #: the sensors' names, in the order the antenna lists them (empty: none)
+    structure_sensors: tuple[str, ...]
+
+    def structure_temperatures(self) -> Mapping[str, float]:
+        """Every sensor's reading now (C), by name."""

@@ -36,7 +36,7 @@ def main(args: argparse.Namespace) -> int:
     from antsim.progress import Progress
     from antsim.run.outputs import write_outputs
     from antsim.run.runner import run_campaign
-    from antsim.scenario import load_scenario
+    from antsim.scenario import load_scenario, thermal_terms_of
 
     if args.seed is not None and args.seed < 0:
         raise InputError("command line", "--seed", args.seed, "must be >= 0")
@@ -50,6 +50,12 @@ def main(args: argparse.Namespace) -> int:
         from controller.pointing.modelio import load_model
 
         model = load_model(args.model)
+        thermal = thermal_terms_of(model)
+        if thermal:
+            raise InputError("command line", "--model", args.model,
+                             f"has thermal terms ({', '.join(thermal)}), which the controller "
+                             "does not apply (they need structure temperatures at every "
+                             "instant)", "give a model of the position alone")
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise InputError("command line", "--out", str(out), "exists and is not a directory")

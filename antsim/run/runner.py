@@ -77,6 +77,9 @@ def recording_meta(scenario: Scenario, seed: int, model: PointingModel) -> dict:
         **({"mount": c.mount} if c.mount != "altaz" else {}),
         **({"method": c.method} if c.method != "five_point" else {}),
         **({"feed_angles_deg": list(c.feed_angles_deg)} if c.feed_angles_deg else {}),
+        **({"structure_sensors": {"names": list(c.structure_sensors),
+                                  "lag_s": c.structure_lag_s}}
+           if c.structure_sensors else {}),
         **({"reduction_width_arcmin": {s.name: c.reduction_width_arcmin(s.name)
                                        for s in c.sources}}
            if c.scan.use_source_size else {}),
@@ -186,7 +189,8 @@ def run_campaign(scenario: Scenario, out_dir: str | Path, seed: int | None = Non
         shown.set(round(min(t_s, scenario.duration_s) / 3600.0, 2))
 
     columns = recording_columns(scenario.controller.mount,
-                                bool(scenario.controller.feed_angles_deg))
+                                bool(scenario.controller.feed_angles_deg),
+                                scenario.controller.structure_sensors)
     with RecordingWriter(out / "recordings.ecsv", meta, resume=resume,
                          columns=columns) as writer:
         try:

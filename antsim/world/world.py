@@ -152,6 +152,13 @@ class World:
             effect.start(self, component_rng(self.seed, f"effect:{i}:{effect.name}"))
         self.slow_effects = [e for e in self.effects if not e.per_sample]
         self.fast_effects = [e for e in self.effects if e.per_sample]
+        #: structure temperature sensors (antsim.world.sensors), or None
+        self.sensors = None
+        config = getattr(scenario, "structure_sensors", None)
+        if config is not None:
+            from .sensors import StructureSensors
+
+            self.sensors = StructureSensors(config, self, component_rng(self.seed, "sensors"))
         self.antenna = SimulatedAntenna(self)
 
     # ------------------------------------------------------------------ services for effects
@@ -207,6 +214,8 @@ class World:
                 "per_channel": {ch: curve(g) for ch, g in per_channel.items()}}
         if self.scenario.controller.tipping is not None:
             truth["zenith_opacity"] = float(self.atmosphere.tau0)
+        if self.sensors is not None:
+            truth["thermal_terms"] = self.sensors.true_coefficients()
         return truth
 
     def pointing_error_rad(self, state: PointingState) -> tuple[float, float]:
@@ -389,6 +398,23 @@ class SimulatedAntenna:
 
     def encoder_deg(self) -> tuple[float, float]:
         return self.mount.current_deg()
+
+    @property
+    def structure_sensors(self) -> tuple[str, ...]:
+        """The structure temperature sensors' names (empty: none)."""
+        sensors = self.world.sensors
+        return () if sensors is None else sensors.names
+
+    def structure_temperatures(self) -> dict[str, float]:
+        """Every structure temperature sensor's reading now (C): the integrations not yet
+        computed are computed first (the dish's temperatures follow where it pointed)."""
+        sensors = self.world.sensors
+        if sensors is None:
+            raise AntennaError("this antenna has no structure temperature sensors (the "
+                               "scenario has no [structure_sensors] table)")
+        self.flush()
+        az_deg, el_deg = self.world.frame.to_altaz_deg(*self.mount.current_deg())
+        return sensors.read(float(self.env.now), az_deg * RAD_PER_DEG, el_deg * RAD_PER_DEG)
 
     # ------------------------------------------------------------------ commands
     def track(self, trajectory: Trajectory, label: str = ""):

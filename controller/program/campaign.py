@@ -38,6 +38,7 @@ from controller.astro.ephemeris import Ephemeris
 from controller.astro.frames import MountFrame
 from controller.astro.site import Site, Weather
 from controller.astro.sources import FixedSource
+from controller.pointing.thermal import structure_column, structure_time_column
 from controller.protocol import Antenna, AntennaError
 from controller.scans.reduction import Flag
 from controller.scans.scan import AXES, RawScan, ReducedScan, cross_scan, reduce_scan
@@ -221,7 +222,8 @@ class ControlProgram:
         while True:
             traj = self.trajectory(target, self.antenna.clock_s())
             raw = yield env.process(cross_scan(env, self.antenna, traj, scan,
-                                               label=target.name))
+                                               label=target.name,
+                                               structure=bool(self.config.structure_sensors)))
             sky_k = self.sky_emission_k(raw)
             reduced = reduce_scan(self.sky_corrected(raw, sky_k), scan)
             reduced.raw = raw
@@ -386,17 +388,30 @@ class ControlProgram:
             for a, axis in enumerate(AXES):
                 for k, name in enumerate(("m4", "m1", "0", "p1", "p4")):
                     row[f"p_{axis}_{name}"] = float(power[a, p, k])
-            row.update(self.extra_columns(lon, lat))
+            row.update(self.extra_columns(lon, lat, raw))
             rows.append(row)
         return rows
 
-    def extra_columns(self, lon_rad: float, lat_rad: float) -> dict:
+    def extra_columns(self, lon_rad: float, lat_rad: float, raw: RawScan | None = None) -> dict:
         """Columns beyond the 1990 set: hour angle and declination on an equatorial mount,
-        the feed angle when the feed is turned (see :func:`recording_columns`)."""
+        the feed angle when the feed is turned, each structure temperature read during
+        each half of the cross scan (see :func:`recording_columns`)."""
         extra: dict = {}
         if not self.frame.is_altaz:
             extra["ha_deg"] = math.degrees(float(lon_rad))
             extra["dec_deg"] = math.degrees(float(lat_rad))
         if self.config.feed_angles_deg:
             extra["feed_angle_deg"] = float(self.feed_angle_deg)
+        if self.config.structure_sensors:
+            for axis, recorded in (("az", "xel"), ("el", "el")):
+                extra[structure_time_column(recorded)] = float(
+                    raw.structure_t_s.get(axis, math.nan) if raw is not None else math.nan)
+        for sensor in self.config.structure_sensors:
+            for axis, recorded in (("az", "xel"), ("el", "el")):
+                reading = raw.structure_c.get(axis, {}) if raw is not None else {}
+                if sensor not in reading:
+                    raise AntennaError(f"the antenna gave no reading of structure temperature "
+                                       f"sensor {sensor!r} (it lists "
+                                       f"{', '.join(reading) or 'none'})")
+                extra[structure_column(sensor, recorded)] = float(reading[sensor])
         return extra

@@ -120,6 +120,11 @@ class ControllerConfig:
     #: the night fit (E). The 1990 report's night is not defined either; -12 deg (nautical
     #: twilight over) is this project's reading of it
     night_sun_max_deg: float = NIGHT_SUN_MAX_DEG
+    #: the antenna's structure temperature sensors the controller reads during each half of
+    #: a cross scan and records (empty: none, as on the 1990 antenna)
+    structure_sensors: tuple[str, ...] = ()
+    #: their response time (s, first order; the datasheet's): the fits correct for it
+    structure_lag_s: float = 0.0
 
     def reduction_width_arcmin(self, source: str) -> float:
         """The width (FWHM, arcmin) the reduction assumes for the catalogue's ``source``

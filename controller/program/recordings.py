@@ -14,7 +14,10 @@ measured + model in use + applied correction (columns ``model_*`` and ``applied_
 
 Columns beyond the 1990 set are added only where they apply (:func:`recording_columns`):
 ``ha_deg``/``dec_deg`` for an equatorial mount, whose ``xel_*``/``el_*`` offsets are then
-cross-declination (dH cos Dec) and declination; ``feed_angle_deg`` when the feed is turned.
+cross-declination (dH cos Dec) and declination; ``feed_angle_deg`` when the feed is turned;
+``temp_<sensor>_xel_c`` and ``temp_<sensor>_el_c`` (and when they were read, ``temp_xel_t_s``,
+``temp_el_t_s``) where the antenna has structure temperature sensors
+(:func:`structure_columns`).
 Optical pointing rows (a TV camera on stars) fill the radio-only columns with NaN.
 """
 
@@ -32,6 +35,7 @@ import numpy as np
 
 from controller.errors import InputError
 from controller.pointing.legacy import W_TERMS, W_TERMS_KEY, names_w_terms, relabel_reconstructed
+from controller.pointing.thermal import structure_column, structure_time_column
 
 __all__ = [
     "COLUMNS",
@@ -41,6 +45,7 @@ __all__ = [
     "read_pointing_data",
     "read_recordings",
     "recording_columns",
+    "structure_columns",
 ]
 
 
@@ -105,15 +110,32 @@ EXTRA_COLUMNS: dict[str, Column] = {c.name: c for c in (
 )}
 
 
-def recording_columns(mount: str = "altaz", feed: bool = False) -> tuple[Column, ...]:
+def structure_columns(sensors: Sequence[str]) -> tuple[Column, ...]:
+    """The columns of structure temperature sensors (optional: only recordings of an antenna
+    with sensors have them; :mod:`controller.pointing.thermal`): each sensor read during the
+    azimuth (cross-elevation) and the elevation half of the cross scan."""
+    if not sensors:
+        return ()
+    halves = {"xel": "azimuth (cross-elevation)", "el": "elevation"}
+    return (*(Column(structure_time_column(a), "float64", "s",
+                     f"antenna clock when the structure temperatures were read during the "
+                     f"{what} scan") for a, what in halves.items()),
+            *(Column(structure_column(s, a), "float64", "deg_C",
+                     f"structure temperature {s}, read during the {what} scan")
+              for s in sensors for a, what in halves.items()))
+
+
+def recording_columns(mount: str = "altaz", feed: bool = False,
+                      sensors: Sequence[str] = ()) -> tuple[Column, ...]:
     """The columns of a campaign's recordings: the 1990 set, plus hour angle and declination
-    on an equatorial mount and the feed angle when the feed is turned."""
+    on an equatorial mount, the feed angle when the feed is turned and the structure
+    temperatures where the antenna has sensors."""
     extra: list[str] = []
     if mount == "equatorial":
         extra += ["ha_deg", "dec_deg"]
     if feed:
         extra.append("feed_angle_deg")
-    return COLUMNS + tuple(EXTRA_COLUMNS[n] for n in extra)
+    return COLUMNS + tuple(EXTRA_COLUMNS[n] for n in extra) + structure_columns(sensors)
 
 
 class ResumeMismatchError(RuntimeError):

@@ -35,6 +35,11 @@ class RawScan:
     integrations: dict[str, list[Integration]] = field(default_factory=dict)
     cos_el: float = 1.0
     t_track_s: float = 0.0
+    #: structure temperatures (C) read after the central integration of each axis, when the
+    #: controller reads them: axis -> sensor -> reading
+    structure_c: dict[str, dict[str, float]] = field(default_factory=dict)
+    #: when they were read (antenna clock, s): axis -> time
+    structure_t_s: dict[str, float] = field(default_factory=dict)
 
     def powers(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Power, sample std (K) and mid-times (s), shape (axes, channels + AVG, positions).
@@ -79,8 +84,12 @@ class ReducedScan:
 
 
 def cross_scan(env, antenna: Antenna, trajectory, scan: ScanConfig, label: str = "",
-               step_arcmin: float | None = None, integration_s: float | None = None):
-    """simpy process: track ``trajectory`` and run a five-point cross scan; returns RawScan."""
+               step_arcmin: float | None = None, integration_s: float | None = None,
+               structure: bool = False):
+    """simpy process: track ``trajectory`` and run a five-point cross scan; returns RawScan.
+    With ``structure`` the antenna's structure temperatures are read after the central
+    (zero-offset) integration of each axis (:class:`~controller.protocol.StructureAntenna`):
+    the temperatures of the structure while that axis' offset was measured."""
     step = scan.step_arcmin if step_arcmin is None else step_arcmin
     tau = scan.integration_s if integration_s is None else integration_s
     raw = RawScan(label=label, step_arcmin=step, offsets_n=scan.offsets_n,
@@ -101,6 +110,9 @@ def cross_scan(env, antenna: Antenna, trajectory, scan: ScanConfig, label: str =
             else:
                 move_s = yield antenna.set_offset(0.0, n * step / 60.0)
             readings.append((yield antenna.integrate(tau)))
+            if structure and n == 0:
+                raw.structure_c[axis] = dict(antenna.structure_temperatures())
+                raw.structure_t_s[axis] = float(antenna.clock_s())
         raw.integrations[axis] = readings
     yield antenna.set_offset(0.0, 0.0)
     if scan.overhead_s > 0:

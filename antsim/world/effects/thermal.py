@@ -307,11 +307,17 @@ class ThermalEffect(Effect):
                                   np.sin(sun_el)])  # north, east, up
         self._insolation = insolation_eff
         forcing = p["pedestal_gradient_k"] * insolation_eff
+        # the pedestal's north-minus-south and east-minus-west differences (K): the side
+        # facing the Sun is the warmer
+        self.pedestal_n_k = relax(forcing * np.cos(sun_az), step, p["pedestal_tau_s"], 0.0)
+        self.pedestal_e_k = relax(forcing * np.sin(sun_az), step, p["pedestal_tau_s"], 0.0)
+        self.gradient_lr_k = dt_lr
         # the heated side expands: the axis tilts away from the Sun
-        self._tilt_n_arcsec = -p["tilt_arcsec_per_k"] * relax(
-            forcing * np.cos(sun_az), step, p["pedestal_tau_s"], 0.0)
-        self._tilt_e_arcsec = -p["tilt_arcsec_per_k"] * relax(
-            forcing * np.sin(sun_az), step, p["pedestal_tau_s"], 0.0)
+        self._tilt_n_arcsec = -p["tilt_arcsec_per_k"] * self.pedestal_n_k
+        self._tilt_e_arcsec = -p["tilt_arcsec_per_k"] * self.pedestal_e_k
+        #: (time -> forcing and gradients of the dish, K) of every instant the dish state
+        #: advanced to, kept only when structure sensors read it (antsim.world.sensors)
+        self.dish_log: dict[float, tuple[float, float, float, float]] | None = None
         self._dish_k = None
         self._dish_t = None
         self._now = None
@@ -357,6 +363,9 @@ class ThermalEffect(Effect):
             self._dish_k = tuple(f + (k - f) * decay
                                  for f, k in zip(forcing, self._dish_k, strict=True))
         self._dish_t = t
+        if self.dish_log is not None and np.ndim(t) == 0:
+            self.dish_log[float(t)] = (*(float(f) for f in forcing),
+                                       *(float(k) for k in self._dish_k))
         return self._dish_k
 
     def _series_at(self, t: float) -> list:
@@ -449,6 +458,11 @@ class ThermalEffect(Effect):
                 now_lr = f_lr + (now_lr - f_lr) * decay
             fb.append(now_fb)
             lr.append(now_lr)
+        if self.dish_log is not None and np.ndim(now_fb) == 0:  # a World, not members
+            for t_k, f_fb, f_lr, g_fb, g_lr in zip(times, rows_fb, rows_lr, fb, lr,
+                                                   strict=True):
+                self.dish_log[float(t_k)] = (float(f_fb), float(f_lr), float(g_fb),
+                                             float(g_lr))
         self._dish_k, self._dish_t = (now_fb, now_lr), max(last_t, times[-1])
         return np.array(fb), np.array(lr)
 
