@@ -140,8 +140,12 @@ def test_run_writes_fit_files_that_round_trip(ghigo, tmp_path):
     write_outputs(result)
     fit = json.loads((tmp_path / "fit.json").read_text())
     variants = json.loads((tmp_path / "fit_variants.json").read_text())
-    assert set(variants) == set("ABCDEF")
+    # fits A-F of the report, and T: A with the thermal terms the data support (the 1990
+    # antenna had no structure sensors: proxies for them)
+    assert set(variants) == set("ABCDEFT")
     assert variants["A"] == fit
+    assert list(variants["T"]["terms"])[:10] == [f"W{i}" for i in range(1, 11)]
+    assert variants["T"]["notes"][0].startswith("thermal terms tested: TESUN")
     for key in ("n_input", "n_used", "n_rejected", "model", "terms", "sky_rms_arcsec",
                 "xel_rms_arcsec", "el_rms_arcsec", "popn_sd_arcsec", "condition_number",
                 "correlations", "unconstrained"):

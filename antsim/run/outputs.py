@@ -34,8 +34,11 @@ def run_fits(result: RunResult) -> dict[str, FitResult | None]:
     """Fits A-F of a run's recordings with the terms its controller fits."""
     c = result.scenario.controller
     terms, name = c.fit_spec()
+    context = {"site": {"latitude_deg": c.site_latitude_deg,
+                        "longitude_deg": c.site_longitude_deg, "height_m": c.site_height_m},
+               "epoch_utc": c.epoch_utc, "sensor_lag_s": c.structure_lag_s}
     return fit_variants(result.rows, terms, name=name, night_sun_max_deg=c.night_sun_max_deg,
-                        fixed=dict(c.fit_fixed))
+                        fixed=dict(c.fit_fixed), context=context)
 
 
 def _fmt(value: float, spec: str) -> str:
@@ -68,8 +71,9 @@ def fit_tables(fits: dict[str, FitResult | None], title: str,
             ref = (f"{reference.points.get(v.name, 0):>10d}{ref_t2[v.name][0]:>6.0f}"
                    f"{ref_t2[v.name][1]:>6.0f}")
         if fit is None:
-            lines.append(f"{v.name:<4}{v.describe(night_sun_max_deg):<48}"
-                         f"{'(too few observations)':>30}")
+            if not v.thermal:  # fit T only where thermal terms can be driven
+                lines.append(f"{v.name:<4}{v.describe(night_sun_max_deg):<48}"
+                             f"{'(too few observations)':>30}")
             continue
         lines.append(f"{v.name:<4}{v.describe(night_sun_max_deg):<48}{fit.n_input:>5}"
                      f"{fit.n_used:>6}"
@@ -86,6 +90,8 @@ def fit_tables(fits: dict[str, FitResult | None], title: str,
         lines += _points_lines(points, reference)
     warnings = fits["A"].warnings if fits.get("A") is not None else ()
     lines += [""] + [f"fit A: {w}" for w in warnings]
+    if fits.get("T") is not None:
+        lines += _thermal_lines(fits["T"]) + [f"fit T: {n}" for n in fits["T"].notes]
     return "\n".join(lines).rstrip() + "\n"
 
 
@@ -119,6 +125,22 @@ def _coefficient_lines(fits, present: list[str], reference: Reference | None) ->
                     f"{labels.get(term, ''):<10}")
         lines.append(row.rstrip())
     return lines
+
+
+def _thermal_lines(fit: FitResult) -> list[str]:
+    """Fit T's thermal terms: value and honest sigma (arcsec per kelvin, or per unit of a
+    proxy)."""
+    from controller.pointing.terms import get_term
+
+    honest = fit.sigma_honest_arcsec
+    lines = ["", "Thermal terms of fit T (arcsec per kelvin of the difference, or per unit of "
+             "a proxy); honest sigma", ""]
+    for j, name in enumerate(fit.names):
+        term = get_term(name)
+        if term.kind == "thermal":
+            lines.append(f"{name:<8}{fit.values_arcsec[j]:>+10.2f}{_fmt(honest[j], '.2f'):>8}  "
+                         f"{term.description}")
+    return [*lines, ""]
 
 
 def _points_lines(points: Mapping[str, int], reference: Reference | None) -> list[str]:

@@ -50,6 +50,8 @@ def fit_summary_table(fits: Mapping[str, FitResult | None],
     for v in VARIANTS:
         fit = fits.get(v.name)
         ref = list(reference_rms.get(v.name, (None, None))) if reference_rms else []
+        if fit is None and v.thermal:
+            continue  # fit T only where thermal terms can be driven
         if fit is None:
             rows.append([v.name, v.describe(night_sun_max_deg), None, None, None, None, None,
                          *ref])
@@ -102,6 +104,27 @@ def _arcsec(arcmin: float | None) -> float | None:
     return None if arcmin is None else 60.0 * arcmin
 
 
+def thermal_table(fit: FitResult, truth_arcsec: Mapping[str, float] | None = None) -> Table:
+    """Fit T's thermal terms: value and honest sigma (arcsec per kelvin of structure
+    temperature difference, or per unit of a proxy), and the truth where it is known."""
+    from controller.pointing.terms import get_term
+
+    honest = (fit.sigma_honest_arcsec if fit.sigma_honest_arcsec is not None
+              else [math.nan] * len(fit.names))
+    rows = []
+    for name, value, h in zip(fit.names, fit.values_arcsec, honest, strict=True):
+        term = get_term(name)
+        if term.kind != "thermal":
+            continue
+        truth = (truth_arcsec or {}).get(name)
+        rows.append([name, term.description, float(value), float(h),
+                     *([truth] if truth_arcsec else [])])
+    header = ["term", "meaning", "fit T", "honest sigma", *(["truth"] if truth_arcsec else [])]
+    return Table(header, rows, number_format="+.2f",
+                 caption="Fit T's thermal terms (arcsec per kelvin of the temperature "
+                         "difference, or per unit of a proxy)")
+
+
 def source_points_table(points: Mapping[str, int], reference: Reference | None) -> Table:
     """Table 1 style: the points per source fit A used, beside the document's."""
     report = dict(reference.source_points) if reference is not None else {}
@@ -152,6 +175,14 @@ def truth_terms_arcsec(truth: Mapping[str, Any] | None) -> dict[str, float]:
     if not truth:
         return {}
     return {k: float(v["value_arcsec"]) for k, v in truth.get("terms", {}).items()}
+
+
+def thermal_truth_arcsec(truth: Mapping[str, Any] | None) -> dict[str, float]:
+    """``{thermal term: value}`` from a ``truth.json`` document's ``thermal_terms`` (the
+    simulated thermal effect's coefficients in the thermal terms' units), empty when absent."""
+    if not truth:
+        return {}
+    return {k: float(v) for k, v in truth.get("thermal_terms", {}).items()}
 
 
 def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
@@ -208,7 +239,11 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
             f"{document.citation}: rms deviation of a data point from the best fit "
             f"{document.rms_arcsec[0]:.1f}\" in azimuth (dA cos E) and "
             f"{document.rms_arcsec[1]:.1f}\" in elevation."))
-    sections.append(Section("Fits A-F", fit_blocks))
+    fit_t = fits.get("T")
+    if fit_t is not None:
+        fit_blocks += [thermal_table(fit_t, thermal_truth_arcsec(result.truth) or None),
+                       Paragraph("Fit T: " + " ".join(fit_t.notes))]
+    sections.append(Section("Fits A-F" + (" and T" if fit_t is not None else ""), fit_blocks))
     if fit_a is not None and truth:
         effects = [e.get("effect", "?") for e in (result.truth or {}).get("effects", [])]
         text = ("Pull = (fit - truth) / sigma. With independent Gaussian residuals pulls "

@@ -74,6 +74,8 @@ class FitResult:
         default=None, repr=False, compare=False)
     #: terms held at a given value, not fitted (no sigma; ``fit_model(fixed=...)``)
     fixed: tuple[str, ...] = ()
+    #: how the terms were chosen, where a procedure chose them (fit T's selection), as sentences
+    notes: tuple[str, ...] = ()
 
     @cached_property
     def _jackknife(self) -> JackknifeResult | None:
@@ -140,6 +142,7 @@ class FitResult:
             },
             "unconstrained": list(self.unconstrained),
             **({"fixed": list(self.fixed)} if self.fixed else {}),
+            **({"notes": list(self.notes)} if self.notes else {}),
             "honest_sigma": {
                 "method": self.honest_method(),
                 "clusters": int(self.honest_clusters),

@@ -8,6 +8,7 @@
 | D | AVG, by day (Sun above 0 deg), filtered |
 | E | AVG, at night (Sun below -12 deg unless the campaign sets another night), filtered |
 | F | AVG, unfiltered: every scan with a defined offset, plain least squares |
+| T | as A, with the thermal terms the data support (not the report's) |
 
 "Filtered" is the report's procedure: scans the reduction flagged (S/N < 4, undefined log
 ratio, ...) are dropped, then the robust fit (LAD, 4x mean absolute deviation, least
@@ -15,10 +16,20 @@ squares, 3x rms, least squares) rejects outliers. The total pointing error fitte
 measured offset plus the model in use plus any correction the controller applied.
 Recordings of an equatorial mount (columns ``ha_deg``, ``dec_deg``) are fitted in hour angle
 and declination; a ``feed_angle_deg`` column feeds the feed terms (``HSCF``...).
+
+Fit T (this project's, not the report's) is fit A with thermal terms
+(:mod:`controller.pointing.thermal`) added where the data support them
+(:mod:`controller.pointing.selection`): in the structure temperatures where the recordings
+have them, else in proxies for them (:mod:`controller.pointing.proxies`: the Sun and the air
+temperature, which need the site and the epoch; alt-az recordings only). Fit A itself says
+what the heating leaves in it: for each term, the difference between the day and the night
+fits (D - E) with its honest sigma, and a warning where that difference exceeds
+``SYSTEMATIC_SIGMAS`` times its sigma (:func:`day_minus_night`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -28,9 +39,24 @@ from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 
 from .data import PointingData
 from .fitting import fit_model
+from .model import named_model_terms
 from .result import FitResult
+from .thermal import (
+    PROXY_TERMS,
+    SENSOR_TERMS,
+    sensor_aux,
+    structure_column,
+    structure_sensor_names,
+    structure_time_column,
+    thermal_regressors,
+)
 
-__all__ = ["VARIANTS", "Variant", "columns", "fit_variants", "pointing_data", "variant_mask"]
+__all__ = ["SYSTEMATIC_SIGMAS", "VARIANTS", "Variant", "columns", "day_minus_night",
+           "fit_variants", "pointing_data", "thermal_fit", "variant_mask"]
+
+#: fit A warns of a term whose day-minus-night difference exceeds this many sigma of it
+#: (3: a false alarm in 0.3% of terms, 3% of ten-term campaigns, without any systematic)
+SYSTEMATIC_SIGMAS = 3.0
 
 
 @dataclass(frozen=True)
@@ -40,6 +66,8 @@ class Variant:
     polarization: str
     window: str  # "all", "day", "night"
     filtered: bool
+    #: thermal terms added where the data support them (fit T)
+    thermal: bool = False
 
     def describe(self, night_sun_max_deg: float = NIGHT_SUN_MAX_DEG) -> str:
         """The description, with the campaign's night threshold for the night fit."""
@@ -55,26 +83,37 @@ VARIANTS: tuple[Variant, ...] = (
     Variant("D", "averaged, day (Sun above 0 deg), filtered", "AVG", "day", True),
     Variant("E", "averaged, night (Sun below -12 deg), filtered", "AVG", "night", True),
     Variant("F", "averaged, unfiltered", "AVG", "all", False),
+    Variant("T", "as A, with the thermal terms the data support", "AVG", "all", True,
+            thermal=True),
 )
 
 _NEEDED = ("polarization", "az_deg", "el_deg", "xel_arcmin", "el_arcmin", "model_xel_arcmin",
            "model_el_arcmin", "applied_xel_arcmin", "applied_el_arcmin", "good", "sun_el_deg",
            "t_s")
-#: taken when present: equatorial coordinates and the feed angle
-_OPTIONAL = ("ha_deg", "dec_deg", "feed_angle_deg")
+#: taken when present: equatorial coordinates, the feed angle, the air temperature (a proxy
+#: of the structure's), and the structure temperatures (controller.pointing.thermal)
+_OPTIONAL = ("ha_deg", "dec_deg", "feed_angle_deg", "air_temp_c")
 
 
 def columns(recordings) -> dict[str, np.ndarray]:
     """Column arrays from an astropy Table of recordings or a list of row dicts."""
     if isinstance(recordings, Sequence) and (not recordings or isinstance(recordings[0],
                                                                            Mapping)):
-        cols = {c: np.array([r[c] for r in recordings]) for c in _NEEDED}
-        present = [c for c in _OPTIONAL if recordings and c in recordings[0]]
-        cols.update({c: np.array([r[c] for r in recordings]) for c in present})
-        return cols
-    cols = {c: np.asarray(recordings[c]) for c in _NEEDED}
-    cols.update({c: np.asarray(recordings[c]) for c in _OPTIONAL if c in recordings.colnames})
-    return cols
+        names = list(recordings[0]) if recordings else []
+        wanted = [*_NEEDED, *(c for c in _OPTIONAL if c in names), *_structure(names)]
+        return {c: np.array([r[c] for r in recordings]) for c in wanted}
+    names = list(recordings.colnames)
+    wanted = [*_NEEDED, *(c for c in _OPTIONAL if c in names), *_structure(names)]
+    return {c: np.asarray(recordings[c]) for c in wanted}
+
+
+def _structure(names) -> list[str]:
+    """The structure temperature columns among ``names`` (both halves of every sensor, and
+    when they were read)."""
+    sensors = structure_sensor_names(names)
+    times = [structure_time_column(a) for a in ("xel", "el")
+             if sensors and structure_time_column(a) in names]
+    return [*times, *(structure_column(s, a) for s in sensors for a in ("xel", "el"))]
 
 
 def variant_mask(cols: Mapping[str, np.ndarray], variant: Variant,
@@ -95,11 +134,15 @@ def variant_mask(cols: Mapping[str, np.ndarray], variant: Variant,
     return mask
 
 
-def pointing_data(cols: Mapping[str, np.ndarray], mask: np.ndarray) -> PointingData:
-    """Total pointing errors (measured + model in use + applied) of the selected rows."""
+def pointing_data(cols: Mapping[str, np.ndarray], mask: np.ndarray,
+                  sensor_lag_s: float = 0.0) -> PointingData:
+    """Total pointing errors (measured + model in use + applied) of the selected rows, with
+    the structure temperatures where the recordings have them (``aux``; corrected for the
+    sensors' response time ``sensor_lag_s``, :func:`~controller.pointing.thermal.sensor_aux`)."""
     f = {k: np.asarray(v)[mask].astype(float) for k, v in cols.items()
          if k not in ("polarization", "good")}
     lon, lat = ("ha_deg", "dec_deg") if "ha_deg" in f else ("az_deg", "el_deg")
+    sensors = structure_sensor_names(list(f))
     return PointingData(
         az_rad=np.radians(f[lon]),
         el_rad=np.radians(f[lat]),
@@ -107,16 +150,22 @@ def pointing_data(cols: Mapping[str, np.ndarray], mask: np.ndarray) -> PointingD
         el_arcsec=60.0 * (f["el_arcmin"] + f["model_el_arcmin"] + f["applied_el_arcmin"]),
         t_s=f["t_s"],
         feed_rad=np.radians(f["feed_angle_deg"]) if "feed_angle_deg" in f else None,
+        aux=sensor_aux(f, sensors, sensor_lag_s) if sensors else None,
     )
 
 
 def fit_variants(recordings, terms: Sequence[str] | str, name: str = "custom",
                  variants: Sequence[Variant] = VARIANTS,
                  night_sun_max_deg: float = NIGHT_SUN_MAX_DEG,
-                 fixed: Mapping[str, float] | None = None) -> dict[str, FitResult | None]:
+                 fixed: Mapping[str, float] | None = None,
+                 context: Mapping | None = None) -> dict[str, FitResult | None]:
     """Fit every variant (night: the Sun below ``night_sun_max_deg``); a variant with too
-    few observations maps to None. ``fixed``: terms held at these values (arcsec), see
-    :func:`~controller.pointing.fitting.fit_model`."""
+    few observations maps to None, and so does fit T where there is nothing to drive
+    thermal terms. ``fixed``: terms held at these values (arcsec), see
+    :func:`~controller.pointing.fitting.fit_model`. ``context``: the recordings' ``site``
+    (``latitude_deg``, ``longitude_deg``, ``height_m``) and ``epoch_utc``, for the proxies
+    of fit T without structure temperatures, and ``sensor_lag_s``, the structure sensors'
+    response time. Fit A carries the day-minus-night warnings of :func:`day_minus_night`."""
     cols = columns(recordings)
     out: dict[str, FitResult | None] = {}
     n_terms = len(terms) if not isinstance(terms, str) else None
@@ -127,8 +176,76 @@ def fit_variants(recordings, terms: Sequence[str] | str, name: str = "custom",
             out[variant.name] = None
             continue
         try:
-            out[variant.name] = fit_model(pointing_data(cols, mask), terms,
-                                          robust=variant.filtered, name=name, fixed=fixed)
+            if variant.thermal:
+                out[variant.name] = thermal_fit(cols, mask, terms, name, fixed, context)
+            else:
+                out[variant.name] = fit_model(pointing_data(cols, mask), terms,
+                                              robust=variant.filtered, name=name, fixed=fixed)
         except ValueError:
             out[variant.name] = None  # e.g. fewer usable observations than terms
+    fit_a = out.get("A")
+    if fit_a is not None:
+        warnings = [w for term, (d, s, w) in day_minus_night(out).items() if w]
+        if warnings:
+            out["A"] = dataclasses.replace(fit_a, warnings=(*fit_a.warnings, *warnings))
+    return out
+
+
+def thermal_fit(cols: Mapping[str, np.ndarray], mask: np.ndarray, terms: Sequence[str] | str,
+                name: str, fixed: Mapping[str, float] | None = None,
+                context: Mapping | None = None) -> FitResult | None:
+    """Fit T of the rows ``mask``: the terms ``terms`` and the thermal terms the data
+    support (:func:`~controller.pointing.selection.select_terms`), in the structure
+    temperatures where the recordings have them, else in proxies (alt-az recordings with a
+    ``context``); None where there are neither. The selection's tests are the fit's
+    ``notes``."""
+    from .selection import select_terms
+
+    base = list(named_model_terms(terms) if isinstance(terms, str) else terms)
+    data = pointing_data(cols, mask, float((context or {}).get("sensor_lag_s", 0.0)))
+    candidates = [t for t, term in SENSOR_TERMS.items()
+                  if data.aux and thermal_regressors((term,)) <= set(data.aux)]
+    if not candidates:
+        if context is None or "ha_deg" in cols or "epoch_utc" not in context:
+            return None
+        from .proxies import proxy_aux
+
+        air = cols["air_temp_c"][mask].astype(float) if "air_temp_c" in cols else None
+        aux = proxy_aux(data.t_s, data.az_rad, data.el_rad, air, context["site"],
+                        context["epoch_utc"])
+        data = dataclasses.replace(data, aux=aux)
+        candidates = [t for t, term in PROXY_TERMS.items()
+                      if thermal_regressors((term,)) <= set(aux)]
+    selection = select_terms(data, base, candidates, fixed=fixed)
+    fit = fit_model(data, selection.terms, name=f"{name}+thermal", fixed=fixed)
+    notes = [f"thermal terms tested: {', '.join(candidates)} (family of "
+             f"{selection.n_family}); added: {', '.join(selection.accepted) or 'none'}"]
+    notes += [step.describe() for step in selection.steps]
+    return dataclasses.replace(fit, notes=tuple(notes))
+
+
+def day_minus_night(fits: Mapping[str, FitResult | None]) -> dict[str, tuple[float, float, str]]:
+    """Per term of fit A that fits D and E both fitted: the difference D - E (arcsec), its
+    sigma (the honest sigmas of D and E in quadrature), and a warning where the difference
+    exceeds ``SYSTEMATIC_SIGMAS`` of them: then the day's pointing differs from the night's
+    beyond the noise, and fit A's value is the pointing of the mixture, with a systematic
+    error that its statistical sigma does not include ("" otherwise)."""
+    a, d, e = fits.get("A"), fits.get("D"), fits.get("E")
+    if a is None or d is None or e is None:
+        return {}
+    out = {}
+    sd, se, sa = d.sigma_honest_arcsec, e.sigma_honest_arcsec, a.sigma_honest_arcsec
+    for j, term in enumerate(a.names):
+        if term in a.fixed or term not in d.names or term not in e.names:
+            continue
+        jd, je = d.names.index(term), e.names.index(term)
+        diff = float(d.values_arcsec[jd] - e.values_arcsec[je])
+        sigma = float(np.hypot(sd[jd], se[je]))
+        warn = ""
+        if np.isfinite(sigma) and sigma > 0 and abs(diff) > SYSTEMATIC_SIGMAS * sigma:
+            warn = (f"{term}: day minus night (fits D - E) {diff:+.1f}\" +- {sigma:.1f}\" "
+                    f"({diff / sigma:+.1f} sigma), against fit A's statistical sigma "
+                    f"{sa[j]:.1f}\": a systematic error (thermal?) that fit A's sigma does not "
+                    "include; fit A gives the pointing of the day and night mixed")
+        out[term] = (diff, sigma, warn)
     return out
