@@ -392,18 +392,18 @@ def _model(t: Table, default: str, base: Path, mount: MountConfig | None = None,
         model = PointingModel(spec)
     else:
         model = _model_file(t, spec, base)
-    unknown = set(values) - set(model.names)
-    if unknown:
-        name = sorted(unknown)[0]
-        raise values_table.error(name, values[name] / scale,
-                                 f"is not a term of model {model.name!r}",
-                                 f"its terms are {' '.join(model.names) or '(none)'}")
     thermal = thermal_terms_of(model)
     if thermal:
         raise t.error("model", spec, f"has thermal terms ({', '.join(thermal)}), which need "
                       "structure temperatures at every instant",
                       "the thermal effect is a [[truth.effects]] table; fit thermal terms, "
                       "do not give them as a model")
+    unknown = set(values) - set(model.names)
+    if unknown:
+        name = sorted(unknown)[0]
+        raise values_table.error(name, values[name] / scale,
+                                 f"is not a term of model {model.name!r}",
+                                 f"its terms are {' '.join(model.names) or '(none)'}")
     return model.with_values(values) if values else model
 
 

@@ -200,6 +200,7 @@ class KatcpAntenna:
         self._deferred: list[_Reply] = []  # integrations whose powers are not fetched yet
         #: encoders and weather read since the last command (virtual clock: they hold)
         self._readings: tuple[tuple[float, float], WeatherReading] | None = None
+        self._structure_names: tuple[str, ...] | None = None
 
     def _axis(self, prefix: str) -> tuple[float, float]:
         """An axis's speed (deg/s) and acceleration (deg/s^2) as ``?antenna`` gives them;
@@ -365,6 +366,23 @@ class KatcpAntenna:
 
     def feed_angle_deg(self) -> float:
         return float(self._request("feed-angle")[0][1])
+
+    @property
+    def structure_sensors(self) -> tuple[str, ...]:
+        """The antenna's structure temperature sensors (``?antenna``'s count; their names
+        from the first ``?structure-temperatures``)."""
+        if self._structure_names is None:
+            count = int(float(self.info.get("structure-temperatures", 0)))
+            self._structure_names = tuple(self.structure_temperatures()) if count else ()
+        return self._structure_names
+
+    def structure_temperatures(self) -> dict[str, float]:
+        """Every structure temperature sensor's reading now (C)."""
+        _, informs = self._request("structure-temperatures")
+        reading = {m.arguments[0].decode(): float(m.arguments[1]) for m in informs}
+        if self._structure_names is None:
+            self._structure_names = tuple(reading)
+        return reading
 
     # ------------------------------------------------------------------ tracking
     def track(self, trajectory: Trajectory, label: str = ""):

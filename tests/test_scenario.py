@@ -169,6 +169,13 @@ BAD = {
     "negative a-priori sky opacity": (
         [("zenith_opacity = 0.010\nt_atm_k", "zenith_opacity = -0.01\nt_atm_k")],
         "controller.sky.zenith_opacity", "-0.01"),
+    "unknown structure temperature sensor": (
+        [("[controller.search]", '[structure_sensors]\nnames = ["dish_fornt"]\n\n'
+                                 '[controller.search]')],
+        "structure_sensors.names", "'dish_fornt'"),
+    "negative structure sensor noise": (
+        [("[controller.search]", "[structure_sensors]\nnoise_k = -0.1\n\n[controller.search]")],
+        "structure_sensors.noise_k", "-0.1"),
     "source size switch not a boolean": (
         [("use_source_size = true", 'use_source_size = "yes"')],
         "controller.scan.use_source_size", "'yes'"),

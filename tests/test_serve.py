@@ -247,6 +247,7 @@ def test_a_track_whose_look_ahead_has_set_is_the_in_process_track(short_path):
     ("fomalont1973_s.toml", 6.0, "feed angles, one channel"),
     ("crane1981_140ft_4990.toml", 6.0, "equatorial mount, idle beyond a track's table"),
     ("wright1992_bima_ant5.toml", 3.0, "optical camera"),
+    ("ghigo1990_sensors.toml", 2.0, "structure temperatures read mid-scan"),
 ])
 def test_other_telescopes_over_the_wire(tmp_path, repo_root, write_scenario, name, hours,
                                        what):

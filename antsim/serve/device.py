@@ -36,7 +36,7 @@ from ..world.world import EPHEMERIS_MARGIN_S, World
 from .arguments import ArgumentError, at_most, integer, number, numbers, quoted
 from .clock import ClockSpec, OutOfTimeError, make_clock
 from .programtrack import ProgramTrack, TableError
-from .sensors import add_sensors, update_sensors
+from .sensors import add_sensors, set_structure, update_sensors
 
 if TYPE_CHECKING:
     from ..scenario import Scenario
@@ -112,7 +112,7 @@ class AntennaDevice(aiokatcp.DeviceServer):
         #: sensors are brought up to date only when read, not after every command
         self._watched = False
         self._sensors_stale = True
-        add_sensors(self.sensors, self.world.frame.is_altaz)
+        add_sensors(self.sensors, self.world.frame.is_altaz, self.antenna.structure_sensors)
         self.refresh_sensors()
 
     # ------------------------------------------------------------------ sensors
@@ -433,9 +433,15 @@ class AntennaDevice(aiokatcp.DeviceServer):
     async def request_structure_temperatures(self, ctx, *args: bytes):
         """Structure temperatures: ?structure-temperatures -> informs (name, C), count.
 
-        The count is 0 where the scenario has no structure temperature sensors."""
+        Every sensor read now (the ``structure.NAME`` sensors take the reading); the count is
+        0 where the scenario has no structure temperature sensors."""
         at_most(args, 0, "?structure-temperatures")
-        return (0,)
+        if not self.antenna.structure_sensors:
+            return (0,)
+        reading = self.antenna.structure_temperatures()
+        set_structure(self.sensors, reading, self._epoch_unix + float(self.antenna.clock_s()))
+        ctx.informs(reading.items())
+        return (len(reading),)
 
     @_request("reading")
     async def request_antenna(self, ctx, *args: bytes):
@@ -466,7 +472,7 @@ class AntennaDevice(aiokatcp.DeviceServer):
             "feed-speed-deg-s": m.feed_speed_deg_s,
             "channels": ",".join(self.antenna.channels),
             "camera": self.world.camera is not None,
-            "structure-temperatures": 0,
+            "structure-temperatures": len(self.antenna.structure_sensors),
         }
 
 

@@ -1,8 +1,10 @@
 """The sensors of `antsim serve`: what the simulated antenna reports, with KATCP's sampling
 strategies (the table in docs/katcp.md). Timestamps are the simulated UTC (Unix seconds).
 
-Structure temperature sensors (issue 25) will be ``structure.NAME`` (degC), added here where
-a scenario has them; the device's ``?structure-temperatures`` lists them.
+Structure temperature sensors are ``structure.NAME`` (degC), where the scenario has them
+(``[structure_sensors]``): each holds the latest reading, taken when a client asks for the
+temperatures (``?structure-temperatures``), as a logger the control system polls; updating
+them reads no thermometer (:func:`set_structure`).
 """
 
 from __future__ import annotations
@@ -11,7 +13,7 @@ import enum
 
 import aiokatcp
 
-__all__ = ["MountMode", "add_sensors", "update_sensors"]
+__all__ = ["MountMode", "add_sensors", "set_structure", "update_sensors"]
 
 
 class MountMode(enum.Enum):
@@ -23,8 +25,10 @@ class MountMode(enum.Enum):
     TRACKING = 3
 
 
-def add_sensors(sensors: aiokatcp.SensorSet, altaz: bool) -> None:
-    """The antenna's sensors (values set by :func:`update_sensors`)."""
+def add_sensors(sensors: aiokatcp.SensorSet, altaz: bool,
+                structure: tuple[str, ...] = ()) -> None:
+    """The antenna's sensors (values set by :func:`update_sensors`), and one per structure
+    temperature sensor (set by :func:`set_structure`)."""
     first, second = (("azimuth (North = 0, East = 90)", "elevation") if altaz
                      else ("hour angle (positive West)", "declination"))
     S = aiokatcp.Sensor
@@ -45,8 +49,17 @@ def add_sensors(sensors: aiokatcp.SensorSet, altaz: bool) -> None:
         S(float, "weather.wind-speed", "wind speed", "m/s"),
         S(str, "control.client", "address of the client that controls the antenna "
           "(empty: none)"),
+        *(S(float, f"structure.{name}", f"structure temperature {name} (latest reading)",
+            "degC") for name in structure),
     ):
         sensors.add(sensor)
+
+
+def set_structure(sensors: aiokatcp.SensorSet, reading: dict[str, float], stamp: float) -> None:
+    """The ``structure.NAME`` sensors to a reading of the structure temperatures (C) taken
+    at ``stamp`` (simulated UTC, Unix seconds)."""
+    for name, value in reading.items():
+        sensors[f"structure.{name}"].set_value(float(value), timestamp=stamp)
 
 
 def update_sensors(sensors: aiokatcp.SensorSet, world, busy: str | None, controller: str,

@@ -15,7 +15,7 @@ ThermalEffect`), never the deformation itself, with a real thermometer's imperfe
   what they see of a part is T_bulk +- half the part's difference;
 * **lag**: ``lag_s``, the first-order response of a sensor clamped to its member under a
   radiation shield;
-* **noise**: ``noise_k`` rms per reading, independent;
+* **noise**: ``noise_k`` rms per reading, independent (drawn for the time of the reading);
 * **resolution**: readings rounded to ``resolution_k``.
 
 Every number is an assumption (``docs/assumptions.md``, Structure temperature sensors).
@@ -131,6 +131,9 @@ class StructureSensors:
         self._slow = np.array(series)
         # the dish's differences through the sensors' lag (front-back, left-right)
         self._dish_state: tuple[float, float, float, float, float] | None = None
+        #: a reading's noise is drawn from this key and the time of the reading, so that
+        #: who reads when (a second client, a monitor) changes no other reading
+        self._noise_key = int(rng.integers(2**63))
 
     def true_coefficients(self) -> dict[str, float]:
         """The thermal effect's coefficients as the thermal terms of
@@ -192,11 +195,12 @@ class StructureSensors:
         slow = interp_rows(float(t_s), self.t_grid, self._slow)
         dish = dict(zip(("dish_fb", "dish_lr"), self._dish_lagged(float(t_s), az_rad, el_rad),
                         strict=True))
-        noise = self.rng.standard_normal(len(self.names)) * self.config.noise_k
+        draws = np.random.default_rng((self._noise_key, round(float(t_s) * 1e6)))
+        noise = draws.standard_normal(len(self.names)) * self.config.noise_k
         res = self.config.resolution_k
         out = {}
         for i, name in enumerate(self.names):
             part, side = _SIDES[name]
             value = float(slow[i]) + side * dish.get(part, 0.0) + float(noise[i])
-            out[name] = round(value / res) * res if res > 0 else value
+            out[name] = round(round(value / res) * res, 9) if res > 0 else value
         return out

@@ -1,0 +1,206 @@
+"""Structure temperature sensors (antsim.world.sensors): they read the temperatures that drive
+the thermal deformation, with their imperfections; the controller records them; the 1990
+antenna (no sensors) is unchanged; the KATCP server serves them."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+import simpy
+from conftest import SHORT_EDITS, edit_text
+
+from antsim.cli import main as cli_main
+from antsim.run.outputs import run_fits
+from antsim.run.runner import run_campaign, simulate
+from antsim.scenario import load_scenario
+from antsim.serve.process import ServerProcess
+from antsim.world.sensors import _lagged_step
+from antsim.world.world import World
+from controller.errors import InputError
+from controller.pointing.model import PointingModel
+from controller.pointing.modelio import model_to_json
+from controller.pointing.thermal import STRUCTURE_SENSORS, structure_column
+from controller.program.recordings import COLUMNS, read_recordings, recording_columns
+
+#: the sensors without imperfections: what they read is the structure's temperature
+IDEAL = (("noise_k = 0.05", "noise_k = 0.0"), ("resolution_k = 0.1", "resolution_k = 0.0"),
+         ("lag_s = 60.0", "lag_s = 0.0"), ("local_k = 0.3", "local_k = 0.0"))
+
+
+@pytest.fixture(scope="module")
+def sensors_text(repo_root) -> str:
+    return (repo_root / "scenarios" / "ghigo1990_sensors.toml").read_text(encoding="utf-8")
+
+
+@pytest.fixture(scope="module")
+def short_sensors(tmp_path_factory, sensors_text):
+    """The sensor scenario cut to its first 3 hours, as the 1990 one in conftest."""
+    path = tmp_path_factory.mktemp("sensors") / "short.toml"
+    path.write_text(edit_text(sensors_text, SHORT_EDITS), encoding="utf-8")
+    return path
+
+
+def test_the_sensor_scenario_is_the_1990_scenario_with_sensors(sensors_text, ghigo_text):
+    """Everything but the header (name, description, comments) and the [structure_sensors]
+    table is ghigo1990.toml's, line for line: the two cannot drift apart."""
+    def body(text: str) -> list[str]:
+        return text[text.index("[site]"):].splitlines()
+
+    ours, base = body(sensors_text), body(ghigo_text)
+    assert ours[:len(base)] == base
+    extra = "\n".join(ours[len(base):])
+    assert "[structure_sensors]" in extra and "[[" not in extra
+    assert load_scenario_text_name(sensors_text) == "ghigo1990_sensors"
+
+
+def load_scenario_text_name(text: str) -> str:
+    return next(line for line in text.splitlines() if line.startswith("name = ")).split('"')[1]
+
+
+def test_ideal_sensors_read_the_temperatures_that_bend_the_structure(short_sensors,
+                                                                      write_scenario):
+    """Without noise, resolution, lag or local wander, each pair's difference is the thermal
+    effect's own difference (yoke and pedestal on its grid, the dish at the instants it
+    advanced to), and a pair's mean is the bulk temperature: the sensors see the structure,
+    not its deformation."""
+    path = write_scenario(short_sensors.read_text(), IDEAL, "ideal.toml")
+    result = simulate(load_scenario(path))
+    world = result.world
+    sensors, thermal = world.sensors, world.sensors.thermal
+    t = 5000.3
+    r = sensors.read(t, 0.0, 0.5)
+    grid = thermal.t_grid
+    assert r["yoke_front"] - r["yoke_back"] == pytest.approx(
+        np.interp(t, grid, thermal.gradient_fb_k), abs=1e-9)
+    assert r["yoke_right"] - r["yoke_left"] == pytest.approx(
+        np.interp(t, grid, thermal.gradient_lr_k), abs=1e-9)
+    assert r["pedestal_east"] - r["pedestal_west"] == pytest.approx(
+        np.interp(t, grid, thermal.pedestal_e_k), abs=1e-9)
+    assert 0.5 * (r["pedestal_north"] + r["pedestal_south"]) == pytest.approx(
+        np.interp(t, grid, thermal.structure_c), abs=1e-9)
+    last = max(thermal.dish_log)
+    _, _, g_fb, g_lr = thermal.dish_log[last]
+    r = sensors.read(last, 0.0, 0.5)
+    assert r["dish_front"] - r["dish_back"] == pytest.approx(g_fb, abs=1e-9)
+    assert r["dish_right"] - r["dish_left"] == pytest.approx(g_lr, abs=1e-9)
+    assert abs(g_fb) > 0.1  # the Sun was up: the check compares something
+    assert result.truth["thermal_terms"]["TEDFB"] == thermal.p["dish_arcsec_per_k"]
+
+
+def test_a_lagged_sensor_follows_its_member_as_the_equations_say():
+    """The sensor's exact step (member relaxing towards f with tau_g, sensor lagging with
+    tau_s) against a fine Euler integration of the same two equations."""
+    s, g, f, tau_g, tau_s = 0.0, 4.0, -1.0, 180.0, 60.0
+    dt = 0.01
+    for _ in range(int(150.0 / dt)):
+        s += (g - s) / tau_s * dt
+        g += (f - g) / tau_g * dt
+    assert _lagged_step(0.0, 4.0, -1.0, 150.0, tau_g, tau_s) == pytest.approx(s, abs=2e-3)
+    equal = _lagged_step(0.0, 4.0, -1.0, 150.0, 60.0, 60.0)
+    assert equal == pytest.approx(_lagged_step(0.0, 4.0, -1.0, 150.0, 60.0 + 1e-6, 60.0),
+                                  abs=1e-6)
+    assert _lagged_step(0.0, 4.0, -1.0, 150.0, tau_g, 0.0) == pytest.approx(
+        -1.0 + 5.0 * math.exp(-150.0 / tau_g))
+
+
+def test_readings_have_the_resolution_and_noise_of_the_thermometers(short_sensors):
+    """Readings are whole tenths of a kelvin; a reading depends on its time only (twice at
+    one time: the same values); without the Sun the two faces of a part differ by the noise
+    alone, 0.05 K per sensor (quantised to 0.1 K: the difference's rms is about 0.1 K)."""
+    scenario = load_scenario(short_sensors)
+    world = World(scenario, simpy.Environment())
+    night = np.arange(40) * 97.0 + 30000.0  # after 01:20 UTC: Sun set, faces relaxed
+    readings = [world.sensors.read(t, 0.0, 0.5) for t in night]
+    assert readings[3] == world.sensors.read(night[3], 0.0, 0.5)
+    for r in readings:
+        assert all(abs(v * 10 - round(v * 10)) < 1e-6 for v in r.values())
+    diff = np.array([r["dish_front"] - r["dish_back"] for r in readings])
+    # rms of the quantised difference of two N(0, 0.05) readings: 0.07-0.13 K for 40 draws
+    assert 0.05 < np.sqrt(np.mean(diff ** 2)) < 0.15
+    assert set(readings[0]) == set(STRUCTURE_SENSORS)
+
+
+def test_sensors_change_nothing_of_the_world_and_are_recorded(short_sensors, short_ghigo_text,
+                                                              write_scenario, tmp_path):
+    """The same seed with and without sensors: the same scans and offsets (to 1e-8', the
+    last bits change with which integrations the antenna computes together when it reads
+    the dish's temperatures), the recordings gain the sensors' columns only; the 1990
+    antenna's columns are the 1990 set."""
+    plain = run_campaign(load_scenario(write_scenario(short_ghigo_text, (), "plain.toml")),
+                         tmp_path / "plain", show_progress=False)
+    withs = run_campaign(load_scenario(short_sensors), tmp_path / "sensors",
+                         show_progress=False)
+    assert len(plain.rows) == len(withs.rows) > 50
+    for a, b in zip(plain.rows, withs.rows, strict=True):
+        assert a["scan"] == b["scan"] and a["source"] == b["source"]
+        assert a["xel_arcmin"] == pytest.approx(b["xel_arcmin"], abs=1e-8)
+        assert a["el_arcmin"] == pytest.approx(b["el_arcmin"], abs=1e-8)
+    assert recording_columns() == COLUMNS
+    names = read_recordings(tmp_path / "plain" / "recordings.ecsv").colnames
+    assert not any(c.startswith("temp_") for c in names)
+    table = read_recordings(tmp_path / "sensors" / "recordings.ecsv")
+    extra = [c for c in table.colnames if c not in names]
+    assert len(extra) == 2 + 2 * len(STRUCTURE_SENSORS)
+    assert table[structure_column("dish_front", "el")].unit == "deg_C"
+    gap = np.asarray(table["temp_el_t_s"]) - np.asarray(table["temp_xel_t_s"])
+    assert np.all((gap > 80.0) & (gap < 140.0))  # one half of a cross scan apart
+    assert table.meta["structure_sensors"]["lag_s"] == 60.0
+    truth = json.loads((tmp_path / "sensors" / "truth.json").read_text())
+    assert "thermal_terms" in truth and "thermal_terms" not in plain.truth
+
+
+def test_fit_t_of_a_sunny_day_with_sensors(repo_root):
+    """The 24-hour run with sensors (seed 1): fit T adds the dish's two terms (the day's
+    largest errors: 20"/K of up to 5 K) with values within 3 honest sigma of the truth, and
+    its Sky RMS is lower than fit A's (by 8% at this seed)."""
+    result = simulate(load_scenario(repo_root / "scenarios" / "ghigo1990_sensors.toml"))
+    fits = run_fits(result)
+    fit_t, truth = fits["T"], result.truth["thermal_terms"]
+    assert {"TEDFB", "TSDRL"} <= set(fit_t.names[10:])
+    for name in fit_t.names[10:]:
+        j = fit_t.names.index(name)
+        assert abs(fit_t.values_arcsec[j] - truth[name]) < 3 * fit_t.sigma_honest_arcsec[j]
+    assert fit_t.sky_rms_arcsec < 0.95 * fits["A"].sky_rms_arcsec
+    assert fit_t.notes[0].startswith("thermal terms tested: TEDFB, TSDRL")
+
+
+def test_a_model_with_thermal_terms_is_refused_as_the_controller_model(
+        tmp_path, short_ghigo_text, write_scenario, capsys):
+    """The controller applies no thermal model (it would need the temperatures at every
+    instant): --model and a scenario's model file with TEDFB are one line, status 2."""
+    model = tmp_path / "thermal.json"
+    model.write_text(json.dumps(model_to_json(PointingModel(["W1", "TEDFB"], [-100.0, 20.0]))))
+    path = write_scenario(short_ghigo_text, (), "short.toml")
+    code = cli_main(["run", str(path), "--out", str(tmp_path / "out"), "--model", str(model)])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.splitlines()) == 1 and "thermal terms (TEDFB)" in err
+    in_file = write_scenario(short_ghigo_text, [('model = "ghigo10"\nunits = "arcmin"\n'
+                                                 '[controller.terms]',
+                                                 f'model = "{model}"\n[controller.terms]')],
+                             "in_file.toml")
+    with pytest.raises(InputError, match=r"controller.model.*thermal terms"):
+        load_scenario(in_file)
+
+
+def test_the_server_serves_the_structure_temperatures(short_sensors):
+    """?antenna counts the sensors, ?structure-temperatures reads them (one inform each),
+    and the structure.NAME sensors hold that reading."""
+    from test_serve import LineClient
+
+    with ServerProcess(short_sensors) as srv:
+        client = LineClient(srv.port)
+        try:
+            _, informs = client.request("?antenna")
+            assert "#antenna structure-temperatures 12" in informs
+            client.request("?wait 3600")
+            reply, informs = client.request("?structure-temperatures")
+            assert reply == "!structure-temperatures ok 12"
+            reading = dict(line.split()[1:3] for line in informs)
+            assert set(reading) == set(STRUCTURE_SENSORS)
+            reply, informs = client.request("?sensor-value structure.dish_front")
+            assert informs[0].split()[-1] == reading["dish_front"]
+        finally:
+            client.close()
