@@ -108,12 +108,20 @@ class Scenario:
 
     def truth_arcsec(self, names) -> dict[str, float]:
         """The injected value (arcsec) of each fitted term of ``names``: the truth model's, 0
-        where it has none. On an equatorial mount Crane's C5 is the world's refraction scale
-        (:mod:`controller.pointing.crane`), not a term of the truth model: its truth is the
-        ``refraction_anomaly`` effect's scale (1 without one), at 60" per unit."""
+        where it has none; with structure sensors, the thermal terms' the thermal effect's
+        (:func:`antsim.world.sensors.thermal_truth`). On an equatorial mount Crane's C5 is the
+        world's refraction scale (:mod:`controller.pointing.crane`), not a term of the truth
+        model: its truth is the ``refraction_anomaly`` effect's scale (1 without one), at 60"
+        per unit."""
         from controller.pointing.crane import REFRACTION_SCALE_TERM
 
         truth = self.truth_model.as_dict()
+        if self.structure_sensors is not None:  # thermal terms: the thermal effect's
+            from .world.sensors import thermal_truth
+
+            for effect in self.effects:
+                if effect.name == "thermal":
+                    truth = {**thermal_truth(effect.params), **truth}
         out = {n: float(truth.get(n, 0.0)) for n in names}
         if self.mount.kind == "equatorial" and REFRACTION_SCALE_TERM in out:
             scales = [e.params.get("scale", 1.0) for e in self.effects

@@ -473,3 +473,31 @@ def test_answers_duration_sources_and_separation(write_plan):
                 if abs(corr[i, j]) > 0.95}
     assert {tuple(p["terms"]) for p in separation["pairs"]} == expected
     assert "duration:" in result.text() and "sources:" in result.text()
+
+
+def test_a_plan_with_sensors_fits_thermal_terms(write_plan, repo_root, write_scenario,
+                                                 short_ghigo_text):
+    """A variant on the antenna with sensors that fits the dish's thermal terms (3 hours of
+    the 1990 afternoon): the prediction reads the deterministic run's sensors, the members
+    are fitted with them; the heating's bias of W1, large without them (the sunny
+    afternoon's +50" and more), shrinks with them (scenarios/plans/ghigo1990_sensors_whatif
+    .toml asks it of 20 days). A source-list question cannot be asked of such a variant."""
+    from conftest import SHORT_EDITS, edit_text
+
+    text = (repo_root / "scenarios" / "ghigo1990_sensors.toml").read_text(encoding="utf-8")
+    sensors = write_scenario(edit_text(text, SHORT_EDITS), name="sensors.toml")
+    thermal = (f'scenario = "{sensors.as_posix()}"\n'
+               'fit_model = "W1,W2,W3,W4,W5,W6,W7,W8,W9,W10,TEDFB,TSDRL"\n')
+    more = f'[[variants]]\nname = "plain"\nscenario = "{sensors.as_posix()}"\n'
+    plan = load_plan(write_plan(members=2, block=2, variant=thermal, more=more))
+    result = run_plan(plan, workers=0, progress=False)
+    with_terms, plain = result.variants
+    assert list(with_terms.terms[-2:]) == ["TEDFB", "TSDRL"]
+    pred = with_terms.prediction
+    assert np.all(np.isfinite(pred.sigma_arcsec))
+    assert abs(plain.prediction.bias_arcsec[0]) > 50.0
+    assert abs(pred.bias_arcsec[0]) < 0.5 * abs(plain.prediction.bias_arcsec[0])
+    bad = write_plan(members=2, block=2, variant=thermal,
+                     more='[[answers.sources]]\nbased_on = "as run"\n', name="bad.toml")
+    with pytest.raises(InputError, match="fits thermal terms"):
+        load_plan(bad)

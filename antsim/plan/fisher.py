@@ -47,6 +47,7 @@ import numpy as np
 
 from antsim.world.effects.tracking import TrackingJitter
 from controller.pointing.model import PointingModel
+from controller.pointing.thermal import sensor_aux, structure_sensor_names
 
 from .vectorized import MemberEngine, SharedSchedule
 
@@ -155,15 +156,20 @@ def truth_vector(scenario, terms) -> np.ndarray:
     return np.array([truth[n] for n in names])
 
 
-def _design(columns: dict[str, np.ndarray], terms, rows: np.ndarray) -> np.ndarray:
+def _design(columns: dict[str, np.ndarray], terms, rows: np.ndarray,
+            sensor_lag_s: float = 0.0) -> np.ndarray:
     """Design matrix of the fit (2n x m: cross-axis rows then the second axis' rows), as the
-    fitter builds it: on an equatorial mount's hour angle and declination when the rows
-    carry them (:func:`controller.pointing.variants.pointing_data`), else azimuth and
-    elevation."""
+    fitter builds it (:func:`controller.pointing.variants.pointing_data`): on an equatorial
+    mount's hour angle and declination when the rows carry them, else azimuth and
+    elevation; thermal terms read the rows' structure temperatures, corrected for the
+    sensors' response time ``sensor_lag_s``."""
     lon, lat = ("ha_deg", "dec_deg") if "ha_deg" in columns else ("az_deg", "el_deg")
     az = np.radians(columns[lon][rows].astype(float))
     el = np.radians(columns[lat][rows].astype(float))
-    basis_az, basis_el = PointingModel(list(terms)).design_matrix(az, el)
+    sensors = structure_sensor_names(list(columns))
+    aux = sensor_aux({k: v[rows] for k, v in columns.items() if k.startswith("temp_")},
+                     sensors, sensor_lag_s) if sensors else None
+    basis_az, basis_el = PointingModel(list(terms)).design_matrix(az, el, aux=aux)
     return np.vstack([basis_az * np.cos(el)[:, None], basis_el])
 
 
@@ -432,7 +438,7 @@ def predict(shared: SharedSchedule, terms: Sequence[str], noise: NoiseModel,
     keep_scan = np.ones(scans.size, bool) if n_scans is None else scans < n_scans
     n = int(keep_scan.sum())
     unit_keep = np.concatenate([keep_scan, keep_scan])
-    a_full = _design(sh.columns, terms, scans)  # (2 n_all, m)
+    a_full = _design(sh.columns, terms, scans, sh.sensor_lag_s)  # (2 n_all, m)
     a = a_full[unit_keep]
     m = len(terms)
     ata = a.T @ a

@@ -363,6 +363,12 @@ def _coverage(t: Table, key: str, names: list[str], scenarios) -> CoverageQuesti
 def _sources(t: Table, key: str, names: list[str], scenarios) -> SourcesQuestion:
     scenario = _scenario_for(t, "based_on", names, scenarios)
     fitted = _fitted_names(scenario)
+    thermal = [n for n in fitted if get_term(n).kind == "thermal"]
+    if thermal:
+        raise t.error("based_on", t.string("based_on"), f"fits thermal terms "
+                      f"({', '.join(thermal)}); the source lists are ranked on positions "
+                      "alone, without the structure temperatures those terms read",
+                      "ask it of a variant that fits the position terms only")
     terms = _terms(t, "terms", fitted=fitted)
     for term in terms:
         if term not in fitted:

@@ -42,15 +42,20 @@ QUIET_PARAMS: dict[str, dict[str, float]] = {
 def quiet_scenario(scenario: Scenario) -> Scenario:
     """``scenario`` with its noise switched off: no gain fluctuations, negligible radiometer
     noise, no weather wander, no jitter or gusts, thermal forcing at its mean (no clouds,
-    no lateral forcing). Its campaign is the deterministic simulation of the plan."""
+    no lateral forcing), structure sensors without noise or local wander (their resolution
+    and lag stay). Its campaign is the deterministic simulation of the plan."""
     rec = scenario.receiver
     receiver = replace(rec, gain_fluctuation=0.0, bandwidth_mhz=QUIET_BANDWIDTH_MHZ,
                        channels=tuple(ChannelConfig(c.name, c.tsys_k, 0.0)
                                       for c in rec.channels))
     effects = tuple(EffectSpec(e.name, {**e.params, **QUIET_PARAMS.get(e.name, {})})
                     for e in scenario.effects)
+    sensors = scenario.structure_sensors
+    if sensors is not None:  # the thermometers' noise and their members' wander off too
+        sensors = replace(sensors, noise_k=0.0, local_k=0.0)
     return replace(scenario, receiver=receiver, effects=effects,
-                   weather=replace(scenario.weather, wander_rms_c=0.0))
+                   weather=replace(scenario.weather, wander_rms_c=0.0),
+                   structure_sensors=sensors)
 
 
 @dataclass
@@ -83,6 +88,8 @@ class SharedSchedule:
     #: the sky emission the controller subtracted before each scan's reduction (K),
     #: (scans, axes, channels, positions); None when it subtracted none
     scan_sky_k: np.ndarray | None = None
+    #: the structure sensors' response time the fits correct for (s; 0: none)
+    sensor_lag_s: float = 0.0
 
     @property
     def n_integrations(self) -> int:
@@ -156,6 +163,8 @@ def record_schedule(quiet: Scenario, seed: int = 0,
              "applied_el_arcmin", "sun_el_deg", "t_s", "xel_arcmin", "el_arcmin", "good")
     # an equatorial mount's rows also carry hour angle and declination, which its fit uses
     names += tuple(n for n in ("ha_deg", "dec_deg") if avg and n in avg[0])
+    # structure temperatures, which thermal terms of the fit read
+    names += tuple(n for n in (avg[0] if avg else ()) if n.startswith("temp_"))
     columns = {n: np.array([r[n] for r in avg]) for n in names}
     columns["polarization"] = np.array(["AVG"] * len(avg))
     shared = SharedSchedule(
@@ -165,7 +174,8 @@ def record_schedule(quiet: Scenario, seed: int = 0,
         paths=[it["paths"] for it in recorder.items], scan_int=scan_int,
         scan_times=scan_times, columns=columns, sources=[r["source"] for r in avg],
         searches=int(program.searches), duration_s=quiet.duration_s, scan_spans_s=spans,
-        wall_s=wall, channels=tuple(run.world.antenna.channels), scan_sky_k=_scan_sky(program))
+        wall_s=wall, channels=tuple(run.world.antenna.channels), scan_sky_k=_scan_sky(program),
+        sensor_lag_s=quiet.controller.structure_lag_s)
     return shared, run
 
 

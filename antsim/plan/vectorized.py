@@ -272,14 +272,17 @@ class MemberResults:
         return cls(**{k: v[order] for k, v in joined.items()})
 
 
-def fit_rows(columns: dict[str, np.ndarray], terms: Sequence[str], name: str):
-    """Fit A of recording columns (None when too few observations)."""
+def fit_rows(columns: dict[str, np.ndarray], terms: Sequence[str], name: str,
+             sensor_lag_s: float = 0.0):
+    """Fit A of recording columns (None when too few observations); thermal terms read the
+    structure temperatures, corrected for the sensors' response time ``sensor_lag_s``."""
     mask = variant_mask(columns, FIT_A)
     n = int(mask.sum())
     if n == 0 or 2 * n <= len(terms):
         return None
     try:
-        return fit_model(pointing_data(columns, mask), terms, robust=FIT_A.filtered, name=name)
+        return fit_model(pointing_data(columns, mask, sensor_lag_s), terms,
+                         robust=FIT_A.filtered, name=name)
     except ValueError:
         return None
 
@@ -563,7 +566,8 @@ class MemberEngine:
         diverged = self.diverges(reduced)
         keep = [m for m in range(len(members)) if not diverged[m]]
         results = _results([members[m] for m in keep],
-                           [fit_rows(self.member_columns(reduced, m), self.terms, self.fit_name)
+                           [fit_rows(self.member_columns(reduced, m), self.terms, self.fit_name,
+                                     self.shared.sensor_lag_s)
                             for m in keep], len(self.terms), full=False)
         return results, [members[m] for m in range(len(members)) if diverged[m]]
 
@@ -591,7 +595,9 @@ def full_member(scenario: Scenario, member: int, seed: int, terms: Sequence[str]
     """A member simulated in full (its own schedule) and fitted as fit A."""
     run = simulate(scenario, seed=seed)
     cols = {k: np.asarray(v) for k, v in _columns(run.rows).items()}
-    return _results([member], [fit_rows(cols, terms, fit_name)], len(terms), full=True)
+    return _results([member], [fit_rows(cols, terms, fit_name,
+                                        scenario.controller.structure_lag_s)],
+                    len(terms), full=True)
 
 
 def _columns(rows: list[dict]) -> dict[str, np.ndarray]:

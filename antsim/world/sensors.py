@@ -50,7 +50,7 @@ from .effects.thermal import (
     relax,
 )
 
-__all__ = ["SensorConfig", "StructureSensors"]
+__all__ = ["SensorConfig", "StructureSensors", "thermal_truth"]
 
 #: a sensor's part of the structure and which side of its difference it is on
 _SIDES = {
@@ -77,6 +77,19 @@ class SensorConfig:
     local_k: float = 0.3
     local_timescale_s: float = 1800.0
     notes: tuple[str, ...] = field(default=(), compare=False)
+
+
+def thermal_truth(params: dict[str, float]) -> dict[str, float]:
+    """A thermal effect's coefficients (its parameters ``params``) as the thermal terms of
+    :mod:`controller.pointing.thermal` express them (arcsec per kelvin of the sensors'
+    difference, indicated minus true): each pair's difference is its part's difference
+    (without the sensors' imperfections), so TEDFB and TSDRL are the dish's arcsec per
+    kelvin, TEYFB and TSYRL the yoke's, TNPNS, TWPEW and TTILT the pedestal's tilt per
+    kelvin."""
+    return {"TEDFB": params["dish_arcsec_per_k"], "TSDRL": params["dish_arcsec_per_k"],
+            "TEYFB": params["el_arcsec_per_k"], "TSYRL": params["xel_arcsec_per_k"],
+            "TNPNS": params["tilt_arcsec_per_k"], "TWPEW": params["tilt_arcsec_per_k"],
+            "TTILT": params["tilt_arcsec_per_k"]}
 
 
 def _lagged_step(s0: float, g0: float, f: float, dt: float, tau_g: float,
@@ -136,19 +149,9 @@ class StructureSensors:
         self._noise_key = int(rng.integers(2**63))
 
     def true_coefficients(self) -> dict[str, float]:
-        """The thermal effect's coefficients as the thermal terms of
-        :mod:`controller.pointing.thermal` express them (arcsec per kelvin of the sensors'
-        difference, indicated minus true): each pair's difference is its part's difference
-        (without the sensors' imperfections), so TEDFB and TSDRL are the dish's arcsec per
-        kelvin, TEYFB and TSYRL the yoke's, TNPNS, TWPEW and TTILT the pedestal's tilt per
-        kelvin. Empty without a thermal effect."""
-        if self.thermal is None:
-            return {}
-        p = self.thermal.p
-        return {"TEDFB": p["dish_arcsec_per_k"], "TSDRL": p["dish_arcsec_per_k"],
-                "TEYFB": p["el_arcsec_per_k"], "TSYRL": p["xel_arcsec_per_k"],
-                "TNPNS": p["tilt_arcsec_per_k"], "TWPEW": p["tilt_arcsec_per_k"],
-                "TTILT": p["tilt_arcsec_per_k"]}
+        """The thermal effect's coefficients as the thermal terms express them
+        (:func:`thermal_truth`); empty without a thermal effect."""
+        return {} if self.thermal is None else thermal_truth(self.thermal.p)
 
     # ------------------------------------------------------------------ the dish
     def _dish_lagged(self, t_s: float, az_rad: float, el_rad: float) -> tuple[float, float]:
