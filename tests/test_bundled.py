@@ -49,7 +49,7 @@ def test_an_unknown_name_is_one_line_with_the_valid_names():
     with pytest.raises(InputError, match=r"^/no/such/dir/x.toml: SCENARIO = "):
         find("/no/such/dir/x.toml")
     with pytest.raises(InputError, match="plans that come with antsim: crane1981_days "
-                                         "ghigo1990_whatif"):
+                                         "ghigo1990_sensors_whatif ghigo1990_whatif"):
         find("whatif", "plan")
 
 

@@ -14,10 +14,12 @@ from controller.pointing.fitting import fit_model
 from controller.pointing.model import PointingModel
 from controller.pointing.proxies import PROXY_NAMES, proxy_aux
 from controller.pointing.selection import select_terms
+from controller.pointing.signs import sign_convention
 from controller.pointing.terms import get_term
 from controller.pointing.thermal import (
     PROXY_TERMS,
     SENSOR_TERMS,
+    THERMAL_TERMS,
     sensor_aux,
     structure_column,
     structure_time_column,
@@ -56,6 +58,9 @@ def test_terms_are_the_shapes_of_the_1990_model_times_a_difference():
         x_g, e_g = _errors(geo, az, el, None)
         np.testing.assert_allclose(x_t, x_g * diff, atol=1e-9, err_msg=thermal)
         np.testing.assert_allclose(e_t, e_g * diff, atol=1e-9, err_msg=thermal)
+    # every output states their sign: indicated minus true, as the W's
+    assert "thermal terms" in sign_convention(THERMAL_TERMS)
+    assert "TPOINT's:" not in sign_convention(THERMAL_TERMS)
     ttilt = get_term("TTILT")
     assert ttilt.components == SENSOR_TERMS["TNPNS"].components \
         + SENSOR_TERMS["TWPEW"].components

@@ -9,8 +9,13 @@
   A-F of one campaign;
 * files: :mod:`.tpoint` (TPOINT data and ``.mod`` files), :mod:`.modelio` (named models,
   ``.mod`` files and ``fit.json`` loaded as models), :mod:`.vocabulary` (a model in TPOINT's
-  names and signs for a file), :mod:`.signs` (the units and sign of any model in words).
+  names and signs for a file), :mod:`.signs` (the units and sign of any model in words);
+* thermal: :mod:`.thermal` (terms in structure temperatures, imported here so that every
+  term name is known wherever a term is looked up), :mod:`.proxies` (their proxies),
+  :mod:`.selection` (which extra terms the data support: fit T).
 
 May import: :mod:`controller.astro`, :mod:`controller.errors`, :mod:`controller.units`;
 never the scans, the program or the protocol.
 """
+
+from . import thermal  # noqa: F401  (registers the thermal terms with terms.get_term)

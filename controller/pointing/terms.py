@@ -569,17 +569,29 @@ KATPOINT_EQUIVALENTS: dict[str, tuple[str, float]] = {
 }
 
 
+#: terms other modules build from this one's pieces (controller.pointing.thermal's, which
+#: the package imports first): name -> term
+_REGISTERED: dict[str, Term] = {}
+
+
+def register_terms(terms: dict[str, Term]) -> None:
+    """Make ``terms`` known to :func:`get_term` by name (names must be new)."""
+    clash = sorted(set(terms) & (set(_FIXED) | set(_REGISTERED)))
+    if clash:
+        raise ValueError(f"term names already taken: {', '.join(clash)}")
+    _REGISTERED.update(terms)
+    get_term.cache_clear()
+
+
 @lru_cache(maxsize=512)
 def get_term(name: str) -> Term:
     """The term called ``name`` (TPOINT name, harmonic, W1..W10, P1..P22, Wright's
     A1..A7, B1..B7, or a thermal term of :mod:`controller.pointing.thermal`)."""
-    from .thermal import THERMAL_TERMS  # it builds its terms from this module's pieces
-
     key = name.strip().upper()
     if key in _FIXED:
         return _FIXED[key]
-    if key in THERMAL_TERMS:
-        return THERMAL_TERMS[key]
+    if key in _REGISTERED:
+        return _REGISTERED[key]
     term = _harmonic(key)
     if term is None:
         raise TermError(

@@ -40,7 +40,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from .terms import COS_AN, SIN_AN, TAN_E, Regressor, Term
+from .terms import COS_AN, SIN_AN, TAN_E, Regressor, Term, register_terms
 
 __all__ = ["PROXY_TERMS", "SENSOR_PAIRS", "SENSOR_TERMS", "STRUCTURE_SENSORS", "THERMAL_TERMS",
            "sensor_aux", "structure_column", "structure_sensor_names", "structure_time_column",
@@ -124,6 +124,7 @@ SENSOR_TERMS: dict[str, Term] = _sensor_terms()
 #: terms in proxies (arcsec per unit of the proxy; :mod:`controller.pointing.proxies`)
 PROXY_TERMS: dict[str, Term] = _proxy_terms()
 THERMAL_TERMS: dict[str, Term] = {**SENSOR_TERMS, **PROXY_TERMS}
+register_terms(THERMAL_TERMS)  # get_term knows them by name (the package imports this first)
 
 AXES_RECORDED = ("xel", "el")
 
