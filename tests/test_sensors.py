@@ -123,16 +123,22 @@ def test_readings_have_the_resolution_and_noise_of_the_thermometers(short_sensor
     assert set(readings[0]) == set(STRUCTURE_SENSORS)
 
 
-def test_sensors_change_nothing_of_the_world_and_are_recorded(short_sensors, short_ghigo_text,
-                                                              write_scenario, tmp_path):
+@pytest.fixture(scope="module")
+def short_runs(tmp_path_factory, short_sensors, short_ghigo_text):
+    """The 3-hour campaign without and with sensors (seed 1): results and directories."""
+    out = tmp_path_factory.mktemp("runs")
+    (out / "plain.toml").write_text(short_ghigo_text, encoding="utf-8")
+    plain = run_campaign(load_scenario(out / "plain.toml"), out / "plain", show_progress=False)
+    withs = run_campaign(load_scenario(short_sensors), out / "sensors", show_progress=False)
+    return plain, withs, out
+
+
+def test_sensors_change_nothing_of_the_world_and_are_recorded(short_runs):
     """The same seed with and without sensors: the same scans and offsets (to 1e-8', the
     last bits change with which integrations the antenna computes together when it reads
     the dish's temperatures), the recordings gain the sensors' columns only; the 1990
     antenna's columns are the 1990 set."""
-    plain = run_campaign(load_scenario(write_scenario(short_ghigo_text, (), "plain.toml")),
-                         tmp_path / "plain", show_progress=False)
-    withs = run_campaign(load_scenario(short_sensors), tmp_path / "sensors",
-                         show_progress=False)
+    plain, withs, tmp_path = short_runs
     assert len(plain.rows) == len(withs.rows) > 50
     for a, b in zip(plain.rows, withs.rows, strict=True):
         assert a["scan"] == b["scan"] and a["source"] == b["source"]
@@ -150,6 +156,23 @@ def test_sensors_change_nothing_of_the_world_and_are_recorded(short_sensors, sho
     assert table.meta["structure_sensors"]["lag_s"] == 60.0
     truth = json.loads((tmp_path / "sensors" / "truth.json").read_text())
     assert "thermal_terms" in truth and "thermal_terms" not in plain.truth
+
+
+def test_antsim_fit_reads_the_structure_temperatures(short_runs, capsys):
+    """`antsim fit --terms ...,TEDFB` fits the recorded temperatures (corrected for the
+    sensors' lag, as fit T); on recordings without sensors it is one line naming what is
+    missing, status 2; proxies need no sensors."""
+    _, _, out = short_runs
+    terms = ",".join([*(f"W{i}" for i in range(1, 11)), "TEDFB"])
+    assert cli_main(["fit", str(out / "sensors" / "recordings.ecsv"), "--terms", terms,
+                     "--json"]) == 0
+    fitted = json.loads(capsys.readouterr().out)["terms"]
+    assert math.isfinite(fitted["TEDFB"]["sigma_honest_arcsec"])
+    assert cli_main(["fit", str(out / "plain" / "recordings.ecsv"), "--terms", terms]) == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and "dish_back, dish_front" in err
+    assert cli_main(["fit", str(out / "plain" / "recordings.ecsv"), "--terms",
+                     terms.replace("TEDFB", "TEFACE")]) == 0
 
 
 def test_fit_t_of_a_sunny_day_with_sensors(repo_root):

@@ -69,7 +69,8 @@ def _terms_from_option(text: str) -> tuple[str, ...]:
         if not is_term_name(name):
             raise InputError("command line", "--terms", name, "unknown pointing term",
                              "use TPOINT names (IA IE CA NPAE AN AW TF TX ...), harmonics "
-                             "such as HESA2, W1..W10 or P1..P22")
+                             "such as HESA2, W1..W10, P1..P22 or thermal terms (TEDFB ...: "
+                             "docs/assumptions.md)")
     duplicates = sorted({n for n in names if names.count(n) > 1})
     if duplicates:
         raise InputError("command line", "--terms", ",".join(duplicates), "listed twice")
@@ -115,12 +116,22 @@ def _terms_from_model(spec: str) -> tuple[tuple[str, ...], str]:
     return model.names, path.stem
 
 
-def _read_data(path: Path, fmt: str, include_masked: bool, mount: str | None, say):
+def _read_data(path: Path, fmt: str, include_masked: bool, mount: str | None, say,
+               terms=()):
     """The pointing data of a TPOINT file or recordings; a TPOINT reader's notes (how a file
-    without a mount option was read) go to ``say``."""
+    without a mount option was read) go to ``say``. Thermal terms among ``terms`` read the
+    recordings' structure temperatures, or proxies (their site and times)."""
+    from controller.pointing.model import PointingModel
+    from controller.pointing.proxies import PROXY_NAMES
+
+    needed = PointingModel(list(terms)).regressors if terms else frozenset()
     if fmt == "tpoint":
         from controller.pointing.tpoint import read_tpoint
 
+        if needed:
+            raise InputError(str(path), "--terms", ",".join(terms),
+                             "thermal terms need recordings with structure temperatures or "
+                             "with times and a site (antsim's ECSV), not a TPOINT file")
         data = read_tpoint(path, mount=mount)
         for note in data.notes:
             say(f"note: {note}")
@@ -136,7 +147,14 @@ def _read_data(path: Path, fmt: str, include_masked: bool, mount: str | None, sa
         raise InputError(str(path), "format", "ECSV",
                          "ECSV support arrives with the recordings module "
                          "(controller.program.recordings), which is not installed yet") from None
-    return recordings.read_pointing_data(path)
+    data = recordings.read_pointing_data(path, proxies=bool(needed & set(PROXY_NAMES)))
+    missing = sorted(needed - set(data.aux or {}))
+    if missing:
+        raise InputError(str(path), "--terms", ",".join(terms),
+                         f"thermal terms read {', '.join(missing)}, which these recordings do "
+                         "not have", "fit them to recordings of an antenna with structure "
+                         "temperature sensors (columns temp_*)")
+    return data
 
 
 def main(args: argparse.Namespace) -> int:
@@ -166,7 +184,7 @@ def main(args: argparse.Namespace) -> int:
     with Progress("fit", args.progress) as progress:
         progress.stage("reading")
         data = _read_data(path, fmt, args.include_masked, args.mount,
-                          say=lambda text: progress.write(text, file=sys.stderr))
+                          say=lambda text: progress.write(text, file=sys.stderr), terms=terms)
         progress.stage(f"fitting {len(data)} observations")
         try:
             result = fit_model(data, terms, robust=not args.no_robust, name=model_name,

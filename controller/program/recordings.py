@@ -288,9 +288,14 @@ def total_errors_arcsec(table) -> tuple[np.ndarray, np.ndarray]:
     return xel, el
 
 
-def read_pointing_data(path: str | Path, polarization: str = "AVG", good_only: bool = True):
-    """Recordings as :class:`controller.pointing.data.PointingData` of total pointing errors."""
+def read_pointing_data(path: str | Path, polarization: str = "AVG", good_only: bool = True,
+                       proxies: bool = False):
+    """Recordings as :class:`controller.pointing.data.PointingData` of total pointing errors,
+    with the structure temperatures where the recordings have them (corrected for the
+    sensors' response time in the metadata) and, with ``proxies``, the proxies of
+    :mod:`controller.pointing.proxies` (they need the metadata's site and epoch)."""
     from controller.pointing.data import PointingData
+    from controller.pointing.thermal import sensor_aux, structure_sensor_names
 
     table = read_recordings(path)
     mask = np.asarray(table["polarization"]) == polarization
@@ -302,11 +307,31 @@ def read_pointing_data(path: str | Path, polarization: str = "AVG", good_only: b
                          "no usable rows for this polarization")
     xel, el = total_errors_arcsec(sel)
     lon, lat = ("ha_deg", "dec_deg") if "ha_deg" in sel.colnames else ("az_deg", "el_deg")
+    sensors = structure_sensor_names(sel.colnames)
+    meta = table.meta
+    lag = float((meta.get("structure_sensors") or {}).get("lag_s", 0.0))
+    aux = sensor_aux({c: np.asarray(sel[c]) for c in sel.colnames}, sensors, lag) \
+        if sensors else {}
+    az = np.radians(np.asarray(sel[lon], dtype=float))
+    el_rad = np.radians(np.asarray(sel[lat], dtype=float))
+    if proxies:
+        if not isinstance(meta.get("site"), dict) or "epoch_utc" not in meta \
+                or "t_s" not in sel.colnames:
+            raise InputError(str(path), "metadata", "site, epoch_utc",
+                             "the proxies of thermal terms need the site, the epoch and the "
+                             "times of the recordings")
+        from controller.pointing.proxies import proxy_aux
+
+        air = np.asarray(sel["air_temp_c"], dtype=float) if "air_temp_c" in sel.colnames \
+            else None
+        aux |= proxy_aux(np.asarray(sel["t_s"], dtype=float), az, el_rad, air, meta["site"],
+                         meta["epoch_utc"])
     return PointingData(
-        az_rad=np.radians(np.asarray(sel[lon], dtype=float)),
-        el_rad=np.radians(np.asarray(sel[lat], dtype=float)),
+        az_rad=az,
+        el_rad=el_rad,
         xel_arcsec=xel,
         el_arcsec=el,
         feed_rad=(np.radians(np.asarray(sel["feed_angle_deg"], dtype=float))
                   if "feed_angle_deg" in sel.colnames else None),
+        aux=aux or None,
     )
