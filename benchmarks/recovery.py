@@ -31,8 +31,9 @@ terms the data support in the sensors' temperatures, corrected for their respons
 Targets: every W within 3 honest sigma in >= 99% of seeds, mean pull within +-0.3, pull
 spread 0.85-1.15; fit D's elevation rms (with fit T's terms) within 15% of fit E's, beside
 the same ratio without heating (the wind by day is the floor). It also fits the thermal terms
-without the response-time correction (what the sensors' lag alone does), and prints how often
-each thermal term was selected and how well its coefficient is recovered. (5) Without
+without the response-time correction (what the sensors' lag alone does) and with all six pair
+terms fitted without selection (what the selection leaves out), and prints how often each
+thermal term was selected and how well its coefficient is recovered. (5) Without
 sensors, fit T on case (1)'s campaigns, with proxies (the Sun, the air temperature): the bias
 per W before (fit A) and after. (6) Fit A's day-minus-night warning (fits D - E beyond 3
 sigma): how often it fires per term with the heating (case 1) and without (case 2).
@@ -56,6 +57,7 @@ from antsim.run.outputs import run_fits  # noqa: E402
 from antsim.run.runner import simulate  # noqa: E402
 from antsim.scenario import Scenario, load_scenario  # noqa: E402
 from controller.pointing.fitting import fit_model  # noqa: E402
+from controller.pointing.model import named_model_terms  # noqa: E402
 from controller.pointing.thermal import THERMAL_TERMS  # noqa: E402
 from controller.pointing.variants import (  # noqa: E402
     VARIANTS,
@@ -106,6 +108,15 @@ def _systematics_of_seed(args):
     return systematic_errors(simulate(scenario, seed=seed).rows, scenario.truth_model)
 
 
+#: the six pair terms of the structure temperatures (TTILT is two of them with one coefficient)
+PAIR_TERMS = ("TEDFB", "TSDRL", "TEYFB", "TSYRL", "TNPNS", "TWPEW")
+
+
+def terms_of(terms) -> tuple[str, ...]:
+    """Term names of a named model or a list."""
+    return named_model_terms(terms) if isinstance(terms, str) else tuple(terms)
+
+
 def fit_seed(args) -> dict:
     """One campaign: fit A's values and sigmas; without a correction also fit T's, the
     terms fit A warns of (day minus night), fits D and E's elevation rms, and with sensors
@@ -145,6 +156,10 @@ def fit_seed(args) -> dict:
                           dict(c.fit_fixed), {"sensor_lag_s": 0.0})
         out["T_raw"] = (raw.values_arcsec[:m], raw.sigma_arcsec[:m],
                         raw.sigma_honest_arcsec[:m])
+        every = fit_model(pointing_data(cols, variant_mask(cols, VARIANTS[0]),
+                                        c.structure_lag_s), [*terms_of(terms), *PAIR_TERMS])
+        out["T_all"] = (every.values_arcsec[:m], every.sigma_arcsec[:m],
+                        every.sigma_honest_arcsec[:m])
     return out
 
 
@@ -160,7 +175,7 @@ def recovery(scenario: Scenario, seeds: range, workers: int,
         results = [fit_seed(j) for j in jobs]
     out = {"truth": scenario.truth_model.values_arcsec, "names": scenario.truth_model.names,
            "per_seed": results}
-    for key in ("A", "T", "T_raw"):
+    for key in ("A", "T", "T_raw", "T_all"):
         if key in results[0]:
             values, tpoint, honest = (np.array(x) for x in zip(*(r[key] for r in results),
                                                                 strict=True))
@@ -286,6 +301,8 @@ def main() -> None:
                      "by day)", floor))
     print_table(f"{sensed.name}, fit T without the sensors' response-time correction",
                 with_sensors["T_raw"], seeds)
+    print_table(f"{sensed.name}, the W's with all six pair terms (no selection)",
+                with_sensors["T_all"], seeds)
 
     print_table(f"{scenario.name} as calibrated, fit T (thermal terms in proxies)",
                 heated["T"], seeds)
