@@ -256,3 +256,55 @@ def test_the_crane_diagnose_case_is_the_benchmarks_output():
     for name, value in (("C2", "-2.06"), ("C6", "+0.89"), ("C5", "-0.08")):
         assert f"{name} {value}" in flat and value.lstrip("+") in absorbed, name
 
+def test_the_thermal_findings_are_the_benchmarks_and_the_plans_output():
+    """Issue 25's bullets: sensors (fit T), without the lag correction, all six terms, the
+    D/E ratio, the proxies' before/after, fit A's warnings, and the sensors' what-if."""
+    output = (RESULTS / "recovery.txt").read_text(encoding="utf-8")
+    section = " ".join(_section("- An observatory has no such mean",
+                                "`tests/test_recovery.py` repeats").split())
+    sensors = _recovery_table(output, "ghigo1990_sensors, fit T (thermal terms in the")
+    raw = _recovery_table(output, "ghigo1990_sensors, fit T without the sensors'")
+    every = _recovery_table(output, "ghigo1990_sensors, the W's with all six pair terms")
+
+    def span(table, column):
+        values = [float(row[column]) for row in table.values()]
+        return f"{min(values):.2f}-{max(values):.2f}"
+
+    within = sorted({row[9] for row in sensors.values()})
+    assert f"within 3 honest sigma in {within[0].rstrip('%')}-{within[-1]}" in section
+    assert f"honest pulls spread by {span(sensors, 7)}" in section
+    off = [n for n, row in sensors.items() if abs(float(row[8])) > 0.3]
+    assert f"but for {off[0]} ({sensors[off[0]][8]}) and {off[1]} ({sensors[off[1]][8]})" \
+        in section and len(off) == 2
+    assert f"biases of {sensors[off[0]][1]}\" and {sensors[off[1]][1]}\"" in section
+    worst = max(every, key=lambda n: abs(float(every[n][8])))
+    assert f"the largest mean pull is {float(every[worst][8]):+.2f} ({worst})" in section
+    assert (f"W7 and W8 are biased (mean pulls {raw['W7'][8]} and {raw['W8'][8]}, "
+            f"{raw['W8'][9]} within 3 sigma)") in section
+    ratio = re.search(r"with fit T's terms: median ([\d.]+), mean [\d.]+, within 15% in (\d+)%",
+                      output)
+    floor = re.search(r"the wind by day\): median ([\d.]+)", output)
+    assert f"is {ratio[1]} times fit E's (median; within 15% in {ratio[2]}% of seeds)" in section
+    assert f"without any heating ({floor[1]})" in section
+    selected = dict(re.findall(r"^(T\w+)\s+(\d+)%\s+\d", output, re.M)[:5])
+    assert selected["TEDFB"] == selected["TSDRL"]
+    assert f"TEDFB and TSDRL in {selected['TEDFB']}% of seeds" in section
+    assert f"TEYFB in {selected['TEYFB']}%" in section
+    block = output[output.index("bias per W, fit A (no thermal terms)"):].split("\n\n")[0]
+    before_after = {line.split()[0]: line.split()[1:3] for line in block.splitlines()[2:]}
+    for term in ("W1", "W4", "W6", "W8", "W9", "W10"):
+        a, t = before_after[term]
+        assert f"{term} {a}\" -> {t}\"" in section, term
+    shares = dict(re.findall(r"(W\d+) (\d+)%/0%", output))
+    assert (f"W8 in {shares['W8']}% of the heated campaigns, W1 in {shares['W1']}%, W2 in "
+            f"{shares['W2']}%") in section
+    assert "campaigns with at least one warning" in output and \
+        re.search(r"at least one warning: \d+% with the heating, 0% without", output)
+    plan = " ".join((RESULTS / "ghigo1990_sensors_whatif.txt").read_text().split())
+    days, hours, bias = re.search(r"duration: (\d+) days of 'day only, sensors' .*?; \d+ scans, "
+                                  r"([\d.]+) h of scanning .*?\(W4 ([-\d.]+)\"\)", plan).groups()
+    plain_days, plain_bias = re.search(r"duration: (\d+) days of 'day only' .*?\(W4 ([-\d.]+)\"\)",
+                                       plan).groups()
+    assert f"{days} days of daytime scans ({hours} h of scanning)" in section.replace("( ", "(")
+    assert f"bias of {bias}\" left" in section
+    assert f"takes {plain_days} days and leaves {plain_bias}\"" in section
