@@ -22,6 +22,7 @@ from controller.pointing.thermal import (
     THERMAL_TERMS,
     sensor_aux,
     structure_column,
+    structure_sensor_names,
     structure_time_column,
     thermal_regressors,
 )
@@ -117,6 +118,9 @@ def test_the_lag_correction_restores_a_ramping_member_exactly():
     cols = {structure_time_column("xel"): t_x, structure_time_column("el"): t_e,
             structure_column("dish_front", "xel"): member_x - rate * tau,
             structure_column("dish_front", "el"): member_e - rate * tau}
+    single = {"temp_dish_front_c": member_x}  # one reading per row (a CSV file): both axes
+    assert structure_sensor_names(list(single)) == ("dish_front",)
+    np.testing.assert_array_equal(sensor_aux(single, ["dish_front"])["dish_front"][1], member_x)
     raw = sensor_aux(cols, ["dish_front"])["dish_front"]
     fixed = sensor_aux(cols, ["dish_front"], lag_s=tau)["dish_front"]
     np.testing.assert_allclose(raw[0], member_x - 0.6)

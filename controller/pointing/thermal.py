@@ -142,10 +142,12 @@ def structure_time_column(axis: str) -> str:
 
 
 def structure_sensor_names(column_names: Sequence[str]) -> tuple[str, ...]:
-    """The sensors whose two columns (both halves) are among ``column_names``."""
+    """The sensors whose two columns (both halves) are among ``column_names``, or their one
+    column ``temp_<sensor>_c`` (one reading per row, e.g. from a CSV file)."""
     names = set(column_names)
     return tuple(s for s in STRUCTURE_SENSORS
-                 if all(structure_column(s, a) in names for a in AXES_RECORDED))
+                 if all(structure_column(s, a) in names for a in AXES_RECORDED)
+                 or f"temp_{s}_c" in names)
 
 
 def sensor_aux(columns: Mapping[str, np.ndarray], sensors: Sequence[str],
@@ -167,8 +169,10 @@ def sensor_aux(columns: Mapping[str, np.ndarray], sensors: Sequence[str],
                                                                       dtype=float)
         gap = np.where(gap > 0.0, gap, np.nan)
     for s in sensors:
-        xel, el = (np.asarray(columns[structure_column(s, a)], dtype=float)
-                   for a in AXES_RECORDED)
+        halves = [structure_column(s, a) for a in AXES_RECORDED]
+        if not all(c in columns for c in halves):  # one reading per row: for both axes
+            halves = [f"temp_{s}_c"] * 2
+        xel, el = (np.asarray(columns[c], dtype=float) for c in halves)
         if compensate:
             ahead = lag_s * (el - xel) / gap
             xel, el = xel + ahead, el + ahead

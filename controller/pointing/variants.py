@@ -113,7 +113,9 @@ def _structure(names) -> list[str]:
     sensors = structure_sensor_names(names)
     times = [structure_time_column(a) for a in ("xel", "el")
              if sensors and structure_time_column(a) in names]
-    return [*times, *(structure_column(s, a) for s in sensors for a in ("xel", "el"))]
+    both = [structure_column(s, a) for s in sensors for a in ("xel", "el")]
+    return [*times, *(c for c in both if c in names),
+            *(f"temp_{s}_c" for s in sensors if f"temp_{s}_c" in names)]
 
 
 def variant_mask(cols: Mapping[str, np.ndarray], variant: Variant,
