@@ -44,6 +44,12 @@ def _recovery_table(output: str, title: str) -> dict[str, list[str]]:
     return {line.split()[0]: line.replace("|", " ").split() for line in block.splitlines()[2:]}
 
 
+def _span(table: dict[str, list[str]], column: int) -> str:
+    """``min-max`` of one field over a recovery table's terms."""
+    values = [float(row[column]) for row in table.values()]
+    return f"{min(values):.2f}-{max(values):.2f}"
+
+
 def test_the_recovery_findings_are_the_benchmarks_output():
     output = (RESULTS / "recovery.txt").read_text(encoding="utf-8")
     section = " ".join(_section("### Are the error bars honest?",
@@ -52,15 +58,11 @@ def test_the_recovery_findings_are_the_benchmarks_output():
     cold = _recovery_table(output, "ghigo1990 without its thermal effect")
     heated = _recovery_table(output, "ghigo1990 as calibrated, heating modelled")
 
-    def span(table, column):
-        values = [float(row[column]) for row in table.values()]
-        return f"{min(values):.2f}-{max(values):.2f}"
-
     # fields: term bias sd tpoint_sigma tpoint_spread tpoint_in3 honest_sigma honest_spread
     # mean_pull honest_in3 verdict
-    assert f"spread by {span(cold, 4)} instead of 1 (without heating)" in section
-    assert f"pulls spread by {span(cold, 7)} (target 0.85-1.15)" in section
-    assert f"honest pulls spread by {span(heated, 7)}, with 99-100%" in section
+    assert f"spread by {_span(cold, 4)} instead of 1 (without heating)" in section
+    assert f"pulls spread by {_span(cold, 7)} (target 0.85-1.15)" in section
+    assert f"honest pulls spread by {_span(heated, 7)}, with 99-100%" in section
     worst = max(cold, key=lambda n: abs(float(cold[n][8])))
     assert f"largest mean pull {abs(float(cold[worst][8])):.2f}, {worst}" in section
     worst = max(heated, key=lambda n: abs(float(heated[n][8])))
@@ -266,13 +268,9 @@ def test_the_thermal_findings_are_the_benchmarks_and_the_plans_output():
     raw = _recovery_table(output, "ghigo1990_sensors, fit T without the sensors'")
     every = _recovery_table(output, "ghigo1990_sensors, the W's with all six pair terms")
 
-    def span(table, column):
-        values = [float(row[column]) for row in table.values()]
-        return f"{min(values):.2f}-{max(values):.2f}"
-
     within = sorted({row[9] for row in sensors.values()})
     assert f"within 3 honest sigma in {within[0].rstrip('%')}-{within[-1]}" in section
-    assert f"honest pulls spread by {span(sensors, 7)}" in section
+    assert f"honest pulls spread by {_span(sensors, 7)}" in section
     off = [n for n, row in sensors.items() if abs(float(row[8])) > 0.3]
     assert f"but for {off[0]} ({sensors[off[0]][8]}) and {off[1]} ({sensors[off[1]][8]})" \
         in section and len(off) == 2
