@@ -3,9 +3,10 @@
 :class:`Observations` holds, per scan, the total pointing error (indicated minus true: measured
 correction + model in use + applied correction) of the polarization average at the observed
 position, and the context columns the recordings carry: time, source, Sun elevation, air
-temperature, direction of the last slew, measured beam widths and the XR - XL offset
-difference. TPOINT data files give only positions (and a rotator angle); the context columns
-are then absent (None) and candidates that need them are not tried.
+temperature, direction of the last slew, measured beam widths, the XR - XL offset
+difference and the structure temperatures where the antenna has sensors. TPOINT data files
+give only positions (and a rotator angle); the context columns are then absent (None) and
+candidates that need them are not tried.
 
 Recordings of an equatorial mount (metadata ``mount: equatorial``) are read on the mount's
 axes: ``az_rad``/``el_rad`` hold the hour angle (positive West) and the declination, the
@@ -26,6 +27,7 @@ import numpy as np
 
 from controller.errors import InputError
 from controller.pointing.model import PointingModel
+from controller.pointing.thermal import sensor_aux, structure_sensor_names
 
 __all__ = ["Observations", "load_observations"]
 
@@ -70,6 +72,11 @@ class Observations:
     #: the daily air-temperature curve (C) at campaign times (s), when a scenario gives it:
     #: it extends the recorded temperatures back over the day before the campaign
     air_daily_c: Any = field(default=None, compare=False, repr=False)
+    #: structure temperatures (C) where the recordings have them: sensor -> (reading during
+    #: the azimuth scan, during the elevation scan), corrected for the sensors' response
+    #: time (controller.pointing.thermal.sensor_aux); the ``aux`` of thermal terms
+    structure: dict[str, tuple[np.ndarray, np.ndarray]] | None = field(default=None,
+                                                                     repr=False)
 
     def __len__(self) -> int:
         return int(self.t_s.size)
@@ -121,6 +128,9 @@ class Observations:
             value = getattr(self, name)
             if value is not None:
                 changes[name] = value[mask]
+        if self.structure is not None:
+            changes["structure"] = {k: (x[mask], e[mask]) for k, (x, e) in
+                                    self.structure.items()}
         return replace(self, **changes)
 
 
@@ -186,6 +196,10 @@ def from_columns(cols: Mapping[str, np.ndarray], meta: Mapping[str, Any] | None 
         pol_x[i] = (mx[r] - mx[ell]) * _ARCSEC_PER_ARCMIN
         pol_e[i] = (me[r] - me[ell]) * _ARCSEC_PER_ARCMIN
     source = cols.get("source")
+    sensors = structure_sensor_names(list(cols))
+    lag = float((meta.get("structure_sensors") or {}).get("lag_s", 0.0))
+    structure = ({k: (x[avg], e[avg]) for k, (x, e) in sensor_aux(cols, sensors, lag).items()}
+                 if sensors else None)
     return Observations(
         t_s=np.asarray(cols["t_s"], dtype=float)[avg],
         az_rad=np.radians(np.asarray(cols[lon], dtype=float)[avg]),
@@ -198,7 +212,7 @@ def from_columns(cols: Mapping[str, np.ndarray], meta: Mapping[str, Any] | None 
         pol_xel_arcsec=pol_x, pol_el_arcsec=pol_e,
         rotator_deg=f("feed_angle_deg"),
         model_in_use=_model_from_meta(meta, mount), meta=_flat_meta(meta), kind=kind,
-        path=path, mount=mount,
+        path=path, mount=mount, structure=structure,
     )
 
 

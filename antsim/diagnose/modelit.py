@@ -39,6 +39,8 @@ def _effect_params(finding: Finding, scenario=None) -> tuple[str, dict[str, Any]
     r = finding.result
     c = r.candidate
     p = r.params
+    if c.name == "thermal_sensors":  # temperatures, not an effect's parameters
+        return None
     if isinstance(c, TermsCandidate):
         terms = dict(p.get("terms_arcsec", {}))
         if c.effect != "terms" and c.pair:
@@ -194,11 +196,13 @@ def _before_after_fits(diag: Diagnosis):
         else:
             nonterm += r.columns @ coef[j:j + q]
         j += q
+    aux = None if obs.structure is None else {k: (x[good], e[good]) for k, (x, e) in
+                                               obs.structure.items()}
     data = PointingData(obs.az_rad[good], obs.el_rad[good], obs.xel_arcsec[good],
-                        obs.el_arcsec[good], t_s=obs.t_s[good])
+                        obs.el_arcsec[good], t_s=obs.t_s[good], aux=aux)
     after_data = PointingData(obs.az_rad[good], obs.el_rad[good],
                               (obs.xel_arcsec - nonterm[:n])[good],
-                              (obs.el_arcsec - nonterm[n:])[good], t_s=obs.t_s[good])
+                              (obs.el_arcsec - nonterm[n:])[good], t_s=obs.t_s[good], aux=aux)
     before = fit_model(data, obs.terms(p.base_terms), robust=True, name="baseline")
     after = fit_model(after_data, obs.terms([*p.base_terms, *term_names]), robust=True,
                       name="baseline+findings")
@@ -285,6 +289,11 @@ def write_outputs(diag: Diagnosis, out_dir: str | Path, scenario=None, resim: in
         written["not_in_model"] = (f"{', '.join(nonterm)} cannot be written as pointing-model "
                                    "terms (they depend on time, source, polarization or the "
                                    "beam); they are in the updated scenario")
+    if any(f.result.candidate.name == "thermal_sensors" for f in diag.findings):
+        written["not_in_scenario"] = ("thermal (the structure sensors' terms) is in the updated "
+                                      "model, not in the updated scenario: six coefficients do "
+                                      "not give the structure's heating (a thermal effect's "
+                                      "forcing and time constants)")
     if scenario is not None:
         text = updated_scenario_text(scenario, diag)
         path = out / "scenario_updated.toml"

@@ -63,12 +63,12 @@ def term_columns(terms: Sequence[str], obs: Observations) -> np.ndarray:
     """Error-convention columns (2n, m) of TPOINT/W terms: the error (indicated - true,
     arcsec) each term makes per arcsec of coefficient, xel rows then el rows (on an
     equatorial mount's recordings: its equatorial terms, cross-declination and declination
-    rows)."""
+    rows; thermal terms per unit of the observations' structure temperature differences)."""
     if not terms:
         return np.zeros((2 * obs.n, 0))
     model = PointingModel(obs.terms(terms))
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        ba, be = model.design_matrix(obs.az_rad, obs.el_rad)
+        ba, be = model.design_matrix(obs.az_rad, obs.el_rad, aux=obs.structure)
     return -np.vstack([ba * np.cos(obs.el_rad)[:, None], be])
 
 

@@ -14,7 +14,12 @@ from .changes import StepCandidate
 from .dynamics import BacklashCandidate, ClockCandidate, ServoLagCandidate
 from .optics import BeamWidthCandidate, ExactTiltCandidate, SourceCandidate, SquintCandidate
 from .terms import FeedOffsetCandidate, HarmonicFamilyCandidate, TermsCandidate
-from .thermal import SunsetCandidate, SunsetTransientCandidate, TemperatureCandidate
+from .thermal import (
+    SensorTermsCandidate,
+    SunsetCandidate,
+    SunsetTransientCandidate,
+    TemperatureCandidate,
+)
 
 __all__ = ["CANDIDATES", "candidate"]
 
@@ -198,6 +203,7 @@ def _library() -> list[Candidate]:
         SunsetCandidate(),
         SunsetTransientCandidate(),
         TemperatureCandidate(),
+        SensorTermsCandidate(),
         StepCandidate(),
         ClockCandidate(),
         ServoLagCandidate(),

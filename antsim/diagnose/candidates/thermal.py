@@ -1,5 +1,6 @@
-"""Thermal candidates: an elevation drift that follows the sunset with a lag, and one that
-follows the air temperature.
+"""Thermal candidates: an elevation drift that follows the sunset with a lag, one that
+follows the air temperature, and the thermal deformation as structure temperature sensors see
+it (recordings of an antenna with sensors).
 """
 
 from __future__ import annotations
@@ -22,8 +23,10 @@ from .base import (
     sun_el_grid_deg,
     time_grid,
 )
+from .terms import TermsCandidate
 
-__all__ = ['SunsetCandidate', 'SunsetTransientCandidate', 'TemperatureCandidate']
+__all__ = ['SensorTermsCandidate', 'SunsetCandidate', 'SunsetTransientCandidate',
+           'TemperatureCandidate']
 
 
 class _LaggedCandidate(Candidate):
@@ -286,3 +289,34 @@ class TemperatureCandidate(_LaggedCandidate):
     def effect_from_params(self, params):
         return {"arcsec_per_k": params["arcsec_per_k"], "tau_s": params["tau_s"],
                 "reference_c": params["reference_c"]}
+
+
+class SensorTermsCandidate(TermsCandidate):
+    """The thermal deformation, linear in the recorded structure temperature differences:
+    the six pair terms of :mod:`controller.pointing.thermal` (fit T's candidates), tested
+    together. Applicable to recordings with every sensor those terms read (an antenna with
+    structure temperature sensors). It names the thermal effect and its terms; it adds no
+    simulator effect (the structure's heating is not recovered from six coefficients:
+    ``antsim.diagnose.modelit``)."""
+
+    def __init__(self):
+        from antsim.world.effects.thermal import ThermalEffect
+        from controller.pointing.thermal import SENSOR_TERMS
+
+        terms = tuple(n for n in SENSOR_TERMS if n != "TTILT")
+        super().__init__(
+            "thermal_sensors", terms, "thermal deformation seen by the structure sensors",
+            "residuals linear in the structure temperature differences: the dish's front-back "
+            "(dE) and left-right (dA cos E), the yoke's, the pedestal's (an azimuth-axis tilt)",
+            ThermalEffect.explanation + "; the structure temperature sensors see it: fit the "
+            "thermal terms " + " ".join(terms) + " with the geometric ones (fit T, "
+            "'antsim fit --terms ...,TEDFB')",
+            effect="thermal", pair=False,
+            blind_exclusion="it needs recordings with structure temperatures")
+
+    def applicable(self, obs, known_noise):
+        from controller.pointing.model import PointingModel
+
+        need = PointingModel(list(self.terms)).regressors
+        return super().applicable(obs, known_noise) and obs.structure is not None \
+            and need <= set(obs.structure)
