@@ -113,7 +113,6 @@ class StructureSensors:
     def __init__(self, config: SensorConfig, world, rng: np.random.Generator):
         self.config = config
         self.names = tuple(config.names)
-        self.rng = rng
         thermal = next((e for e in world.effects if isinstance(e, ThermalEffect)), None)
         self.thermal = thermal
         if thermal is not None:

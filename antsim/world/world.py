@@ -112,6 +112,7 @@ class World:
     #: antsim.plan's member worlds, which are not built by ``__init__``)
     frame: MountFrame = ALTAZ
     camera = None
+    sensors = None  # structure temperature sensors (antsim.world.sensors), where there are
 
     def __init__(self, scenario: Scenario, env, seed: int | None = None):
         self.scenario = scenario
@@ -152,8 +153,6 @@ class World:
             effect.start(self, component_rng(self.seed, f"effect:{i}:{effect.name}"))
         self.slow_effects = [e for e in self.effects if not e.per_sample]
         self.fast_effects = [e for e in self.effects if e.per_sample]
-        #: structure temperature sensors (antsim.world.sensors), or None
-        self.sensors = None
         config = getattr(scenario, "structure_sensors", None)
         if config is not None:
             from .sensors import StructureSensors
