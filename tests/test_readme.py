@@ -268,8 +268,8 @@ def test_the_thermal_findings_are_the_benchmarks_and_the_plans_output():
     raw = _recovery_table(output, "ghigo1990_sensors, fit T without the sensors'")
     every = _recovery_table(output, "ghigo1990_sensors, the W's with all six pair terms")
 
-    within = sorted({row[9] for row in sensors.values()})
-    assert f"within 3 honest sigma in {within[0].rstrip('%')}-{within[-1]}" in section
+    within = sorted({int(row[9].rstrip("%")) for row in sensors.values()})
+    assert f"within 3 honest sigma in {within[0]}-{within[-1]}%" in section
     assert f"honest pulls spread by {_span(sensors, 7)}" in section
     off = [n for n, row in sensors.items() if abs(float(row[8])) > 0.3]
     assert f"but for {off[0]} ({sensors[off[0]][8]}) and {off[1]} ({sensors[off[1]][8]})" \
