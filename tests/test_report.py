@@ -14,6 +14,7 @@ import re
 import shutil
 import subprocess
 import warnings
+from html.parser import HTMLParser
 from pathlib import Path
 
 import pytest
@@ -48,6 +49,55 @@ def ghigo_run(tmp_path_factory) -> Path:
 
 def _embedded(html: str) -> dict[str, bytes]:
     return {name: base64.b64decode(data) for data, name in IMG.findall(html)}
+
+
+class _PageReader(HTMLParser):
+    """The tables (by caption: header and rows of cell texts) and figure captions (by file)
+    of a report page."""
+
+    def __init__(self):
+        super().__init__()
+        self.tables: dict[str, list[list[str]]] = {}
+        self.captions: dict[str, str] = {}
+        self._text: list[str] | None = None
+        self._rows: list[list[str]] = []
+        self._caption = ""
+        self._figure = ""
+
+    def handle_starttag(self, tag, attrs):
+        if tag == "table":
+            self._rows, self._caption = [], ""
+        elif tag == "tr":
+            self._rows.append([])
+        elif tag in ("td", "th", "caption", "figcaption"):
+            self._text = []
+        elif tag == "img":
+            self._figure = dict(attrs).get("data-file", "")
+
+    def handle_data(self, data):
+        if self._text is not None:
+            self._text.append(data)
+
+    def handle_endtag(self, tag):
+        text = "".join(self._text or [])
+        if tag in ("td", "th"):
+            self._rows[-1].append(text)
+        elif tag == "caption":
+            self._caption = text
+        elif tag == "figcaption":
+            self.captions[self._figure] = text
+        elif tag == "table":
+            self.tables[self._caption] = self._rows
+        if tag in ("td", "th", "caption", "figcaption"):
+            self._text = None
+
+
+def read_page(path: Path) -> _PageReader:
+    """A report page's tables ``{caption: [header, *rows]}`` and figure captions
+    ``{file name: title and caption}``, as the browser shows their text."""
+    reader = _PageReader()
+    reader.feed(path.read_text(encoding="utf-8"))
+    return reader
 
 
 def test_report_embeds_every_figure_of_the_run(ghigo_run):
@@ -244,11 +294,11 @@ def test_console_detector_catches_a_broken_page(tmp_path):
     assert any("Content Security Policy" in line for line in lines)
 
 
-@needs_chromium
-def test_report_in_a_headless_browser(ghigo_run, tmp_path):
+def assert_renders_in_a_browser(page: Path, tmp_path: Path, n_images: int) -> None:
+    """``page`` in headless chromium: no console message, a screenshot that is not blank, and
+    every one of its ``n_images`` embedded images decoded."""
     shot = tmp_path / "report.png"
-    proc = run_chromium(ghigo_run / "report.html", tmp_path, f"--screenshot={shot}",
-                        "--window-size=1280,2000")
+    proc = run_chromium(page, tmp_path, f"--screenshot={shot}", "--window-size=1280,2000")
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert console_lines(proc.stderr) == []
     assert shot.exists() and shot.stat().st_size > 10_000
@@ -256,17 +306,22 @@ def test_report_in_a_headless_browser(ghigo_run, tmp_path):
     assert std > 0.03 and ink > 0.01, f"screenshot looks blank (std {std:.3f}, ink {ink:.3f})"
     # every embedded image decodes in the browser: a copy of the page with a probe script
     # (the report itself has none, and its policy forbids scripts)
-    html = (ghigo_run / "report.html").read_text(encoding="utf-8")
+    html = page.read_text(encoding="utf-8")
     probe = ("<script>window.addEventListener('load', function () {"
              "var n = 0; for (var i = 0; i < document.images.length; i++) {"
              "var im = document.images[i]; if (im.complete && im.naturalWidth > 0) n++; }"
              "document.body.setAttribute('data-probe', document.images.length + ' ' + n);"
              "});</script>")
-    page = tmp_path / "probe.html"
-    page.write_text(html.replace("default-src 'none';",
-                                 "default-src 'none'; script-src 'unsafe-inline';", 1)
-                    .replace("</body>", probe + "</body>", 1), encoding="utf-8")
-    proc = run_chromium(page, tmp_path, "--dump-dom", "--virtual-time-budget=5000")
-    n_images = len(list((ghigo_run / "figures").glob("*.png")))
+    probed = tmp_path / "probe.html"
+    probed.write_text(html.replace("default-src 'none';",
+                                   "default-src 'none'; script-src 'unsafe-inline';", 1)
+                      .replace("</body>", probe + "</body>", 1), encoding="utf-8")
+    proc = run_chromium(probed, tmp_path, "--dump-dom", "--virtual-time-budget=5000")
     assert f'data-probe="{n_images} {n_images}"' in proc.stdout
     assert console_lines(proc.stderr) == []
+
+
+@needs_chromium
+def test_report_in_a_headless_browser(ghigo_run, tmp_path):
+    assert_renders_in_a_browser(ghigo_run / "report.html", tmp_path,
+                                len(list((ghigo_run / "figures").glob("*.png"))))

@@ -38,7 +38,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true",
                         help="print the result as JSON (DESIGN section 4)")
     parser.add_argument("--out", metavar="DIR",
-                        help="write diagnose.json/.txt, model_updated.dat/.json, "
+                        help="write diagnose.json/.txt, report.html, model_updated.dat/.json, "
                              "scenario_updated.toml and before/after plots into DIR")
     parser.add_argument("--resimulate", type=int, default=None, metavar="K",
                         help="with --out and --scenario: re-simulate the updated scenario K "

@@ -196,11 +196,11 @@ def main(args: argparse.Namespace) -> int:
         progress.stage("the honest sigma (jackknife)")
         result.sigma_honest_arcsec  # noqa: B018 (computed on first use: computed here)
     if target is not None:
-        from controller.pointing.tpoint import TPointModel, write_mod
-        from controller.pointing.vocabulary import in_tpoint_terms
+        from controller.pointing.modelio import write_model_file
+        from controller.pointing.tpoint import TPointModel
 
         caption = f"{path.name}: antsim fit, model {model_name}"
-        write_mod(in_tpoint_terms(TPointModel.from_fit(result, caption=caption)), target)
+        write_model_file(TPointModel.from_fit(result, caption=caption), target)
     if args.json:
         json.dump(result.to_json(), sys.stdout, indent=2)
         sys.stdout.write("\n")

@@ -23,7 +23,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true",
                         help="print the result as JSON ({\"plans\": [...], \"answers\": ...})")
     parser.add_argument("--out", default=None,
-                        help="directory for plan.json, plan.txt and the comparison figures")
+                        help="directory for plan.json, plan.txt, report.html and the "
+                             "comparison figures")
     parser.add_argument("--workers", type=int, default=None,
                         help="local worker processes (default: the machine's cores; 0: run "
                              "in this process)")
@@ -78,9 +79,14 @@ def main(args: argparse.Namespace) -> int:
             progress.stage("figures")
             out.mkdir(parents=True, exist_ok=True)
             (out / "plan.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
-            (out / "plan.txt").write_text(result.text(timing=False), encoding="utf-8")
+            plan_text = result.text(timing=False)
+            (out / "plan.txt").write_text(plan_text, encoding="utf-8")
             figures = plan_figures(doc, out)
-            text += f"wrote {out}/: plan.json plan.txt and {len(figures)} figures\n"
+            from antsim.plan.report import write_plan_report
+
+            write_plan_report(doc, plan_text, figures, out)
+            text += (f"wrote {out}/: plan.json plan.txt report.html and {len(figures)} "
+                     "figures\n")
     if args.json:
         print(json.dumps(doc, indent=2))
     else:

@@ -156,6 +156,19 @@ class Diagnosis:
     def baseline_name(self) -> str:
         return "baseline"
 
+    def tested(self) -> list[str]:
+        """The candidate effects tested against the baseline (the first round's)."""
+        return [r.name for r in self.selection.first_round]
+
+    def nothing_found_words(self) -> str:
+        """Why nothing was found, and what was tested (the text and the figures say it)."""
+        head = ("no mismatch: the model explains the data to the noise"
+                if self.prediction.known_noise else
+                "nothing beyond the baseline terms is warranted by these data")
+        tested = self.tested()
+        return (f"{head}; tested {len(tested)} candidate effects against the baseline "
+                f"{' '.join(self.baseline.terms)}: {', '.join(tested)}")
+
     def axes_label(self) -> str:
         """The two offsets in words: "xel/el", or on an equatorial mount "RA/Dec" (the
         cross-declination error is the right-ascension error on the sky)."""
@@ -213,6 +226,7 @@ class Diagnosis:
                                 "words": sf.words}
                                for f in self.findings if (sf := f.step.simplest) is not None],
             "refused": [{"effect": r.result.name, "words": r.reason} for r in sel.refused],
+            "tested": self.tested(),
             "degeneracies": self.degeneracies(),
             "absorbed": [{"effect": r.name, "components": list(r.absorbed)}
                          for r in sel.absorbed],
@@ -229,9 +243,7 @@ class Diagnosis:
                  f"noise: {self.prediction.description}",
                  f"located: {self.location.words}"]
         if not self.findings:
-            lines.append("no mismatch: the model explains the data to the noise"
-                         if self.prediction.known_noise else
-                         "nothing beyond the baseline terms is warranted by these data")
+            lines.append(self.nothing_found_words())
         for i, f in enumerate(self.findings, 1):
             j = f.to_json()
             shown = {k: v for k, v in j["params"].items() if not isinstance(v, dict)}

@@ -11,8 +11,8 @@
   test with the simulations' own scatter and time correlation), before (the original
   scenario) and after (the updated one), and also the two residual distributions
   (two-sample Kolmogorov-Smirnov per axis).
-* Plots: residuals before and after (``antsim.figures.diagnose.before_after_figures`` when present,
-  else a minimal figure of our own).
+* Plots: residuals before and after (:mod:`antsim.figures.diagnose`), before only when
+  nothing was found; on an equatorial mount a figure against its own axes.
 """
 
 from __future__ import annotations
@@ -172,114 +172,97 @@ def resimulate(diag: Diagnosis, scenario, n_sims: int = 4, cache_dir=None,
     return out
 
 
-def _before_after_fits(diag: Diagnosis):
-    """Fits of the baseline terms to the data (before) and of baseline + finding terms to
-    the data corrected for the findings' non-term signatures (after)."""
+def residuals_before_after(diag: Diagnosis):
+    """What the figures draw: the good scans' positions and the residuals (arcsec) of the
+    baseline (before) and of the baseline with every finding (after), each an unweighted
+    least-squares fit over the diagnosis's used scans, the residuals its Sky RMS
+    (``summary``) is the rms of: the figures print the diagnosis's own numbers. Returns
+    (data, before, after) as :class:`antsim.figures.diagnose.Residuals`."""
+    from antsim.figures.diagnose import Residuals
+
     p = diag.problem
     obs = diag.obs
     good = obs.good
-    cols = p.current_columns()
     rows = p.rows()
-    coef, _ = _lstsq(cols[rows], p.y_raw[rows])
-    k = len(p.base_terms)
-    n = obs.n
-    term_names: list[str] = []
-    nonterm = np.zeros(2 * n)
-    j = k
-    for f in diag.findings:
-        r = f.result
-        if r.candidate.kind != "offsets":
-            continue
-        q = r.columns.shape[1]
-        if isinstance(r.candidate, TermsCandidate):
-            term_names += [t for t in r.comp_names if t not in term_names]
-        else:
-            nonterm += r.columns @ coef[j:j + q]
-        j += q
+    used = p.used[good]
     aux = None if obs.structure is None else {k: (x[good], e[good]) for k, (x, e) in
                                                obs.structure.items()}
     data = PointingData(obs.az_rad[good], obs.el_rad[good], obs.xel_arcsec[good],
                         obs.el_arcsec[good], t_s=obs.t_s[good], aux=aux)
-    after_data = PointingData(obs.az_rad[good], obs.el_rad[good],
-                              (obs.xel_arcsec - nonterm[:n])[good],
-                              (obs.el_arcsec - nonterm[n:])[good], t_s=obs.t_s[good], aux=aux)
-    before = fit_model(data, obs.terms(p.base_terms), robust=True, name="baseline")
-    after = fit_model(after_data, obs.terms([*p.base_terms, *term_names]), robust=True,
-                      name="baseline+findings")
-    return before, after, data, after_data
+    after_names = [*p.base_terms, *(f.effect for f in diag.findings)]
+    out = []
+    for names, cols, key in ((list(p.base_terms), p.base, "before"),
+                             (after_names, p.current_columns(), "after")):
+        coef, _ = _lstsq(cols[rows], p.y_raw[rows])
+        r = (p.y_raw - cols @ coef).reshape(2, -1)[:, good]
+        out.append(Residuals(names, r[0], r[1], used, diag.summary[f"sky_rms_{key}_arcsec"]))
+    return data, out[0], out[1]
 
 
-def _minimal_plot(before, after, data, after_data, path: Path,
-                  equatorial: bool = False) -> None:
-    import matplotlib
+def _equatorial_plot(before, after, data, path: Path, caption: str):
+    """Residuals against the equatorial mount's axes and time (the shared figures draw an
+    alt-az sky); ``after`` None: before only."""
+    from antsim.figures.style import Canvas, figure_file
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    if equatorial:  # the mount's axes: hour angle and declination
-        offsets = ("cross-declination", "declination")
-        positions = (("hour angle (h, West +)", np.degrees(data.az_rad) / 15.0),
-                     ("declination (deg)", np.degrees(data.el_rad)))
-    else:
-        offsets = ("cross-elevation", "elevation")
-        positions = (("azimuth (deg)", np.degrees(data.az_rad)),
-                     ("elevation (deg)", np.degrees(data.el_rad)))
-    fig, axes = plt.subplots(2, 3, figsize=(13, 7), constrained_layout=True)
-    for row, (axis, r_b, r_a) in enumerate((
-            (offsets[0], before.residual_xel_arcsec, after.residual_xel_arcsec),
-            (offsets[1], before.residual_el_arcsec, after.residual_el_arcsec))):
-        for col, (xlab, x) in enumerate((*positions,
-                                         ("time (h)", np.asarray(data.t_s) / 3600.0))):
-            ax = axes[row, col]
-            ax.plot(x, r_b, ".", ms=4, alpha=0.6, label=f"before ({before.sky_rms_arcsec:.1f}\")")
-            ax.plot(x, r_a, ".", ms=4, alpha=0.6, label=f"after ({after.sky_rms_arcsec:.1f}\")")
-            ax.axhline(0.0, color="k", lw=0.5)
-            ax.set_xlabel(xlab)
-            ax.set_ylabel(f"{axis} residual (arcsec)")
-        axes[row, 0].legend(fontsize=8)
-    fig.suptitle("antsim diagnose: residuals before and after modelling the findings")
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    offsets = ("cross-declination", "declination")
+    positions = (("hour angle (h, West +)", np.degrees(data.az_rad) / 15.0),
+                 ("declination (deg)", np.degrees(data.el_rad)))
+    series = [("before", before)] + ([("after", after)] if after is not None else [])
+    with Canvas(13.0, 7.0) as fig:
+        axes = fig.subplots(2, 3)
+        fig.subplots_adjust(left=0.06, right=0.99, bottom=0.08, top=0.92, hspace=0.3,
+                            wspace=0.25)
+        for row, axis in enumerate(offsets):
+            for col, (xlab, x) in enumerate((*positions,
+                                             ("time (h)", np.asarray(data.t_s) / 3600.0))):
+                ax = axes[row, col]
+                for name, res in series:
+                    r = res.residual_xel_arcsec if row == 0 else res.residual_el_arcsec
+                    ax.plot(x, r, ".", ms=4, alpha=0.6,
+                            label=f"{name} ({res.sky_rms_arcsec:.2f}\")")
+                ax.axhline(0.0, color="k", lw=0.5)
+                ax.set_xlabel(xlab)
+                ax.set_ylabel(f"{axis} residual (arcsec)")
+            axes[row, 0].legend(fontsize=8)
+        title = ("Residuals before and after modelling the findings" if after is not None
+                 else "Residuals of the baseline (nothing found)")
+        return figure_file(fig, path, title, caption, ("png",))
 
 
-def plots(diag: Diagnosis, out_dir: Path) -> list[str]:
-    """Before/after residual plots into ``out_dir``; returns the file names written."""
-    before, after, data, after_data = _before_after_fits(diag)
+def plots(diag: Diagnosis, out_dir: Path) -> list:
+    """Residual plots into ``out_dir``: before and after the findings, or before only (with
+    a caption saying nothing was found and what was tested); returns their
+    :class:`antsim.figures.style.FigureFile` s."""
+    from antsim.figures.diagnose import before_after_figures, before_figures
+
+    data, before, after = residuals_before_after(diag)
+    nothing = diag.nothing_found_words() if not diag.findings else ""
     if diag.obs.mount == "equatorial":  # the shared figures draw an alt-az sky
-        path = out_dir / "diagnose_residuals.png"
-        _minimal_plot(before, after, data, after_data, path, equatorial=True)
-        return [path.name]
-    try:
-        from antsim.figures.diagnose import before_after_figures
-    except ImportError:
-        before_after_figures = None
-    if before_after_figures is not None:
-        try:
-            files = before_after_figures(before, after, data, out_dir, label="diagnose",
-                                         after_data=after_data, before_name="baseline",
-                                         after_name="with findings")
-            return [str(Path(getattr(f, "path", f)).name) for f in files]
-        except (TypeError, ValueError, AttributeError):
-            pass  # the shared figures API changed: fall back on our own
-    path = out_dir / "diagnose_residuals.png"
-    _minimal_plot(before, after, data, after_data, path)
-    return [path.name]
+        return [_equatorial_plot(
+            before, after if diag.findings else None, data, out_dir / "diagnose_residuals.png",
+            nothing or "Residuals of the baseline (before) and with the findings (after) "
+                       "against hour angle, declination and time.")]
+    if not diag.findings:
+        return before_figures(before, data, out_dir, label="diagnose",
+                              before_name="baseline", nothing_found=nothing)
+    return before_after_figures(before, after, data, out_dir, label="diagnose",
+                                before_name="baseline", after_name="with findings")
 
 
 def write_outputs(diag: Diagnosis, out_dir: str | Path, scenario=None, resim: int = 0,
                   cache_dir=None, use_cache: bool = True, jobs: int = 1) -> dict[str, Any]:
-    """Write the report, the updated model and scenario, plots; optionally re-simulate."""
-    from controller.pointing.modelio import model_to_json
-    from controller.pointing.tpoint import TPointModel, write_mod
+    """Write the report (diagnose.json, diagnose.txt, report.html), the updated model and
+    scenario, plots; optionally re-simulate."""
+    from controller.pointing.modelio import model_to_json, write_model_file
+    from controller.pointing.tpoint import TPointModel
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written: dict[str, Any] = {}
     model = diag.updated_model()
-    write_mod(TPointModel.from_model(model, caption=f"{model.name} (antsim diagnose)",
-                                     n_obs=int(diag.problem.used.sum()),
-                                     sky_rms_arcsec=diag.summary["sky_rms_after_arcsec"]),
-              out / "model_updated.dat")
+    write_model_file(TPointModel.from_model(
+        model, caption=f"{model.name} (antsim diagnose)", n_obs=int(diag.problem.used.sum()),
+        sky_rms_arcsec=diag.summary["sky_rms_after_arcsec"]), out / "model_updated.dat")
     (out / "model_updated.json").write_text(json.dumps(model_to_json(model), indent=2) + "\n",
                                             encoding="utf-8")
     written["model"] = ["model_updated.dat", "model_updated.json"]
@@ -306,8 +289,9 @@ def write_outputs(diag: Diagnosis, out_dir: str | Path, scenario=None, resim: in
             res = resimulate(diag, scenario, resim, cache_dir, use_cache, jobs)
             res.pop("_baseline", None)
             written["resimulation"] = _plain(res)
-    if diag.findings:
-        written["plots"] = plots(diag, out)
+    figures = plots(diag, out)
+    written["plots"] = [f.path.name for f in figures]
+    written["report"] = "report.html"
     doc = diag.to_json()
     doc["outputs"] = _plain(written)
     (out / "diagnose.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
@@ -315,6 +299,11 @@ def write_outputs(diag: Diagnosis, out_dir: str | Path, scenario=None, resim: in
     if "resimulation" in written:
         text += "\n" + resimulation_words(written["resimulation"])
     (out / "diagnose.txt").write_text(text + "\n", encoding="utf-8")
+    from .report import write_diagnose_report
+
+    write_diagnose_report(doc, text, figures, out, recordings=str(diag.obs.path),
+                          axes=diag.axes_label(),
+                          nothing_found="" if diag.findings else diag.nothing_found_words())
     return written
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -25,8 +26,90 @@ from .style import (
     rms,
 )
 
-__all__ = ["check_fit_data", "comparison_figure", "error_panels", "histogram_figure",
-           "pointing_errors_figure", "quiver", "residual_quiver_figure", "sky_axes"]
+__all__ = ["QuiverScale", "check_fit_data", "comparison_figure", "error_panels",
+           "histogram_bin_arcsec", "histogram_edges", "histogram_figure", "nice_step",
+           "pointing_errors_figure", "quiver", "quiver_scale", "residual_quiver_figure",
+           "sky_axes", "spread_arcsec"]
+
+
+# ---------------------------------------------------------------------------------------------
+# scales from the data's spread
+# ---------------------------------------------------------------------------------------------
+def spread_arcsec(*values) -> float:
+    """A robust spread (arcsec) of the finite values given: 1.4826 times the median absolute
+    value (the standard deviation of zero-mean Gaussian residuals, unmoved by a few outliers),
+    or their rms when that is zero; NaN when there is nothing finite."""
+    v = np.concatenate([np.ravel(np.asarray(x, float)) for x in values]) if values \
+        else np.empty(0)
+    v = v[np.isfinite(v)]
+    if not v.size:
+        return math.nan
+    mad = 1.4826 * float(np.median(np.abs(v)))
+    return mad if mad > 0 else rms(v)
+
+
+def nice_step(x: float) -> float:
+    """The largest of 1, 2, 5 times a power of ten that is at most ``x`` (> 0)."""
+    if not (math.isfinite(x) and x > 0):
+        raise ValueError(f"nice_step needs a positive finite number, got {x!r}")
+    power = 10.0 ** math.floor(math.log10(x))
+    for m in (5.0, 2.0, 1.0):
+        if m * power <= x * (1 + 1e-9):
+            return m * power
+    return power  # pragma: no cover (m = 1 always fits)
+
+
+#: bins per standard deviation of the residuals (about 15 bins across +-3 sigma)
+BINS_PER_SIGMA = 2.5
+#: at most this many bins over the drawn range (long tails widen the bins instead)
+MAX_BINS = 80
+
+
+def histogram_bin_arcsec(*values, drawn=None) -> float:
+    """A bin width (arcsec, a 1-2-5 number) for histograms of ``values``: about
+    1 / :data:`BINS_PER_SIGMA` of their spread (:func:`spread_arcsec`), widened so that
+    the range of everything ``drawn`` (default: ``values``) takes at most :data:`MAX_BINS`
+    bins."""
+    s = spread_arcsec(*values)
+    if not (math.isfinite(s) and s > 0):
+        return 1.0
+    v = np.concatenate([np.ravel(np.asarray(x, float)) for x in (drawn or values)])
+    top = float(np.max(np.abs(v[np.isfinite(v)])))
+    step = nice_step(s / BINS_PER_SIGMA)
+    while 2.0 * top / step > MAX_BINS:
+        step = nice_step(step * 2.5)  # the next 1-2-5 step up
+    return step
+
+
+@dataclass(frozen=True)
+class QuiverScale:
+    """How residual arrows are drawn on a :func:`sky_axes` map: ``arcsec_per_deg`` of
+    residual per degree of zenith distance, and the key arrow's length ``key_arcsec``."""
+
+    arcsec_per_deg: float
+    key_arcsec: float
+
+    @property
+    def key_deg(self) -> float:
+        return self.key_arcsec / self.arcsec_per_deg
+
+    def words(self) -> str:
+        """'20" of residual is drawn as 6 deg on the map' (for captions)."""
+        return (f"{self.key_arcsec:g}\" of residual is drawn as {self.key_deg:g}"
+                f"\N{DEGREE SIGN} on the map")
+
+
+#: degrees of zenith distance of the key arrow (about the spacing of neighbouring scans)
+QUIVER_KEY_DEG = 6.0
+
+
+def quiver_scale(xel, el) -> QuiverScale:
+    """The arrows' scale for residuals ``xel``, ``el`` (arcsec): the key a 1-2-5 number near
+    twice the residuals' spread per axis (a typical arrow is about half the key), drawn
+    :data:`QUIVER_KEY_DEG` long."""
+    s = spread_arcsec(xel, el)
+    key = nice_step(2.0 * s) if math.isfinite(s) and s > 0 else 1.0
+    return QuiverScale(key / QUIVER_KEY_DEG, key)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -101,10 +184,6 @@ def pointing_errors_figure(az_deg, el_deg, xel_arcsec, el_arcsec, path: str | Pa
 # ---------------------------------------------------------------------------------------------
 # residuals on the sky
 # ---------------------------------------------------------------------------------------------
-#: quiver scale: arcsec of residual per degree of zenith distance on the sky map
-QUIVER_ARCSEC_PER_DEG = 10.0
-
-
 def sky_axes(ax, el_limit_deg: float | None = 10.0) -> None:
     """Cartesian sky map axes: x = z sin A, y = z cos A (deg), North up, East right."""
     theta = np.linspace(0.0, 2.0 * math.pi, 181)
@@ -126,8 +205,10 @@ def sky_axes(ax, el_limit_deg: float | None = 10.0) -> None:
     ax.set_yticks([])
 
 
-def quiver(ax, az_deg, el_deg, xel, el, used, *, key: bool = True) -> None:
-    """Arrows of (xel, el) residuals at each position on a :func:`sky_axes` map."""
+def quiver(ax, az_deg, el_deg, xel, el, used, *, key: bool = True,
+           scale: QuiverScale | None = None) -> QuiverScale:
+    """Arrows of (xel, el) residuals at each position on a :func:`sky_axes` map, at
+    ``scale`` (default: :func:`quiver_scale` of the used residuals); returns the scale."""
     a = np.radians(np.asarray(az_deg, float))
     zd = 90.0 - np.asarray(el_deg, float)
     x, y = zd * np.sin(a), zd * np.cos(a)
@@ -137,15 +218,18 @@ def quiver(ax, az_deg, el_deg, xel, el, used, *, key: bool = True) -> None:
     u = xel * np.cos(a) - el * np.sin(a)
     v = -xel * np.sin(a) - el * np.cos(a)
     used = np.asarray(used, bool)
+    if scale is None:
+        scale = quiver_scale(xel[used], el[used])
     for sel, color in ((used, "#1f4e9c"), (~used, REJECT_COLOR)):
         if sel.any():
             q = ax.quiver(x[sel], y[sel], u[sel], v[sel], color=color, angles="xy",
-                          scale_units="xy", scale=QUIVER_ARCSEC_PER_DEG, width=0.003,
+                          scale_units="xy", scale=scale.arcsec_per_deg, width=0.003,
                           headwidth=3.5)
             if key and color != REJECT_COLOR:
-                ax.quiverkey(q, 0.86, 0.04, 60.0, "60\"", labelpos="E", coordinates="axes",
-                             fontproperties={"size": 8})
+                ax.quiverkey(q, 0.86, 0.04, scale.key_arcsec, f"{scale.key_arcsec:g}\"",
+                             labelpos="E", coordinates="axes", fontproperties={"size": 8})
     ax.scatter(x, y, s=3, color="k", zorder=3)
+    return scale
 
 
 def check_fit_data(fit: FitResult, data: PointingData, name: str) -> None:
@@ -158,20 +242,20 @@ def check_fit_data(fit: FitResult, data: PointingData, name: str) -> None:
 def residual_quiver_figure(data: PointingData, fit: FitResult, path: str | Path, *,
                            title: str = "", formats: Sequence[str] = ("png",)) -> FigureFile:
     """The residuals of ``fit`` as arrows on a map of the sky (North up, East right, zenith
-    at the centre; 60" of residual = 6 deg of zenith distance); rejected points in red."""
+    at the centre; the arrows' scale from the residuals' spread, :func:`quiver_scale`);
+    rejected points in red."""
     check_fit_data(fit, data, "fit")
     title = title or "Residuals after the fit on the sky"
     with Canvas(7.5, 7.5) as fig:
         ax = fig.add_axes((0.03, 0.03, 0.94, 0.88))
         sky_axes(ax)
-        quiver(ax, np.degrees(data.az_rad), np.degrees(data.el_rad), fit.residual_xel_arcsec,
-                fit.residual_el_arcsec, fit.used)
+        scale = quiver(ax, np.degrees(data.az_rad), np.degrees(data.el_rad),
+                       fit.residual_xel_arcsec, fit.residual_el_arcsec, fit.used)
         ax.text(-100.0, -100.0, f"{fit.n_used} used (blue), {fit.n_rejected} rejected (red)\n"
                 f"sky rms {fit.sky_rms_arcsec:.1f}\"", fontsize=8, va="bottom")
         caption = ("Each arrow is one scan's residual after the fit (indicated minus true: "
                    "cross-elevation along increasing azimuth, elevation towards the zenith), "
-                   f"drawn at the position observed; 60\" of residual is drawn as "
-                   f"{60 / QUIVER_ARCSEC_PER_DEG:g}\N{DEGREE SIGN} on the map. Random noise "
+                   f"drawn at the position observed; {scale.words()}. Random noise "
                    "points every way; arrows that agree with their neighbours are a term the "
                    "model lacks.")
         return figure_file(fig, Path(path), title, caption, formats)
@@ -180,22 +264,34 @@ def residual_quiver_figure(data: PointingData, fit: FitResult, path: str | Path,
 # ---------------------------------------------------------------------------------------------
 # histograms and grouped bars
 # ---------------------------------------------------------------------------------------------
+def histogram_edges(values, bin_arcsec: float) -> np.ndarray:
+    """Bin edges (arcsec) of width ``bin_arcsec`` centred on its multiples, symmetric about
+    zero and just covering every finite value."""
+    v = np.asarray(values, float)
+    v = v[np.isfinite(v)]
+    top = float(np.max(np.abs(v))) if v.size else bin_arcsec
+    n = max(1, math.ceil(top / bin_arcsec - 0.5 + 1e-9))  # bins beside the one at zero
+    return bin_arcsec * (np.arange(-n, n + 2) - 0.5)
+
+
 def histogram_figure(series: Mapping[str, tuple[Any, Any]], path: str | Path, *,
-                     title: str = "", caption: str = "", bin_arcsec: float = 10.0,
+                     title: str = "", caption: str = "", bin_arcsec: float | None = None,
                      gaussian: bool = True,
                      formats: Sequence[str] = ("png",)) -> FigureFile:
     """Histograms of cross-elevation and elevation values (arcsec) for each named series
     ``{label: (xel, el)}``, with the rms in the legend and, if ``gaussian``, the normal
-    curve of the first series' rms."""
+    curve of the first series' rms. Bins of ``bin_arcsec`` (default: from the first
+    series' spread, :func:`histogram_bin_arcsec`), the axis just covering every value; the
+    caption ends with the bin width."""
     if not series:
         raise ValueError("histogram_figure needs at least one series")
     title = title or "Residual histograms"
     all_values = np.concatenate([np.concatenate([np.ravel(x), np.ravel(y)])
                                  for x, y in series.values()]).astype(float)
-    all_values = all_values[np.isfinite(all_values)]
-    top = max(bin_arcsec, float(np.max(np.abs(all_values))) if all_values.size else 1.0)
-    edges = np.arange(-top - bin_arcsec, top + 2 * bin_arcsec, bin_arcsec)
-    edges -= 0.5 * bin_arcsec
+    if bin_arcsec is None:
+        bin_arcsec = histogram_bin_arcsec(*next(iter(series.values())), drawn=[all_values])
+    edges = histogram_edges(all_values, bin_arcsec)
+    caption = (caption or title).rstrip(".") + f". Bins of {bin_arcsec:g}\"."
     with Canvas(10.0, 4.4) as fig:
         axes = fig.subplots(1, 2)
         fig.subplots_adjust(left=0.07, right=0.98, bottom=0.12, top=0.84, wspace=0.2)
@@ -214,11 +310,12 @@ def histogram_figure(series: Mapping[str, tuple[Any, Any]], path: str | Path, *,
                     ax.plot(x, v.size * bin_arcsec * np.exp(-0.5 * (x / s) ** 2)
                             / (s * math.sqrt(2 * math.pi)), "k-", lw=1,
                             label=f"normal, \N{GREEK SMALL LETTER SIGMA} = {s:.1f}\"")
+            ax.set_xlim(edges[0], edges[-1])
             ax.set_xlabel(f"{axis_name} (arcsec)")
             ax.set_ylabel(f"number per {bin_arcsec:g}\" bin")
             ax.set_title(f"({'ab'[a]}) {axis_name}", fontsize=9)
             ax.legend(loc="upper right", fontsize=7)
-        return figure_file(fig, Path(path), title, caption or title, formats)
+        return figure_file(fig, Path(path), title, caption, formats)
 
 
 def comparison_figure(values: Mapping[str, Mapping[str, float]], path: str | Path, *,

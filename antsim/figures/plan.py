@@ -11,17 +11,20 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from .style import FigureFile
+
 __all__ = ["plan_figures"]
 
 DPI = 100
 
 
-def plan_figures(doc: dict[str, Any], out_dir: str | Path) -> list[Path]:
-    """Write the figures of a plan document (``antsim plan --json``) into ``out_dir``."""
+def plan_figures(doc: dict[str, Any], out_dir: str | Path) -> list[FigureFile]:
+    """Write the figures of a plan document (``antsim plan --json``) into ``out_dir``;
+    returns them with their titles and captions (for ``report.html``)."""
     from .charts import comparison_figure
 
     out = Path(out_dir)
-    written: list[Path] = []
+    written: list[FigureFile] = []
     plans = doc["plans"]
 
     def series(key: str) -> dict[str, dict[str, float]]:
@@ -31,11 +34,11 @@ def plan_figures(doc: dict[str, Any], out_dir: str | Path) -> list[Path]:
     written.append(comparison_figure(
         series("sigma_fisher_arcsec"), out / "sigma_predicted.png",
         title="Predicted sigma of each term (Fisher: design + noise model)",
-        ylabel="sigma (arcsec)", log=True).path)
+        ylabel="sigma (arcsec)", log=True))
     written.append(comparison_figure(
         series("sigma_mc_arcsec"), out / "sigma_monte_carlo.png",
         title="Monte Carlo sigma of each term (scatter of the fits)",
-        ylabel="sigma (arcsec)", log=True).path)
+        ylabel="sigma (arcsec)", log=True))
     ratio = {p["name"]: {t: v["sigma_mc_arcsec"] / v["sigma_fisher_arcsec"]
                          for t, v in p["terms"].items()
                          if v["sigma_mc_arcsec"] and v["sigma_fisher_arcsec"]}
@@ -43,12 +46,13 @@ def plan_figures(doc: dict[str, Any], out_dir: str | Path) -> list[Path]:
     written.append(comparison_figure(
         ratio, out / "sigma_mc_over_predicted.png",
         title="Monte Carlo sigma / predicted sigma (1 = agreement)", ylabel="ratio",
-        caption="Sampling error of the Monte Carlo sigma: about 1/sqrt(2N).").path)
+        caption="Sampling error of the Monte Carlo sigma: about 1/sqrt(2N), with N "
+                + ", ".join(f"{p['n_monte_carlo']} ({p['name']})" for p in plans) + "."))
     written.append(comparison_figure(
         series("bias_arcsec"), out / "bias.png",
         title="Bias of each term (mean fit minus truth)", ylabel="bias (arcsec)",
         caption="Deterministic errors (mean thermal, source structure) bias the terms the "
-                "same way in every campaign; more time does not remove them.").path)
+                "same way in every campaign; more time does not remove them."))
     for k, a in enumerate(doc.get("answers", {}).get("duration", [])):
         written.append(_duration_figure(a, out / f"duration_{k + 1}.png"))
     for k, a in enumerate(doc.get("answers", {}).get("sources", [])):
@@ -60,11 +64,11 @@ def plan_figures(doc: dict[str, Any], out_dir: str | Path) -> list[Path]:
             written.append(comparison_figure(
                 values, out / f"sources_{k + 1}.png",
                 title=f"Predicted sigma for source lists ({a['based_on']})",
-                ylabel="sigma (arcsec)", log=True).path)
+                ylabel="sigma (arcsec)", log=True))
     return written
 
 
-def _duration_figure(answer: dict[str, Any], path: Path) -> Path:
+def _duration_figure(answer: dict[str, Any], path: Path) -> FigureFile:
     """Predicted sigma of the question's terms against the number of hours, days or nights."""
     import matplotlib
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -96,7 +100,13 @@ def _duration_figure(answer: dict[str, Any], path: Path) -> Path:
         ax.grid(True, alpha=0.35)
         ax.legend(fontsize=8)
         goal = f"{one:g}\"" if one is not None else "their targets"
-        fig.suptitle(f"How long for {', '.join(answer['terms'])} to reach {goal}", fontsize=11)
+        title = f"How long for {', '.join(answer['terms'])} to reach {goal}"
+        fig.suptitle(title, fontsize=11)
         path.parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(path, format="png", dpi=DPI, metadata={"Software": "antsim"})
-    return path
+    caption = (f"Predicted sigma against the number of {answer['unit']}s of "
+               f"'{answer['based_on']}': " + (
+                   f"the target is reached after {answer['answer']['count']} "
+                   f"{answer['unit']}s." if answer["reached"] else
+                   "the target is not reached within the range tried."))
+    return FigureFile(path, title, caption)

@@ -17,11 +17,11 @@ from pathlib import Path
 from antsim.documents import Reference, reference_for
 from antsim.progress import Progress
 from controller.astro.sun import NIGHT_SUN_MAX_DEG
+from controller.pointing.modelio import write_model_file
 from controller.pointing.result import FitResult
 from controller.pointing.signs import UNITS, sign_convention
-from controller.pointing.tpoint import TPointModel, write_mod
+from controller.pointing.tpoint import TPointModel
 from controller.pointing.variants import VARIANTS, fit_variants
-from controller.pointing.vocabulary import in_tpoint_terms
 
 from .inuse import Pointing, pointing_in_use
 from .runner import RunResult
@@ -172,8 +172,7 @@ def write_outputs(result: RunResult, report: bool = True,
         (out / "fit.json").write_text(json.dumps(fit_a.to_json(), indent=2) + "\n",
                                       encoding="utf-8")
         caption = f"{result.scenario.name} seed {result.seed}: fit A"
-        write_mod(in_tpoint_terms(TPointModel.from_fit(fit_a, caption=caption)),
-                  out / "model.dat")
+        write_model_file(TPointModel.from_fit(fit_a, caption=caption), out / "model.dat")
     from controller.scans.gaincurve import calibrate
 
     result.calibration = calibrate(result.rows, result.scenario.controller, result.tippings)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from controller.errors import InputError
 
@@ -11,12 +12,29 @@ from .legacy import W_TERMS_KEY, names_w_terms, relabel_reconstructed, w_terms_m
 from .model import NAMED_MODELS, PointingModel
 from .terms import TermError
 
-__all__ = ["load_model", "model_from_json", "model_to_json"]
+if TYPE_CHECKING:
+    from .tpoint import TPointModel
+
+__all__ = ["load_model", "model_from_json", "model_to_json", "write_model_file"]
 
 
 def model_to_json(model: PointingModel) -> dict:
     return {"model": model.name, **w_terms_marker(model.names),
             "terms": {n: {"value_arcsec": v} for n, v in model.as_dict().items()}}
+
+
+def write_model_file(model: TPointModel, path: str | Path) -> Path:
+    """Write ``model`` as a TPOINT ``.mod`` file in TPOINT's vocabulary and sign wherever a
+    term maps (:func:`controller.pointing.vocabulary.in_tpoint_terms`: the old name in a
+    comment on the line, units and sign convention in the header); :func:`load_model` (and
+    ``antsim run --model``) reads it back. The one writer of ``run``'s ``model.dat``,
+    ``fit --write-model`` and ``diagnose``'s ``model_updated.dat``."""
+    from .tpoint import write_mod
+    from .vocabulary import in_tpoint_terms
+
+    path = Path(path)
+    write_mod(in_tpoint_terms(model), path)
+    return path
 
 
 def model_from_json(data: dict, where: str) -> PointingModel:
