@@ -441,6 +441,7 @@ def test_diagnose_command_on_tpoint_data_json(tmp_path, capsys):
     assert doc["findings"][0]["effect"] == "az_runout_2a"
     assert (tmp_path / "out" / "model_updated.dat").exists()
     assert (tmp_path / "out" / "diagnose.json").exists()
+    assert (tmp_path / "out" / "report.html").exists()
 
 
 def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):

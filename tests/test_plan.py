@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -416,14 +417,27 @@ def test_predicted_sigma_agrees_with_monte_carlo(short_engine):
 # ---------------------------------------------------------------------------------------------
 # engines, command line, answers
 # ---------------------------------------------------------------------------------------------
-def test_same_results_with_1_and_2_workers_and_dask(write_plan, tmp_path, capsys):
+@pytest.fixture(scope="module")
+def plan_out(tmp_path_factory, short_ghigo_text):
+    """``antsim plan PLAN --workers 1 --no-answers --out DIR`` of 6 members in blocks of 2:
+    (plan file, DIR)."""
+    base = tmp_path_factory.mktemp("plan_out")
+    scenario = base / "short.toml"
+    scenario.write_text(short_ghigo_text, encoding="utf-8")
+    path = base / "plan.toml"
+    path.write_text(PLAN.format(scenario=scenario.as_posix(), members=6, block=2, variant="",
+                                extra=""), encoding="utf-8")
+    out = base / "out"
+    assert cli_main(["plan", str(path), "--workers", "1", "--no-answers", "--no-progress",
+                     "--out", str(out)]) == 0
+    return path, out
+
+
+def test_same_results_with_1_and_2_workers_and_dask(plan_out):
     """Member i has seed (plan seed, i) and block i // block_members whatever runs it: the
     same JSON from a pool of 1 and of 2 workers, a Dask LocalCluster of 2, and this process."""
-    path = write_plan(members=6, block=2)
-    out = tmp_path / "out"
-    assert cli_main(["plan", str(path), "--json", "--workers", "1", "--no-answers",
-                     "--out", str(out)]) == 0
-    doc1 = json.loads(capsys.readouterr().out)
+    path, out = plan_out
+    doc1 = json.loads((out / "plan.json").read_text())
     plan = load_plan(path)
     doc2 = run_plan(plan, workers=2, answers=False, progress=False).to_json()
     doc0 = run_plan(plan, workers=0, answers=False, progress=False).to_json()  # this process
@@ -440,8 +454,54 @@ def test_same_results_with_1_and_2_workers_and_dask(write_plan, tmp_path, capsys
         assert {"sigma_fisher_arcsec", "sigma_mc_arcsec", "bias_arcsec"} <= set(entry)
         assert entry["sigma_fisher_arcsec"] > 0 and entry["sigma_mc_arcsec"] > 0
     assert {"sky_rms_fisher_arcsec", "sky_rms_mc_arcsec", "duration_h", "n_scans"} <= set(p)
-    assert json.loads((out / "plan.json").read_text()) == doc1
     assert (out / "sigma_predicted.png").stat().st_size > 1000
+
+
+def test_plan_page_numbers_are_the_json_numbers(plan_out):
+    """report.html: the variants' and terms' numbers are plan.json's at plan.txt's precision
+    (one source), plan.txt is on the page whole, every figure embedded byte for byte."""
+    from html import escape
+
+    from test_report import _embedded, read_page
+
+    from antsim.plan.report import TERMS_HEADER, VARIANTS_HEADER
+
+    _, out = plan_out
+    doc = json.loads((out / "plan.json").read_text())
+    page = read_page(out / "report.html")
+
+    def f(x, spec):
+        return "\N{EN DASH}" if x is None else format(x, spec)
+
+    assert page.tables["The plan's variants"] == [list(VARIANTS_HEADER)] + [
+        [p["name"], f(p["duration_h"], ".1f"), str(p["n_scans"]), str(p["n_monte_carlo"]),
+         f(p["sky_rms_fisher_arcsec"], ".1f"), f(p["sky_rms_mc_arcsec"], ".1f")]
+        for p in doc["plans"]]
+    text = (out / "plan.txt").read_text()
+    for p in doc["plans"]:
+        rows = page.tables[f"{p['name']}: the fitted terms (arcsec)"]
+        assert rows == [list(TERMS_HEADER)] + [
+            [n, f(t["truth_arcsec"], "+.1f"), f(t["sigma_fisher_arcsec"], ".2f"),
+             f(t["sigma_mc_arcsec"], ".2f"), f(t["bias_arcsec"], "+.1f"),
+             f(t["bias_predicted_arcsec"], "+.1f")] for n, t in p["terms"].items()]
+        for n, t in p["terms"].items():  # the same figures as plan.txt's table
+            assert re.search(rf"^  {n} .*{f(t['sigma_fisher_arcsec'], '.2f')}", text, re.M)
+        assert f"predicted {f(p['sky_rms_fisher_arcsec'], '.1f')}\"" in text
+    html = (out / "report.html").read_text()
+    assert escape(text.rstrip("\n")) in html
+    embedded = _embedded(html)
+    pngs = sorted(x.name for x in out.glob("*.png"))
+    assert sorted(embedded) == pngs and len(pngs) >= 4
+    assert all(embedded[n] == (out / n).read_bytes() for n in pngs)
+
+
+def test_plan_page_in_a_headless_browser(plan_out, tmp_path):
+    from test_report import CHROMIUM, assert_renders_in_a_browser
+
+    if CHROMIUM is None:
+        pytest.skip("chromium is not installed (apt-get install chromium)")
+    _, out = plan_out
+    assert_renders_in_a_browser(out / "report.html", tmp_path, len(list(out.glob("*.png"))))
 
 
 def test_answers_duration_sources_and_separation(write_plan):

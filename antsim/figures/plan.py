@@ -34,11 +34,16 @@ def plan_figures(doc: dict[str, Any], out_dir: str | Path) -> list[FigureFile]:
     written.append(comparison_figure(
         series("sigma_fisher_arcsec"), out / "sigma_predicted.png",
         title="Predicted sigma of each term (Fisher: design + noise model)",
-        ylabel="sigma (arcsec)", log=True))
+        ylabel="sigma (arcsec)", log=True,
+        caption="The standard error of each term predicted from the schedule the controller "
+                "would produce and the noise model of the physics, per variant (log scale)."))
     written.append(comparison_figure(
         series("sigma_mc_arcsec"), out / "sigma_monte_carlo.png",
         title="Monte Carlo sigma of each term (scatter of the fits)",
-        ylabel="sigma (arcsec)", log=True))
+        ylabel="sigma (arcsec)", log=True,
+        caption="The scatter of each term over the fits of simulated campaigns: "
+                + ", ".join(f"{p['n_monte_carlo']} ({p['name']})" for p in plans)
+                + " (log scale)."))
     ratio = {p["name"]: {t: v["sigma_mc_arcsec"] / v["sigma_fisher_arcsec"]
                          for t, v in p["terms"].items()
                          if v["sigma_mc_arcsec"] and v["sigma_fisher_arcsec"]}

@@ -77,7 +77,7 @@ def write_plan_report(doc: Mapping[str, Any], text: str, figures: Sequence[Figur
         sections.append(Section(f"Variant: {p['name']}", blocks))
     answers = answers_text(doc.get("answers", {}))
     if answers:
-        sections.append(Section("Answers", [Preformatted("\n".join(answers))]))
+        sections.append(Section("Answers", [Paragraph("\n\n".join(answers))]))
     sections.append(Section("Figures", [Figure.of(f) for f in figures]))
     sections.append(Section("The plan in words", [Preformatted(text, caption="plan.txt")]))
     return write_report(out / "report.html", f"antsim plan: {doc['plan']}", sections,
