@@ -169,8 +169,9 @@ def test_before_after_figures(short_run, tmp_path):
                                             "diag_quiver.png"]
     for f in files:
         assert_sane_png(f.path)
-    assert f"{before.sky_rms_arcsec:.1f}" in files[0].title
-    assert f"{after.sky_rms_arcsec:.1f}" in files[0].title
+    # the Sky RMS at the precision diagnose's text prints it
+    assert f"{before.sky_rms_arcsec:.2f}\"" in files[0].title
+    assert f"{after.sky_rms_arcsec:.2f}\"" in files[0].title
 
 
 def test_before_after_refuses_mismatched_data(short_run, tmp_path):
