@@ -539,10 +539,13 @@ def test_equatorial_recordings_are_diagnosed_on_their_axes(tmp_path, capsys):
     not know is refused in one line."""
     _, recordings = _short_run(tmp_path, "crane1981_140ft_3245.toml")
     capsys.readouterr()
-    assert cli(["diagnose", str(recordings)]) == 0
+    assert cli(["diagnose", str(recordings), "--out", str(tmp_path / "diag")]) == 0
     out = capsys.readouterr().out
     assert "baseline C1 C2 C3 C4 C5 C6 C7 C8 C9 C10 C11" in out and "RA/Dec rms" in out
-    assert "cross-declination" in out and "azimuth" not in out
+    assert "cross-declination" in out and "azimuth" not in out.split("\nwrote ")[0]
+    # the figure against the mount's own axes, on the report page
+    page = (tmp_path / "diag" / "report.html").read_text()
+    assert 'data-file="diagnose_residuals.png"' in page and "RA/Dec rms in-sample" in page
     bad = tmp_path / "gimbal.ecsv"
     bad.write_text(recordings.read_text().replace("mount: equatorial", "mount: gimbal"))
     assert cli(["diagnose", str(bad)]) == 2

@@ -207,7 +207,7 @@ def _equatorial_plot(before, after, data, path: Path, caption: str):
     offsets = ("cross-declination", "declination")
     positions = (("hour angle (h, West +)", np.degrees(data.az_rad) / 15.0),
                  ("declination (deg)", np.degrees(data.el_rad)))
-    series = [("before", before)] + ([("after", after)] if after is not None else [])
+    series = [("baseline", before)] + ([("with findings", after)] if after is not None else [])
     with Canvas(13.0, 7.0) as fig:
         axes = fig.subplots(2, 3)
         fig.subplots_adjust(left=0.06, right=0.99, bottom=0.08, top=0.92, hspace=0.3,
