@@ -11,9 +11,11 @@ import json
 import math
 import re
 from dataclasses import replace
+from html import escape
 
 import numpy as np
 import pytest
+from test_report import _embedded, assert_renders_in_a_browser, needs_chromium, read_page
 
 from antsim.cli import main as cli_main
 from antsim.plan.planfile import load_plan
@@ -460,10 +462,6 @@ def test_same_results_with_1_and_2_workers_and_dask(plan_out):
 def test_plan_page_numbers_are_the_json_numbers(plan_out):
     """report.html: the variants' and terms' numbers are plan.json's at plan.txt's precision
     (one source), plan.txt is on the page whole, every figure embedded byte for byte."""
-    from html import escape
-
-    from test_report import _embedded, read_page
-
     from antsim.plan.report import TERMS_HEADER, VARIANTS_HEADER
 
     _, out = plan_out
@@ -495,11 +493,8 @@ def test_plan_page_numbers_are_the_json_numbers(plan_out):
     assert all(embedded[n] == (out / n).read_bytes() for n in pngs)
 
 
+@needs_chromium
 def test_plan_page_in_a_headless_browser(plan_out, tmp_path):
-    from test_report import CHROMIUM, assert_renders_in_a_browser
-
-    if CHROMIUM is None:
-        pytest.skip("chromium is not installed (apt-get install chromium)")
     _, out = plan_out
     assert_renders_in_a_browser(out / "report.html", tmp_path, len(list(out.glob("*.png"))))
 
