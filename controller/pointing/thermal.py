@@ -42,9 +42,9 @@ import numpy as np
 
 from .terms import COS_AN, SIN_AN, TAN_E, Regressor, Term, register_terms
 
-__all__ = ["PROXY_TERMS", "SENSOR_PAIRS", "SENSOR_TERMS", "STRUCTURE_SENSORS", "THERMAL_TERMS",
-           "sensor_aux", "structure_column", "structure_sensor_names", "structure_time_column",
-           "thermal_regressors"]
+__all__ = ["PROXY_TERMS", "SENSOR_FAMILY", "SENSOR_PAIRS", "SENSOR_TERMS", "STRUCTURE_SENSORS",
+           "THERMAL_TERMS", "sensor_aux", "structure_column", "structure_sensor_names",
+           "structure_time_column", "thermal_regressors"]
 
 #: where each structure temperature sensor sits (antsim's 45-ft; docs/assumptions.md)
 STRUCTURE_SENSORS: dict[str, str] = {
@@ -121,6 +121,9 @@ def _proxy_terms() -> dict[str, Term]:
 
 #: terms in structure temperature differences (arcsec per kelvin)
 SENSOR_TERMS: dict[str, Term] = _sensor_terms()
+#: the six pair terms: one term per sensor pair (TTILT is TNPNS and TWPEW with one
+#: coefficient); fit T and diagnose test them as one family
+SENSOR_FAMILY: tuple[str, ...] = ("TEDFB", "TSDRL", "TEYFB", "TSYRL", "TNPNS", "TWPEW")
 #: terms in proxies (arcsec per unit of the proxy; :mod:`controller.pointing.proxies`)
 PROXY_TERMS: dict[str, Term] = _proxy_terms()
 THERMAL_TERMS: dict[str, Term] = {**SENSOR_TERMS, **PROXY_TERMS}

@@ -43,6 +43,7 @@ from .model import named_model_terms
 from .result import FitResult
 from .thermal import (
     PROXY_TERMS,
+    SENSOR_FAMILY,
     SENSOR_TERMS,
     sensor_aux,
     structure_column,
@@ -200,13 +201,29 @@ def thermal_fit(cols: Mapping[str, np.ndarray], mask: np.ndarray, terms: Sequenc
     support (:func:`~controller.pointing.selection.select_terms`), in the structure
     temperatures where the recordings have them, else in proxies (alt-az recordings with a
     ``context``); None where there are neither. The selection's tests are the fit's
-    ``notes``."""
+    ``notes``.
+
+    The structure-sensor terms are one candidate: the pair terms of :data:`SENSOR_FAMILY`
+    that the recorded sensors allow enter together, when an F test of the group (one dof
+    per term, at ``ALPHA``) and the held-out check say the data support them, or not at all.
+    They are one physical mechanism (the structure's thermal bending) measured by one set of
+    thermometers (the Sun that warms one part of the structure warms the others); tested
+    one at a time, a weak term is left out in most campaigns (pre-test estimation: Judge and Bock
+    1978; Giles and Giles 1993, J. Econ. Surveys 7, 145) and what it explains goes into the
+    geometric terms that share its pattern: W3 and W5 by about a third of their sigma in
+    every campaign alike (``benchmarks/recovery.py``). ``antsim diagnose`` tests the same
+    family as one candidate (``thermal_sensors``). TTILT (TNPNS and TWPEW with one
+    coefficient) is a restriction of the family, not a member. The proxies stay single
+    candidates: they are not measurements of separate parts but alternative descriptions of
+    the same heating (the Sun's height, its direction, the air), largely collinear, among
+    which the selection chooses."""
     from .selection import select_terms
 
     base = list(named_model_terms(terms) if isinstance(terms, str) else terms)
     data = pointing_data(cols, mask, float((context or {}).get("sensor_lag_s", 0.0)))
-    candidates = [t for t, term in SENSOR_TERMS.items()
-                  if data.aux and thermal_regressors((term,)) <= set(data.aux)]
+    family = tuple(t for t in SENSOR_FAMILY
+                   if data.aux and thermal_regressors((SENSOR_TERMS[t],)) <= set(data.aux))
+    candidates: list[str | tuple[str, ...]] = [family] if family else []
     if not candidates:
         if context is None or "ha_deg" in cols or "epoch_utc" not in context:
             return None
@@ -220,7 +237,8 @@ def thermal_fit(cols: Mapping[str, np.ndarray], mask: np.ndarray, terms: Sequenc
                       if thermal_regressors((term,)) <= set(aux)]
     selection = select_terms(data, base, candidates, fixed=fixed)
     fit = fit_model(data, selection.terms, name=f"{name}+thermal", fixed=fixed)
-    notes = [f"thermal terms tested: {', '.join(candidates)} (family of "
+    tested = ", ".join(c if isinstance(c, str) else "(" + " ".join(c) + ")" for c in candidates)
+    notes = [f"thermal terms tested: {tested} (family of "
              f"{selection.n_family}); added: {', '.join(selection.accepted) or 'none'}"]
     notes += [step.describe() for step in selection.steps]
     return dataclasses.replace(fit, notes=tuple(notes))

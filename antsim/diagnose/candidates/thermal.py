@@ -301,9 +301,9 @@ class SensorTermsCandidate(TermsCandidate):
 
     def __init__(self):
         from antsim.world.effects.thermal import ThermalEffect
-        from controller.pointing.thermal import SENSOR_TERMS
+        from controller.pointing.thermal import SENSOR_FAMILY
 
-        terms = tuple(n for n in SENSOR_TERMS if n != "TTILT")
+        terms = SENSOR_FAMILY
         super().__init__(
             "thermal_sensors", terms, "thermal deformation seen by the structure sensors",
             "residuals linear in the structure temperature differences: the dish's front-back "
