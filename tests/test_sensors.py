@@ -23,7 +23,7 @@ from antsim.world.world import World
 from controller.errors import InputError
 from controller.pointing.model import PointingModel
 from controller.pointing.modelio import model_to_json
-from controller.pointing.thermal import STRUCTURE_SENSORS, structure_column
+from controller.pointing.thermal import SENSOR_FAMILY, STRUCTURE_SENSORS, structure_column
 from controller.program.recordings import COLUMNS, read_recordings, recording_columns
 
 #: the sensors without imperfections: what they read is the structure's temperature
@@ -183,18 +183,19 @@ def sunny_day(repo_root):
 
 
 def test_fit_t_of_a_sunny_day_with_sensors(sunny_day):
-    """The 24-hour run with sensors (seed 1): fit T adds the dish's two terms (the day's
-    largest errors: 20"/K of up to 5 K) with values within 3 honest sigma of the truth, and
-    its Sky RMS is lower than fit A's (by 8% at this seed)."""
+    """The 24-hour run with sensors (seed 1): fit T adds the six pair terms together (the
+    dish's are the day's largest errors: 20"/K of up to 5 K), each within 3 honest sigma of
+    the truth, and its Sky RMS is lower than fit A's (by 8% at this seed)."""
     result = sunny_day
     fits = run_fits(result)
     fit_t, truth = fits["T"], result.truth["thermal_terms"]
-    assert {"TEDFB", "TSDRL"} <= set(fit_t.names[10:])
+    assert fit_t.names[10:] == SENSOR_FAMILY
+    assert fit_t.notes[1].startswith(", ".join(SENSOR_FAMILY) + " added together (F = ")
     for name in fit_t.names[10:]:
         j = fit_t.names.index(name)
         assert abs(fit_t.values_arcsec[j] - truth[name]) < 3 * fit_t.sigma_honest_arcsec[j]
     assert fit_t.sky_rms_arcsec < 0.95 * fits["A"].sky_rms_arcsec
-    assert fit_t.notes[0].startswith("thermal terms tested: TEDFB, TSDRL")
+    assert fit_t.notes[0].startswith("thermal terms tested: (TEDFB TSDRL TEYFB")
 
 
 def test_a_model_with_thermal_terms_is_refused_as_the_controller_model(
