@@ -309,7 +309,7 @@ def test_the_thermal_findings_are_the_benchmarks_and_the_plans_output():
         re.search(r"at least one warning: \d+% with the heating, 0% without", output)
     plan = " ".join((RESULTS / "ghigo1990_sensors_whatif.txt").read_text().split())
     days, hours, bias = re.search(r"duration: (\d+) days of 'day only, sensors' .*?; \d+ scans, "
-                                  r"([\d.]+) h of scanning .*?\(W4 ([-\d.]+)\"\)", plan).groups()
+                                  r"([\d.]+) h of scanning .*?\(W4 ([-+\d.]+)\"\)", plan).groups()
     plain_days, plain_bias = re.search(r"duration: (\d+) days of 'day only' .*?\(W4 ([-\d.]+)\"\)",
                                        plan).groups()
     assert f"{days} days of daytime scans ({hours} h of scanning)" in section.replace("( ", "(")
