@@ -97,10 +97,10 @@ def test_demo_numbers_tell_the_story(demo):
 
 
 def test_the_readme_quotes_chapter_5(demo):
-    """The README quotes chapter 5's finding: the words and numbers the demo printed."""
+    """docs/diagnose.md quotes chapter 5's finding: the words and numbers the demo printed."""
     _, stdout, numbers, _ = demo
     best = numbers["diagnose"]["findings"][0]
-    readme = " ".join((Path(__file__).resolve().parents[1] / "README.md").read_text(
+    readme = " ".join((Path(__file__).resolve().parents[1] / "docs" / "diagnose.md").read_text(
         encoding="utf-8").split())
     quote = (f"antsim diagnose names the effect: {best['effect']} (terms "
              f"{', '.join(best['terms'])}). [...] Where: {best['where']}. Sky rms "

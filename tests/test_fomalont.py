@@ -429,7 +429,7 @@ def _published_row(text: str, band: str) -> list[str]:
 
 @pytest.mark.parametrize("band", ["x", "s"])
 def test_the_published_seed_3_numbers_are_the_runs(fomalont_runs, band):
-    """docs/telescopes.md (and the README's row) quote the runs of this module: each number
+    """docs/telescopes.md (and docs/results.md's row) quote the runs of this module: each number
     as the run gives it, rounded as printed."""
     _, fit_a, fit_f = _fits(fomalont_runs[band])
     table, _, _ = _recordings(fomalont_runs[band])
@@ -444,7 +444,7 @@ def test_the_published_seed_3_numbers_are_the_runs(fomalont_runs, band):
             f"{(t['W2'] + t['W8']) / 120:.2f}', {(t['W3'] - t['W7']) / 120:.2f}'"]
     docs = (REPO / "docs" / "telescopes.md").read_text(encoding="utf-8")
     assert _published_row(docs, band.upper()) == want
-    readme = (REPO / "README.md").read_text(encoding="utf-8")
-    row = next(line for line in readme.splitlines()
+    results = (REPO / "docs" / "results.md").read_text(encoding="utf-8")
+    row = next(line for line in results.splitlines()
                if line.startswith("| `fomalont1973_x.toml`, `fomalont1973_s.toml`"))
     assert f"{scans} scans" in row and want[2] in row and want[3] in row and want[4] in row

@@ -132,11 +132,11 @@ def test_report_gain_curve_recovered_from_cas_a_and_cyg_a(ghigo_calibration):
 
 
 def test_the_published_seed_1_gain_curve(ghigo_calibration):
-    """README and docs/telescopes.md quote this fit (seed 1), as printed here."""
+    """docs/results.md and docs/telescopes.md quote this fit (seed 1), as printed here."""
     _, _, cal = ghigo_calibration
     g, s = cal.fit.gains, cal.fit.sigma
     quoted = (f"{g[0]:.3f} +- {s[0]:.3f} at 10 deg", f"{g[1]:.3f} +- {s[1]:.3f} at 20 deg")
-    for doc in ("README.md", "docs/telescopes.md"):
+    for doc in ("docs/results.md", "docs/telescopes.md"):
         text = " ".join((REPO / doc).read_text(encoding="utf-8").split())
         assert all(q in text for q in quoted), doc
     docs = " ".join((REPO / "docs" / "telescopes.md").read_text(encoding="utf-8").split())

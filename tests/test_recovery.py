@@ -2,7 +2,7 @@
 
 Twelve seeds of the 1990 campaign without its thermal effect (the heating shifts some W's the
 same way in every seed, a bias no single-campaign error bar can cover: see the benchmark and
-the README). The pulls (fitted - true) / sigma of all ten W's in all twelve seeds are pooled.
+docs/results.md). The pulls (fitted - true) / sigma of all ten W's in all twelve seeds are pooled.
 """
 
 from __future__ import annotations

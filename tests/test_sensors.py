@@ -259,7 +259,8 @@ def test_diagnose_names_the_thermal_effect_in_the_sensors_terms(sunny_day, tmp_p
     # 49.8" -> 39.5"); 5% is beyond the held-out Sky RMS's own noise on the same scans
     assert s["sky_rms_after_arcsec"] < 0.95 * s["sky_rms_before_arcsec"]
     assert s["cv_sky_rms_after_arcsec"] < 0.95 * s["cv_sky_rms_before_arcsec"]
-    readme = " ".join((Path(__file__).resolve().parents[1] / "README.md").read_text().split())
+    readme = " ".join((Path(__file__).resolve().parents[1] / "docs" / "results.md").read_text(
+        encoding="utf-8").split())
     assert (f"Sky RMS {s['sky_rms_before_arcsec']:.1f}\" -> {s['sky_rms_after_arcsec']:.1f}\" "
             f"in sample, {s['cv_sky_rms_before_arcsec']:.1f}\" -> "
             f"{s['cv_sky_rms_after_arcsec']:.1f}\" held out") in readme

@@ -20,8 +20,9 @@ from controller.errors import InputError
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("recordings", metavar="RECORDINGS",
-                        help="recordings.ecsv from 'antsim run', or a TPOINT pointing data file")
+    parser.add_argument("recordings", metavar="RECORDINGS", nargs="?",
+                        help="recordings.ecsv from 'antsim run', or a TPOINT pointing data "
+                             "file (required but with --list)")
     parser.add_argument("--scenario", metavar="SCENARIO",
                         help="the scenario that should explain the recordings (a name, e.g. "
                              "ghigo1990, or a TOML file): its simulation predicts the noise "
@@ -88,6 +89,10 @@ def main(args: argparse.Namespace) -> int:
     if args.list:
         print(_library_text())
         return 0
+    if args.recordings is None:
+        raise InputError("command line", "RECORDINGS", "(none)",
+                         "is required (a recordings.ecsv or a TPOINT data file)",
+                         "antsim diagnose --list alone prints the candidate library")
     for name in ("sims", "jobs"):
         if getattr(args, name) < 1:
             raise InputError("command line", f"--{name}", getattr(args, name),

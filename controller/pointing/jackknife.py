@@ -240,7 +240,7 @@ def _rejection_factor(replay: _Replay, t_s: np.ndarray, block_s: float,
     should. One ratio over all terms keeps each term's linear jackknife (smooth, its dof
     computed) and corrects the common scale. Over seeds 201..400 of ghigo1990 without heating
     the pulls' spread went from 1.03-1.14 to 0.93-1.04 and the fraction within 3 sigma from
-    98-100% to 99.5-100% (seeds 1..200, on which the form was chosen: README)."""
+    98-100% to 99.5-100% (seeds 1..200, on which the form was chosen: docs/results.md)."""
     replayed = replay.variance(t_s, block_s)
     ok = np.isfinite(replayed) & np.isfinite(linear_var) & (linear_var > 0)
     return float(np.mean(replayed[ok] / linear_var[ok])) if ok.any() else 1.0
