@@ -185,17 +185,24 @@ class Installed:
         self.venv, self.wheel = venv, wheel
         self.bin = venv / "bin"
 
-    def run(self, command: str, cwd: Path, timeout: float = 300.0):
-        """``command`` (a shell line, as a README writes it) in ``cwd`` with the venv's
-        ``bin`` first on PATH and no PYTHONPATH: what a user who installed the wheel runs."""
+    def environ(self, **extra: str) -> dict[str, str]:
+        """This process's environment with the venv's ``bin`` first on PATH and no
+        PYTHONPATH (plus ``extra``): what a user who installed the wheel has."""
         import os
-        import subprocess
 
         env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
         env["PATH"] = f"{self.bin}{os.pathsep}{env.get('PATH', '')}"
         env["VIRTUAL_ENV"] = str(self.venv)
-        return subprocess.run(["bash", "-c", command], cwd=cwd, env=env, capture_output=True,
-                              text=True, timeout=timeout)
+        env.update(extra)
+        return env
+
+    def run(self, command: str, cwd: Path, timeout: float = 300.0, **extra: str):
+        """``command`` (a shell line, as a README writes it) in ``cwd`` in
+        :meth:`environ`: what a user who installed the wheel runs."""
+        import subprocess
+
+        return subprocess.run(["bash", "-c", command], cwd=cwd, env=self.environ(**extra),
+                              capture_output=True, text=True, timeout=timeout)
 
 
 @pytest.fixture(scope="session")
