@@ -454,9 +454,13 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
 
 
 def test_list_prints_the_library(capsys):
-    assert cli(["diagnose", "x", "--list"]) == 0
+    assert cli(["diagnose", "--list"]) == 0  # as the docs write it: no recordings needed
     out = capsys.readouterr().out
     assert "az_track_2a [HESA2 HECA2]" in out and "sunset_drift" in out
+    assert cli(["diagnose", "x", "--list"]) == 0
+    assert cli(["diagnose"]) == 2  # without --list the recordings are required, in one line
+    err = capsys.readouterr().err
+    assert "RECORDINGS" in err and "--list" in err and len(err.strip().splitlines()) == 1
 
 
 # ------------------------------------------------------------------------------ real data
