@@ -81,12 +81,27 @@ def test_the_readme_parses_into_the_commands_this_test_knows():
     assert any(c.startswith("antsim serve ") for c in commands)
 
 
+def _ci_scripts() -> list[str]:
+    """The lines of .ci/run and of the .ci/ scripts it runs (comments left out)."""
+    scripts, lines = [REPO / ".ci" / "run"], []
+    while scripts:
+        text = scripts.pop().read_text(encoding="utf-8")
+        for line in (line.strip() for line in text.splitlines()):
+            if line.startswith("#"):
+                continue
+            lines.append(line)
+            scripts += [REPO / name for name in re.findall(r"(?<![\w/])\.ci/[\w-]+\b(?!\.)",
+                                                           line) if (REPO / name).is_file()]
+    return lines
+
+
 def test_the_quick_start_test_command_is_what_ci_runs():
-    """The Quick start's second command is, character for character, the one .ci/run runs."""
-    ci = (REPO / ".ci" / "run").read_text(encoding="utf-8")
+    """The Quick start's second command is, character for character, a line CI runs."""
     assert TEST_COMMAND in readme_commands()
-    assert [line for line in ci.splitlines() if line.strip() == TEST_COMMAND], \
+    assert TEST_COMMAND in _ci_scripts(), \
         f".ci/run does not run the README's test command {TEST_COMMAND!r}"
+    readme_step = "ANTSIM_README_COMMANDS=1 python3 -m pytest -q tests/test_readme_commands.py"
+    assert readme_step in _ci_scripts()  # this module's own step
 
 
 def test_nothing_in_the_readme_points_outside_the_repository():
