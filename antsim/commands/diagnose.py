@@ -22,7 +22,7 @@ from controller.errors import InputError
 def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("recordings", metavar="RECORDINGS", nargs="?",
                         help="recordings.ecsv from 'antsim run', or a TPOINT pointing data "
-                             "file (required but with --list)")
+                             "file (required except with --list)")
     parser.add_argument("--scenario", metavar="SCENARIO",
                         help="the scenario that should explain the recordings (a name, e.g. "
                              "ghigo1990, or a TOML file): its simulation predicts the noise "
