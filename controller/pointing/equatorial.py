@@ -221,13 +221,15 @@ def load_equatorial_model(spec: str, latitude_deg: float) -> PointingModel:
         raise InputError(text_spec, "model", text_spec,
                          "neither a named equatorial model nor an existing file",
                          f"equatorial models: {', '.join(sorted(EQUATORIAL_MODELS))}")
-    text = path.read_text(encoding="utf-8", errors="replace")
+    from .modelio import check_value, read_model_file, refuse_empty
+
+    kind, content = read_model_file(path)
     names: list[str] = []
     values: list[float] = []
     name = path.stem
-    if text.lstrip().startswith("{"):
+    if kind == "json":
         try:
-            data = json.loads(text)
+            data = content
             terms = data["terms"]
             names = list(terms)
             values = [float(t["value_arcsec"] if isinstance(t, dict) else t)
@@ -238,7 +240,7 @@ def load_equatorial_model(spec: str, latitude_deg: float) -> PointingModel:
                              "not a model JSON ({'terms': {name: {'value_arcsec': x}}})") \
                 from None
     else:
-        lines = [ln.split("!", 1)[0].strip() for ln in text.splitlines()]
+        lines = [ln.split("!", 1)[0].strip() for ln in content.splitlines()]
         lines = [ln for ln in lines if ln]
         for line_no, line in enumerate(lines[1:], start=2):  # the first is the caption
             if line.upper() == "END":
@@ -254,7 +256,10 @@ def load_equatorial_model(spec: str, latitude_deg: float) -> PointingModel:
                 raise InputError(str(path), tokens[0], line, "expected a value in arcsec") \
                     from None
             names.append(tokens[0].upper())
+    for term, value in zip(names, values, strict=True):
+        check_value(value, str(path), term)
     try:
-        return PointingModel(equatorial_terms(names, latitude_deg), values, name)
+        model = PointingModel(equatorial_terms(names, latitude_deg), values, name)
     except (TermError, ValueError) as err:
         raise InputError(str(path), "terms", names, str(err)) from None
+    return refuse_empty(model, str(path))

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from controller.errors import InputError
+from controller.errors import InputError, read_text_file
 
 from .legacy import W_TERMS_KEY, names_w_terms, relabel_reconstructed, w_terms_marker
 from .model import NAMED_MODELS, PointingModel
@@ -15,7 +16,15 @@ from .terms import TermError
 if TYPE_CHECKING:
     from .tpoint import TPointModel
 
-__all__ = ["load_model", "model_from_json", "model_to_json", "write_model_file"]
+__all__ = [
+    "check_value",
+    "load_model",
+    "model_from_json",
+    "model_to_json",
+    "read_model_file",
+    "refuse_empty",
+    "write_model_file",
+]
 
 
 def model_to_json(model: PointingModel) -> dict:
@@ -37,6 +46,18 @@ def write_model_file(model: TPointModel, path: str | Path) -> Path:
     return path
 
 
+#: the largest coefficient a model file may give (arcsec): half a turn
+MAX_VALUE_ARCSEC = 648000.0
+
+
+def check_value(value: float, where: str, field: str) -> float:
+    """A model coefficient (arcsec): finite and within half a turn, else one InputError."""
+    if not math.isfinite(value) or abs(value) > MAX_VALUE_ARCSEC:
+        raise InputError(where, field, value, f"must be finite and within +-{MAX_VALUE_ARCSEC:g}"
+                         " arcsec (180 deg)")
+    return value
+
+
 def model_from_json(data: dict, where: str) -> PointingModel:
     """A model from ``{"model": name, "terms": {"IA": {"value_arcsec": x}, ...}}``; from a
     fit's document (``fit.json``, with ``sky_rms_arcsec``) a
@@ -52,7 +73,7 @@ def model_from_json(data: dict, where: str) -> PointingModel:
         value = entry.get("value_arcsec") if isinstance(entry, dict) else entry
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise InputError(where, f"terms.{name}.value_arcsec", value, "must be a number")
-        values_of[name] = float(value)
+        values_of[name] = check_value(float(value), where, f"terms.{name}.value_arcsec")
     if names_w_terms(values_of) and W_TERMS_KEY not in data:
         values_of = relabel_reconstructed(values_of, where)
     names, values = list(values_of), list(values_of.values())
@@ -78,6 +99,36 @@ def _number_or_nan(entry) -> float:
         else float("nan")
 
 
+def read_model_file(path: str | Path) -> tuple[str, object]:
+    """What a model file holds: ``("json", data)`` for JSON (a ``fit.json``), or
+    ``("mod", text)`` for a TPOINT ``.mod`` file judged by content; anything else (TPOINT
+    pointing data, ECSV recordings, free text, a JSON list) is one InputError line."""
+    from .tpoint import sniff_format
+
+    where = str(path)
+    text = read_text_file(path)
+    if text.lstrip()[:1] in ("{", "["):
+        try:
+            return "json", json.loads(text)
+        except json.JSONDecodeError as err:
+            raise InputError(f"{where}:{err.lineno}", "JSON", err.msg, "invalid JSON") from None
+    kind = sniff_format(path)
+    if kind != "mod":
+        what = {"ecsv": "ECSV recordings", "tpoint": "TPOINT pointing data"}[kind]
+        raise InputError(where, "model", where, f"is {what}, not a pointing model",
+                         "give a TPOINT .mod file, a fit.json or a named model")
+    return "mod", text
+
+
+def refuse_empty(model: PointingModel, where: str) -> PointingModel:
+    """``model``, unless it has no terms: a model file without terms is a mistake (a cold
+    start is asked for by name)."""
+    if not len(model):
+        raise InputError(where, "model", where, "holds no pointing terms",
+                         "use --model none for a cold start")
+    return model
+
+
 def load_model(spec: str | Path) -> PointingModel:
     """A pointing model from a name (zero coefficients), a ``.mod`` file or a JSON file."""
     text_spec = str(spec)
@@ -88,14 +139,9 @@ def load_model(spec: str | Path) -> PointingModel:
         raise InputError(text_spec, "model", text_spec,
                          "neither a named model nor an existing file",
                          f"named models: {', '.join(sorted(NAMED_MODELS))}")
-    head = path.read_text(encoding="utf-8", errors="replace").lstrip()[:1]
-    if head == "{":
-        try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-        except json.JSONDecodeError as err:
-            raise InputError(str(path), "JSON", err.msg, f"invalid JSON at line {err.lineno}") \
-                from None
-        return model_from_json(data, str(path))
-    from .tpoint import read_mod
+    kind, content = read_model_file(path)
+    if kind == "json":
+        return refuse_empty(model_from_json(content, str(path)), str(path))
+    from .tpoint import parse_mod
 
-    return read_mod(path)
+    return refuse_empty(parse_mod(content, source=str(path)), str(path))

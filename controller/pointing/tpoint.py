@@ -52,7 +52,7 @@ from typing import Literal
 
 import numpy as np
 
-from controller.errors import InputError
+from controller.errors import InputError, read_text_file
 from controller.units import RAD_PER_DEG
 
 from .legacy import W_TERMS, W_TERMS_COMMENT, names_w_terms, relabel_reconstructed
@@ -99,7 +99,10 @@ def _strip_comment(line: str) -> str:
 def _number(token: str, where: str, field_name: str) -> float:
     if not _NUMBER.match(token):
         raise InputError(where, field_name, token, "is not a number")
-    return float(token)
+    value = float(token)
+    if not math.isfinite(value):
+        raise InputError(where, field_name, token, "is too large to be a number here")
+    return value
 
 
 def _integer(token: str, where: str, field_name: str) -> int:
@@ -391,6 +394,9 @@ def _decimal_record(tokens: list[str], where: str
     for value, name in ((values[1], "E_obs"), (values[3], "E_raw")):
         if not -90.0 <= value <= 90.0:
             raise InputError(where, name, value, "elevation must lie within -90..90 deg")
+    for value, name in ((values[0], "A_obs"), (values[2], "A_raw")):
+        if not -360.0 <= value <= 720.0:
+            raise InputError(where, name, value, "azimuth must lie within -360..720 deg")
     rotator = values[4] if len(values) == 5 else math.nan
     return (values[0], values[1], values[2], values[3], rotator, math.nan), ()
 
@@ -471,6 +477,7 @@ def parse_tpoint(text: str, source: str = "<string>", mount: str | None = None) 
     ``mount="altaz"`` reads decimal records as Az/El whatever the options say."""
     if mount is not None and mount not in MOUNTS:
         raise InputError(source, "--mount", mount, f"must be one of {', '.join(MOUNTS)}")
+    text = text.removeprefix("\ufeff")
     caption: str | None = None
     options: list[str] = []
     comments: list[str] = []
@@ -563,18 +570,7 @@ def parse_tpoint(text: str, source: str = "<string>", mount: str | None = None) 
 
 
 def _read_text(path: str | Path) -> str:
-    p = Path(path)
-    try:
-        return p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(str(p), "file", str(p), "no such file") from None
-    except IsADirectoryError:
-        raise InputError(str(p), "file", str(p), "is a directory, not a file") from None
-    except UnicodeDecodeError as err:
-        raise InputError(str(p), "file", str(p), f"is not a UTF-8 text file ({err.reason})") \
-            from None
-    except OSError as err:
-        raise InputError(str(p), "file", str(p), err.strerror or str(err)) from None
+    return read_text_file(path)
 
 
 def read_tpoint(path: str | Path, mount: str | None = None) -> TPointData:
@@ -759,6 +755,7 @@ def _is_term_line(content: str) -> bool:
 
 def parse_mod(text: str, source: str = "<string>") -> TPointModel:
     """Parse the text of a TPOINT ``.mod`` model file."""
+    text = text.removeprefix("\ufeff")
     caption: str | None = None
     parameters: tuple[str, ...] | None = None
     names: list[str] = []
@@ -807,6 +804,9 @@ def parse_mod(text: str, source: str = "<string>") -> TPointModel:
             raise InputError(where, name, " ".join(rest) or content,
                              "expected a value in arcsec and optionally its sigma")
         value = _number(rest[0], where, f"{name} value")
+        if abs(value) > 648000.0:
+            raise InputError(where, f"{name} value", rest[0],
+                             "a coefficient beyond 180 deg (648000 arcsec)")
         sigma = _number(rest[1], where, f"{name} sigma") if len(rest) == 2 else None
         if sigma is not None and sigma < 0:
             raise InputError(where, f"{name} sigma", rest[1], "a sigma cannot be negative")
@@ -876,7 +876,7 @@ def sniff_format(path: str | Path) -> Format:
     by numbers (the model parameters record) or a term line means a model file.
     """
     text = _read_text(path)
-    if text.lstrip("\ufeff").startswith("# %ECSV"):
+    if text.startswith("# %ECSV"):
         return "ecsv"
     caption_seen = False
     second: str | None = None
