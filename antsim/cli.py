@@ -57,6 +57,18 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     return parser
 
 
+def os_error_line(err: OSError) -> str:
+    """One line for a file-system error: the file, what the system said, and its code."""
+    import errno
+
+    where = err.filename if err.filename is not None else "file system"
+    code = errno.errorcode.get(err.errno or 0, "")
+    text = f"{where}: {err.strerror or type(err).__name__}" + (f" [{code}]" if code else "")
+    if err.filename2 is not None:
+        text += f" (with {err.filename2})"
+    return " ".join(text.split()) + "; files written before it are kept"
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     command = next((a for a in argv if not a.startswith("-")), None)
@@ -73,6 +85,9 @@ def main(argv: list[str] | None = None) -> int:
             return int(module.main(args) or 0)
     except InputError as err:
         print(f"antsim {args.command}: error: {err.line()}", file=sys.stderr)
+        return EXIT_INPUT
+    except OSError as err:  # the file system said no: a full disk, a lost permission, ...
+        print(f"antsim {args.command}: error: {os_error_line(err)}", file=sys.stderr)
         return EXIT_INPUT
     except KeyboardInterrupt:
         print(f"antsim {args.command}: interrupted; recordings written so far are kept",

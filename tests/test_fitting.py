@@ -543,9 +543,6 @@ def _write_ecsv(path: Path, data: PointingData) -> None:
 
 
 def test_cli_reads_ecsv_recordings(tmp_path, capsys):
-    recordings = pytest.importorskip("controller.program.recordings")
-    if not hasattr(recordings, "read_pointing_data"):
-        pytest.skip("controller.program.recordings has no read_pointing_data yet")
     rng = np.random.default_rng(14)
     data = synthetic(ghigo_truth(), rng, 120)
     path = tmp_path / "recordings.dat"  # the name does not matter: the content does
@@ -556,14 +553,6 @@ def test_cli_reads_ecsv_recordings(tmp_path, capsys):
     got = [doc["terms"][f"W{i}"]["value_arcsec"] for i in range(1, 11)]
     # 1e-4": the ECSV stores arcmin as text with ~1e-9 arcmin resolution or better
     np.testing.assert_allclose(got, GHIGO_TABLE3_ARCSEC, rtol=0, atol=1e-4)
-
-
-def test_cli_says_when_the_recordings_module_is_missing(tmp_path, capsys, monkeypatch):
-    path = tmp_path / "recordings.ecsv"
-    path.write_text("# %ECSV 1.0\n# ---\n")
-    monkeypatch.setitem(sys.modules, "controller.program.recordings", None)
-    assert cli_main(["fit", str(path)]) == 2
-    assert "ECSV support arrives with the recordings module" in capsys.readouterr().err
 
 
 def test_cli_subprocess_bad_input(tmp_path):

@@ -10,7 +10,6 @@ declination with TPOINT's equatorial terms (default model ``crane11``).
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
 import sys
 from pathlib import Path
@@ -117,10 +116,11 @@ def _terms_from_model(spec: str) -> tuple[tuple[str, ...], str]:
 
 
 def _read_data(path: Path, fmt: str, include_masked: bool, mount: str | None, say,
-               terms=()):
-    """The pointing data of a TPOINT file or recordings; a TPOINT reader's notes (how a file
-    without a mount option was read) go to ``say``. Thermal terms among ``terms`` read the
-    recordings' structure temperatures, or proxies (their site and times)."""
+               terms=(), table=None):
+    """The pointing data of a TPOINT file, recordings (``table``, read already) or a CSV
+    (``table`` too); a TPOINT reader's notes (how a file without a mount option was read)
+    go to ``say``. Thermal terms among ``terms`` read the recordings' structure
+    temperatures, or proxies (their site and times)."""
     from controller.pointing.model import PointingModel
     from controller.pointing.proxies import PROXY_NAMES
 
@@ -139,15 +139,14 @@ def _read_data(path: Path, fmt: str, include_masked: bool, mount: str | None, sa
     if mount is not None:
         raise InputError(str(path), "--mount", mount, "applies to TPOINT data files only",
                          "recordings name their mount in their metadata")
-    try:
-        recordings = importlib.import_module("controller.program.recordings")
-    except ModuleNotFoundError as err:
-        if err.name != "controller.program.recordings":
-            raise
-        raise InputError(str(path), "format", "ECSV",
-                         "ECSV support arrives with the recordings module "
-                         "(controller.program.recordings), which is not installed yet") from None
-    data = recordings.read_pointing_data(path, proxies=bool(needed & set(PROXY_NAMES)))
+    if fmt == "csv":
+        from controller.program.csvdata import pointing_data
+
+        data = pointing_data(table)
+    else:
+        from controller.program.recordings import table_pointing_data
+
+        data = table_pointing_data(table, str(path), proxies=bool(needed & set(PROXY_NAMES)))
     missing = sorted(needed - set(data.aux or {}))
     if missing:
         raise InputError(str(path), "--terms", ",".join(terms),
@@ -155,6 +154,10 @@ def _read_data(path: Path, fmt: str, include_masked: bool, mount: str | None, sa
                          "not have", "fit them to recordings of an antenna with structure "
                          "temperature sensors (columns temp_*)")
     return data
+
+
+def _note(line: str) -> None:
+    print(f"antsim fit: note: {line}", file=sys.stderr)
 
 
 def main(args: argparse.Namespace) -> int:
@@ -167,7 +170,15 @@ def main(args: argparse.Namespace) -> int:
         raise InputError(str(path), "RECORDINGS", str(path),
                          "is a TPOINT model (.mod) file, not pointing data",
                          "pass a model file with --model")
-    equatorial = _equatorial_site(path) if fmt == "ecsv" else None
+    table = None
+    if fmt == "ecsv":
+        from controller.program.recordings import read_recordings, recording_notes
+
+        table = read_recordings(path)
+        for line in recording_notes(table, "fit"):
+            _note(f"{path}: {line}")
+    equatorial = (float(table.meta["site"]["latitude_deg"])
+                  if table is not None and table.meta.get("mount") == "equatorial" else None)
     if equatorial is not None:
         terms, model_name = _equatorial_terms(args, equatorial)
     elif args.terms is not None:
@@ -184,7 +195,8 @@ def main(args: argparse.Namespace) -> int:
     with Progress("fit", args.progress) as progress:
         progress.stage("reading")
         data = _read_data(path, fmt, args.include_masked, args.mount,
-                          say=lambda text: progress.write(text, file=sys.stderr), terms=terms)
+                          say=lambda text: progress.write(text, file=sys.stderr), terms=terms,
+                          table=table)
         progress.stage(f"fitting {len(data)} observations")
         try:
             result = fit_model(data, terms, robust=not args.no_robust, name=model_name,
@@ -210,18 +222,6 @@ def main(args: argparse.Namespace) -> int:
         if target is not None:
             print(f"wrote {target} (TPOINT's term names and signs)")
     return 0
-
-
-def _equatorial_site(path: Path) -> float | None:
-    """The site latitude (deg) of recordings made on an equatorial mount, else None."""
-    try:
-        recordings = importlib.import_module("controller.program.recordings")
-    except ModuleNotFoundError:
-        return None  # _read_data says what is missing
-    meta = recordings.read_recordings(path).meta
-    if meta.get("mount") != "equatorial":
-        return None
-    return float(meta["site"]["latitude_deg"])
 
 
 def _equatorial_terms(args: argparse.Namespace, latitude_deg: float):

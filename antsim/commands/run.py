@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 from controller.errors import InputError
 
@@ -33,8 +32,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def main(args: argparse.Namespace) -> int:
     from antsim.bundled import find
+    from antsim.outdir import DirectoryLock, output_dir
     from antsim.progress import Progress
-    from antsim.run.outputs import write_outputs
+    from antsim.run.outputs import PRODUCTS, clear_products, write_outputs
     from antsim.run.runner import run_campaign
     from antsim.scenario import load_scenario, thermal_terms_of
 
@@ -56,34 +56,36 @@ def main(args: argparse.Namespace) -> int:
                              f"has thermal terms ({', '.join(thermal)}), which the controller "
                              "does not apply (they need structure temperatures at every "
                              "instant)", "give a model of the position alone")
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise InputError("command line", "--out", str(out), "exists and is not a directory")
-    if not args.resume and (out / "recordings.ecsv").exists():
-        raise InputError("command line", "--out", str(out),
-                         "already holds recordings.ecsv",
-                         "use --resume to continue that run, or another directory")
-    antenna, seed = None, args.seed
-    if args.connect is not None:
-        from antsim.serve.remote import connect
+    for option, given in (("--seed", args.seed is not None), ("--resume", args.resume)):
+        if given and args.connect is not None:
+            raise InputError("command line", option, True, "not with --connect",
+                             "the simulation is the server's (antsim serve --seed)")
+    out = output_dir(args.out)
+    with DirectoryLock(out, "--out", "antsim run"):
+        present = [name for name in PRODUCTS if (out / name).exists()]
+        if present and not args.resume:
+            raise InputError("command line", "--out", str(out),
+                             f"already holds {' '.join(present)} of an earlier run",
+                             "use --resume to continue that run, or an empty or new directory")
+        antenna, seed = None, args.seed
+        if args.connect is not None:
+            from antsim.serve.remote import connect
 
-        for option, given in (("--seed", args.seed is not None), ("--resume", args.resume)):
-            if given:
-                raise InputError("command line", option, True, "not with --connect",
-                                 "the simulation is the server's (antsim serve --seed)")
-        antenna, seed = connect(scenario, args.connect)
-    with Progress("run", args.progress) as progress:
-        try:
-            result = run_campaign(scenario, out, seed=seed, model=model, resume=args.resume,
-                                  show_progress=progress, antenna=antenna)
-        except ConnectionError as err:  # controller.wire.ConnectionLostError, mid-campaign
-            progress.close()
-            print(f"antsim run: error: {err}; the scans recorded so far are in "
-                  f"{out / 'recordings.ecsv'}", file=sys.stderr)
-            return 1
-        finally:
-            if antenna is not None:
-                antenna.close()
-        summary = write_outputs(result, report=not args.no_report, progress=progress)
+            antenna, seed = connect(scenario, args.connect)
+        with Progress("run", args.progress) as progress:
+            try:
+                result = run_campaign(scenario, out, seed=seed, model=model,
+                                      resume=args.resume, show_progress=progress,
+                                      antenna=antenna)
+            except ConnectionError as err:  # controller.wire.ConnectionLostError, mid-campaign
+                progress.close()
+                print(f"antsim run: error: {err}; the scans recorded so far are in "
+                      f"{out / 'recordings.ecsv'}", file=sys.stderr)
+                return 1
+            finally:
+                if antenna is not None:
+                    antenna.close()
+            clear_products(out)  # a resumed run's earlier fits, model and figures
+            summary = write_outputs(result, report=not args.no_report, progress=progress)
     print(summary, file=sys.stdout)
     return 0

@@ -27,7 +27,7 @@ from .inuse import Pointing, pointing_in_use
 from .runner import RunResult
 from .sources import points_per_source
 
-__all__ = ["fit_tables", "run_fits", "write_outputs"]
+__all__ = ["PRODUCTS", "clear_products", "fit_tables", "run_fits", "write_outputs"]
 
 
 def run_fits(result: RunResult) -> dict[str, FitResult | None]:
@@ -156,12 +156,35 @@ def _points_lines(points: Mapping[str, int], reference: Reference | None) -> lis
     return lines
 
 
+#: every file (and folder) ``antsim run`` may write into its output directory
+PRODUCTS = ("recordings.ecsv", "truth.json", "fit.json", "fit_variants.json", "fit.txt",
+            "model.dat", "gaincurve.json", "report.html", "figures")
+
+
+def clear_products(out: Path, keep: tuple[str, ...] = ("recordings.ecsv", "truth.json")) -> None:
+    """Remove an earlier run's products from ``out`` (all but ``keep``), so that a resumed run
+    leaves only what it wrote itself: no stale ``model.dat`` beside recordings that can no
+    longer be fitted."""
+    import shutil
+
+    for name in PRODUCTS:
+        path = out / name
+        if name in keep or not (path.exists() or path.is_symlink()):
+            continue
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path)
+        else:
+            path.unlink()
+
+
 def write_outputs(result: RunResult, report: bool = True,
                   progress: Progress | None = None) -> str:
-    """Write the products of a run into its output directory; return a short summary.
-    With ``report`` also the figures (``figures/``) and ``report.html``
-    (:mod:`antsim.run.report`); ``progress``: the command's, told each stage."""
+    """Write the products of a run into its output directory; return a short summary that
+    names exactly the files written. With ``report`` also the figures (``figures/``) and
+    ``report.html`` (:mod:`antsim.run.report`); ``progress``: the command's, told each
+    stage."""
     out = Path(result.out_dir)
+    written = ["recordings.ecsv"] + (["truth.json"] if result.truth else [])
     if progress is not None:
         progress.stage("fits A-F")
     fits = run_fits(result)
@@ -173,12 +196,11 @@ def write_outputs(result: RunResult, report: bool = True,
                                       encoding="utf-8")
         caption = f"{result.scenario.name} seed {result.seed}: fit A"
         write_model_file(TPointModel.from_fit(fit_a, caption=caption), out / "model.dat")
+        written += ["fit.json"]
+    written += ["fit_variants.json"]
     from controller.scans.gaincurve import calibrate
 
     result.calibration = calibrate(result.rows, result.scenario.controller, result.tippings)
-    if result.calibration is not None:
-        (out / "gaincurve.json").write_text(
-            json.dumps(result.calibration.to_json(), indent=2) + "\n", encoding="utf-8")
     what = "star offsets" if result.scenario.controller.method == "optical" else "cross scans"
     title = (f"{result.scenario.name}, seed {result.seed}: {result.n_scans} {what}, "
              f"model in use {result.model.name}")
@@ -188,24 +210,28 @@ def write_outputs(result: RunResult, report: bool = True,
         fit_tables(fits, title, result.scenario.controller.night_sun_max_deg, reference,
                    points_per_source(result.rows, fit_a), in_use),
         encoding="utf-8")
+    written += ["fit.txt"] + (["model.dat"] if fit_a is not None else [])
+    if result.calibration is not None:
+        (out / "gaincurve.json").write_text(
+            json.dumps(result.calibration.to_json(), indent=2) + "\n", encoding="utf-8")
+        written += ["gaincurve.json"]
     good = sum(1 for r in result.rows if r["polarization"] == "AVG" and r["good"])
     summary = (f"{result.scenario.name}: {result.n_scans} {what} ({good} good) in "
                f"{result.scenario.duration_s / 3600:.1f} h, seed {result.seed}")
     if fit_a is not None:
         summary += (f"; fit A: {fit_a.n_used} points, xel rms {fit_a.xel_rms_arcsec:.1f}\", "
                     f"el rms {fit_a.el_rms_arcsec:.1f}\"")
+    else:
+        terms, _ = result.scenario.controller.fit_spec()
+        summary += (f"; no fit A: {good} good {what} for {len(terms)} terms, too few "
+                    "(fit.json and model.dat not written)")
     if in_use is not None and in_use.ratio is not None:
         summary += "\n" + in_use.line()
-    written = "recordings.ecsv truth.json fit.json fit_variants.json fit.txt model.dat"
-    if not result.truth:  # an antenna over the wire: its server keeps the truth
-        written = written.replace(" truth.json", "")
-    if result.calibration is not None:
-        written += " gaincurve.json"
     if report:
         from .report import write_run_report
 
         if progress is not None:
             progress.stage("figures and report")
         _, figures = write_run_report(result, fits, out, in_use)
-        written += f" report.html figures/ ({len(figures)} figures)"
-    return summary + f"\nwrote {out}/: {written}"
+        written += ["report.html", f"figures/ ({len(figures)} figures)"]
+    return summary + f"\nwrote {out}/: {' '.join(written)}"

@@ -128,6 +128,12 @@ def simulate(scenario: Scenario, seed: int | None = None, model: PointingModel |
 
         program_class = OpticalPointingProgram
     program = program_class(scenario.controller, antenna, sink=collect, progress=progress)
+    if program.scan_duration_s > scenario.duration_s:
+        from controller.errors import InputError
+
+        raise InputError(scenario.path, "campaign.duration_h", scenario.duration_s / 3600.0,
+                         f"is shorter than one observation ({program.scan_duration_s:g} s)",
+                         "lengthen the campaign or shorten controller.scan.integration_s")
     check_scenario(scenario, program.observer, program.targets)
     env.run(until=env.process(program.run(env)))
     return RunResult(scenario=scenario, seed=seed, model=model, rows=rows,
@@ -196,6 +202,11 @@ def run_campaign(scenario: Scenario, out_dir: str | Path, seed: int | None = Non
         try:
             result = simulate(scenario, seed, model, sink=writer.write_scan, progress=progress,
                               antenna=antenna)
+        except BaseException:
+            # a file with a header and no scan would only block the next plain run
+            if writer.rows_written == 0 and writer.existing_rows == 0:
+                writer.discard()
+            raise
         finally:
             if owned:
                 shown.close()

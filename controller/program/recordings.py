@@ -33,9 +33,11 @@ from typing import Any
 
 import numpy as np
 
-from controller.errors import InputError
+from controller.errors import InputError, read_text_file
 from controller.pointing.legacy import W_TERMS, W_TERMS_KEY, names_w_terms, relabel_reconstructed
 from controller.pointing.thermal import structure_column, structure_time_column
+
+from .tablecheck import ColumnRule, check_range, first_repeat, unit_factor
 
 __all__ = [
     "COLUMNS",
@@ -45,36 +47,60 @@ __all__ = [
     "read_pointing_data",
     "read_recordings",
     "recording_columns",
+    "recording_notes",
     "structure_columns",
+    "table_pointing_data",
 ]
 
 
 @dataclass(frozen=True)
 class Column:
+    """A recordings column: how it is written (``dtype``, ``unit``, ``description``) and
+    what reading it accepts (``lo``..``hi`` in ``unit``; ``finite``: never NaN). A reader
+    converts the unit a file declares into ``unit`` (:mod:`.tablecheck`)."""
+
     name: str
     dtype: str
     unit: str | None
     description: str
+    lo: float | None = None
+    hi: float | None = None
+    finite: bool = False
+
+    @property
+    def rule(self) -> ColumnRule:
+        return ColumnRule(self.name, self.unit, self.lo, self.hi, self.finite)
 
 
 _POS = ("m4", "m1", "0", "p1", "p4")
+#: the range of a pointing offset or correction (arcmin): half a turn
+_OFFSET = (-10800.0, 10800.0)
 
 COLUMNS: tuple[Column, ...] = (
     Column("scan", "int64", None, "scan number in the campaign"),
     Column("time", "str", None, "UTC at the middle of the scan (ISO)"),
-    Column("t_s", "float64", "s", "seconds since the campaign epoch (antenna clock)"),
+    Column("t_s", "float64", "s", "seconds since the campaign epoch (antenna clock)",
+           finite=True),
     Column("source", "str", None, "source name"),
     Column("polarization", "str", None, "XR, XL or AVG (mean of XR and XL powers)"),
-    Column("az_deg", "float64", "deg", "observed azimuth of the source (N=0, E=90)"),
-    Column("el_deg", "float64", "deg", "observed (refracted) elevation of the source"),
+    Column("az_deg", "float64", "deg", "observed azimuth of the source (N=0, E=90)",
+           -360.0, 720.0, finite=True),
+    Column("el_deg", "float64", "deg", "observed (refracted) elevation of the source",
+           -90.0, 90.0, finite=True),
     Column("cmd_az_deg", "float64", "deg", "commanded encoder azimuth at the pattern centre"),
     Column("cmd_el_deg", "float64", "deg", "commanded encoder elevation at the pattern centre"),
-    Column("model_xel_arcmin", "float64", "arcmin", "pointing model in use, cross-elevation"),
-    Column("model_el_arcmin", "float64", "arcmin", "pointing model in use, elevation"),
-    Column("applied_xel_arcmin", "float64", "arcmin", "controller's extra correction, xel"),
-    Column("applied_el_arcmin", "float64", "arcmin", "controller's extra correction, el"),
-    Column("xel_arcmin", "float64", "arcmin", "measured correction to apply, cross-elevation"),
-    Column("el_arcmin", "float64", "arcmin", "measured correction to apply, elevation"),
+    Column("model_xel_arcmin", "float64", "arcmin", "pointing model in use, cross-elevation",
+           *_OFFSET, finite=True),
+    Column("model_el_arcmin", "float64", "arcmin", "pointing model in use, elevation",
+           *_OFFSET, finite=True),
+    Column("applied_xel_arcmin", "float64", "arcmin", "controller's extra correction, xel",
+           *_OFFSET, finite=True),
+    Column("applied_el_arcmin", "float64", "arcmin", "controller's extra correction, el",
+           *_OFFSET, finite=True),
+    Column("xel_arcmin", "float64", "arcmin", "measured correction to apply, cross-elevation",
+           *_OFFSET),
+    Column("el_arcmin", "float64", "arcmin", "measured correction to apply, elevation",
+           *_OFFSET),
     Column("xel_sigma_arcmin", "float64", "arcmin", "formal error of xel_arcmin"),
     Column("el_sigma_arcmin", "float64", "arcmin", "formal error of el_arcmin"),
     Column("xel_amp_k", "float64", "K", "amplitude of the azimuth scan"),
@@ -88,13 +114,15 @@ COLUMNS: tuple[Column, ...] = (
     Column("xel_flags", "int64", None, "quality flags of the azimuth scan (bit mask)"),
     Column("el_flags", "int64", None, "quality flags of the elevation scan (bit mask)"),
     Column("good", "bool", None, "both axes reduced without flags"),
-    Column("air_temp_c", "float64", "deg_C", "air temperature (weather sensor)"),
-    Column("pressure_hpa", "float64", "hPa", "air pressure (weather sensor)"),
-    Column("humidity", "float64", None, "relative humidity 0..1 (weather sensor)"),
-    Column("wind_m_s", "float64", "m / s", "wind speed (weather sensor)"),
-    Column("sun_el_deg", "float64", "deg", "elevation of the Sun"),
-    Column("slew_az", "int64", None, "direction of the last slew in azimuth (+1/-1/0)"),
-    Column("slew_el", "int64", None, "direction of the last slew in elevation (+1/-1/0)"),
+    Column("air_temp_c", "float64", "deg_C", "air temperature (weather sensor)", -100.0, 100.0),
+    Column("pressure_hpa", "float64", "hPa", "air pressure (weather sensor)", 0.0, 1200.0),
+    Column("humidity", "float64", None, "relative humidity 0..1 (weather sensor)", 0.0, 1.0),
+    Column("wind_m_s", "float64", "m / s", "wind speed (weather sensor)", 0.0, 100.0),
+    Column("sun_el_deg", "float64", "deg", "elevation of the Sun", -90.0, 90.0),
+    Column("slew_az", "int64", None, "direction of the last slew in azimuth (+1/-1/0)",
+           -1, 1),
+    Column("slew_el", "int64", None, "direction of the last slew in elevation (+1/-1/0)",
+           -1, 1),
     *(Column(f"p_az_{p}", "float64", "K", f"total power, azimuth scan, position {p}")
       for p in _POS),
     *(Column(f"p_el_{p}", "float64", "K", f"total power, elevation scan, position {p}")
@@ -104,9 +132,12 @@ COLUMN_NAMES = tuple(c.name for c in COLUMNS)
 
 #: columns written only where they apply (see :func:`recording_columns`)
 EXTRA_COLUMNS: dict[str, Column] = {c.name: c for c in (
-    Column("ha_deg", "float64", "deg", "observed hour angle (equatorial mount; West positive)"),
-    Column("dec_deg", "float64", "deg", "observed declination (equatorial mount)"),
-    Column("feed_angle_deg", "float64", "deg", "feed (feed-box rotation) angle of the scan"),
+    Column("ha_deg", "float64", "deg", "observed hour angle (equatorial mount; West positive)",
+           -360.0, 360.0, finite=True),
+    Column("dec_deg", "float64", "deg", "observed declination (equatorial mount)", -90.0, 90.0,
+           finite=True),
+    Column("feed_angle_deg", "float64", "deg", "feed (feed-box rotation) angle of the scan",
+           -360.0, 360.0, finite=True),
 )}
 
 
@@ -138,8 +169,16 @@ def recording_columns(mount: str = "altaz", feed: bool = False,
     return COLUMNS + tuple(EXTRA_COLUMNS[n] for n in extra) + structure_columns(sensors)
 
 
-class ResumeMismatchError(RuntimeError):
-    """The regenerated rows differ from those on disk: the file is not this run's."""
+class ResumeMismatchError(InputError):
+    """The regenerated rows differ from those on disk: the file is not this run's (one
+    line, as any bad input: the scenario, seed or model changed since it was written)."""
+
+    def __init__(self, path: str | Path, row: int, recorded: str):
+        super().__init__(str(path), f"row {row}", recorded.strip(),
+                         "differs from the same row of the resumed run: the scenario, seed or "
+                         "model changed since this file was written",
+                         "the file is kept as it is; run without --resume into a new directory")
+        self.args = (path, row, recorded)  # rebuilt as type(err)(*err.args) (simpy)
 
 
 def _format(value: Any, dtype: str) -> str:
@@ -223,15 +262,19 @@ class RecordingWriter:
         for line in lines:
             if self._cursor < len(self._existing):
                 if self._existing[self._cursor] != line:
-                    raise ResumeMismatchError(
-                        f"{self.path}: row {self._cursor + 1} differs from the replayed run; "
-                        "the file was made with other settings")
+                    raise ResumeMismatchError(self.path, self._cursor + 1,
+                                              self._existing[self._cursor])
                 self._cursor += 1
             else:
                 fresh.append(line)
         if fresh:
             os.write(self._fd, "".join(fresh).encode("utf-8"))
             self.rows_written += len(fresh)
+
+    def discard(self) -> None:
+        """Close and remove the file: for a run that failed before its first scan."""
+        self.close()
+        self.path.unlink(missing_ok=True)
 
     def close(self) -> None:
         if self._fd is not None:
@@ -245,27 +288,100 @@ class RecordingWriter:
         self.close()
 
 
-def read_recordings(path: str | Path):
-    """Read a recordings file into an astropy Table, ignoring a torn last line."""
+#: columns without which recordings cannot be used: the total pointing error is measured +
+#: model in use + applied correction, so a missing part would silently count as zero
+REQUIRED = ("polarization", "az_deg", "el_deg", "xel_arcmin", "el_arcmin", "model_xel_arcmin",
+            "model_el_arcmin", "applied_xel_arcmin", "applied_el_arcmin")
+#: what is left out without an optional column (named in a note, never silently)
+OPTIONAL = {
+    "good": "the reduction's flags (every row with finite offsets is used)",
+    "scan": "scan numbers (rows are matched to their scan by time)",
+    "source": "the tests by source",
+    "sun_el_deg": "the tests against the Sun's elevation (day and night)",
+    "air_temp_c": "the tests against air temperature",
+    "slew_az": "the tests of the last slew's direction",
+    "xel_width_arcmin": "the tests of the measured beam width",
+}
+#: the optional columns each reader of recordings uses
+USES = {"fit": ("good",), "diagnose": tuple(OPTIONAL)}
+_KNOWN = {c.name: c for c in (*COLUMNS, *EXTRA_COLUMNS.values())}
+
+
+def _data_lines(text: str) -> list[int]:
+    """The 1-based line number of each data row of ECSV ``text`` (after the header and the
+    line of column names; blank lines are not rows)."""
+    lines = text.split("\n")
+    numbers = []
+    names_seen = False
+    for i, line in enumerate(lines, start=1):
+        if not line.strip() or line.startswith("#"):
+            continue
+        if names_seen:
+            numbers.append(i)
+        names_seen = True
+    return numbers
+
+
+def read_recordings(path: str | Path, purpose: str = "fit"):
+    """Read a recordings file into an astropy Table, ignoring a torn last line.
+
+    Every column this package knows is converted from the unit the file declares into the
+    unit of its name (``az_deg`` in deg, ``el_arcmin`` in arcmin, ...), or refused when the
+    units are not convertible; values are checked against the column's range; a scan and
+    polarization recorded twice is refused; the columns of :data:`REQUIRED` (and ``t_s`` for
+    ``purpose="diagnose"``) must be there. Masked (missing) numbers become NaN. Every refusal
+    is one InputError line naming ``file:line``, the column and the value.
+    """
+    import warnings
+
     from astropy.table import Table
 
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(str(path), "file", str(path), "no such file") from None
+    where = str(path)
+    text = read_text_file(path)
     if not text.startswith("# %ECSV"):
-        raise InputError(str(path), "format", text[:20], "not an ECSV file")
+        raise InputError(where, "format", text[:20], "not an ECSV file (no '# %ECSV' line)")
     text = text[: text.rfind("\n") + 1]
     try:
-        table = Table.read(text, format="ascii.ecsv")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # an unknown unit is refused below, by name
+            table = Table.read(text, format="ascii.ecsv")
     except Exception as err:  # astropy raises many types for malformed ECSV
-        raise InputError(str(path), "ECSV", type(err).__name__,
-                         f"cannot be parsed: {err}") from None
-    missing = [c for c in ("az_deg", "el_deg", "xel_arcmin", "el_arcmin", "polarization")
-               if c not in table.colnames]
+        message = " ".join(str(err).split())[:200]
+        raise InputError(where, "ECSV", type(err).__name__, f"cannot be parsed: {message}") \
+            from None
+    lines = _data_lines(text)
+    if len(lines) != len(table):  # astropy read rows we did not count: no line numbers
+        lines = list(range(1, len(table) + 1))
+    _check_meta(table.meta, where)
+    need = REQUIRED + (("t_s",) if purpose == "diagnose" else ())
+    if table.meta.get("mount") == "equatorial":
+        need += ("ha_deg", "dec_deg")
+    missing = [c for c in need if c not in table.colnames]
     if missing:
-        raise InputError(str(path), "columns", missing, "required columns are missing")
+        raise InputError(where, "columns", " ".join(missing),
+                         "required column(s) missing", "docs/inputs.md lists the columns")
+    for name in table.colnames:
+        if name in _KNOWN:
+            _check_column(table, _KNOWN[name], where, lines)
+    if "good" in table.colnames:  # a row marked good has both offsets (NaN: not measured)
+        good = np.asarray(table["good"], dtype=bool)
+        for name in ("xel_arcmin", "el_arcmin"):
+            rule = _KNOWN[name].rule
+            check_range(np.asarray(table[name], dtype=float),
+                        ColumnRule(name, rule.unit, rule.lo, rule.hi, finite=True), where,
+                        lines, rows=good)
+    keys = [np.asarray(table["scan"] if "scan" in table.colnames else table["t_s"]
+                       if "t_s" in table.colnames else table["az_deg"]),
+            np.asarray(table["polarization"]).astype(str)]
+    repeat = first_repeat(keys)
+    if repeat is not None:
+        first, row = repeat
+        key = "scan" if "scan" in table.colnames else "t_s" if "t_s" in table.colnames \
+            else "az_deg"
+        raise InputError(f"{where}:{lines[row]}", f"{key}, polarization",
+                         f"{table[key][row]} {table['polarization'][row]}",
+                         f"repeats line {lines[first]}", "record each scan and polarization once")
     model = table.meta.get("model")
     if isinstance(model, dict) and isinstance(model.get("terms_arcsec"), dict) \
             and names_w_terms(model["terms_arcsec"]) and W_TERMS_KEY not in model:
@@ -274,6 +390,76 @@ def read_recordings(path: str | Path):
         model["terms_arcsec"] = relabel_reconstructed(model["terms_arcsec"], f"{path}")
         model[W_TERMS_KEY] = W_TERMS
     return table
+
+
+def recording_notes(table, purpose: str = "fit") -> list[str]:
+    """What the reader of ``purpose`` leaves out for want of an optional column."""
+    return [f"no column {name}: {OPTIONAL[name]}" for name in USES.get(purpose, ())
+            if name not in table.colnames]
+
+
+def _check_column(table, column: Column, where: str, lines: list[int]) -> None:
+    """Convert ``column`` to its unit in place and check its values (see read_recordings)."""
+    col = table[column.name]
+    if column.dtype == "str":
+        return
+    kind = col.dtype.kind
+    if kind not in "biuf":
+        raise InputError(where, column.name, str(col.dtype),
+                         f"must hold numbers ({column.dtype}), not text")
+    given = None if col.unit is None else col.unit.to_string()
+    convert = unit_factor(given, column.rule, where, named=True)  # az_deg: deg
+    mask = np.asarray(getattr(col, "mask", np.zeros(len(col), bool)), dtype=bool)
+    if column.dtype in ("int64", "bool"):
+        if mask.any():
+            i = int(np.flatnonzero(mask)[0])
+            raise InputError(f"{where}:{lines[i]}", column.name, "<missing>",
+                             "has no value where one is needed")
+        if column.dtype == "int64" and column.lo is not None:
+            check_range(np.asarray(col, dtype=float), column.rule, where, lines)
+        return
+    shown = np.where(mask, np.nan, np.asarray(col, dtype=float))
+    values = convert(shown)
+    check_range(values, column.rule, where, lines, shown=shown)
+    table.replace_column(column.name, values)
+    if column.unit is not None:
+        table[column.name].unit = column.unit
+
+
+def _check_meta(meta, where: str) -> None:
+    """The metadata readers use: the site (numbers within range), mount and epoch."""
+    site = meta.get("site")
+    if site is not None:
+        if not isinstance(site, dict):
+            raise InputError(where, "meta.site", site, "must be a mapping (latitude_deg, ...)")
+        for key, (lo, hi) in (("latitude_deg", (-90, 90)), ("longitude_deg", (-180, 360)),
+                              ("height_m", (-500, 10000))):
+            value = site.get(key)
+            if value is None:
+                continue
+            if isinstance(value, bool) or not isinstance(value, int | float) \
+                    or not lo <= value <= hi:
+                raise InputError(where, f"meta.site.{key}", value,
+                                 f"must be a number within {lo}..{hi}")
+    mount = meta.get("mount", "altaz")
+    if mount not in ("altaz", "equatorial"):
+        raise InputError(where, "meta.mount", mount, "must be altaz or equatorial")
+    if mount == "equatorial" and not isinstance((site or {}).get("latitude_deg"), int | float):
+        raise InputError(where, "meta.site.latitude_deg", "<missing>",
+                         "an equatorial mount's recordings need the site latitude")
+    for key in ("duration_s", "beam_hpbw_arcmin"):
+        value = meta.get(key)
+        if value is not None and (isinstance(value, bool) or not isinstance(value, int | float)
+                                  or not 0 < value < 1e9):
+            raise InputError(where, f"meta.{key}", value, "must be a positive number")
+    epoch = meta.get("epoch_utc")
+    if epoch is not None:
+        from astropy.time import Time
+
+        try:
+            Time(str(epoch), scale="utc")
+        except ValueError:
+            raise InputError(where, "meta.epoch_utc", epoch, "not an ISO UTC time") from None
 
 
 def total_errors_arcsec(table) -> tuple[np.ndarray, np.ndarray]:
@@ -294,16 +480,25 @@ def read_pointing_data(path: str | Path, polarization: str = "AVG", good_only: b
     with the structure temperatures where the recordings have them (corrected for the
     sensors' response time in the metadata) and, with ``proxies``, the proxies of
     :mod:`controller.pointing.proxies` (they need the metadata's site and epoch)."""
+    return table_pointing_data(read_recordings(path), str(path), polarization, good_only,
+                               proxies)
+
+
+def table_pointing_data(table, where: str, polarization: str = "AVG", good_only: bool = True,
+                        proxies: bool = False):
+    """:func:`read_pointing_data` of a table :func:`read_recordings` returned."""
     from controller.pointing.data import PointingData
     from controller.pointing.thermal import sensor_aux, structure_sensor_names
 
-    table = read_recordings(path)
     mask = np.asarray(table["polarization"]) == polarization
     if good_only and "good" in table.colnames:
         mask &= np.asarray(table["good"], dtype=bool)
+    elif good_only:  # no flags: the rows that have both offsets
+        mask &= np.isfinite(np.asarray(table["xel_arcmin"], dtype=float))
+        mask &= np.isfinite(np.asarray(table["el_arcmin"], dtype=float))
     sel = table[mask]
     if len(sel) == 0:
-        raise InputError(str(path), "polarization", polarization,
+        raise InputError(where, "polarization", polarization,
                          "no usable rows for this polarization")
     xel, el = total_errors_arcsec(sel)
     lon, lat = ("ha_deg", "dec_deg") if "ha_deg" in sel.colnames else ("az_deg", "el_deg")
@@ -317,7 +512,7 @@ def read_pointing_data(path: str | Path, polarization: str = "AVG", good_only: b
     if proxies:
         if not isinstance(meta.get("site"), dict) or "epoch_utc" not in meta \
                 or "t_s" not in sel.colnames:
-            raise InputError(str(path), "metadata", "site, epoch_utc",
+            raise InputError(where, "metadata", "site, epoch_utc",
                              "the proxies of thermal terms need the site, the epoch and the "
                              "times of the recordings")
         from controller.pointing.proxies import proxy_aux

@@ -1,0 +1,97 @@
+"""Output directories: checked with one-line errors, and held by one process at a time.
+
+:func:`output_dir` turns an ``--out`` option into a directory that exists and can be written,
+or one :class:`~controller.errors.InputError` line (an empty name, a path through a file, a
+read-only file system, no permission). :class:`DirectoryLock` holds an exclusive lock on
+``DIR/.antsim.lock`` while a command writes into ``DIR``: a second ``antsim`` process that
+wants the same directory is refused with one line naming the first one's process id. The
+lock is the operating system's (``fcntl.flock``): the kernel releases it when its holder
+exits, however it exits, so a run killed with ``kill -9`` leaves no stale lock behind (the
+file stays, unlocked; it holds only the last holder's process id and command).
+
+May import: :mod:`controller.errors` only.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from controller.errors import InputError
+
+__all__ = ["LOCK_NAME", "DirectoryLock", "output_dir"]
+
+#: the lock file each locked output directory holds
+LOCK_NAME = ".antsim.lock"
+
+
+def _why(err: OSError) -> str:
+    return err.strerror or type(err).__name__
+
+
+def output_dir(text: str | os.PathLike, option: str = "--out") -> Path:
+    """The directory named by ``option``, created with its parents when missing."""
+    name = os.fspath(text)
+    if not name.strip():
+        raise InputError("command line", option, name, "is empty",
+                         "name a directory (use . for the current one)")
+    path = Path(name)
+    if path.exists() and not path.is_dir():
+        raise InputError("command line", option, name, "exists and is not a directory")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:  # a parent is a file
+        raise InputError("command line", option, name,
+                         "cannot be created: a part of the path is a file") from None
+    except OSError as err:
+        raise InputError("command line", option, name,
+                         f"cannot be created ({_why(err)})") from None
+    return path
+
+
+class DirectoryLock:
+    """``with DirectoryLock(path, option, command):`` holds ``path`` for this process.
+
+    Entering creates ``path/.antsim.lock`` (which also proves the directory writable) and
+    takes an exclusive, non-blocking ``flock`` on it; a directory held by another process,
+    or one that cannot be written, is an :class:`InputError`. Where ``fcntl`` does not exist
+    (Windows) the directory is only checked for writing.
+    """
+
+    def __init__(self, path: str | os.PathLike, option: str = "--out", command: str = "antsim"):
+        self.path = Path(path)
+        self.option = option
+        self.command = command
+        self._fd: int | None = None
+
+    def __enter__(self) -> DirectoryLock:
+        lock = self.path / LOCK_NAME
+        try:
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as err:
+            raise InputError("command line", self.option, str(self.path),
+                             f"cannot be written ({_why(err)})") from None
+        try:
+            import fcntl
+        except ImportError:  # no advisory locks here: the check for writing is all we do
+            self._fd = fd
+            return self
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            pid, _, command = os.pread(fd, 200, 0).decode("utf-8", "replace").strip() \
+                .partition("\t")
+            os.close(fd)
+            raise InputError("command line", self.option, str(self.path),
+                             "is in use by another antsim process"
+                             + (f" (pid {pid}: {command})" if pid else ""),
+                             "wait for it to finish, or write into another directory") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\t{self.command}\n".encode(), 0)
+        self._fd = fd
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self._fd is not None:
+            os.close(self._fd)  # closing the last descriptor releases the flock
+            self._fd = None
