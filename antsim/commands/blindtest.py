@@ -12,6 +12,7 @@ import json
 import sys
 from pathlib import Path
 
+from antsim.commands import check_processes
 from controller.errors import InputError
 
 #: the scenario the effects are hidden in unless --scenario says otherwise
@@ -52,8 +53,7 @@ def main(args: argparse.Namespace) -> int:
 
     if args.n < 1:
         raise InputError("command line", "--n", args.n, "must be at least 1")
-    if args.jobs < 1:
-        raise InputError("command line", "--jobs", args.jobs, "must be at least 1")
+    check_processes(args.jobs, "--jobs")
     scenario = load_scenario(find(args.scenario, field="--scenario"))
     with Progress("blindtest", args.progress) as shown:
         shown.stage("cases", total=args.n, unit="case")

@@ -66,16 +66,18 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    out = Path(args.out)
-    scenario_path = find(args.scenario, field="--scenario")
-    if out.exists() and not out.is_dir():
-        raise InputError("command line", "--out", str(out), "exists and is not a directory")
-    if out.is_dir() and any(out.iterdir()) and not (out / "demo.html").exists():
-        raise InputError("command line", "--out", str(out),
-                         "is not empty and holds no earlier demo", "choose a new directory")
+    from antsim.outdir import LOCK_NAME, DirectoryLock, output_dir
     from antsim.progress import Progress
 
-    with Progress("demo", args.progress) as progress:
+    scenario_path = find(args.scenario, field="--scenario")
+    if Path(args.out).exists() and not Path(args.out).is_dir():
+        raise InputError("command line", "--out", args.out, "exists and is not a directory")
+    if Path(args.out).is_dir() and not (Path(args.out) / "demo.html").exists() and any(
+            p.name != LOCK_NAME for p in Path(args.out).iterdir()):
+        raise InputError("command line", "--out", args.out,
+                         "is not empty and holds no earlier demo", "choose a new directory")
+    out = output_dir(args.out)
+    with DirectoryLock(out, "--out", "antsim demo"), Progress("demo", args.progress) as progress:
         run_demo(out, scenario_path, echo=progress.write, on_chapter=progress.stage)
     return 0
 

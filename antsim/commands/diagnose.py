@@ -16,6 +16,7 @@ import os
 import sys
 from pathlib import Path
 
+from antsim.commands import check_processes
 from controller.errors import InputError
 
 
@@ -93,14 +94,21 @@ def main(args: argparse.Namespace) -> int:
         raise InputError("command line", "RECORDINGS", "(none)",
                          "is required (a recordings.ecsv or a TPOINT data file)",
                          "antsim diagnose --list alone prints the candidate library")
-    for name in ("sims", "jobs"):
-        if getattr(args, name) < 1:
-            raise InputError("command line", f"--{name}", getattr(args, name),
-                             "must be at least 1")
+    check_processes(args.jobs, "--jobs")
     if args.sims < 2:
         raise InputError("command line", "--sims", args.sims, "must be at least 2")
     if args.resimulate is not None and args.resimulate < 0:
         raise InputError("command line", "--resimulate", args.resimulate, "must be >= 0")
+    if args.out is None:
+        return _diagnose(args, None)
+    from antsim.outdir import DirectoryLock, output_dir
+
+    out = output_dir(args.out)
+    with DirectoryLock(out, "--out", "antsim diagnose"):  # held from the start: refused early
+        return _diagnose(args, out)
+
+
+def _diagnose(args: argparse.Namespace, out: Path | None) -> int:
     scenario = None
     if args.scenario:
         from antsim.bundled import find
@@ -136,13 +144,13 @@ def main(args: argparse.Namespace) -> int:
                 raise
             raise InputError(args.recordings, "observations", obs.n, str(err)) from None
         written = None
-        if args.out:
+        if out is not None:
             from antsim.diagnose.modelit import resimulation_words, write_outputs
 
             resim = 4 if args.resimulate is None else args.resimulate
             progress.stage("writing the outputs" + (f" and re-simulating {resim} times"
                                                     if scenario and resim else ""))
-            written = write_outputs(diag, args.out, scenario, resim if scenario else 0,
+            written = write_outputs(diag, out, scenario, resim if scenario else 0,
                                     cache_dir=args.cache, use_cache=not args.no_cache,
                                     jobs=args.jobs)
     if args.json:
@@ -155,7 +163,9 @@ def main(args: argparse.Namespace) -> int:
         print(diag.text())
         if written and "resimulation" in written:
             print(resimulation_words(written["resimulation"]))
-        if args.out:
-            names = " ".join(sorted(p.name for p in Path(args.out).iterdir()))
-            print(f"wrote {args.out}/: {names}")
+        if out is not None:
+            from antsim.outdir import LOCK_NAME
+
+            names = " ".join(sorted(p.name for p in out.iterdir() if p.name != LOCK_NAME))
+            print(f"wrote {out}/: {names}")
     return 0

@@ -12,8 +12,9 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
+from contextlib import nullcontext
 
+from antsim.commands import check_processes
 from controller.errors import InputError
 
 
@@ -44,6 +45,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def main(args: argparse.Namespace) -> int:
     from antsim.bundled import find
+    from antsim.outdir import DirectoryLock, output_dir
     from antsim.plan.planfile import MAX_MEMBERS, load_plan
     from antsim.plan.study import run_plan
     from antsim.progress import Progress
@@ -51,16 +53,15 @@ def main(args: argparse.Namespace) -> int:
     if args.members is not None and not 2 <= args.members <= MAX_MEMBERS:
         raise InputError("command line", "--members", args.members,
                          f"must be within 2..{MAX_MEMBERS}")
-    if args.workers is not None and args.workers < 0:
-        raise InputError("command line", "--workers", args.workers, "must be >= 0")
+    if args.workers is not None:
+        check_processes(args.workers, "--workers", minimum=0)
     if args.scheduler is not None and args.workers is not None:
         raise InputError("command line", "--workers", args.workers,
                          "give --workers or --scheduler, not both",
                          "the Dask cluster sets its own workers")
-    out = Path(args.out) if args.out else None
-    if out is not None and out.exists() and not out.is_dir():
-        raise InputError("command line", "--out", str(out), "exists and is not a directory")
-    with Progress("plan", args.progress) as progress:
+    out = output_dir(args.out) if args.out is not None else None
+    held = DirectoryLock(out, "--out", "antsim plan") if out is not None else nullcontext()
+    with held, Progress("plan", args.progress) as progress:
         progress.stage("reading the plan")
         plan = load_plan(find(args.plan, "plan"))
 
@@ -77,7 +78,6 @@ def main(args: argparse.Namespace) -> int:
             from antsim.figures.plan import plan_figures
 
             progress.stage("figures")
-            out.mkdir(parents=True, exist_ok=True)
             (out / "plan.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
             plan_text = result.text(timing=False)
             (out / "plan.txt").write_text(plan_text, encoding="utf-8")

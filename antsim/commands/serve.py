@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from controller.errors import InputError
 
@@ -29,6 +28,7 @@ def main(args: argparse.Namespace) -> int:
     import asyncio
 
     from antsim.bundled import find
+    from antsim.outdir import DirectoryLock, output_dir
     from antsim.scenario import load_scenario
     from antsim.serve.app import serve
     from antsim.serve.clock import parse_clock
@@ -41,9 +41,11 @@ def main(args: argparse.Namespace) -> int:
         raise InputError("command line", "--port", args.port, "must be in 0..65535")
     if args.seed is not None and args.seed < 0:
         raise InputError("command line", "--seed", args.seed, "must be >= 0")
-    out = Path(args.out) if args.out is not None else None
-    if out is not None and out.exists() and not out.is_dir():
-        raise InputError("command line", "--out", str(out), "exists and is not a directory")
     scenario = load_scenario(find(args.scenario))
-    return asyncio.run(serve(scenario, clock, host=args.host, port=args.port, seed=args.seed,
-                             out=out))
+    if args.out is None:
+        return asyncio.run(serve(scenario, clock, host=args.host, port=args.port,
+                                 seed=args.seed))
+    out = output_dir(args.out)
+    with DirectoryLock(out, "--out", "antsim serve"):
+        return asyncio.run(serve(scenario, clock, host=args.host, port=args.port,
+                                 seed=args.seed, out=out))

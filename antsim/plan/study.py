@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from controller.errors import InputError
 from controller.pointing.signs import UNITS, sign_convention
 
 from ..progress import Progress, progress_for
@@ -289,6 +290,16 @@ def run_plan(plan: Plan, workers: int | None = None, scheduler: str | None = Non
     return result
 
 
+def _result(done, plan: Plan, v: int):
+    """A task's result; a variant's scenario refused while it runs is named as the plan's
+    variant (the base scenario's file and key alone would not say which variant)."""
+    try:
+        return done.result()
+    except InputError as err:
+        raise InputError(plan.path, f"variants[{v}]", plan.variants[v].name,
+                         f"{err.field} = {err.value!r}: {err.problem}", err.hint) from None
+
+
 def _run_variants(plan: Plan, executor: Executor, members: int | None,
                   progress: Progress) -> list[VariantResult]:
     n_var = len(plan.variants)
@@ -311,8 +322,13 @@ def _run_variants(plan: Plan, executor: Executor, members: int | None,
                                   if k in kinds))
         done = next(iter(executor.as_completed(list(pending))))
         kind, v, extra = pending.pop(done)
-        value = done.result()
+        value = _result(done, plan, v)
         if kind == "record":
+            if value.n_scans == 0:
+                raise InputError(plan.path, f"variants[{v}]", plan.variants[v].name,
+                                 "the controller schedules no scan in this variant",
+                                 "lengthen it, widen its window or elevation limits, or "
+                                 "give it sources that are up")
             shared[v] = value
             terms, fit_name = plan.scenarios[v].controller.fit_spec()
             job = Job(f"{token}:{v}", plan.scenarios[v], quiet[v], value, tuple(terms),
