@@ -25,6 +25,7 @@ from controller.astro.site import Site
 from controller.astro.sun import NIGHT_SUN_MAX_DEG
 from controller.errors import InputError
 from controller.pointing.model import NAMED_MODELS, PointingModel
+from controller.pointing.modelio import MAX_VALUE_ARCSEC
 from controller.pointing.terms import TermError, get_term
 from controller.program.config import (
     CatalogSource,
@@ -41,7 +42,7 @@ from .world.atmosphere import AtmosphereConfig
 from .world.beam import BeamConfig
 from .world.camera import CameraConfig, synthetic_stars
 from .world.effects import EFFECTS
-from .world.mount import AxisConfig, MountConfig
+from .world.mount import AxisConfig, MountConfig, move_time_s
 from .world.receiver import ChannelConfig, ReceiverConfig
 from .world.sensors import SensorConfig
 from .world.sky import SourceConfig
@@ -57,6 +58,17 @@ EQUATORIAL_EFFECTS = ("tracking_jitter", "clock_error", "polarization_squint", "
                       "source_structure", "refraction_anomaly", "terms", "polar_torsion")
 #: effects that model an equatorial mount's structure (refused on an alt-az mount)
 EQUATORIAL_ONLY_EFFECTS = ("polar_torsion",)
+
+
+#: ``[receiver] radiometer_noise = false`` (closure tests): a bandwidth so large that the
+#: radiometer noise of a 1-s sample is ~5e-12 K, below anything a test resolves but not zero
+#: (a reduction divides by the samples' scatter)
+NO_RADIOMETER_BANDWIDTH_MHZ = 1e20
+#: longest correlation time of a random process (s): about 3 years; beyond it a process is a
+#: constant, and its one-step correlation rounds to 1 (a division by zero)
+MAX_TIMESCALE_S = 1e8
+#: most receiver samples in one integration (each is a few numbers per channel in memory)
+MAX_SAMPLES = 100_000
 
 
 @dataclass(frozen=True)
@@ -219,8 +231,33 @@ def _axis(t: Table, default: AxisConfig) -> AxisConfig:
     )
     if axis.max_deg <= axis.min_deg:
         raise t.error("max_deg", axis.max_deg, f"must exceed min_deg = {axis.min_deg:g}")
+    # the sky is computed to EPHEMERIS_MARGIN_S past the campaign: a slew begun before the
+    # end must arrive within it (real antennas cross their whole range in minutes)
+    from controller.program.campaign import EPHEMERIS_MARGIN_S
+
+    span = axis.max_deg - axis.min_deg
+    slew_s = move_time_s(span, axis.speed_deg_s, axis.accel_deg_s2)
+    if slew_s > EPHEMERIS_MARGIN_S:
+        key = ("speed_deg_s" if span / axis.speed_deg_s > EPHEMERIS_MARGIN_S / 2
+               else "accel_deg_s2")
+        raise t.error(key, getattr(axis, key),
+                      f"too slow: crossing the axis range ({span:g} deg) would take "
+                      f"{slew_s:.3g} s, more than the {EPHEMERIS_MARGIN_S:g} s allowed")
     t.finish()
     return axis
+
+
+def _wrap_margin(t: Table, default: float) -> float:
+    """The cable-wrap look-ahead (s): within the hour the simulated sky reaches past the
+    campaign (``EPHEMERIS_MARGIN_S``), as a slew's arrival is (:func:`_axis`)."""
+    from controller.program.campaign import EPHEMERIS_MARGIN_S
+
+    value = t.number("wrap_margin_s", default, min=0.0)
+    if value > EPHEMERIS_MARGIN_S:
+        raise t.error("wrap_margin_s", value,
+                      f"must be <= {EPHEMERIS_MARGIN_S:g} s: the mount plans its cable wrap "
+                      "at most that far ahead of a slew's arrival")
+    return value
 
 
 def _mount(t: Table) -> MountConfig:
@@ -246,9 +283,10 @@ def _mount(t: Table) -> MountConfig:
             raise t.error("el.max_deg", el.max_deg, "must be <= 90 deg")
     mount = MountConfig(kind=kind, az=az, el=el,
                         settle_s=t.number("settle_s", d.settle_s, min=0.0, max=600.0),
-                        wrap_margin_s=t.number("wrap_margin_s", d.wrap_margin_s, min=0.0),
+                        wrap_margin_s=_wrap_margin(t, d.wrap_margin_s),
+                        # a full turn of the feed box (720 deg) within the same hour
                         feed_speed_deg_s=t.number("feed_speed_deg_s", d.feed_speed_deg_s,
-                                                  gt=0.0, max=90.0))
+                                                  min=0.2, max=90.0))
     t.finish()
     return mount
 
@@ -269,7 +307,8 @@ def _beam(t: Table) -> BeamConfig:
         harmonics = tuple(h.number(n, 0.0, min=-2.0, max=2.0) for n in HARMONIC_NAMES)
         h.finish()
     beam = BeamConfig(
-        hpbw_arcmin=t.number("hpbw_arcmin", d.hpbw_arcmin, gt=0.0, max=600.0),
+        # 0.01' (0.6"): narrower than any radio telescope's beam
+        hpbw_arcmin=t.number("hpbw_arcmin", d.hpbw_arcmin, min=0.01, max=600.0),
         efficiency_el_deg=el, efficiency=eff,
         gain_k_per_jy=t.number("gain_k_per_jy", d.gain_k_per_jy, gt=0.0, max=100.0),
         gain_harmonics=harmonics,
@@ -289,13 +328,30 @@ def _receiver(t: Table) -> ReceiverConfig:
         ct.finish()
     if not channels:
         raise t.error("channels", [], "the receiver needs at least one channel")
+    frequency_ghz = t.number("frequency_ghz", d.frequency_ghz, gt=0.0, max=1000.0)
+    # a band wider than twice its centre frequency would reach below 0 Hz
+    widest = 2000.0 * frequency_ghz
+    if t.boolean("radiometer_noise", True):
+        bandwidth = t.number("bandwidth_mhz", d.bandwidth_mhz, gt=0.0)
+        if bandwidth > widest:
+            raise t.error("bandwidth_mhz", bandwidth,
+                          f"must be <= {widest:g} (twice frequency_ghz: a wider band would "
+                          "reach below 0 Hz)", "radiometer_noise = false leaves the noise out")
+    elif "bandwidth_mhz" in t:
+        raise t.error("bandwidth_mhz", t.raw("bandwidth_mhz"),
+                      "not with radiometer_noise = false (no radiometer, no bandwidth)")
+    else:
+        bandwidth = NO_RADIOMETER_BANDWIDTH_MHZ
     rec = ReceiverConfig(
         channels=tuple(channels),
-        frequency_ghz=t.number("frequency_ghz", d.frequency_ghz, gt=0.0, max=1000.0),
-        bandwidth_mhz=t.number("bandwidth_mhz", d.bandwidth_mhz, gt=0.0),
-        sample_interval_s=t.number("sample_interval_s", d.sample_interval_s, gt=0.0, max=60.0),
+        frequency_ghz=frequency_ghz,
+        bandwidth_mhz=bandwidth,
+        # at least 0.01 s: a sample per 10 ms keeps an hour-long integration's arrays small
+        sample_interval_s=t.number("sample_interval_s", d.sample_interval_s, min=0.01,
+                                   max=60.0),
         gain_fluctuation=t.number("gain_fluctuation", d.gain_fluctuation, min=0.0, max=0.1),
-        gain_timescale_s=t.number("gain_timescale_s", d.gain_timescale_s, gt=0.0),
+        gain_timescale_s=t.number("gain_timescale_s", d.gain_timescale_s, gt=0.0,
+                                  max=MAX_TIMESCALE_S),
     )
     t.finish()
     return rec
@@ -319,7 +375,8 @@ def _weather(t: Table) -> WeatherConfig:
         min_local_h=t.number("min_local_h", d.min_local_h, min=0.0, lt=24.0),
         max_local_h=t.number("max_local_h", d.max_local_h, min=0.0, lt=24.0),
         wander_rms_c=t.number("wander_rms_c", d.wander_rms_c, min=0.0, max=20.0),
-        wander_timescale_s=t.number("wander_timescale_s", d.wander_timescale_s, gt=0.0),
+        wander_timescale_s=t.number("wander_timescale_s", d.wander_timescale_s, gt=0.0,
+                                    max=MAX_TIMESCALE_S),
         pressure_hpa=t.number("pressure_hpa", d.pressure_hpa, min=100.0, max=1100.0),
         relative_humidity=t.number("relative_humidity", d.relative_humidity, min=0.0, max=1.0),
         wind_speed_m_s=t.number("wind_speed_m_s", d.wind_speed_m_s, min=0.0, max=60.0),
@@ -386,7 +443,9 @@ def _model(t: Table, default: str, base: Path, mount: MountConfig | None = None,
     for key in values_table:
         try:
             term = (equatorial_term(key, site.latitude_deg) if equatorial else get_term(key))
-            values[term.name] = values_table.number(key) * scale
+            # a coefficient within half a turn (the bound of model files, modelio)
+            values[term.name] = values_table.number(key, min=-MAX_VALUE_ARCSEC / scale,
+                                                    max=MAX_VALUE_ARCSEC / scale) * scale
         except TermError as err:
             raise values_table.error(key, values_table.raw(key), "not a pointing term",
                                      str(err)) from None
@@ -508,13 +567,21 @@ def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, re
     ds = ScanConfig()
     scan = ScanConfig(
         step_arcmin=scan_t.number("step_arcmin", ds.step_arcmin, gt=0.0),
-        integration_s=scan_t.number("integration_s", ds.integration_s, gt=0.0, max=3600.0),
-        hpbw_arcmin=scan_t.number("hpbw_arcmin", ds.hpbw_arcmin, gt=0.0),
+        # the noise of an integration is the scatter of its samples: two at least
+        integration_s=scan_t.number("integration_s", ds.integration_s,
+                                    min=2.0 * receiver.sample_interval_s, max=3600.0),
+        hpbw_arcmin=scan_t.number("hpbw_arcmin", ds.hpbw_arcmin, min=0.01, max=600.0),
         estimator=scan_t.string("estimator", ds.estimator, choices=ESTIMATORS),
         snr_min=scan_t.number("snr_min", ds.snr_min, min=0.0),
         overhead_s=scan_t.number("overhead_s", ds.overhead_s, min=0.0, max=3600.0),
         use_source_size=scan_t.boolean("use_source_size", ds.use_source_size),
     )
+    samples = scan.integration_s / receiver.sample_interval_s
+    if samples > MAX_SAMPLES:
+        raise scan_t.error("integration_s", scan.integration_s,
+                           f"holds {samples:.3g} samples of receiver.sample_interval_s = "
+                           f"{receiver.sample_interval_s:g} s; at most {MAX_SAMPLES:g}",
+                           "integrate less or sample less often")
     if scan.step_arcmin > 1.2 * scan.hpbw_arcmin:
         raise scan_t.error("step_arcmin", scan.step_arcmin,
                            f"the +-D points would lie outside the main beam (HPBW "

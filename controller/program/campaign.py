@@ -230,6 +230,8 @@ class ControlProgram:
             if self._detected(reduced, tolerated=Flag(0)) or searches >= 2 \
                     or not self.config.search.enabled:
                 break
+            if self.antenna.clock_s() + self.scan_duration_s > self.config.duration_s:
+                break  # no time left in the campaign for a search and a scan after it
             found = yield env.process(self.search(env, target))
             searches += 1
             if not found:

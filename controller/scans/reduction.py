@@ -588,7 +588,7 @@ def _grid_start(profile: _Profile, half_range: float
     the grid's spacing."""
     weight, offsets, sigma_beam = profile.weight, profile.offsets, profile.sigma_beam
     spacing = sigma_beam / _LSQ_GRID_PER_SIGMA
-    n_nodes = round(2.0 * half_range / spacing) + 1
+    n_nodes = max(round(2.0 * half_range / spacing) + 1, 3)  # a pattern narrow to the beam
     grid = np.linspace(-half_range, half_range, n_nodes)
     spacing = grid[1] - grid[0]
     g_grid = np.exp(-((offsets[None, :] - grid[:, None]) ** 2) / (2.0 * sigma_beam**2))

@@ -51,7 +51,9 @@ BLOCK_FIELDS = ("t_s", "az_rad", "el_rad", "az_rate_rad_s", "el_rate_rad_s", "ap
 
 @dataclass(frozen=True)
 class Param:
-    """A numeric effect parameter with its default, bounds and meaning (units in the name)."""
+    """A numeric effect parameter with its default, bounds and meaning (units in the name).
+    Where ``min``/``max`` are not given, :data:`NAME_BOUNDS` bounds the magnitude by the
+    unit the name ends in."""
 
     default: float | None
     doc: str
@@ -59,6 +61,28 @@ class Param:
     max: float | None = None
     kind: str = "number"  # "number", "string", "table" (name -> number)
     choices: tuple[str, ...] | None = None  # the values a string may take
+
+
+#: the largest magnitude of a parameter whose spec gives no bound, by the unit its name
+#: ends in (first match): beyond these a value means nothing physical and would only break
+#: the simulation (a pointing error of 10^300", a time past the ephemeris, 10^9 gusts)
+NAME_BOUNDS: tuple[tuple[str, float], ...] = (
+    ("_per_k", 3600.0),        # arcsec per kelvin
+    ("_arcsec", 648000.0),     # half a turn
+    ("_arcmin", 10800.0),
+    ("_deg", 720.0),
+    ("_s_per_day", 3600.0),    # a clock an hour off per day
+    ("_per_h", 3600.0),        # one event a second
+    ("_s", 1e8),               # about 3 years
+    ("_k", 1000.0),
+    ("_c", 100.0),
+    ("_m_s", 100.0),
+)
+
+
+def name_bound(name: str) -> float | None:
+    """The magnitude bound :data:`NAME_BOUNDS` gives parameter ``name`` (None: none)."""
+    return next((bound for suffix, bound in NAME_BOUNDS if name.endswith(suffix)), None)
 
 
 def _instant(value):
@@ -100,9 +124,14 @@ class Effect:
                 params[key] = table.string(key, spec.default, choices=spec.choices)
             elif spec.kind == "table":
                 sub = table.table(key, spec.default if spec.default is not None else {})
-                params[key] = {k: sub.number(k) for k in sub}
+                bound = name_bound(key)
+                params[key] = {k: sub.number(k, min=None if bound is None else -bound,
+                                             max=bound) for k in sub}
             else:
-                params[key] = table.number(key, spec.default, min=spec.min, max=spec.max,
+                bound = name_bound(key)
+                lo = spec.min if spec.min is not None or bound is None else -bound
+                hi = spec.max if spec.max is not None or bound is None else bound
+                params[key] = table.number(key, spec.default, min=lo, max=hi,
                                            allow_none=spec.default is None)
                 if params[key] is None and key in table:
                     raise table.error(key, None, "must be a number")

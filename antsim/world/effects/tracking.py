@@ -45,7 +45,7 @@ class TrackingJitter(Effect):
         "el_rms_arcsec": Param(5.0, "rms of the elevation wander (arcsec)", min=0.0),
         "timescale_s": Param(60.0, "correlation time of the wander (s)", min=1e-3),
         "wind_ref_m_s": Param(10.0, "wind speed that doubles the rms (m/s)", min=0.1),
-        "gust_rate_per_h": Param(0.0, "mean number of gusts per hour", min=0.0),
+        "gust_rate_per_h": Param(0.0, "mean number of gusts per hour", min=0.0, max=3600.0),
         "gust_arcsec": Param(60.0, "rms beam displacement of a gust per axis (arcsec)",
                              min=0.0),
         "gust_duration_s": Param(30.0, "duration of a gust (s)", min=1.0),
