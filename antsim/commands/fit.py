@@ -17,14 +17,16 @@ from pathlib import Path
 from controller.errors import InputError
 from controller.pointing.model import NAMED_MODELS
 
-#: default model per input format: TPOINT users start from TPOINT's eight physical terms;
-#: antsim's own recordings come from the 45-ft, whose model is Ghigo's ten terms.
-DEFAULT_MODEL = {"tpoint": "tpoint8", "ecsv": "ghigo10"}
+#: default model per input format: TPOINT users (and a CSV of one's own measurements) start
+#: from TPOINT's eight physical terms; antsim's own recordings come from the 45-ft, whose
+#: model is Ghigo's ten terms.
+DEFAULT_MODEL = {"tpoint": "tpoint8", "csv": "tpoint8", "ecsv": "ghigo10"}
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("recordings", metavar="RECORDINGS",
-                        help="recordings.ecsv from 'antsim run', or a TPOINT pointing data file")
+                        help="recordings.ecsv from 'antsim run', a TPOINT pointing data file, "
+                             "or a CSV of your own measurements (docs/inputs.md)")
     which = parser.add_mutually_exclusive_group()
     which.add_argument("--model", metavar="NAME",
                        help="named model (" + ", ".join(sorted(NAMED_MODELS)) + ") or a "
@@ -42,6 +44,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "term names and signs (usable as antsim run --model FILE)")
     parser.add_argument("--no-robust", action="store_true",
                         help="plain least squares on every observation (no outlier rejection)")
+    parser.add_argument("--csv", action="append", default=[], metavar="'KEY: VALUE'",
+                        help="a CSV setting the file does not state, e.g. 'sign: "
+                             "true-minus-indicated' or 'units: d_el=arcsec' (repeatable)")
     parser.add_argument("--include-masked", action="store_true",
                         help="also fit the observations a TPOINT file masks with ';'")
     parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
@@ -162,15 +167,21 @@ def _note(line: str) -> None:
 
 def main(args: argparse.Namespace) -> int:
     from controller.pointing.fitting import fit_model
-    from controller.pointing.tpoint import sniff_format
+    from controller.program.csvdata import input_format
 
     path = Path(args.recordings)
-    fmt = sniff_format(path)
+    fmt = input_format(path)
+    if args.csv and fmt != "csv":
+        raise InputError("command line", "--csv", args.csv[0], f"{path} is not a CSV file")
     if fmt == "mod":
         raise InputError(str(path), "RECORDINGS", str(path),
                          "is a TPOINT model (.mod) file, not pointing data",
                          "pass a model file with --model")
     table = None
+    if fmt == "csv":
+        from controller.program.csvdata import read_csv
+
+        table = read_csv(path, args.csv)
     if fmt == "ecsv":
         from controller.program.recordings import read_recordings, recording_notes
 
@@ -217,7 +228,8 @@ def main(args: argparse.Namespace) -> int:
         json.dump(result.to_json(), sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
-        print(f"{path} ({'TPOINT data' if fmt == 'tpoint' else 'recordings'})")
+        kind = {"tpoint": "TPOINT data", "csv": "CSV measurements"}.get(fmt, "recordings")
+        print(f"{path} ({kind})")
         print(result.summary())
         if target is not None:
             print(f"wrote {target} (TPOINT's term names and signs)")
