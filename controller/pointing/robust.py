@@ -64,6 +64,10 @@ __all__ = ["CORRELATION_WARNING_LEVEL", "Equations", "fit_terms", "lad_fit",
 CORRELATION_WARNING_LEVEL = 0.95
 
 
+#: the largest term basis (per radian) a fit takes: beyond it a term is at its singularity
+#: (cot E at E = 0.2", tan E within 0.2" of the zenith) and its column would swamp the solver
+MAX_BASIS = 1e6
+
 @dataclass(frozen=True)
 class Equations:
     """The stacked equations of a fit: ``design`` (2N x M, the xel rows then the el rows,
@@ -90,12 +94,14 @@ class Equations:
         design = np.empty((2 * n, m), order="F")  # column-major, as LAPACK works on it
         np.multiply(basis_az, cos_el[:, None], out=design[:n])
         design[n:] = basis_el
-        if not np.all(np.isfinite(design)):
-            row, col = np.argwhere(~np.isfinite(design))[0]
+        with np.errstate(invalid="ignore"):
+            singular = ~(np.abs(design) <= MAX_BASIS)  # NaN and infinity included
+        if singular.any():
+            row, col = np.argwhere(singular)[0]
             obs = row % n
             raise ValueError(
                 f"term {names[col]} is infinite at observation {obs} (elevation "
-                f"{math.degrees(data.el_rad[obs]):.4f} deg); remove the term or the observation"
+                f"{math.degrees(data.el_rad[obs]):.4g} deg); remove the term or the observation"
             )
         target = -np.concatenate([data.xel_arcsec, data.el_arcsec])
         if weighted:
