@@ -16,6 +16,7 @@ declination; models in TPOINT's equatorial terms, e.g. ``crane11``), ``beam.gain
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field, replace
 from itertools import pairwise
 from pathlib import Path
@@ -147,7 +148,7 @@ def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario file; raises InputError on the first bad value."""
     path = Path(path)
     root = load_toml(path)
-    text = path.read_text(encoding="utf-8")
+    text = root.text
     name = root.string("name")
     description = root.string("description", "")
     seed = root.integer("seed", 1, min=0)
@@ -212,12 +213,14 @@ def _epoch(t: Table) -> str:
     from astropy.time import Time
 
     try:
-        epoch = Time(text, scale="utc")
-        iso = epoch.isot
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # ERFA's "dubious year": refused below, by name
+            epoch = Time(text, scale="utc")
+            iso, year = epoch.isot, epoch.ymdhms["year"]
     except (ValueError, TypeError):
         raise t.error("start_utc", text, "not an ISO UTC time",
                       "write e.g. 1990-02-08T17:00:00") from None
-    if not 1900 <= epoch.datetime.year <= 2200:
+    if not 1900 <= year <= 2200:
         raise t.error("start_utc", text, "year outside 1900..2200")
     return iso
 

@@ -13,7 +13,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from controller.errors import InputError
+from controller.errors import InputError, read_text_file
 
 __all__ = ["Table", "load_toml"]
 
@@ -24,17 +24,14 @@ def load_toml(path: str | Path) -> Table:
     """Parse a TOML file into a :class:`Table`; unreadable or invalid files raise InputError."""
     path = Path(path)
     where = str(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(where, "file", str(path), "no such file") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise InputError(where, "file", str(path), f"cannot be read ({err})") from None
+    text = read_text_file(path)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise InputError(where, "TOML syntax", str(err).split("\n")[0], "not valid TOML") from None
-    return Table(data, where, "")
+    table = Table(data, where, "")
+    table.text = text
+    return table
 
 
 class Table:
@@ -45,6 +42,8 @@ class Table:
         self.where = where
         self.prefix = prefix
         self._read: set[str] = set()
+        #: the file's text (the root table of a file only)
+        self.text = ""
 
     # ------------------------------------------------------------------ helpers
     def key(self, name: str) -> str:

@@ -509,7 +509,7 @@ def test_cli_human_output_and_masked_lines(capsys):
     (["--terms", "IA,BOGUS"], "--terms = 'BOGUS': unknown pointing term"),
     (["--terms", "IA,,IE"], "none empty"),
     (["--terms", "IA,IA"], "listed twice"),
-    (["--model", "no-such-model"], "neither a named model nor an existing .mod file"),
+    (["--model", "no-such-model"], "neither a named model nor an existing model file"),
     (["--model", "none"], "no terms to fit"),
     (["--terms", "IA,IE,CA,NPAE,AN"], "4 observations cannot determine 5 terms"),
 ])

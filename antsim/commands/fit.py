@@ -29,9 +29,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "or a CSV of your own measurements (docs/inputs.md)")
     which = parser.add_mutually_exclusive_group()
     which.add_argument("--model", metavar="NAME",
-                       help="named model (" + ", ".join(sorted(NAMED_MODELS)) + ") or a "
-                            "TPOINT .mod file whose terms are fitted (default: tpoint8 for "
-                            "TPOINT data, ghigo10 for recordings)")
+                       help="named model (" + ", ".join(sorted(NAMED_MODELS)) + "), a "
+                            "TPOINT .mod file or a fit.json whose terms are fitted (default: "
+                            "tpoint8 for TPOINT data and CSV, ghigo10 for recordings)")
     which.add_argument("--terms", metavar="T1,T2,...",
                        help="comma-separated term names, e.g. IA,IE,NPAE,CA,AN,AW,TF,TX")
     parser.add_argument("--fixed", metavar="T=ARCSEC,...",
@@ -110,14 +110,11 @@ def _terms_from_model(spec: str) -> tuple[tuple[str, ...], str]:
     path = Path(spec)
     if not path.is_file():
         raise InputError("command line", "--model", spec,
-                         "is neither a named model nor an existing .mod file",
+                         "is neither a named model nor an existing model file",
                          f"named models: {', '.join(sorted(NAMED_MODELS))}")
-    from controller.pointing.tpoint import read_mod, sniff_format
+    from controller.pointing.modelio import load_model
 
-    if sniff_format(path) != "mod":
-        raise InputError(str(path), "--model", spec, "is not a TPOINT .mod model file")
-    model = read_mod(path)
-    return model.names, path.stem
+    return load_model(path).names, path.stem
 
 
 def _read_data(path: Path, fmt: str, include_masked: bool, mount: str | None, say,

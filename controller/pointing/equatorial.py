@@ -218,7 +218,7 @@ def load_equatorial_model(spec: str, latitude_deg: float) -> PointingModel:
         return equatorial_model(text_spec, latitude_deg)
     path = Path(text_spec)
     if not path.is_file():
-        raise InputError(text_spec, "model", text_spec,
+        raise InputError("command line", "--model", text_spec,
                          "neither a named equatorial model nor an existing file",
                          f"equatorial models: {', '.join(sorted(EQUATORIAL_MODELS))}")
     from .modelio import check_value, read_model_file, refuse_empty

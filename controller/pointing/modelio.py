@@ -112,7 +112,11 @@ def read_model_file(path: str | Path) -> tuple[str, object]:
             return "json", json.loads(text)
         except json.JSONDecodeError as err:
             raise InputError(f"{where}:{err.lineno}", "JSON", err.msg, "invalid JSON") from None
-    kind = sniff_format(path)
+    try:
+        kind = sniff_format(path)
+    except InputError as err:  # free text: say what it is not, as a model
+        raise InputError(where, "model", where, "is not a pointing model (a TPOINT .mod file "
+                         f"or a fit.json): {err.problem}") from None
     if kind != "mod":
         what = {"ecsv": "ECSV recordings", "tpoint": "TPOINT pointing data"}[kind]
         raise InputError(where, "model", where, f"is {what}, not a pointing model",
@@ -136,7 +140,7 @@ def load_model(spec: str | Path) -> PointingModel:
         return PointingModel(text_spec)
     path = Path(spec)
     if not path.exists():
-        raise InputError(text_spec, "model", text_spec,
+        raise InputError("command line", "--model", text_spec,
                          "neither a named model nor an existing file",
                          f"named models: {', '.join(sorted(NAMED_MODELS))}")
     kind, content = read_model_file(path)
