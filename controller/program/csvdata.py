@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import csv
 import re
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -64,13 +65,13 @@ _OFFSET = (-10800.0, 10800.0)
 #: base name -> what it is (table-driven: a new optional column is one more line)
 CSV_COLUMNS: dict[str, CsvColumn] = {
     "time": CsvColumn("time", text=True),
-    "source": CsvColumn("source", text=True),
     "az": CsvColumn("az_deg", ColumnRule("az", "deg", -360.0, 720.0, finite=True), True),
     "el": CsvColumn("el_deg", ColumnRule("el", "deg", -90.0, 90.0, finite=True), True),
     "d_xel": CsvColumn("xel_arcmin", ColumnRule("d_xel", "arcmin", *_OFFSET, finite=True)),
     "d_az": CsvColumn("d_az_arcmin", ColumnRule("d_az", "arcmin", -21600.0, 21600.0,
                                                 finite=True)),
     "d_el": CsvColumn("el_arcmin", ColumnRule("d_el", "arcmin", *_OFFSET, finite=True), True),
+    "source": CsvColumn("source", text=True),
     "air_temp": CsvColumn("air_temp_c", ColumnRule("air_temp", "deg_C", -100.0, 100.0)),
     "pressure": CsvColumn("pressure_hpa", ColumnRule("pressure", "hPa", 0.0, 1200.0)),
     "humidity": CsvColumn("humidity", ColumnRule("humidity", None, 0.0, 1.0)),
@@ -130,6 +131,11 @@ def parse_settings(lines: Sequence[str], where: str) -> dict[str, str]:
             raise InputError(where, key, value, f"contradicts {key}: {out[key]}")
         out[key] = value
     return out
+
+
+def _suffix(unit: str | None) -> str:
+    """The column-name suffix of an astropy unit string (``arcmin`` for ``"arcmin"``)."""
+    return next((k for k, v in UNIT_SUFFIXES.items() if v == unit), "deg")
 
 
 def _known(base: str) -> bool:
@@ -251,7 +257,10 @@ def read_csv(path: str | Path, options: Sequence[str] = ()) -> CsvData:
             columns[spec.target] = values
             continue
         numbers = _numbers(cells[j], headings[j], where, lines)
-        converted = unit_factor(unit, spec.rule, f"{where}:{names_line}")(numbers)
+        converted = unit_factor(unit, spec.rule, f"{where}:{names_line}",
+                                hint=f"name the column {base}_<unit> (e.g. {base}_"
+                                f"{_suffix(spec.rule.unit)}) or add '# units: {base}=<unit>'"
+                                )(numbers)
         check_range(converted, spec.rule, where, lines, shown=numbers)
         columns[spec.target] = np.asarray(converted, dtype=float)
     if "d_az_arcmin" in columns:
@@ -267,7 +276,7 @@ def read_csv(path: str | Path, options: Sequence[str] = ()) -> CsvData:
         repeat = first_repeat([columns["t_s"], columns["az_deg"], columns["el_deg"]])
         if repeat is not None:
             first, row = repeat
-            raise InputError(f"{where}:{lines[row]}", "row", " ".join(rows[row]),
+            raise InputError(f"{where}:{lines[row]}", "row", ",".join(rows[row]),
                              f"repeats line {lines[first]} (same time and position)",
                              "give each measurement once")
     meta["sign_convention"] = ("offsets: indicated minus true (converted from the file's "
@@ -298,17 +307,21 @@ def _times(values: np.ndarray, where: str, lines: list[int]) -> tuple[np.ndarray
 
     texts = [str(v).removesuffix("Z") for v in values]
     try:
-        times = Time(texts, format="isot", scale="utc")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # ERFA's "dubious year": refused below, by name
+            times = Time(texts, format="isot", scale="utc")
+            year = np.asarray(times.ymdhms["year"])
     except ValueError:
         for i, text in enumerate(texts):
             try:
-                Time(text, format="isot", scale="utc")
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    Time(text, format="isot", scale="utc")
             except ValueError:
                 raise InputError(f"{where}:{lines[i]}", "time", str(values[i]),
                                  "is not an ISO UTC time", "write e.g. 1990-02-08T17:03:10") \
                     from None
         raise
-    year = np.asarray(times.ymdhms["year"])
     bad = (year < 1900) | (year > 2200)
     if bad.any():
         i = int(np.flatnonzero(bad)[0])

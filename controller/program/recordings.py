@@ -294,13 +294,13 @@ REQUIRED = ("polarization", "az_deg", "el_deg", "xel_arcmin", "el_arcmin", "mode
             "model_el_arcmin", "applied_xel_arcmin", "applied_el_arcmin")
 #: what is left out without an optional column (named in a note, never silently)
 OPTIONAL = {
-    "good": "the reduction's flags (every row with finite offsets is used)",
-    "scan": "scan numbers (rows are matched to their scan by time)",
-    "source": "the tests by source",
-    "sun_el_deg": "the tests against the Sun's elevation (day and night)",
-    "air_temp_c": "the tests against air temperature",
-    "slew_az": "the tests of the last slew's direction",
-    "xel_width_arcmin": "the tests of the measured beam width",
+    "good": "every row with finite offsets is used",
+    "scan": "rows are matched to their scan by time",
+    "source": "the tests by source are left out",
+    "sun_el_deg": "the tests against the Sun's elevation are left out",
+    "air_temp_c": "the tests against air temperature are left out",
+    "slew_az": "the tests of the last slew's direction are left out",
+    "xel_width_arcmin": "the tests of the measured beam width are left out",
 }
 #: the optional columns each reader of recordings uses
 USES = {"fit": ("good",), "diagnose": tuple(OPTIONAL)}
@@ -405,8 +405,9 @@ def _check_column(table, column: Column, where: str, lines: list[int]) -> None:
         return
     kind = col.dtype.kind
     if kind not in "biuf":
-        raise InputError(where, column.name, str(col.dtype),
-                         f"must hold numbers ({column.dtype}), not text")
+        raise InputError(f"{where}:{lines[0]}" if len(col) else where, column.name,
+                         col[0] if len(col) else "", f"must be {column.dtype} values; the "
+                         f"header declares {col.dtype.name if kind != 'U' else 'text'}")
     given = None if col.unit is None else col.unit.to_string()
     convert = unit_factor(given, column.rule, where, named=True)  # az_deg: deg
     mask = np.asarray(getattr(col, "mask", np.zeros(len(col), bool)), dtype=bool)

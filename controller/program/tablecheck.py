@@ -32,7 +32,8 @@ class ColumnRule:
     finite: bool = False
 
 
-def unit_factor(given: str | None, rule: ColumnRule, where: str, named: bool = False):
+def unit_factor(given: str | None, rule: ColumnRule, where: str, named: bool = False,
+                hint: str = ""):
     """A function converting values in unit ``given`` (a file's unit string; None or "" when
     the file names none) into ``rule.unit``; InputError when they are not convertible. A
     column without a unit is in ``rule.unit`` when its name says so (``named``: ``az_deg``);
@@ -44,7 +45,7 @@ def unit_factor(given: str | None, rule: ColumnRule, where: str, named: bool = F
         if rule.unit is None or named:
             return lambda v: v
         raise InputError(where, f"{rule.name}.unit", "<none>", f"needs a unit ({rule.unit})",
-                         "declare it in the header, e.g. unit: " + rule.unit)
+                         hint or f"declare it in the header, e.g. unit: {rule.unit}")
     try:
         unit = u.Unit(given, parse_strict="raise")
     except ValueError:
