@@ -503,17 +503,16 @@ def test_import_is_light():
     a second; `antsim --help` should not pay for them) and nothing heavy beyond what
     ``import controller`` already loads (its IERS set-up brings astropy.time and erfa)."""
     code = (
-        "import sys, time; import controller; before = set(sys.modules); "
-        "start = time.perf_counter(); import controller.astro.ephemeris; "
-        "cost = time.perf_counter() - start; added = set(sys.modules) - before; "
+        "import sys; import controller; before = set(sys.modules); "
+        "import controller.astro.ephemeris; added = set(sys.modules) - before; "
         "print(sorted(m for m in sys.modules if m.split('.')[0] == 'scipy' "
         "or m.startswith('astropy.coordinates'))); "
-        "print(sorted(m for m in added if m.split('.')[0] in ('astropy', 'erfa', 'scipy'))); "
-        "print(cost)"
+        "print(sorted(m for m in added if m.split('.')[0] in ('astropy', 'erfa', 'scipy')))"
     )
     result = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True,
                             text=True, check=True)
-    heavy_loaded, heavy_added, cost_s = result.stdout.split("\n")[:3]
+    heavy_loaded, heavy_added = result.stdout.split("\n")[:2]
     assert heavy_loaded == "[]"
     assert heavy_added == "[]"
-    assert float(cost_s) < 0.1  # measured ~5 ms: dataclasses, re and this module
+    # (the import's time, ~5 ms on a quiet machine, is no test: a busy shared machine took
+    # 0.17 s; what makes it light is the absence of the modules above)
