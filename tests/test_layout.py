@@ -57,6 +57,11 @@ RULES: tuple[tuple[str, tuple[str, ...], str], ...] = (
                         "antsim.cli"),
      "finding the scenarios that come with antsim by name is a base of antsim: it reads no "
      "scenario"),
+    ("antsim.outdir", ("antsim.world", "antsim.scenario", "antsim.figures", "antsim.studies",
+                       "antsim.run", "antsim.serve", "antsim.plan", "antsim.diagnose",
+                       "antsim.commands", "antsim.cli", "controller.astro", "controller.pointing",
+                       "controller.scans", "controller.program"),
+     "output directories and their lock are a base of every command that writes"),
     ("antsim.world", ("antsim.figures", "antsim.studies", "antsim.run", "antsim.serve",
                       "antsim.plan", "antsim.diagnose", "antsim.commands", "antsim.cli"),
      "the simulated world knows nothing of what is done with it"),

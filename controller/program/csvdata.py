@@ -230,18 +230,15 @@ def read_csv(path: str | Path, options: Sequence[str] = ()) -> CsvData:
         raise InputError(f"{where}:{names_line}", "columns", " ".join(missing),
                          "required column(s) missing", "docs/inputs.md lists the columns")
 
-    rows: list[list[str]] = []
-    lines: list[int] = []
-    for k, line in enumerate(raw_lines[names_at + 1:], start=names_line + 1):
-        if not line.strip() or line.lstrip().startswith("#"):
-            continue
-        fields = next(csv.reader([line]))
+    lines = [k for k, line in enumerate(raw_lines[names_at + 1:], start=names_line + 1)
+             if line.strip() and not line.lstrip().startswith("#")]
+    rows = [[f.strip() for f in fields]
+            for fields in csv.reader(raw_lines[k - 1] for k in lines)]
+    for k, fields in zip(lines, rows, strict=True):
         if len(fields) != len(headings):
-            raise InputError(f"{where}:{k}", "row", line.strip(),
+            raise InputError(f"{where}:{k}", "row", raw_lines[k - 1].strip(),
                              f"has {len(fields)} fields; the column names line has "
                              f"{len(headings)}")
-        rows.append([f.strip() for f in fields])
-        lines.append(k)
     if not rows:
         raise InputError(where, "rows", 0, "the file has column names but no measurements")
     cells = list(zip(*rows, strict=True))
