@@ -333,3 +333,33 @@ def test_the_documented_case_count_is_the_suites():
     text = (REPO / "docs" / "inputs.md").read_text(encoding="utf-8")
     claimed = int(re.search(r"runs more than (\d+) such inputs", text).group(1))
     assert len(cases) > claimed >= len(cases) - 50
+
+
+def test_a_full_disk_mid_run_is_one_line_and_keeps_the_scans_written(tmp_path, monkeypatch,
+                                                                      capsys):
+    """The file system refusing a write (ENOSPC on the 4th scan) is one line and exit 2; the
+    three scans written before it read back."""
+    import errno
+
+    from controller.program import recordings
+
+    real_write = os.write
+    calls = {"n": 0}
+
+    def write(fd, data):
+        if data.startswith(b"# %ECSV"):
+            return real_write(fd, data)
+        calls["n"] += 1
+        if calls["n"] == 4:
+            raise OSError(errno.ENOSPC, "No space left on device", "recordings.ecsv")
+        return real_write(fd, data)
+
+    monkeypatch.setattr(recordings.os, "write", write)
+    out = tmp_path / "full"
+    assert main(["run", str(BASE), "--out", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert err == [f"antsim run: error: {out / 'recordings.ecsv'}: rows = 3: cannot be written: "
+                   "No space left on device; the scans written before them are kept"]
+    monkeypatch.undo()
+    table = recordings.read_recordings(out / "recordings.ecsv")
+    assert len(set(table["scan"])) == 3

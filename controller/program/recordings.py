@@ -268,7 +268,12 @@ class RecordingWriter:
             else:
                 fresh.append(line)
         if fresh:
-            os.write(self._fd, "".join(fresh).encode("utf-8"))
+            try:
+                os.write(self._fd, "".join(fresh).encode("utf-8"))
+            except OSError as err:  # as one line: simpy re-raises an OSError without its file
+                raise InputError(str(self.path), "rows", len(fresh),
+                                 f"cannot be written: {err.strerror or err}",
+                                 "the scans written before them are kept") from None
             self.rows_written += len(fresh)
 
     def discard(self) -> None:
