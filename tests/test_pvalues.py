@@ -1,8 +1,9 @@
-"""antsim.diagnose.pvalues against scipy.stats, bit for bit."""
+"""antsim.diagnose.pvalues against scipy.stats: the same special functions, to a few ulps."""
 
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 import pytest
@@ -12,10 +13,14 @@ from antsim.diagnose import pvalues
 
 
 def _same(a: float, b: float) -> bool:
-    return (math.isnan(a) and math.isnan(b)) or a == b
+    """Equal, or both NaN, or within four ulps: the same scipy.special functions as
+    scipy.stats calls, equal to the bit with scipy 1.17; scipy 1.11's stats takes the log of
+    the tail by another route, one ulp away (chi2.logsf(200, 3))."""
+    return ((math.isnan(a) and math.isnan(b)) or a == b
+            or math.isclose(a, b, rel_tol=4 * sys.float_info.epsilon, abs_tol=0.0))
 
 
-def test_tail_probabilities_are_scipy_stats_bit_for_bit():
+def test_tail_probabilities_are_scipy_stats():
     xs = [-1.0, 0.0, 1e-12, 0.3, 1.0, 2.5, 7.0, 30.0, 200.0, 2000.0, math.inf, math.nan]
     for dof in (1, 2, 3, 7.5, 40, 300):
         for x in xs:
