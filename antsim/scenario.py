@@ -176,6 +176,7 @@ def load_scenario(path: str | Path) -> Scenario:
     truth_model = _model(truth, default="none", base=path.parent, mount=mount, site=site)
     effects = tuple(_effect(t, mount, site) for t in truth.tables("effects", []))
     _check_effect_sources(effects, names, truth)
+    _check_clock(effects, duration_s, truth)
     truth.finish()
     sensors = (_sensors(root.table("structure_sensors"), mount)
                if "structure_sensors" in root else None)
@@ -551,6 +552,24 @@ def _effect(t: Table, mount: MountConfig | None = None, site: Site | None = None
         return EffectSpec(name, {"terms_arcsec": dict(effect.values_arcsec)})
     effect = cls.from_table(t)
     return EffectSpec(name, effect.params())
+
+
+def _check_clock(effects, duration_s: float, truth: Table) -> None:
+    """A clock error at most the hour the simulated sky reaches beyond the campaign (the
+    world computes the sky at the true time of the antenna's clock)."""
+    from controller.program.campaign import EPHEMERIS_MARGIN_S
+
+    for i, spec in enumerate(effects):
+        if spec.name != "clock_error":
+            continue
+        worst = (abs(spec.params["offset_s"])
+                 + abs(spec.params["drift_s_per_day"]) * duration_s / 86400.0)
+        if worst > EPHEMERIS_MARGIN_S:
+            raise InputError(truth.where, f"truth.effects[{i}].offset_s",
+                             spec.params["offset_s"],
+                             f"with drift_s_per_day = {spec.params['drift_s_per_day']:g} the "
+                             f"clock is {worst:.4g} s off by the campaign's end; at most "
+                             f"{EPHEMERIS_MARGIN_S:g} s")
 
 
 def _check_effect_sources(effects, names, truth: Table) -> None:

@@ -68,8 +68,8 @@ class Param:
 #: the simulation (a pointing error of 10^300", a time past the ephemeris, 10^9 gusts)
 NAME_BOUNDS: tuple[tuple[str, float], ...] = (
     ("_per_k", 3600.0),        # arcsec per kelvin
-    ("_arcsec", 648000.0),     # half a turn
-    ("_arcmin", 10800.0),
+    ("_arcsec", 36000.0),      # 10 deg: beyond any telescope's pointing error
+    ("_arcmin", 600.0),
     ("_deg", 720.0),
     ("_s_per_day", 3600.0),    # a clock an hour off per day
     ("_per_h", 3600.0),        # one event a second
