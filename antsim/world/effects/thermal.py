@@ -506,7 +506,7 @@ class SunsetDrift(Effect):
         "amplitude_arcsec": Param(60.0, "total elevation change after sunset (arcsec)"),
         "tau_s": Param(5400.0, "time constant of the drift (s)", min=60.0),
         "nights": Param(0.0, "after the first this many sunsets of the campaign only "
-                             "(0: every night)", min=0.0),
+                             "(0: every night)", min=0.0, max=1000.0),
         "shape": Param("relaxation", "relaxation (a lasting change, back after sunrise) or "
                        "transient (a change at sunset that dies away)", kind="string",
                        choices=SUNSET_SHAPES),

@@ -50,9 +50,9 @@ class TrackingJitter(Effect):
                              min=0.0),
         "gust_duration_s": Param(30.0, "duration of a gust (s)", min=1.0),
         "day_xel_factor": Param(1.0, "cross-elevation rms by day (Sun above the horizon) over "
-                                "xel_rms_arcsec", min=0.0),
+                                "xel_rms_arcsec", min=0.0, max=100.0),
         "day_el_factor": Param(1.0, "elevation rms by day (Sun above the horizon) over "
-                               "el_rms_arcsec", min=0.0),
+                               "el_rms_arcsec", min=0.0, max=100.0),
     }
     #: step of the table of day (Sun up) and night over the campaign (s)
     DAY_TABLE_STEP_S: ClassVar[float] = 60.0
