@@ -363,3 +363,23 @@ def test_a_full_disk_mid_run_is_one_line_and_keeps_the_scans_written(tmp_path, m
     monkeypatch.undo()
     table = recordings.read_recordings(out / "recordings.ecsv")
     assert len(set(table["scan"])) == 3
+
+
+def test_the_fast_ecsv_reader_reads_what_astropys_reads():
+    """antsim's own recordings go through numpy's reader, anything else through astropy's:
+    the same table either way (decimal text parsed correctly rounded by both: equal to the
+    bit on any machine), and a layout the fast reader does not know goes to astropy's."""
+    from controller.program.recordings import _fast_table
+
+    text = ECSV.read_text(encoding="utf-8")
+    fast, lines = _fast_table(text, len(text))
+    slow = Table.read(text, format="ascii.ecsv")
+    assert fast.colnames == slow.colnames and len(fast) == len(slow) == 36
+    for name in fast.colnames:
+        assert fast[name].dtype.kind == slow[name].dtype.kind, name
+        np.testing.assert_array_equal(np.asarray(fast[name]), np.asarray(slow[name]), name)
+        assert fast[name].unit == slow[name].unit, name
+    assert dict(fast.meta) == dict(slow.meta)
+    assert text.splitlines()[lines[0] - 1].startswith("0 ")  # the first scan's first row
+    blank = text.replace("\n0 ", "\n\n0 ", 1)  # a blank line: not the plain layout
+    assert _fast_table(blank, len(blank)) is None
