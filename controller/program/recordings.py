@@ -332,14 +332,6 @@ _FAST_TYPES = ("int64", "int32", "int16", "int8", "uint64", "uint32", "uint16", 
                "float64", "float32")
 
 
-def _bool(text: str) -> bool:
-    if text == "True":
-        return True
-    if text == "False":
-        return False
-    raise ValueError(text)
-
-
 def _lines(text: str, start: int, end: int):
     """The lines of ``text[start:end]`` one by one (no copy of the whole)."""
     while start < end:
@@ -371,25 +363,26 @@ def _fast_table(text: str, end: int):
         names_end = text.index("\n", head_end)
         if text[head_end:names_end].split(delimiter) != [c["name"] for c in columns]:
             return None
-        dtype, converters = [], {}
-        for i, c in enumerate(columns):
+        dtype = []
+        for c in columns:
             kind = c.get("datatype")
             if "subtype" in c or kind not in (*_FAST_TYPES, "string", "bool"):
                 return None
-            dtype.append((c["name"], object if kind == "string" else
-                          bool if kind == "bool" else kind))
-            if kind == "bool":
-                converters[i] = _bool
+            dtype.append((c["name"], object if kind in ("string", "bool") else kind))
         if text.find("\n\n", names_end, end) >= 0:  # blank lines: line numbers unknown
             return None
         values = np.loadtxt(_lines(text, names_end + 1, end), dtype=dtype,
-                            delimiter=delimiter, quotechar='"', comments=None,
-                            converters=converters or None, ndmin=1)
+                            delimiter=delimiter, quotechar='"', comments=None, ndmin=1)
         table = Table(meta=dict(header.get("meta") or {}))  # an !!omap: (key, value) pairs
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # an unknown unit is refused later, by name
             for c in columns:
                 column = values[c["name"]]
+                if c["datatype"] == "bool":  # read as text: True and False only
+                    truth = column == "True"
+                    if not np.all(truth | (column == "False")):
+                        return None
+                    column = truth
                 table[c["name"]] = column.astype(str) if column.dtype == object else column
                 table[c["name"]].unit = c.get("unit")
                 table[c["name"]].description = c.get("description")
