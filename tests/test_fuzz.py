@@ -121,33 +121,72 @@ def test_tpoint_model_reader(text):
         parse_mod(text, source="fuzz.mod")
 
 
-@FUZZ
-@given(text=edited(TPOINT))
-def test_tpoint_data_through_antsim_fit(text, tmp_path_factory, capsys):
-    path = _fuzz_file(tmp_path_factory, "fuzz.dat", text)
-    _one_line_or_success(capsys, ["fit", str(path), "--json"])
-
-
 # ---------------------------------------------------------------------------------------------
-# ECSV recordings
+# files: ECSV recordings, CSV measurements, scenarios (and TPOINT data again, from a file)
 ECSV = (DATA / "ecsv" / "_base.ecsv").read_text(encoding="utf-8")
+CSV = _comma_tokens((DATA / "csv" / "_base.csv").read_text(encoding="utf-8"))
+SCENARIO = (DATA / "scenario" / "_base.toml").read_text(encoding="utf-8")
+PLAN = (DATA / "plan" / "_base.toml").read_text(encoding="utf-8")
 
 
-@FUZZ
-@given(text=edited(ECSV))
-def test_ecsv_reader(text, tmp_path_factory):
+def _read_tpoint(path: Path) -> None:
+    from controller.pointing.tpoint import read_tpoint
+
+    read_tpoint(path).pointing_data()
+
+
+def _read_ecsv(path: Path) -> None:
     from controller.program.recordings import read_recordings, table_pointing_data
 
-    path = _fuzz_file(tmp_path_factory, "fuzz.ecsv", text)
+    table_pointing_data(read_recordings(path), str(path))
+
+
+def _read_csv(path: Path) -> None:
+    from controller.program.csvdata import pointing_data, read_csv
+
+    pointing_data(read_csv(path))
+
+
+def _read_scenario(path: Path) -> None:
+    from antsim.scenario import load_scenario
+
+    load_scenario(path)
+
+
+#: kind -> (file suffix, base text, reader)
+FILES = {"tpoint": (".dat", TPOINT, _read_tpoint), "ecsv": (".ecsv", ECSV, _read_ecsv),
+         "csv": (".csv", CSV, _read_csv), "scenario": (".toml", SCENARIO, _read_scenario)}
+
+
+def _edited_file(kind: str, data, tmp_path_factory) -> Path:
+    suffix, base, _ = FILES[kind]
+    text = data.draw(edited(base)).replace(" ,", ",")  # CSV fields were space-split tokens
+    return _fuzz_file(tmp_path_factory, "fuzz" + suffix, text)
+
+
+@pytest.mark.parametrize("kind", ["ecsv", "csv", "scenario"])
+@FUZZ
+@given(data=st.data())
+def test_file_readers(kind, data, tmp_path_factory):
+    path = _edited_file(kind, data, tmp_path_factory)
     with contextlib.suppress(InputError):
-        table_pointing_data(read_recordings(path), str(path))
+        FILES[kind][2](path)
+
+
+@pytest.mark.parametrize("kind", ["tpoint", "ecsv", "csv"])
+@FUZZ
+@given(data=st.data())
+def test_edited_files_through_antsim_fit(kind, data, tmp_path_factory, capsys):
+    """The whole command: read, fit, print; exit 0 or one line and 2."""
+    _one_line_or_success(capsys, ["fit", str(_edited_file(kind, data, tmp_path_factory)),
+                                  "--json"])
 
 
 @FUZZ
-@given(text=edited(ECSV))
-def test_ecsv_through_antsim_fit(text, tmp_path_factory, capsys):
-    path = _fuzz_file(tmp_path_factory, "fuzz.ecsv", text)
-    _one_line_or_success(capsys, ["fit", str(path), "--json"])
+@given(text=st.text(max_size=300))
+def test_free_text_as_csv(text, tmp_path_factory):
+    with contextlib.suppress(InputError):
+        _read_csv(_fuzz_file(tmp_path_factory, "fuzz.csv", text))
 
 
 @FUZZ
@@ -155,44 +194,6 @@ def test_ecsv_through_antsim_fit(text, tmp_path_factory, capsys):
 def test_bytes_through_antsim_fit(data, tmp_path_factory, capsys):
     path = _fuzz_file(tmp_path_factory, "fuzz.ecsv", b"# %ECSV 1.0\n" + data)
     _one_line_or_success(capsys, ["fit", str(path)])
-
-
-# ---------------------------------------------------------------------------------------------
-# CSV measurements
-CSV = _comma_tokens((DATA / "csv" / "_base.csv").read_text(encoding="utf-8"))
-
-
-@FUZZ
-@given(text=st.one_of(edited(CSV).map(lambda t: t.replace(" ,", ",")), st.text(max_size=300)))
-def test_csv_reader(text, tmp_path_factory):
-    from controller.program.csvdata import pointing_data, read_csv
-
-    path = _fuzz_file(tmp_path_factory, "fuzz.csv", text)
-    with contextlib.suppress(InputError):
-        pointing_data(read_csv(path))
-
-
-@FUZZ
-@given(text=edited(CSV).map(lambda t: t.replace(" ,", ",")))
-def test_csv_through_antsim_fit(text, tmp_path_factory, capsys):
-    path = _fuzz_file(tmp_path_factory, "fuzz.csv", text)
-    _one_line_or_success(capsys, ["fit", str(path), "--json"])
-
-
-# ---------------------------------------------------------------------------------------------
-# TOML: scenarios and plans
-SCENARIO = (DATA / "scenario" / "_base.toml").read_text(encoding="utf-8")
-PLAN = (DATA / "plan" / "_base.toml").read_text(encoding="utf-8")
-
-
-@FUZZ
-@given(text=edited(SCENARIO))
-def test_scenario_reader(text, tmp_path_factory):
-    from antsim.scenario import load_scenario
-
-    path = _fuzz_file(tmp_path_factory, "fuzz.toml", text)
-    with contextlib.suppress(InputError):
-        load_scenario(path)
 
 
 @FUZZ
@@ -209,32 +210,19 @@ def test_plan_reader(text, tmp_path_factory):
         load_plan(path)
 
 
-@pytest.mark.parametrize("reader", ["tpoint", "ecsv", "csv", "scenario"])
-def test_the_fuzzers_reach_both_outcomes(reader, tmp_path):
+@pytest.mark.parametrize("kind", list(FILES))
+def test_the_fuzzers_reach_both_outcomes(kind, tmp_path):
     """A fuzzer whose inputs all fail (or all pass) tests one path only: over a fixed sample
     of the same edits, each reader must both accept and refuse some inputs."""
     from hypothesis import find
 
-    from antsim.scenario import load_scenario
-    from controller.pointing.tpoint import parse_tpoint
-    from controller.program.csvdata import read_csv
-    from controller.program.recordings import read_recordings
-
-    base = {"tpoint": TPOINT, "ecsv": ECSV, "csv": CSV, "scenario": SCENARIO}[reader]
-    suffix = {"tpoint": ".dat", "ecsv": ".ecsv", "csv": ".csv", "scenario": ".toml"}[reader]
+    suffix, base, reader = FILES[kind]
 
     def read(text: str) -> bool:
         path = tmp_path / ("case" + suffix)
         path.write_text(text.replace(" ,", ","), encoding="utf-8", errors="surrogatepass")
         try:
-            if reader == "tpoint":
-                parse_tpoint(text)
-            elif reader == "ecsv":
-                read_recordings(path)
-            elif reader == "csv":
-                read_csv(path)
-            else:
-                load_scenario(path)
+            reader(path)
         except InputError:
             return False
         return True
