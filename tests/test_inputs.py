@@ -383,3 +383,21 @@ def test_the_fast_ecsv_reader_reads_what_astropys_reads():
     assert text.splitlines()[lines[0] - 1].startswith("0 ")  # the first scan's first row
     blank = text.replace("\n0 ", "\n\n0 ", 1)  # a blank line: not the plain layout
     assert _fast_table(blank, len(blank)) is None
+
+
+def test_a_truncated_diagnose_cache_file_is_a_miss(tmp_path):
+    """A cached baseline simulation cut short (a full disk, a killed writer) is simulated
+    again, not a BadZipFile traceback: the same products, and the file whole again."""
+    from antsim.diagnose.baseline import SimulatedBaseline
+    from antsim.scenario import load_scenario
+
+    scenario = load_scenario(BASE)
+    first = SimulatedBaseline(scenario, ("W1", "W6"), n_sims=2, cache_dir=tmp_path, jobs=1)
+    (cached, *_) = sorted(tmp_path.glob("baseline-*.npz"))
+    whole = cached.read_bytes()
+    cached.write_bytes(whole[: len(whole) // 2])
+    again = SimulatedBaseline(scenario, ("W1", "W6"), n_sims=2, cache_dir=tmp_path, jobs=1)
+    for a, b in zip(first.products, again.products, strict=True):
+        np.testing.assert_array_equal(a.res, b.res)  # one code path, same seed: same bytes
+    assert cached.read_bytes() == whole
+

@@ -24,9 +24,11 @@ import hashlib
 import json
 import math
 import os
+import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from zipfile import BadZipFile
 
 import numpy as np
 
@@ -328,8 +330,8 @@ class SimulatedBaseline:
                         out[seed] = SimProducts(z["t_s"], z["source"].astype(str), z["res"],
                                                 z["pol"], z["width"], z["az_rad"], z["el_rad"])
                     continue
-                except (OSError, KeyError, ValueError):
-                    pass
+                except (OSError, KeyError, ValueError, EOFError, BadZipFile, zlib.error):
+                    pass  # a truncated or damaged cache is a miss: simulated again
             todo.append(seed)
         if not todo or self.scenario.controller.method != "five_point":
             from ..plan.streaming import release_prestarted
