@@ -401,3 +401,19 @@ def test_a_truncated_diagnose_cache_file_is_a_miss(tmp_path):
         np.testing.assert_array_equal(a.res, b.res)  # one code path, same seed: same bytes
     assert cached.read_bytes() == whole
 
+
+def test_diagnose_reads_csv_as_the_recordings_it_was_made_from(capsys):
+    """antsim diagnose on the base CSV (the AVG rows of the base recordings, printed to
+    0.01") reports the residuals of the recordings to what that rounding moves (< 0.01" on
+    rms of 7-22")."""
+    summaries = []
+    for path in (CSV, ECSV):
+        assert main(["diagnose", str(path), "--model", "ghigo10", "--json", "--no-progress",
+                     "--no-cache"]) == 0
+        summaries.append(json.loads(capsys.readouterr().out)["summary"])
+    csv_sum, ecsv_sum = summaries
+    assert csv_sum["n_used"] == ecsv_sum["n_used"] == 12
+    for key in ("sky_rms_before_arcsec", "cv_sky_rms_before_arcsec"):
+        assert csv_sum[key] == pytest.approx(ecsv_sum[key], abs=0.01)
+    np.testing.assert_allclose(csv_sum["axis_rms_before_arcsec"],
+                               ecsv_sum["axis_rms_before_arcsec"], rtol=0, atol=0.01)

@@ -37,6 +37,9 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--mount", choices=("altaz",), default=None,
                         help="a TPOINT file's decimal records are Az/El whatever its options "
                              "say (a file without a mount option is read so, with a note)")
+    parser.add_argument("--csv", action="append", default=[], metavar="'KEY: VALUE'",
+                        help="a setting of a CSV of your own measurements that the file does "
+                             "not state, e.g. 'sign: true-minus-indicated' (docs/inputs.md)")
     parser.add_argument("--json", action="store_true",
                         help="print the result as JSON (DESIGN section 4)")
     parser.add_argument("--out", metavar="DIR",
@@ -115,6 +118,14 @@ def _diagnose(args: argparse.Namespace, out: Path | None) -> int:
         from antsim.scenario import load_scenario
 
         scenario = load_scenario(find(args.scenario, field="--scenario"))
+        from controller.program.recordings import recorded_mount
+
+        mount = recorded_mount(args.recordings)
+        if mount is not None and mount != scenario.mount.kind:  # before 7 s of simulation
+            raise InputError(args.recordings, "mount", mount,
+                             f"the recordings' mount; --scenario {args.scenario} is an "
+                             f"{scenario.mount.kind} mount's",
+                             "diagnose them with a scenario of their own telescope")
         if Path(args.recordings).is_file():
             # a cold baseline's quiet campaign starts now, on the second core, while this
             # process imports the analysis and reads the recordings (antsim.plan.streaming)
@@ -127,12 +138,13 @@ def _diagnose(args: argparse.Namespace, out: Path | None) -> int:
         progress.stage("reading the recordings")
         from antsim.diagnose import diagnose, load_observations
 
-        obs = load_observations(args.recordings, mount=args.mount)
+        obs = load_observations(args.recordings, mount=args.mount, csv_options=args.csv)
         for note in obs.meta.get("notes", ()):
             progress.write(f"note: {note}", file=sys.stderr)
-        if scenario is not None and obs.kind == "tpoint":
+        if scenario is not None and (obs.kind == "tpoint" or not obs.has_time):
             raise InputError(args.recordings, "--scenario", args.scenario,
-                             "a TPOINT data file has no times or sources to simulate against",
+                             f"{'a TPOINT data file' if obs.kind == 'tpoint' else 'a file'} "
+                             "without times has nothing to simulate against",
                              "diagnose it without --scenario")
         progress.stage("the noise the scenario predicts (simulations) and the candidate "
                        "effects" if scenario is not None else "testing the candidate effects")

@@ -311,6 +311,10 @@ def diagnose(obs: Observations, scenario=None, model: str | None = None,
     if scenario is not None and obs.air_daily_c is None:
         obs = replace(obs, air_daily_c=daily_air_curve(scenario))
     spec = resolve_baseline(obs, scenario, model)
+    n_good = int(np.count_nonzero(obs.good))
+    if n_good < len(spec.terms):  # antsim fit's rule (controller.pointing.robust)
+        raise ValueError(f"{n_good} observations cannot determine {len(spec.terms)} terms; "
+                         "observe more positions")
     if prediction is None:
         if scenario is not None:
             if sim_baseline is None:

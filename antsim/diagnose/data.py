@@ -284,15 +284,24 @@ def from_tpoint(path: str | Path, include_masked: bool = False,
         meta=meta, kind="tpoint", path=str(path))
 
 
-def load_observations(path: str | Path, mount: str | None = None) -> Observations:
-    """Recordings (``.ecsv``) or TPOINT data, detected by content; InputError if neither.
-    ``mount="altaz"`` reads a TPOINT file's decimal records as Az/El (``--mount altaz``)."""
-    from controller.pointing.tpoint import sniff_format
+def load_observations(path: str | Path, mount: str | None = None,
+                      csv_options: Sequence[str] = ()) -> Observations:
+    """Recordings (``.ecsv``), TPOINT data or a CSV of one's own measurements
+    (:mod:`controller.program.csvdata`, with its ``--csv`` settings), detected by content;
+    InputError if none. ``mount="altaz"`` reads a TPOINT file's decimal records as Az/El
+    (``--mount altaz``)."""
+    from controller.program.csvdata import input_format
 
     path = Path(path)
     if not path.exists():
         raise InputError(str(path), "RECORDINGS", str(path), "no such file")
-    fmt = sniff_format(path)
+    fmt = input_format(path)
+    if csv_options and fmt != "csv":
+        raise InputError("command line", "--csv", csv_options[0], f"{path} is not a CSV file")
+    if fmt == "csv":
+        if mount is not None:
+            raise InputError(str(path), "--mount", mount, "applies to TPOINT data files only")
+        return from_csv(path, csv_options)
     if fmt == "mod":
         raise InputError(str(path), "RECORDINGS", str(path),
                          "is a TPOINT model (.mod) file, not pointing data",
@@ -303,9 +312,9 @@ def load_observations(path: str | Path, mount: str | None = None) -> Observation
         raise InputError(str(path), "--mount", mount, "applies to TPOINT data files only",
                          "recordings name their mount in their metadata")
     from controller.astro.frames import MOUNT_KINDS
-    from controller.program.recordings import read_recordings
+    from controller.program.recordings import read_recordings, recording_notes
 
-    table = read_recordings(path)
+    table = read_recordings(path, purpose="diagnose")
     mount = table.meta.get("mount", "altaz")
     if mount not in MOUNT_KINDS:
         raise InputError(str(path), "mount", mount, "is not a mount diagnose knows",
@@ -320,7 +329,20 @@ def load_observations(path: str | Path, mount: str | None = None) -> Observation
             raise InputError(str(path), "site.latitude_deg", "<missing>",
                              "an equatorial mount's terms need the site's latitude")
     cols = {name: np.asarray(table[name]) for name in table.colnames if name != "time"}
-    for need in ("t_s",):
-        if need not in cols:
-            raise InputError(str(path), "columns", need, "required column is missing")
-    return from_columns(cols, dict(table.meta), path=str(path))
+    obs = from_columns(cols, dict(table.meta), path=str(path))
+    return replace(obs, meta={**obs.meta, "notes": recording_notes(table, "diagnose")})
+
+
+def from_csv(path: Path, options: Sequence[str] = ()) -> Observations:
+    """Observations from a CSV of one's own measurements (one row per measurement: the
+    polarization average, every row good). Without a time column the times are all zero:
+    no time-dependent test runs (``has_time`` is false)."""
+    from controller.program.csvdata import read_csv
+
+    data = read_csv(path, options)
+    cols = dict(data.columns)
+    n = len(data)
+    cols.setdefault("t_s", np.zeros(n))
+    cols["scan"] = np.arange(n)
+    obs = from_columns(cols, data.meta, path=str(path), kind="csv")
+    return replace(obs, meta={**obs.meta, "notes": list(data.notes)})

@@ -46,6 +46,7 @@ __all__ = [
     "ResumeMismatchError",
     "read_pointing_data",
     "read_recordings",
+    "recorded_mount",
     "recording_columns",
     "recording_notes",
     "structure_columns",
@@ -390,6 +391,28 @@ def _fast_table(text: str, end: int):
         return None
     first = text.count("\n", 0, names_end) + 2  # the line after the column names, 1-based
     return table, range(first, first + len(table))
+
+
+def recorded_mount(path: str | Path) -> str | None:
+    """The mount (``altaz``, ``equatorial``) ECSV recordings were made on, from their header
+    alone (a quick look before reading them); None for a file that is not ECSV or whose
+    header does not parse (reading it then says what is wrong)."""
+    from astropy.io.misc.yaml import load
+
+    try:
+        with open(path, encoding="utf-8") as fh:
+            header = []
+            for line in fh:
+                if not line.startswith("#"):
+                    break
+                header.append(line)
+        if not header or not header[0].lstrip("\ufeff").startswith("# %ECSV"):
+            return None
+        meta = dict(load("".join(line[2:] if line.startswith("# ") else line[1:]
+                                 for line in header[1:])).get("meta") or {})
+    except Exception:  # not readable here: read_recordings names the problem
+        return None
+    return str(meta.get("mount", "altaz"))
 
 
 def read_recordings(path: str | Path, purpose: str = "fit"):
