@@ -152,6 +152,7 @@ def test_the_base_files_are_good_input(base_run, capsys):
     """Each case fails because of its edit: the bases themselves are accepted."""
     assert (base_run / "fit.json").exists()
     for args in (["fit", str(DATA / "ecsv" / "_base.ecsv")],
+                 ["fit", str(DATA / "ecsv" / "_sensors.ecsv"), "--terms", "IA,IE,TEDFB"],
                  ["fit", str(DATA / "csv" / "_base.csv")],
                  ["fit", str(DATA / "tpoint" / "_base.dat")],
                  ["fit", str(DATA / "ecsv" / "_base.ecsv"), "--model",

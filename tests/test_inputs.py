@@ -123,19 +123,25 @@ def test_csv_sign_units_and_offset_columns_in_every_documented_form(tmp_path, ca
     np.testing.assert_allclose(got, reference, rtol=0, atol=1e-9)
 
 
-def test_csv_structure_temperatures_are_kept_in_celsius(tmp_path):
-    from controller.program.csvdata import read_csv
+def test_csv_structure_temperatures_are_the_recordings_sensor_readings(tmp_path):
+    """temp_<sensor> in any temperature unit becomes the recordings' one-reading column
+    temp_<sensor>_c in Celsius, which the thermal terms read as the sensor's reading."""
+    from controller.program.csvdata import pointing_data, read_csv
 
     rows = _csv_rows()
     path = tmp_path / "temps.csv"
     lines = ["# sign: indicated-minus-true", "az_deg,el_deg,d_xel_arcsec,d_el_arcsec,"
-             "temp_front_k,temp_back_c"]
+             "temp_dish_front_k,temp_dish_back_c"]
     lines += [f"{r[1]},{r[2]},{r[3]},{r[4]},{280.15 + i},{5.0 - i}" for i, r in enumerate(rows)]
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     data = read_csv(path)
-    np.testing.assert_allclose(data.columns["temp_front_c"], 7.0 + np.arange(len(rows)))
-    np.testing.assert_allclose(data.columns["temp_back_c"], 5.0 - np.arange(len(rows)))
+    front, back = 7.0 + np.arange(len(rows)), 5.0 - np.arange(len(rows))
+    np.testing.assert_allclose(data.columns["temp_dish_front_c"], front)
+    np.testing.assert_allclose(data.columns["temp_dish_back_c"], back)
     assert "t_s" not in data.columns  # no time column: no times made up
+    aux = pointing_data(data).aux
+    assert set(aux) == {"dish_front", "dish_back"}
+    np.testing.assert_allclose(aux["dish_front"], [front, front])  # both halves: one reading
 
 
 # ---------------------------------------------------------------------------------------------
@@ -287,16 +293,28 @@ def _doc_table(marker: str) -> list[list[str]]:
 
 
 def test_the_documented_ecsv_columns_are_the_readers(tmp_path):
-    from controller.program.recordings import COLUMNS, EXTRA_COLUMNS, OPTIONAL, REQUIRED
+    from controller.pointing.thermal import STRUCTURE_SENSORS
+    from controller.program.recordings import (
+        COLUMNS,
+        EXTRA_COLUMNS,
+        OPTIONAL,
+        REQUIRED,
+        SENSOR_COLUMNS,
+    )
 
+    text = (REPO / "docs" / "inputs.md").read_text(encoding="utf-8")
+    sensors = text.split("<!-- sensors -->", 1)[1].split("<!-- end sensors -->", 1)[0]
+    assert re.findall(r"`([a-z_]+)`", sensors) == list(STRUCTURE_SENSORS)
     documented = {}
     for name, unit, rng, required in _doc_table("ecsv-columns"):
-        names = re.findall(r"`([a-z_0-9]+)`", name)
+        names = re.findall(r"`([a-z_0-9<>]+)`", name)
         if "..." in name:  # p_az_m4 ... p_el_p4: the ten raw powers
             names = [c.name for c in COLUMNS if c.name.startswith("p_")]
+        names = [n.replace("<sensor>", s) for n in names
+                 for s in (STRUCTURE_SENSORS if "<sensor>" in n else ("",))]
         for n in names:
             documented[n] = (unit, rng, required)
-    columns = {c.name: c for c in (*COLUMNS, *EXTRA_COLUMNS.values())}
+    columns = {c.name: c for c in (*COLUMNS, *EXTRA_COLUMNS.values(), *SENSOR_COLUMNS.values())}
     assert set(documented) == set(columns)
     for name, col in columns.items():
         unit, rng, required = documented[name]
@@ -320,7 +338,7 @@ def test_the_documented_csv_columns_are_the_readers():
     text = (REPO / "docs" / "inputs.md").read_text(encoding="utf-8")
     table = text.split("## Your own measurements")[1].split("**The offsets**")[0]
     documented = re.findall(r"^\| `([a-z_<>]+)` \|", table, re.M)
-    assert [n for n in documented if n != "temp_<where>"] == list(CSV_COLUMNS)
+    assert [n for n in documented if n != "temp_<sensor>"] == list(CSV_COLUMNS)
     required = [n for n, c in CSV_COLUMNS.items() if c.required]
     for name in required:
         assert re.search(rf"^\| `{name}` \|.*\| yes \|$", text, re.M), name

@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from controller.errors import InputError, read_text_file
+from controller.pointing.thermal import STRUCTURE_SENSORS, sensor_aux, structure_sensor_names
 
 from .tablecheck import ColumnRule, check_range, first_repeat, unit_factor
 
@@ -77,9 +78,11 @@ CSV_COLUMNS: dict[str, CsvColumn] = {
     "humidity": CsvColumn("humidity", ColumnRule("humidity", None, 0.0, 1.0)),
     "wind": CsvColumn("wind_m_s", ColumnRule("wind", "m / s", 0.0, 100.0)),
 }
-#: structure temperatures: any column ``temp_<where>`` (a temperature unit), kept as
-#: ``temp_<where>_c``
-_TEMP = re.compile(r"^temp_[a-z0-9]+(?:_[a-z0-9]+)*?$")
+#: structure temperatures: ``temp_<sensor>`` (a temperature unit) for a sensor of the
+#: recordings' (:data:`controller.pointing.thermal.STRUCTURE_SENSORS`), kept as
+#: ``temp_<sensor>_c``, the recordings' one-reading column, which thermal terms read; any
+#: other name is refused (a misspelt sensor silently left out would be a wrong answer)
+_TEMPS = frozenset(f"temp_{s}" for s in STRUCTURE_SENSORS)
 _SETTINGS = ("sign", "units", "latitude_deg", "longitude_deg", "height_m")
 
 
@@ -139,7 +142,7 @@ def _suffix(unit: str | None) -> str:
 
 
 def _known(base: str) -> bool:
-    return (base in CSV_COLUMNS and not CSV_COLUMNS[base].text) or bool(_TEMP.match(base))
+    return (base in CSV_COLUMNS and not CSV_COLUMNS[base].text) or base in _TEMPS
 
 
 def _split_name(name: str, units: Mapping[str, str], where: str) -> tuple[str, str | None]:
@@ -153,11 +156,12 @@ def _split_name(name: str, units: Mapping[str, str], where: str) -> tuple[str, s
                 raise InputError(where, name, units[base],
                                  "has a unit in its name and in the units setting")
             return base, unit
-    if low in CSV_COLUMNS or _TEMP.match(low):
+    if low in CSV_COLUMNS or low in _TEMPS:
         return low, units.get(low)
     raise InputError(where, "column", name, "unknown column",
-                     "known: " + ", ".join(CSV_COLUMNS) + ", temp_<where>, each with a unit "
-                     "suffix such as _deg or _arcsec (docs/inputs.md)")
+                     "known: " + ", ".join(CSV_COLUMNS) + ", temp_<sensor> with <sensor> "
+                     "one of " + " ".join(STRUCTURE_SENSORS) + ", each with a unit suffix "
+                     "such as _deg or _arcsec (docs/inputs.md)")
 
 
 def _units_setting(text: str, where: str) -> dict[str, str]:
@@ -360,5 +364,7 @@ def pointing_data(data: CsvData):
     from controller.pointing.data import PointingData
 
     c = data.columns
+    sensors = structure_sensor_names(list(c))
     return PointingData(az_rad=np.radians(c["az_deg"]), el_rad=np.radians(c["el_deg"]),
-                        xel_arcsec=60.0 * c["xel_arcmin"], el_arcsec=60.0 * c["el_arcmin"])
+                        xel_arcsec=60.0 * c["xel_arcmin"], el_arcsec=60.0 * c["el_arcmin"],
+                        aux=sensor_aux(c, sensors) if sensors else None)

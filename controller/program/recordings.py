@@ -33,15 +33,21 @@ from typing import Any
 
 import numpy as np
 
+from controller.astro.frames import MOUNT_KINDS
 from controller.errors import InputError, read_text_file
 from controller.pointing.legacy import W_TERMS, W_TERMS_KEY, names_w_terms, relabel_reconstructed
-from controller.pointing.thermal import structure_column, structure_time_column
+from controller.pointing.thermal import (
+    STRUCTURE_SENSORS,
+    structure_column,
+    structure_time_column,
+)
 
 from .tablecheck import ColumnRule, check_range, first_repeat, unit_factor
 
 __all__ = [
     "COLUMNS",
     "EXTRA_COLUMNS",
+    "SENSOR_COLUMNS",
     "RecordingWriter",
     "ResumeMismatchError",
     "read_pointing_data",
@@ -142,6 +148,10 @@ EXTRA_COLUMNS: dict[str, Column] = {c.name: c for c in (
 )}
 
 
+#: the range of a structure temperature (deg_C), as of the air's (``air_temp_c``)
+_STRUCTURE_TEMP = (-100.0, 100.0)
+
+
 def structure_columns(sensors: Sequence[str]) -> tuple[Column, ...]:
     """The columns of structure temperature sensors (optional: only recordings of an antenna
     with sensors have them; :mod:`controller.pointing.thermal`): each sensor read during the
@@ -153,8 +163,17 @@ def structure_columns(sensors: Sequence[str]) -> tuple[Column, ...]:
                      f"antenna clock when the structure temperatures were read during the "
                      f"{what} scan") for a, what in halves.items()),
             *(Column(structure_column(s, a), "float64", "deg_C",
-                     f"structure temperature {s}, read during the {what} scan")
+                     f"structure temperature {s}, read during the {what} scan",
+                     *_STRUCTURE_TEMP)
               for s in sensors for a, what in halves.items()))
+
+
+#: one reading of a sensor per row (``temp_<sensor>_c``: a CSV of one's own measurements,
+#: :mod:`controller.program.csvdata`), which the thermal terms read as both halves' reading
+SENSOR_COLUMNS: dict[str, Column] = {c.name: c for c in (
+    *structure_columns(tuple(STRUCTURE_SENSORS)),
+    *(Column(f"temp_{s}_c", "float64", "deg_C", f"structure temperature {s}, one reading",
+             *_STRUCTURE_TEMP) for s in STRUCTURE_SENSORS))}
 
 
 def recording_columns(mount: str = "altaz", feed: bool = False,
@@ -310,7 +329,7 @@ OPTIONAL = {
 }
 #: the optional columns each reader of recordings uses
 USES = {"fit": ("good",), "diagnose": tuple(OPTIONAL)}
-_KNOWN = {c.name: c for c in (*COLUMNS, *EXTRA_COLUMNS.values())}
+_KNOWN = {c.name: c for c in (*COLUMNS, *EXTRA_COLUMNS.values(), *SENSOR_COLUMNS.values())}
 
 
 def _data_lines(text: str) -> list[int]:
@@ -371,6 +390,8 @@ def _fast_table(text: str, end: int):
                 return None
             dtype.append((c["name"], object if kind in ("string", "bool") else kind))
         if text.find("\n\n", names_end, end) >= 0:  # blank lines: line numbers unknown
+            return None
+        if names_end + 1 >= end:  # no rows (numpy would warn on stderr): astropy's reader
             return None
         values = np.loadtxt(_lines(text, names_end + 1, end), dtype=dtype,
                             delimiter=delimiter, quotechar='"', comments=None, ndmin=1)
@@ -541,8 +562,9 @@ def _check_meta(meta, where: str) -> None:
                 raise InputError(where, f"meta.site.{key}", value,
                                  f"must be a number within {lo}..{hi}")
     mount = meta.get("mount", "altaz")
-    if mount not in ("altaz", "equatorial"):
-        raise InputError(where, "meta.mount", mount, "must be altaz or equatorial")
+    if mount not in MOUNT_KINDS:
+        raise InputError(where, "meta.mount", mount,
+                         f"is not a mount antsim knows ({', '.join(MOUNT_KINDS)})")
     if mount == "equatorial" and not isinstance((site or {}).get("latitude_deg"), int | float):
         raise InputError(where, "meta.site.latitude_deg", "<missing>",
                          "an equatorial mount's recordings need the site latitude")
