@@ -395,6 +395,49 @@ def test_the_step_scans_look_elsewhere_bound_holds():
         assert tail <= bound <= 3.0 * tail, (level, tail, bound)
 
 
+def test_the_steps_running_sums_are_its_projected_columns(monkeypatch):
+    """Two code paths of the step test: running sums over the scans in time order (white
+    noise, any number of scans) and the projected step columns themselves. On 150 scans out
+    of time order, some unused, each with its own noise and offset scale, with a step of 40"
+    in elevation, they agree to float rounding: the sums subtract the model's projection
+    from the columns' norms (|c|^2 - |Q'c|^2), which loses digits in proportion to
+    |c|^2 / |xp|^2 (at most 1e9 for a kept column: relative 1e-6 at worst, 1e-9 here)."""
+    from antsim.diagnose.candidates.library import candidate as named
+    from antsim.diagnose.problem import Prediction, Problem
+
+    n = 150
+    rng = np.random.default_rng(7)
+    t = rng.permutation(np.linspace(0.0, 5 * 86400.0, n))
+    el = np.radians(rng.uniform(15.0, 85.0, n))
+    obs = Observations(t_s=t, az_rad=rng.uniform(0, 6.28, n), el_rad=el,
+                       xel_arcsec=rng.normal(0.0, 5.0, n),
+                       el_arcsec=rng.normal(0.0, 5.0, n) + 40.0 * (t > 2.2 * 86400.0),
+                       good=rng.random(n) > 0.1, meta={"latitude_deg": 38.43})
+    problem = Problem(obs, Prediction("white", np.zeros(n), np.zeros(n),
+                                      rng.uniform(3.0, 8.0, n), rng.uniform(3.0, 8.0, n)),
+                      ["IA", "IE", "NPAE", "CA", "AN", "AW", "TF", "TX"],
+                      offset_scale=rng.uniform(0.7, 1.0, n))
+    step = named("step")
+    perp, z_perp = problem.perp_for(problem.used)
+    assert problem.white()
+    summed = step._all_stats(problem, perp, z_perp)
+    fast = step.test(problem, perp, z_perp, float(z_perp @ z_perp))
+    monkeypatch.setattr(problem, "white", lambda used=None: False)
+    dense = step._all_stats(problem, perp, z_perp)
+    slow = step.test(problem, perp, z_perp, float(z_perp @ z_perp))
+    m2 = dense[1].size
+    np.testing.assert_allclose(summed[0], dense[0], rtol=1e-9, atol=1e-9 * np.abs(dense[0]).max())
+    np.testing.assert_allclose(summed[1], dense[1], rtol=1e-9, atol=1e-9 * dense[1].max())
+    a = np.concatenate([np.arange(m2 // 2 - 1), np.arange(m2 // 2, m2 - 1)])  # one axis
+    b = a + 1  # neighbours of one axis (a pair across the axes is never asked for)
+    np.testing.assert_allclose(summed[2](a, b), dense[2](a, b), rtol=1e-9,
+                               atol=1e-9 * dense[1].max())
+    assert fast.theta == slow.theta and fast.theta[0] == "el"
+    assert abs(fast.theta[1] - 2.2 * 86400.0) < 86400.0 / n * 3  # found where it was put
+    assert fast.trials == pytest.approx(slow.trials, rel=1e-9)
+    assert fast.delta_chi2 == pytest.approx(slow.delta_chi2, rel=1e-12)
+
+
 def test_the_transient_after_sunset_and_the_step_effect():
     """A transient is 1 at each sunset and falls by e per time constant; before the first
     sunset of the grid it is 0; the relaxation is the lag of the night indicator. A step is

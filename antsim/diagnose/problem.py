@@ -256,15 +256,24 @@ class Problem:
         self._perps.clear()
 
     # ------------------------------------------------------------------ tests
+    def white(self, used: np.ndarray | None = None) -> bool:
+        """Whether whitening over the used scans is a weight per row (no correlated noise):
+        a whitened column is then the raw column times :attr:`w` on the used rows."""
+        return all(f is None for f in self._factors(self.used if used is None else used))
+
+    def basis(self, used: np.ndarray | None = None) -> np.ndarray:
+        """An orthonormal basis (2 n_used, rank) of the whitened current model over the used
+        scans (what :meth:`projector` projects out)."""
+        a = self.T(self.current_columns(), self.used if used is None else used)
+        q, r = np.linalg.qr(a)
+        d = np.abs(np.diag(r))
+        return q[:, d > 1e-10 * max(float(d.max()) if d.size else 0.0, 1e-300)]
+
     def projector(self, used: np.ndarray | None = None):
         """A function raw v (2n, k) -> P_perp T(v): whitened over the used scans, with the
         current model projected out."""
         used = self.used if used is None else used
-        a = self.T(self.current_columns(), used)
-        q, r = np.linalg.qr(a)
-        d = np.abs(np.diag(r))
-        keep = d > 1e-10 * max(float(d.max()) if d.size else 0.0, 1e-300)
-        q = q[:, keep]
+        q = self.basis(used)
 
         def perp(v: np.ndarray) -> np.ndarray:
             vr = self.T(v, used)

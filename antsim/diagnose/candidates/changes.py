@@ -41,13 +41,18 @@ PROFILE_95 = 3.841458820694124
 def curve_length(xp: np.ndarray, split: int) -> float:
     """Length (radians) of the curve the unit-normalized columns of ``xp`` trace, in order,
     as two curves: columns [0, split) and [split, end)."""
-    u = xp / np.linalg.norm(xp, axis=0)
-    total = 0.0
-    for part in (u[:, :split], u[:, split:]):
-        if part.shape[1] > 1:
-            cos = np.abs(np.einsum("ij,ij->j", part[:, 1:], part[:, :-1]))
-            total += float(np.arccos(np.clip(cos, 0.0, 1.0)).sum())
-    return total
+    return sum(_arc_length(np.einsum("ij,ij->j", part, part),
+                           np.einsum("ij,ij->j", part[:, 1:], part[:, :-1]))
+               for part in (xp[:, :split], xp[:, split:]))
+
+
+def _arc_length(norm2: np.ndarray, dots: np.ndarray) -> float:
+    """Length (radians) of the curve of unit vectors from vectors of squared norms
+    ``norm2`` whose neighbours' inner products are ``dots`` (one fewer)."""
+    if norm2.size < 2:
+        return 0.0
+    cos = np.abs(dots) / np.sqrt(norm2[1:] * norm2[:-1])
+    return float(np.arccos(np.clip(cos, 0.0, 1.0)).sum())
 
 
 def tube_trials(u: float, length: float, ends: int) -> float:
@@ -113,25 +118,68 @@ class StepCandidate(Candidate):
             return stacked(after * np.cos(obs.el_rad), None, obs.n)[:, None], ("az_arcsec",)
         return stacked(None, after, obs.n)[:, None], ("el_arcsec",)
 
+    def _all_stats(self, problem: Problem, perp, z_perp):
+        """Of every step column (:meth:`_all_columns`, whitened and projected): the inner
+        products with ``z_perp``, the squared norms, and a function giving the inner
+        products of columns ``a`` and ``b`` (index arrays). Where the noise is white (a
+        weight per row), from running sums over the scans in time order, O(n k) for n scans
+        and k model columns instead of the O(n m) columns for m change times: a step column
+        c_j is the scans after its time, so c_a.c_b = |c_b|^2 for a < b of one axis, and
+        projecting out the model's orthonormal basis Q subtracts (Q'c_a).(Q'c_b). With
+        correlated noise (a scenario's prediction: a few thousand scans), the columns."""
+        obs = problem.obs
+        used = problem.used
+        if not problem.white(used):
+            xp = perp(problem.cand(self._all_columns(obs)))
+            return (xp.T @ z_perp, np.einsum("ij,ij->j", xp, xp),
+                    lambda a, b: np.einsum("ij,ij->j", xp[:, a], xp[:, b]))
+        q = problem.basis(used)
+        times = self.change_times(obs)
+        n, n_used = obs.n, int(used.sum())
+        t = obs.t_s[used]
+        order = np.argsort(t, kind="stable")
+        start = np.searchsorted(t[order], times, side="right")  # first scan after each time
+
+        def after(x: np.ndarray) -> np.ndarray:  # sums over the scans after each time
+            tail = np.cumsum(x[::-1], axis=0)[::-1]
+            return np.concatenate([tail, np.zeros((1, *x.shape[1:]))])[start]
+
+        cz, sq, qc = [], [], []
+        for axis in range(2):
+            rows = slice(axis * n_used, (axis + 1) * n_used)
+            g = problem.f[used] * problem.w[axis * n:(axis + 1) * n][used]
+            if axis == 0:  # an azimuth step shows as dA cos E in cross-elevation
+                g = g * np.cos(obs.el_rad[used])
+            g = g[order]
+            qc.append(after(g[:, None] * q[rows][order]))
+            sq.append(after(g * g))
+            cz.append(after(g * z_perp[rows][order]) - qc[-1] @ (q.T @ z_perp))
+        sq_all, qc_all = np.concatenate(sq), np.vstack(qc)
+        norm2 = sq_all - np.einsum("ij,ij->i", qc_all, qc_all)
+        return (np.concatenate(cz), norm2,
+                lambda a, b: sq_all[b] - np.einsum("ij,ij->i", qc_all[a], qc_all[b]))
+
     def test(self, problem: Problem, perp, z_perp, chi2_now) -> TestResult:
         obs = problem.obs
         thetas = self.thetas(obs)
-        xp = perp(problem.cand(self._all_columns(obs)))
-        norm2 = np.einsum("ij,ij->j", xp, xp)
+        xz, norm2, dot = self._all_stats(problem, perp, z_perp)
         ok = norm2 > 1e-9 * max(float(norm2.max()), 1e-300)
-        gain = np.where(ok, (xp.T @ z_perp) ** 2 / np.where(ok, norm2, 1.0), 0.0)
+        gain = np.where(ok, xz ** 2 / np.where(ok, norm2, 1.0), 0.0)
         best = int(np.argmax(gain))
         cols, names = self.columns(obs, thetas[best])
         res = self._linear(problem, perp, z_perp, cols, names, thetas[best])
         if not res.testable:
             return res
-        length = curve_length(xp[:, ok], split=int(ok[: len(thetas) // 2].sum()))
+        m = len(thetas) // 2
+        length = 0.0
+        for axis in (slice(0, m), slice(m, 2 * m)):  # the kept columns' two curves
+            k = np.flatnonzero(ok[axis]) + axis.start
+            length += _arc_length(norm2[k], dot(k[:-1], k[1:]))
         res.trials_at = lambda u, _l=length: tube_trials(u, _l, ends=2)
         res.trials = res.trials_at(res.delta_chi2)
         res.p = with_trials(p_value(problem, res.delta_chi2, res.dof, res.chi2_now, res.mask),
                             res.trials)
         # the profile over the change time on the chosen axis: a 95% interval
-        m = len(thetas) // 2
         axis_gain = gain[:m] if best < m else gain[m:]
         times = np.array([t for _, t in thetas[:m]])
         inside = times[axis_gain >= axis_gain.max() - PROFILE_95]
