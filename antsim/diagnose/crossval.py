@@ -159,7 +159,7 @@ def _options(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
     for c in candidates:
         if c.kind != "offsets" or c.name in taken:
             continue
-        for theta in c.thetas(obs):
+        for theta in c.cv_thetas(problem):
             try:
                 cols, names = c.columns(obs, theta)
             except NotImplementedError:  # a nonlinear signature (exact tilt)

@@ -266,6 +266,11 @@ class Candidate:
     def thetas(self, obs: Observations) -> list[Any]:
         return [None]
 
+    def cv_thetas(self, problem) -> list[Any]:
+        """The shapes the cross-validated stage (:mod:`..crossval`) compares: all of them
+        unless there is one per scan (a step's change time)."""
+        return self.thetas(problem.obs)
+
     def params_from(self, obs: Observations, theta: Any, coef: np.ndarray, cov: np.ndarray,
                     names: tuple[str, ...]) -> tuple[dict[str, Any], float, float]:
         """Effect parameters, amplitude and its sigma from the fitted coefficients."""
