@@ -95,6 +95,10 @@ def correlation_matrix(t_s: np.ndarray, model: tuple[tuple[float, float], ...]) 
     return r
 
 
+#: the bound on the memory cached projectors hold (their bases; see Problem.perp_for)
+PERP_CACHE_BYTES = 128 * 2**20
+
+
 class Problem:
     """Whitened data and base design; fits models of base + extra columns on the used scans.
 
@@ -112,6 +116,7 @@ class Problem:
         #: resolved source shows theta_b^2 / (theta_b^2 + theta_s^2) of it, Clark 1968)
         self.f = np.ones(obs.n) if offset_scale is None else np.asarray(offset_scale, float)
         self._perps: dict[bytes, tuple] = {}
+        self._perp_bytes: dict[bytes, int] = {}
         self._chol: dict[bytes, tuple] = {}
         self.pred = pred
         self.base_terms = tuple(base_terms)
@@ -241,6 +246,7 @@ class Problem:
         if not self.pred.known_noise:
             self._rescale(self.fit_current())
         self._perps.clear()
+        self._perp_bytes.clear()
 
     def _rescale(self, f: LinearFit) -> None:
         """Per-axis noise scale from the residual rms, corrected for the fitted columns."""
@@ -254,6 +260,7 @@ class Problem:
             if ms > 0:
                 self.scale[axis] *= math.sqrt(ms)
         self._perps.clear()
+        self._perp_bytes.clear()
 
     # ------------------------------------------------------------------ tests
     def white(self, used: np.ndarray | None = None) -> bool:
@@ -289,9 +296,15 @@ class Problem:
         if hit is None:
             perp = self.projector(used)
             hit = (perp, perp(self.y[:, None])[:, 0])
-            if len(self._perps) > 64:
+            # each projector holds its basis, 2 n_used x k floats (200,000 scans and 20
+            # terms: 64 MB): at most 64 of them and PERP_CACHE_BYTES together
+            size = 8 * hit[1].size * (self.current_columns().shape[1] + 1)
+            if len(self._perps) > 64 or sum(self._perp_bytes.values()) + size \
+                    > PERP_CACHE_BYTES:
                 self._perps.clear()
+                self._perp_bytes.clear()
             self._perps[key] = hit
+            self._perp_bytes[key] = size
         return hit
 
     def gof(self) -> dict[str, dict[str, float]]:
