@@ -83,10 +83,15 @@ def main(argv: list[str] | None = None) -> int:
         with warnings.catch_warnings():
             warnings.simplefilter("always", RelabelledTermsWarning)
             warnings.showwarning = _notes_in_one_line(args.command, warnings.showwarning)
-            return int(module.main(args) or 0)
+            code = int(module.main(args) or 0)
+            sys.stdout.flush()  # here, where a reader that left is caught, not at exit
+            return code
     except InputError as err:
         print(f"antsim {args.command}: error: {err.line()}", file=sys.stderr)
         return EXIT_INPUT
+    except BrokenPipeError:  # the reader left (`antsim diagnose --list | head`): not an error
+        _silence_stdout()
+        return EXIT_BROKEN_PIPE
     except OSError as err:  # the file system said no: a full disk, a lost permission, ...
         print(f"antsim {args.command}: error: {os_error_line(err)}", file=sys.stderr)
         return EXIT_INPUT
@@ -94,6 +99,19 @@ def main(argv: list[str] | None = None) -> int:
         print(f"antsim {args.command}: interrupted; recordings written so far are kept",
               file=sys.stderr)
         return 130
+
+
+EXIT_BROKEN_PIPE = 141
+"""A shell's status for a process ended by SIGPIPE (128 + 13), which Python ignores."""
+
+
+def _silence_stdout() -> None:
+    """Point stdout at the null device, so that the interpreter's flush at exit does not
+    fail on the closed pipe a second time (Python's signal docs, "Note on SIGPIPE")."""
+    import os
+
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
 
 
 def _notes_in_one_line(command: str, show):
