@@ -173,6 +173,19 @@ def _design(columns: dict[str, np.ndarray], terms, rows: np.ndarray,
     return np.vstack([basis_az * np.cos(el)[:, None], basis_el])
 
 
+def terms_without_lever_arm(shared: SharedSchedule, terms: Sequence[str]) -> list[str]:
+    """The fit's terms whose column is zero at every scan of ``shared``, the noise-free run:
+    a thermal term of a difference only random forcing drives (the yoke's left-right), a term
+    of a sensor that reads constant. Neither the prediction nor the members can determine
+    them: the least-squares normal matrix is singular in them. Zero exactly, not small: the
+    sensors' readings are rounded to their resolution, so an undriven difference is 0.0."""
+    rows = np.arange(len(shared.scan_times))
+    a = _design(shared.columns, terms, rows, shared.sensor_lag_s)
+    names = PointingModel(list(terms)).names
+    return [name for name, peak in zip(names, np.abs(a).max(axis=0), strict=True)
+            if not peak > 0.0]
+
+
 def _ou_mean_cov(t1: np.ndarray, t2: np.ndarray, tau: float) -> np.ndarray:
     """Covariance of the means of a unit-rms OU process over sample sets: t1 (P, 5, n),
     t2 (P, 5, n) -> (P, 5, 5)."""

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import time
 import uuid
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -31,7 +31,7 @@ from .ensemble import (
     task_noise,
     task_record,
 )
-from .fisher import NoiseModel, Prediction, predict, truth_vector
+from .fisher import NoiseModel, Prediction, predict, terms_without_lever_arm, truth_vector
 from .planfile import Plan, VariantSpec
 from .vectorized import MemberResults, SharedSchedule, quiet_scenario
 
@@ -300,6 +300,24 @@ def _result(done, plan: Plan, v: int):
                          f"{err.field} = {err.value!r}: {err.problem}", err.hint) from None
 
 
+def _refuse_undetermined(plan: Plan, v: int, shared: SharedSchedule,
+                         terms: Sequence[str]) -> None:
+    """One line for a fitted term the variant's schedule leaves without a lever arm (see
+    :func:`antsim.plan.fisher.terms_without_lever_arm`), naming where its fit comes from."""
+    dead = terms_without_lever_arm(shared, terms)
+    if not dead:
+        return
+    problem = (f"{', '.join(dead)} {'is' if len(dead) == 1 else 'are'} zero at every scan of "
+               "this variant's noise-free run: the plan cannot determine "
+               f"{'it' if len(dead) == 1 else 'them'}")
+    spec = plan.variants[v]
+    if spec.fit_model is not None:
+        raise InputError(plan.path, f"variants[{v}].fit_model", spec.fit_model, problem,
+                         "leave it out of fit_model, or give the variant what drives it")
+    raise InputError(plan.path, f"variants[{v}]", spec.name, f"the scenario's fit: {problem}",
+                     "give the variant a fit_model without it")
+
+
 def _run_variants(plan: Plan, executor: Executor, members: int | None,
                   progress: Progress) -> list[VariantResult]:
     n_var = len(plan.variants)
@@ -331,6 +349,7 @@ def _run_variants(plan: Plan, executor: Executor, members: int | None,
                                  "give it sources that are up")
             shared[v] = value
             terms, fit_name = plan.scenarios[v].controller.fit_spec()
+            _refuse_undetermined(plan, v, value, terms)
             job = Job(f"{token}:{v}", plan.scenarios[v], quiet[v], value, tuple(terms),
                       fit_name, plan.seed)
             jobs[v] = executor.share(job)
