@@ -109,13 +109,8 @@ def test_nothing_in_the_readme_points_outside_the_repository():
     for pattern in (r"\.\./", r"\bissue \d+", r"\bDESIGN\b", r"the issue's"):
         assert not re.search(pattern, README), pattern
     for target in re.findall(r"\]\(([^)#]+)\)", README):
-        if not target.startswith("http") and target not in PENDING:
+        if not target.startswith("http"):
             assert (REPO / target).exists(), target
-
-
-#: pages the README links that another branch writes (merged before this one); remove the
-#: name once the page is in the tree
-PENDING = {"docs/inputs.md"} - {str(p.relative_to(REPO)) for p in REPO.glob("docs/*.md")}
 
 
 class Server:
