@@ -704,3 +704,75 @@ def test_offset_scale_follows_the_width_the_reduction_assumed():
     assumed = {"3C84": 11.0, "Cassiopeia A": width[1], "W31": width[2]}
     told = replace(obs, meta={**obs.meta, "reduction_width_arcmin": assumed})
     np.testing.assert_allclose(offset_scale(told), 1.0, rtol=1e-12)
+
+
+def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits():
+    """Two code paths each: the current model plus a candidate's columns fitted by
+    Frisch-Waugh-Lovell on the model's cached QR (:meth:`Problem.fit_added`) against one
+    least-squares fit of the whole design (SVD), and each fold predicted by the closed
+    leave-group-out form (:func:`heldout_lstsq`) against refitting without it (also where a
+    fold is a tenth of the data). 150 scans, some unused, each with its own noise and offset
+    scale. They are the same projections computed in another order, so they agree to float
+    rounding: 1e-9 relative (measured 1e-13 here; the design's condition number, about 1e3,
+    times the rounding of the products over 300 rows leaves that margin), and the outlier
+    masks the two fits give are identical."""
+    from antsim.diagnose.crossval import heldout_losses
+    from antsim.diagnose.problem import Prediction, Problem, _lstsq, heldout_lstsq
+
+    n = 150
+    rng = np.random.default_rng(28)
+    t = np.sort(rng.uniform(0.0, 6 * 86400.0, n))
+    az = rng.uniform(0, 6.28, n)
+    obs = Observations(t_s=t, az_rad=az, el_rad=np.radians(rng.uniform(15.0, 85.0, n)),
+                       xel_arcsec=rng.normal(0.0, 5.0, n) * (1 + 9 * (rng.random(n) < 0.03)),
+                       el_arcsec=rng.normal(0.0, 5.0, n) + 30.0 * np.sin(2 * az),
+                       good=rng.random(n) > 0.1, meta={"latitude_deg": 38.43})
+    problem = Problem(obs, Prediction("white", np.zeros(n), np.zeros(n),
+                                      rng.uniform(3.0, 8.0, n), rng.uniform(3.0, 8.0, n)),
+                      ["IA", "IE", "NPAE", "CA", "AN", "AW", "TF", "TX"],
+                      offset_scale=rng.uniform(0.7, 1.0, n))
+    problem.update_outliers()
+    extra = problem.cand(np.concatenate([np.zeros((n, 2)),
+                                         np.column_stack([np.sin(2 * az), np.cos(2 * az)])]))
+    whole = np.column_stack([problem.current_columns(), extra])
+    for used in (problem.used, problem.valid):
+        fast, slow = problem.fit_added(extra, used), problem.fit(whole, used)
+        np.testing.assert_allclose(fast.coef, slow.coef, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(fast.resid, slow.resid, rtol=1e-9, atol=1e-9)
+        assert fast.chi2 == pytest.approx(slow.chi2, rel=1e-9)
+        np.testing.assert_allclose(fast.cov, slow.cov[-2:, -2:], rtol=1e-9, atol=1e-12)
+    mask = problem.mask_for(extra)
+    old = problem.valid.copy()  # the mask as the whole design's fits give it
+    for _ in range(2):
+        r = np.abs(problem.fit(whole, old).resid)
+        keep = problem.valid & (r[:n] <= 4.0) & (r[n:] <= 4.0)
+        if np.array_equal(keep, old):
+            break
+        old = keep
+    assert np.array_equal(mask, old) and 0 < (problem.valid & ~mask).sum() < 10
+
+    x, z = rng.normal(size=(300, 6)), rng.normal(size=300)
+    for groups in (10, 75):
+        labels = rng.integers(0, groups, 300)
+        closed = heldout_lstsq(x, z, labels)
+        refit = np.empty(300)
+        for k in np.unique(labels):
+            coef, _ = _lstsq(x[labels != k], z[labels != k])
+            refit[labels == k] = (z - x @ coef)[labels == k]
+        np.testing.assert_allclose(closed, refit, rtol=1e-9, atol=1e-12)
+    assert heldout_lstsq(x, z, np.zeros(300, int)) is None  # nothing left to fit on
+    folds = (np.arange(n) * 5) // n
+    losses = heldout_losses(whole, problem.y_raw, problem.used, folds)
+    rows = problem.rows(problem.used)
+    ref = []
+    for k in range(5):
+        train, test = problem.used & (folds != k), problem.used & (folds == k)
+        coef, _ = _lstsq(whole[np.concatenate([train, train])],
+                         problem.y_raw[np.concatenate([train, train])])
+        ref.append(((problem.y_raw - whole @ coef).reshape(2, n) ** 2).sum(axis=0)[test])
+    np.testing.assert_allclose(losses, np.concatenate(ref), rtol=1e-9)
+    assert rows.sum() == 2 * losses.size
+    assert problem.cv_chi2(whole, folds) == pytest.approx(
+        sum(float(np.sum(problem.T(problem.y - whole @ problem.fit(whole, problem.used
+            & (folds != k)).coef, problem.used & (folds == k)) ** 2)) for k in range(5)),
+        rel=1e-9)

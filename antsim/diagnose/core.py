@@ -485,6 +485,7 @@ def fit_variants_before_after(diag: Diagnosis) -> dict[str, Any]:
     n = obs.n
     zero = _el_zero_term(p)
     out = {}
+    fit_a: dict[str, Any] = {}  # Fit A (every good scan) by label: the split below reuses it
     for name, window, mask in (
             ("D", "day, Sun above 0 deg", obs.sun_el_deg > DAY_SUN_MIN_DEG),
             ("E", "night, Sun below -12 deg", obs.sun_el_deg < NIGHT_SUN_MAX_DEG),
@@ -500,6 +501,8 @@ def fit_variants_before_after(diag: Diagnosis) -> dict[str, Any]:
                 f = fit_model(data, obs.terms(p.base_terms), robust=True)
             except ValueError:
                 break
+            if name == "A":
+                fit_a[label] = f
             res[label] = {"xel": f.xel_rms_arcsec, "el": f.el_rms_arcsec,
                           "sky": f.sky_rms_arcsec, "n_used": f.n_used}
             if zero is not None:
@@ -516,7 +519,8 @@ def fit_variants_before_after(diag: Diagnosis) -> dict[str, Any]:
         data = PointingData(obs.az_rad[m], obs.el_rad[m], (obs.xel_arcsec - sx)[m],
                             (obs.el_arcsec - se)[m])
         try:
-            f = fit_model(data, obs.terms(p.base_terms), robust=True)
+            f = fit_a[label] if label in fit_a else fit_model(data, obs.terms(p.base_terms),
+                                                              robust=True)
         except ValueError:
             split = {}
             break

@@ -30,7 +30,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .candidates.base import DISTINGUISH_R, Candidate, TestResult, p_value, with_trials
-from .problem import Problem, _lstsq
+from .problem import Problem, _lstsq, _qr, added_basis, heldout_lstsq
 
 __all__ = ["MAX_FINDINGS_CV", "contiguous_folds", "heldout_losses", "heldout_sky_rms",
            "loo_blocks", "loo_residuals", "loo_rms", "mimicked", "orthonormal"]
@@ -85,11 +85,13 @@ def loo_rms(h: tuple, e: np.ndarray, n: int) -> float:
 
 
 def heldout_losses(x: np.ndarray, y: np.ndarray, used: np.ndarray,
-                   folds: np.ndarray | None) -> np.ndarray:
+                   folds: np.ndarray | None,
+                   basis: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """Squared held-out residual (xel^2 + el^2, arcsec^2) of each ``used`` observation under
     an unweighted fit of ``y`` (2n,) on ``x`` (2n, k): each left out in turn (``folds``
-    None, closed form) or each fold predicted from the others. Infinite where an
-    observation alone determines a term."""
+    None, closed form) or each fold predicted from the others (closed form,
+    :func:`heldout_lstsq`, with the used rows' ``basis`` of ``x`` when given). Infinite
+    where an observation alone determines a term."""
     n = used.size
     rows = np.concatenate([used, used])
     if folds is None:
@@ -100,6 +102,11 @@ def heldout_losses(x: np.ndarray, y: np.ndarray, used: np.ndarray,
         yy = y[rows]
         r = loo_residuals(loo_blocks(q, m), yy - q @ (q.T @ yy), m)
         return np.full(m, np.inf) if r is None else r[0] ** 2 + r[1] ** 2
+    lab = folds[used]
+    r = heldout_lstsq(x[rows], y[rows], np.concatenate([lab, lab]), basis)
+    if r is not None:
+        r = r.reshape(2, -1)
+        return r[0] ** 2 + r[1] ** 2
     out = np.zeros(n)
     for k in np.unique(folds[used]):
         test = used & (folds == k)
@@ -178,13 +185,19 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
     out = []
     while len(out) < room:
         cur = problem.current_columns()
-        now = heldout_losses(cur, problem.y_raw, problem.used, folds)
+        # the model's basis over the used rows once; each option adds its columns to it
+        rows = problem.rows()
+        q0, r0 = _qr(cur[rows])
+        d0 = np.abs(np.diag(r0))
+        now = heldout_losses(cur, problem.y_raw, problem.used, folds, (q0, d0))
         best = None
         tried = 0
         for c, theta, raw, names in _options(problem, candidates, taken, model_terms):
             tried += 1
-            new = heldout_losses(np.column_stack([cur, problem.cand(raw)]), problem.y_raw,
-                                 problem.used, folds)
+            x = problem.cand(raw)
+            q, d1 = added_basis(q0, x[rows])
+            new = heldout_losses(np.column_stack([cur, x]), problem.y_raw, problem.used,
+                                 folds, (q, np.concatenate([d0, d1])))
             if best is None or new.sum() < best[0].sum():
                 best = (new, c, theta, raw, names)
         if best is None or not improves(now, best[0]):

@@ -118,6 +118,7 @@ class Problem:
         self._perps: dict[bytes, tuple] = {}
         self._perp_bytes: dict[bytes, int] = {}
         self._chol: dict[bytes, tuple] = {}
+        self._stacked: tuple[int, np.ndarray] | None = None
         self.pred = pred
         self.base_terms = tuple(base_terms)
         n = obs.n
@@ -193,7 +194,13 @@ class Problem:
         return out[:, 0] if flat else out
 
     def current_columns(self) -> np.ndarray:
-        return np.column_stack([self.base, *self.extra]) if self.extra else self.base
+        """The current model's raw columns (2n, m): the base, then the accepted ones (stacked
+        once per model, not per call: 200,000 scans and 13 columns are 42 MB)."""
+        if not self.extra:
+            return self.base
+        if self._stacked is None or self._stacked[0] != len(self.extra):
+            self._stacked = (len(self.extra), np.column_stack([self.base, *self.extra]))
+        return self._stacked[1]
 
     @property
     def current_names(self) -> list[str]:
@@ -214,16 +221,65 @@ class Problem:
     def fit_current(self, used: np.ndarray | None = None) -> LinearFit:
         return self.fit(self.current_columns(), used)
 
-    def mask_for(self, columns: np.ndarray, iterations: int = 2) -> np.ndarray:
-        """The scans a model of ``columns`` keeps (standardized residual <= OUTLIER_Z on both
-        axes), starting from every valid scan: a candidate that explains scans the current
-        model rejects gets them back."""
+    def _current_qr(self, used: np.ndarray):
+        """(q, r, q^T z) of the whitened current model over the scans ``used`` (z the
+        whitened data), cached with the projectors; None when its columns are not
+        independent there (the callers then fit the whole design)."""
+        key = b"qr" + used.tobytes() + bytes([len(self.extra)])
+        hit = self._perps.get(key)
+        if hit is None:
+            q, r = _qr(self.T(self.current_columns(), used))
+            d = np.abs(np.diag(r))
+            full = bool(d.size) and d.min() > 1e-10 * max(float(d.max()), 1e-300)
+            hit = (q, r, q.T @ self.T(self.y, used)) if full else ()
+            self._cache(key, hit, 8 * q.size if full else 0)
+        return hit or None
+
+    def fit_added(self, extra: np.ndarray, used: np.ndarray | None = None) -> LinearFit:
+        """:meth:`fit` of the current model plus raw columns ``extra`` (2n, q) by
+        Frisch-Waugh-Lovell: the current model is factored once per set of scans (QR) and only
+        ``extra``, projected off it, is solved for; the same least-squares problem (the
+        residual is the same projection, to float rounding), without a factorization of the
+        whole design per call. ``cov`` is the extra columns' block only."""
+        used = self.used if used is None else used
+        qr = self._current_qr(used)
+        if qr is None:
+            f = self.fit(np.column_stack([self.current_columns(), extra]), used)
+            m = self.current_columns().shape[1]
+            f.cov = f.cov[m:, m:]
+            return f
+        q, r, qz = qr
+        z = self.T(self.y, used)
+        x = self.T(extra, used)
+        qx = q.T @ x
+        coef_x, cov = _lstsq(x - q @ qx, z - q @ qz)
+        coef_a = scipy.linalg.solve_triangular(r, qz - qx @ coef_x)
+        wres = z - q @ (r @ coef_a) - x @ coef_x
+        resid = (self.y - self.current_columns() @ coef_a - extra @ coef_x) * self.w
+        return LinearFit(coef=np.concatenate([coef_a, coef_x]), chi2=float(wres @ wres),
+                         resid=resid, cov=cov, wres=wres, n_used=int(used.sum()))
+
+    def _cache(self, key: bytes, value, size: int) -> None:
+        """Keep ``value`` among the cached projectors and factors: at most 64 of them and
+        PERP_CACHE_BYTES together (each holds a basis, 2 n_used x k floats: 200,000 scans
+        and 20 terms are 64 MB)."""
+        if len(self._perps) > 64 or sum(self._perp_bytes.values()) + size > PERP_CACHE_BYTES:
+            self._perps.clear()
+            self._perp_bytes.clear()
+        self._perps[key] = value
+        self._perp_bytes[key] = size
+
+    def mask_for(self, extra: np.ndarray, iterations: int = 2) -> np.ndarray:
+        """The scans a model of the current columns plus raw ``extra`` (2n, q) keeps
+        (standardized residual <= OUTLIER_Z on both axes), starting from every valid scan: a
+        candidate that explains scans the current model rejects gets them back."""
         used = self.valid.copy()
+        m = self.current_columns().shape[1] + extra.shape[1]
         for _ in range(iterations):
-            f = self.fit(columns, used)
+            f = self.fit_added(extra, used)
             r = np.abs(f.resid)
             keep = self.valid & (r[: self.n] <= OUTLIER_Z) & (r[self.n:] <= OUTLIER_Z)
-            if keep.sum() < max(columns.shape[1], 3) or np.array_equal(keep, used):
+            if keep.sum() < max(m, 3) or np.array_equal(keep, used):
                 break
             used = keep
         return used
@@ -271,8 +327,12 @@ class Problem:
     def basis(self, used: np.ndarray | None = None) -> np.ndarray:
         """An orthonormal basis (2 n_used, rank) of the whitened current model over the used
         scans (what :meth:`projector` projects out)."""
-        a = self.T(self.current_columns(), self.used if used is None else used)
-        q, r = np.linalg.qr(a)
+        used = self.used if used is None else used
+        qr = self._current_qr(used)
+        if qr is not None:  # independent columns: the cached factor's basis, all of it
+            return qr[0]
+        a = self.T(self.current_columns(), used)
+        q, r = _qr(a)
         d = np.abs(np.diag(r))
         return q[:, d > 1e-10 * max(float(d.max()) if d.size else 0.0, 1e-300)]
 
@@ -296,15 +356,10 @@ class Problem:
         if hit is None:
             perp = self.projector(used)
             hit = (perp, perp(self.y[:, None])[:, 0])
-            # each projector holds its basis, 2 n_used x k floats (200,000 scans and 20
-            # terms: 64 MB): at most 64 of them and PERP_CACHE_BYTES together
-            size = 8 * hit[1].size * (self.current_columns().shape[1] + 1)
-            if len(self._perps) > 64 or sum(self._perp_bytes.values()) + size \
-                    > PERP_CACHE_BYTES:
-                self._perps.clear()
-                self._perp_bytes.clear()
-            self._perps[key] = hit
-            self._perp_bytes[key] = size
+            # the basis is shared with the cached factors when the model's columns are
+            # independent there (already counted)
+            m = 1 if self._current_qr(used) is not None else self.current_columns().shape[1] + 1
+            self._cache(key, hit, 8 * hit[1].size * m)
         return hit
 
     def gof(self) -> dict[str, dict[str, float]]:
@@ -349,8 +404,14 @@ class Problem:
                 refit=None, used: np.ndarray | None = None) -> float:
         """Held-out chi^2: each fold predicted from a fit to the others (whitened units).
         ``refit(train_mask) -> columns`` re-derives nonlinear shapes on the training data."""
-        total = 0.0
         used = self.used if used is None else used
+        if refit is None and self.white(used):
+            lab = folds[used]
+            r = heldout_lstsq(self.T(columns, used), self.T(self.y, used),
+                              np.concatenate([lab, lab]))
+            if r is not None:
+                return float(r @ r)
+        total = 0.0
         for k in np.unique(folds[used]):
             test = used & (folds == k)
             train = used & (folds != k)
@@ -369,6 +430,13 @@ class Problem:
     def heldout_residuals(self, columns: np.ndarray, folds: np.ndarray) -> np.ndarray:
         """(2, n_used) raw residuals (arcsec) of each fold's used scans predicted from an
         unweighted fit to the other folds."""
+        lab = folds[self.used]
+        rows = self.rows(self.used)
+        r = heldout_lstsq(columns[rows], self.y_raw[rows], np.concatenate([lab, lab]))
+        if r is not None:  # in the order of the loop below: fold by fold
+            r = r.reshape(2, -1)
+            return np.concatenate([r[:, lab == k] for k in np.unique(lab)], axis=1) \
+                if lab.size else np.zeros((2, 0))
         parts = []
         for k in np.unique(folds[self.used]):
             test = self.used & (folds == k)
@@ -377,6 +445,60 @@ class Problem:
             coef, _ = _lstsq(columns[rows], self.y_raw[rows])
             parts.append((self.y_raw - columns @ coef).reshape(2, -1)[:, test])
         return np.concatenate(parts, axis=1) if parts else np.zeros((2, 0))
+
+
+#: a held-out group whose leverage leaves less than this of some direction of the model to
+#: the other groups (an eigenvalue of I - Q_S^T Q_S) is refitted without it instead
+HELDOUT_MIN_EIG = 1e-8
+
+
+def _qr(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Economic QR (LAPACK through scipy: on a tall matrix several times faster than
+    numpy's ``linalg.qr``)."""
+    return scipy.linalg.qr(x, mode="economic", check_finite=False)
+
+
+def added_basis(q0: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """An orthonormal basis of [span(q0), x] and the diagonal magnitudes of its R (those of
+    a QR of the whole, to rounding): ``x`` projected off ``q0`` twice (classical
+    Gram-Schmidt loses orthogonality once, not twice) and factored alone."""
+    rest = x - q0 @ (q0.T @ x)
+    rest -= q0 @ (q0.T @ rest)
+    q1, r1 = _qr(rest)
+    return np.hstack([q0, q1]), np.abs(np.diag(r1))
+
+
+def heldout_lstsq(x: np.ndarray, z: np.ndarray, labels: np.ndarray,
+                  basis: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray | None:
+    """Residuals (rows as ``z``) of each group of rows (same ``labels``) predicted by a
+    least-squares fit of ``z`` on ``x`` to the other groups, from one QR of ``x``: with Q its
+    orthonormal basis, e the full fit's residual and S a group's rows, the held-out residual
+    is (I - Q_S Q_S^T)^-1 e_S = e_S + Q_S (I - Q_S^T Q_S)^-1 Q_S^T e_S (Woodbury; the
+    textbook leave-group-out identity), exactly what refitting without S gives, at a cost in
+    the group's rows rather than a factorization of the others per group. ``basis``: Q and
+    |diag R| when the caller has them (:func:`added_basis`). None when ``x`` has dependent
+    columns or a group alone determines a direction of the model (the caller then refits
+    per group, whose pseudo-inverse handles that)."""
+    if basis is None:
+        q, r = _qr(x)
+        d = np.abs(np.diag(r))
+    else:
+        q, d = basis
+    if not d.size or d.min() <= 1e-10 * max(float(d.max()), 1e-300):
+        return None
+    e = z - q @ (q.T @ z)
+    out = np.empty_like(e)
+    order = np.argsort(labels, kind="stable")
+    bounds = np.flatnonzero(np.diff(labels[order])) + 1
+    eye = np.eye(q.shape[1])
+    for rows in np.split(order, bounds):
+        qs = q[rows]
+        m = eye - qs.T @ qs
+        w, v = np.linalg.eigh(m)
+        if w.min() < HELDOUT_MIN_EIG:
+            return None
+        out[rows] = e[rows] + qs @ (v @ ((v.T @ (qs.T @ e[rows])) / w))
+    return out
 
 
 def _lstsq(a: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -310,7 +310,7 @@ class Candidate:
         scans a model with the candidate keeps."""
         raw = cols
         cols = problem.cand(cols)
-        mask = problem.mask_for(np.column_stack([problem.current_columns(), cols]))
+        mask = problem.mask_for(cols)
         perp, z_perp = problem.perp_for(mask)
         xp = perp(cols)
         # degeneracy with the model is a property of the signature itself (before the
