@@ -235,6 +235,15 @@ class Problem:
             self._cache(key, hit, 8 * q.size if full else 0)
         return hit or None
 
+    def coef_on_current(self, x: np.ndarray, used: np.ndarray) -> np.ndarray | None:
+        """Least-squares coefficients of whitened columns ``x`` (2 n_used, k) on the whitened
+        current model over ``used``, from its cached QR (R^-1 Q^T x); None when the model's
+        columns are dependent there."""
+        qr = self._current_qr(used)
+        if qr is None:
+            return None
+        return scipy.linalg.solve_triangular(qr[1], qr[0].T @ x)
+
     def fit_added(self, extra: np.ndarray, used: np.ndarray | None = None) -> LinearFit:
         """:meth:`fit` of the current model plus raw columns ``extra`` (2n, q) by
         Frisch-Waugh-Lovell: the current model is factored once per set of scans (QR) and only
@@ -252,9 +261,10 @@ class Problem:
         z = self.T(self.y, used)
         x = self.T(extra, used)
         qx = q.T @ x
-        coef_x, cov = _lstsq(x - q @ qx, z - q @ qz)
+        xp, zp = x - q @ qx, z - q @ qz
+        coef_x, cov = _lstsq(xp, zp)
         coef_a = scipy.linalg.solve_triangular(r, qz - qx @ coef_x)
-        wres = z - q @ (r @ coef_a) - x @ coef_x
+        wres = zp - xp @ coef_x
         resid = (self.y - self.current_columns() @ coef_a - extra @ coef_x) * self.w
         return LinearFit(coef=np.concatenate([coef_a, coef_x]), chi2=float(wres @ wres),
                          resid=resid, cov=cov, wres=wres, n_used=int(used.sum()))

@@ -345,7 +345,9 @@ class Candidate:
         if res.columns is not None and res.columns.size and res.r_model > 0.5:
             a = problem.T(problem.current_columns(), res.mask)
             x = problem.T(res.columns, res.mask)
-            beta, _ = _lstsq(a, x)
+            beta = problem.coef_on_current(x, res.mask)
+            if beta is None:
+                beta, _ = _lstsq(a, x)
             contrib = np.abs(beta) * np.linalg.norm(a, axis=0)[:, None]
             weight = contrib.max(axis=1)
             order = np.argsort(weight)[::-1]
