@@ -59,6 +59,8 @@ STRONG_R = 0.85
 #: a simpler form "explains as much" when each parameter it lacks would add at most this
 #: much chi^2 (Akaike's 2)
 AKAIKE_PER_PARAMETER = 2.0
+#: term columns projected at a time when looking for a finding's simplest form
+SIMPLEST_CHUNK = 8
 #: a candidate the model mimics, not accepted, is reported as below detection when the part
 #: the model cannot absorb reaches this local significance (sigma)
 HINT_SIGMA = 3.0
@@ -255,18 +257,22 @@ def _simplest_form(problem: Problem, res: TestResult, vocabulary: list[str]
     names = [t for t in vocabulary if t not in _model_terms(problem)]
     if not names:
         return None
-    cols = problem.cand(term_columns(names, problem.obs))
     perp, z_perp = problem.perp_for(res.mask)
-    xp = perp(cols)
-    norm2 = np.einsum("ij,ij->j", xp, xp)
+    # a few terms at a time: the whole vocabulary's columns over 200,000 scans are 0.5 GB
+    # per copy, and each column's numbers are its own
+    norm2, xz = np.zeros(len(names)), np.zeros(len(names))
+    for start in range(0, len(names), SIMPLEST_CHUNK):
+        part = slice(start, start + SIMPLEST_CHUNK)
+        xp = perp(problem.cand(term_columns(names[part], problem.obs)))
+        norm2[part], xz[part] = np.einsum("ij,ij->j", xp, xp), xp.T @ z_perp
     with np.errstate(invalid="ignore", divide="ignore"):
-        gain = np.where(norm2 > 1e-9 * max(float(norm2.max()), 1e-300),
-                        (xp.T @ z_perp) ** 2 / norm2, 0.0)
+        gain = np.where(norm2 > 1e-9 * max(float(norm2.max()), 1e-300), xz ** 2 / norm2, 0.0)
     best = int(np.argmax(gain))
     if not explains_as_much(problem, float(gain[best]), 1, res):
         return None
     term = names[best]
-    rms = problem.sky_rms(np.column_stack([problem.current_columns(), cols[:, best]]))
+    col = problem.cand(term_columns([term], problem.obs))
+    rms = problem.sky_rms(np.column_stack([problem.current_columns(), col]))
     pair = problem.sky_rms(np.column_stack([problem.current_columns(), res.columns]))
     return SimplestForm((term,), float(gain[best]), rms,
                         f"{term} alone explains as much as {' '.join(res.comp_names)} "
