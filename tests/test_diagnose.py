@@ -717,7 +717,7 @@ def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits(
     times the rounding of the products over 300 rows leaves that margin), and the outlier
     masks the two fits give are identical."""
     from antsim.diagnose.crossval import heldout_losses
-    from antsim.diagnose.problem import Prediction, Problem, _lstsq, heldout_lstsq
+    from antsim.diagnose.problem import Prediction, Problem, _lstsq, _qr, added_basis, heldout_lstsq
 
     n = 150
     rng = np.random.default_rng(28)
@@ -772,6 +772,13 @@ def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits(
         ref.append(((problem.y_raw - whole @ coef).reshape(2, n) ** 2).sum(axis=0)[test])
     np.testing.assert_allclose(losses, np.concatenate(ref), rtol=1e-9)
     assert rows.sum() == 2 * losses.size
+    # the cross-validated stage's path: the model's basis plus the option's columns
+    q0, r0 = _qr(problem.current_columns()[rows])
+    q, d1 = added_basis(q0, extra[rows])
+    np.testing.assert_allclose(q.T @ q, np.eye(q.shape[1]), atol=1e-12)
+    via = heldout_losses(whole, problem.y_raw, problem.used, folds,
+                         (q, np.concatenate([np.abs(np.diag(r0)), d1])))
+    np.testing.assert_allclose(via, losses, rtol=1e-9)
     assert problem.cv_chi2(whole, folds) == pytest.approx(
         sum(float(np.sum(problem.T(problem.y - whole @ problem.fit(whole, problem.used
             & (folds != k)).coef, problem.used & (folds == k)) ** 2)) for k in range(5)),
