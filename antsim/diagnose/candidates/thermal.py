@@ -28,6 +28,9 @@ from .terms import TermsCandidate
 __all__ = ['SensorTermsCandidate', 'SunsetCandidate', 'SunsetTransientCandidate',
            'TemperatureCandidate']
 
+#: the memory a candidate's cached sunset levels may hold
+LEVEL_CACHE_BYTES = 64 * 2**20
+
 
 class _LaggedCandidate(Candidate):
     """An effect with one time constant ``tau_s`` (a lag or a relaxation): the blind
@@ -92,7 +95,9 @@ class SunsetCandidate(_LaggedCandidate):
         t = time_grid(obs)
         key = (obs_key(obs), round(tau_s, 3))
         if key not in self._cache:
-            if len(self._cache) > 512:
+            # each level is n floats and the time-constant search asks for new ones: bounded
+            # in bytes too (512 levels of 200,000 scans were 0.8 GB)
+            if len(self._cache) > 512 or 8 * obs.n * len(self._cache) > LEVEL_CACHE_BYTES:
                 self._cache.clear()
             night = (sun_el_grid_deg(obs, t) < 0.0).astype(float)
             lev = sunset_level(night, GRID_STEP_S, tau_s, self.shape)
@@ -213,7 +218,9 @@ class TemperatureCandidate(_LaggedCandidate):
 
         key = (obs_key(obs), round(tau_s, 3))
         if key not in self._cache:
-            if len(self._cache) > 512:
+            # each level is n floats and the time-constant search asks for new ones: bounded
+            # in bytes too (512 levels of 200,000 scans were 0.8 GB)
+            if len(self._cache) > 512 or 8 * obs.n * len(self._cache) > LEVEL_CACHE_BYTES:
                 self._cache.clear()
             t = time_grid(obs)
             ok = np.isfinite(obs.air_temp_c)
