@@ -28,7 +28,8 @@ from .terms import TermsCandidate
 __all__ = ['SensorTermsCandidate', 'SunsetCandidate', 'SunsetTransientCandidate',
            'TemperatureCandidate']
 
-#: the memory a candidate's cached sunset levels may hold
+#: the memory a lagged candidate's cached levels (sunset or air temperature, n floats each)
+#: may hold
 LEVEL_CACHE_BYTES = 64 * 2**20
 
 
