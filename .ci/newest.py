@@ -1,8 +1,9 @@
 """Print the installed version of every direct dependency of pyproject.toml (with the test
 extra) and name those the package index has a newer version of (``pip list --outdated``).
 
-Used by ``.ci/newest`` after an eager upgrade: the suite is run with the newest versions, and
-a dependency another package holds back says so instead of passing as the newest.
+Used by ``.ci/run`` after the README's test command in a fresh virtual environment, whose
+install takes the newest versions the index offers: a dependency another package holds back
+says so instead of passing as the newest.
 """
 
 from __future__ import annotations
