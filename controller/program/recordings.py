@@ -26,7 +26,7 @@ from __future__ import annotations
 import io
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -360,6 +360,13 @@ def _lines(text: str, start: int, end: int):
         start = stop + 1
 
 
+def _yaml_header(lines: Iterable[str]) -> dict:
+    """The YAML header of an ECSV file from its comment lines after ``# %ECSV``."""
+    from astropy.io.misc.yaml import load
+
+    return load("\n".join(line[2:] if line.startswith("# ") else line[1:] for line in lines))
+
+
 def _fast_table(text: str, end: int):
     """(astropy Table, each data row's line number) from ECSV ``text[:end]`` in the plain
     layout (numbers, booleans and quoted text, one delimiter, no blank lines), parsed by
@@ -368,16 +375,13 @@ def _fast_table(text: str, end: int):
     then reads."""
     import warnings
 
-    from astropy.io.misc.yaml import load
     from astropy.table import Table
 
     try:
         head_end = 0
         while text.startswith("#", head_end):
             head_end = text.index("\n", head_end) + 1
-        header_lines = text[:head_end].splitlines()[1:]
-        header = load("\n".join(line[2:] if line.startswith("# ") else line[1:]
-                                 for line in header_lines))
+        header = _yaml_header(text[:head_end].splitlines()[1:])
         columns = header["datatype"]
         delimiter = header.get("delimiter", " ")
         names_end = text.index("\n", head_end)
@@ -418,8 +422,6 @@ def recorded_mount(path: str | Path) -> str | None:
     """The mount (``altaz``, ``equatorial``) ECSV recordings were made on, from their header
     alone (a quick look before reading them); None for a file that is not ECSV or whose
     header does not parse (reading it then says what is wrong)."""
-    from astropy.io.misc.yaml import load
-
     try:
         with open(path, encoding="utf-8") as fh:
             header = []
@@ -429,8 +431,7 @@ def recorded_mount(path: str | Path) -> str | None:
                 header.append(line)
         if not header or not header[0].lstrip("\ufeff").startswith("# %ECSV"):
             return None
-        meta = dict(load("".join(line[2:] if line.startswith("# ") else line[1:]
-                                 for line in header[1:])).get("meta") or {})
+        meta = dict(_yaml_header(line.rstrip("\n") for line in header[1:]).get("meta") or {})
     except Exception:  # not readable here: read_recordings names the problem
         return None
     return str(meta.get("mount", "altaz"))
