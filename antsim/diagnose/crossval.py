@@ -84,11 +84,12 @@ def loo_rms(h: tuple, e: np.ndarray, n: int) -> float:
     return math.inf if r is None else math.sqrt(float(np.mean(r[0] ** 2 + r[1] ** 2)))
 
 
-def heldout_losses(x: np.ndarray, y: np.ndarray, used: np.ndarray,
+def heldout_losses(x: np.ndarray | tuple[np.ndarray, ...], y: np.ndarray, used: np.ndarray,
                    folds: np.ndarray | None,
                    basis: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """Squared held-out residual (xel^2 + el^2, arcsec^2) of each ``used`` observation under
-    an unweighted fit of ``y`` (2n,) on ``x`` (2n, k): each left out in turn (``folds``
+    an unweighted fit of ``y`` (2n,) on ``x`` (2n, k; or a tuple of column blocks, stacked
+    only if the closed form fails): each left out in turn (``folds``
     None, closed form) or each fold predicted from the others (closed form,
     :func:`heldout_lstsq`, with the used rows' ``basis`` of ``x`` when given). Infinite
     where an observation alone determines a term."""
@@ -96,17 +97,20 @@ def heldout_losses(x: np.ndarray, y: np.ndarray, used: np.ndarray,
     rows = np.concatenate([used, used])
     if folds is None:
         m = int(used.sum())
-        q = orthonormal(x[rows])
+        q = orthonormal(_design(x)[rows])
         if q is None:
             return np.full(m, np.inf)
         yy = y[rows]
         r = loo_residuals(loo_blocks(q, m), yy - q @ (q.T @ yy), m)
         return np.full(m, np.inf) if r is None else r[0] ** 2 + r[1] ** 2
     lab = folds[used]
-    r = heldout_lstsq(x[rows], y[rows], np.concatenate([lab, lab]), basis)
+    # with the basis given the fit needs no copy of the design's rows
+    r = heldout_lstsq(None if basis is not None else _design(x)[rows], y[rows],
+                      np.concatenate([lab, lab]), basis)
     if r is not None:
         r = r.reshape(2, -1)
         return r[0] ** 2 + r[1] ** 2
+    x = _design(x)
     out = np.zeros(n)
     for k in np.unique(folds[used]):
         test = used & (folds == k)
@@ -115,6 +119,11 @@ def heldout_losses(x: np.ndarray, y: np.ndarray, used: np.ndarray,
         r = (y - x @ coef).reshape(2, n)
         out[test] = r[0, test] ** 2 + r[1, test] ** 2
     return out[used]
+
+
+def _design(x) -> np.ndarray:
+    """A design given as its columns' blocks (stacked here, only when needed) or whole."""
+    return np.column_stack(x) if isinstance(x, tuple) else x
 
 
 def heldout_sky_rms(x: np.ndarray, y: np.ndarray, used: np.ndarray,
@@ -142,11 +151,13 @@ def contiguous_folds(t_s: np.ndarray, k: int) -> np.ndarray:
     return folds
 
 
-def mimicked(problem: Problem, perp, raw: np.ndarray) -> bool:
+def mimicked(problem: Problem, raw: np.ndarray) -> bool:
     """Whether the current model mimics any of the raw columns (2n, q) above
     ``DISTINGUISH_R`` over the used scans (its correlation with the model's span)."""
-    full = np.linalg.norm(problem.T(raw), axis=0)
-    left = np.linalg.norm(perp(raw), axis=0)
+    whitened = problem.T(raw)
+    q = problem.basis()
+    full = np.linalg.norm(whitened, axis=0)
+    left = np.linalg.norm(whitened - q @ (q.T @ whitened), axis=0)  # perp(raw), whitened once
     with np.errstate(invalid="ignore", divide="ignore"):
         r2 = np.where(full > 0, 1.0 - (left / full) ** 2, 1.0)
     return bool(np.any(r2 > DISTINGUISH_R**2))
@@ -162,7 +173,6 @@ def _options(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
     held-out stars better (the procedure's leave-one-star-out Sky RMS 10.37" with it,
     benchmarks/blind.py --real --nested) but measures nothing."""
     obs = problem.obs
-    perp, _ = problem.perp_for(problem.used)
     for c in candidates:
         if c.kind != "offsets" or c.name in taken:
             continue
@@ -171,7 +181,7 @@ def _options(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
                 cols, names = c.columns(obs, theta)
             except NotImplementedError:  # a nonlinear signature (exact tilt)
                 break
-            if set(names) <= model_terms or mimicked(problem, perp, cols):
+            if set(names) <= model_terms or mimicked(problem, cols):
                 continue
             yield c, theta, cols, names
 
@@ -196,8 +206,8 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
             tried += 1
             x = problem.cand(raw)
             q, d1 = added_basis(q0, x[rows])
-            new = heldout_losses(np.column_stack([cur, x]), problem.y_raw, problem.used,
-                                 folds, (q, np.concatenate([d0, d1])))
+            new = heldout_losses((cur, x), problem.y_raw, problem.used, folds,
+                                 (q, np.concatenate([d0, d1])))
             if best is None or new.sum() < best[0].sum():
                 best = (new, c, theta, raw, names)
         if best is None or not improves(now, best[0]):

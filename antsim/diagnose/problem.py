@@ -95,6 +95,10 @@ def correlation_matrix(t_s: np.ndarray, model: tuple[tuple[float, float], ...]) 
     return r
 
 
+#: sets of scans whose row indices and weights whitening keeps (each 2 n_used indices and
+#: weights: 6 MB at 200,000 scans)
+VIEW_CACHE = 4
+
 #: the bound on the memory cached projectors hold (their bases; see Problem.perp_for)
 PERP_CACHE_BYTES = 128 * 2**20
 
@@ -118,6 +122,8 @@ class Problem:
         self._perps: dict[bytes, tuple] = {}
         self._perp_bytes: dict[bytes, int] = {}
         self._chol: dict[bytes, tuple] = {}
+        self._views: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+        self._w: tuple[bytes, np.ndarray] | None = None
         self._stacked: tuple[int, np.ndarray] | None = None
         self.pred = pred
         self.base_terms = tuple(base_terms)
@@ -137,6 +143,12 @@ class Problem:
         self.extra_names: list[str] = []
 
     # ------------------------------------------------------------------ candidates
+    @property
+    def unscaled(self) -> bool:
+        """Whether every scan shows all of a pointing error (offset scale 1): candidate
+        columns are then the raw columns."""
+        return bool(np.all(self.f == 1.0))
+
     def cand(self, columns: np.ndarray) -> np.ndarray:
         """Candidate columns as the recordings show them (scaled by the offset scale)."""
         f2 = np.concatenate([self.f, self.f])
@@ -145,10 +157,16 @@ class Problem:
     # ------------------------------------------------------------------ whitening
     @property
     def w(self) -> np.ndarray:
-        """1 / (predicted noise) per row (2n), arcsec^-1."""
-        s = self.sigma * np.repeat(self.scale, self.n)
-        with np.errstate(divide="ignore"):
-            return np.where(s > 0, 1.0 / s, 0.0)
+        """1 / (predicted noise) per row (2n), arcsec^-1 (read-only; formed once per noise
+        scale, not per call: whitening asks for it thousands of times)."""
+        key = self.scale.tobytes()
+        if self._w is None or self._w[0] != key:
+            s = self.sigma * np.repeat(self.scale, self.n)
+            with np.errstate(divide="ignore"):
+                w = np.where(s > 0, 1.0 / s, 0.0)
+            w.flags.writeable = False
+            self._w = (key, w)
+        return self._w[1]
 
     def rows(self, used: np.ndarray | None = None) -> np.ndarray:
         used = self.used if used is None else used
@@ -179,12 +197,18 @@ class Problem:
     def T(self, v: np.ndarray, used: np.ndarray | None = None) -> np.ndarray:
         """Whiten raw rows ``v`` (2n,) or (2n, k) over the used scans: (2 n_used[, k])."""
         used = self.used if used is None else used
+        factors = self._factors(used)
+        if all(f is None for f in factors):  # white: the used rows times their weights
+            idx, wu = self._view(used)
+            out = v.take(idx, axis=0)
+            out *= wu if v.ndim == 1 else wu[:, None]
+            return out
         flat = v.ndim == 1
         vv = v[:, None] if flat else v
         w = self.w
         n = self.n
         parts = []
-        for axis, factor in enumerate(self._factors(used)):
+        for axis, factor in enumerate(factors):
             sl = slice(axis * n, (axis + 1) * n)
             x = vv[sl][used] * w[sl][used][:, None]
             if factor is not None:
@@ -192,6 +216,19 @@ class Problem:
             parts.append(x)
         out = np.vstack(parts)
         return out[:, 0] if flat else out
+
+    def _view(self, used: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(indices, weights) of the rows [xel; el] of the scans ``used``, kept for the last
+        few sets of scans (one boolean selection and stacking per set, not per call)."""
+        key = used.tobytes() + self.scale.tobytes()
+        hit = self._views.get(key)
+        if hit is None:
+            idx = np.flatnonzero(self.rows(used))
+            hit = (idx, self.w[idx])
+            if len(self._views) >= VIEW_CACHE:
+                self._views.pop(next(iter(self._views)))
+            self._views[key] = hit
+        return hit
 
     def current_columns(self) -> np.ndarray:
         """The current model's raw columns (2n, m): the base, then the accepted ones (stacked
@@ -222,17 +259,22 @@ class Problem:
         return self.fit(self.current_columns(), used)
 
     def _current_qr(self, used: np.ndarray):
-        """(q, r, q^T z) of the whitened current model over the scans ``used`` (z the
-        whitened data), cached with the projectors; None when its columns are not
-        independent there (the callers then fit the whole design)."""
+        """(q, r, q^T z, z, z projected off q) of the whitened current model over the scans
+        ``used`` (z the whitened data), cached with the projectors; None when its columns
+        are not independent there (the callers then fit the whole design)."""
         key = b"qr" + used.tobytes() + bytes([len(self.extra)])
         hit = self._perps.get(key)
         if hit is None:
             q, r = _qr(self.T(self.current_columns(), used))
             d = np.abs(np.diag(r))
             full = bool(d.size) and d.min() > 1e-10 * max(float(d.max()), 1e-300)
-            hit = (q, r, q.T @ self.T(self.y, used)) if full else ()
-            self._cache(key, hit, 8 * q.size if full else 0)
+            if full:
+                z = self.T(self.y, used)
+                qz = q.T @ z
+                hit = (q, r, qz, z, z - q @ qz)
+            else:
+                hit = ()
+            self._cache(key, hit, 8 * (q.size + 2 * q.shape[0]) if full else 0)
         return hit or None
 
     def coef_on_current(self, x: np.ndarray, used: np.ndarray) -> np.ndarray | None:
@@ -244,30 +286,40 @@ class Problem:
             return None
         return scipy.linalg.solve_triangular(qr[1], qr[0].T @ x)
 
+    def current_norms(self, used: np.ndarray) -> np.ndarray:
+        """Norms of the whitened current model's columns over ``used`` (from its cached R;
+        the model's columns must be independent there)."""
+        return np.linalg.norm(self._current_qr(used)[1], axis=0)
+
     def fit_added(self, extra: np.ndarray, used: np.ndarray | None = None) -> LinearFit:
         """:meth:`fit` of the current model plus raw columns ``extra`` (2n, q) by
         Frisch-Waugh-Lovell: the current model is factored once per set of scans (QR) and only
         ``extra``, projected off it, is solved for; the same least-squares problem (the
         residual is the same projection, to float rounding), without a factorization of the
         whole design per call. ``cov`` is the extra columns' block only."""
-        used = self.used if used is None else used
+        return self._added(extra, self.used if used is None else used)[0]
+
+    def _added(self, extra: np.ndarray, used: np.ndarray
+               ) -> tuple[LinearFit, tuple[np.ndarray, np.ndarray, np.ndarray] | None]:
+        """:meth:`fit_added` and, when the model's cached QR served, the whitened ``extra``,
+        it projected off the model and the projected data (x, x_perp, z_perp)."""
         qr = self._current_qr(used)
         if qr is None:
             f = self.fit(np.column_stack([self.current_columns(), extra]), used)
             m = self.current_columns().shape[1]
             f.cov = f.cov[m:, m:]
-            return f
-        q, r, qz = qr
-        z = self.T(self.y, used)
+            return f, None
+        q, r, qz, _, zp = qr
         x = self.T(extra, used)
         qx = q.T @ x
-        xp, zp = x - q @ qx, z - q @ qz
+        xp = x - q @ qx
         coef_x, cov = _lstsq(xp, zp)
         coef_a = scipy.linalg.solve_triangular(r, qz - qx @ coef_x)
         wres = zp - xp @ coef_x
         resid = (self.y - self.current_columns() @ coef_a - extra @ coef_x) * self.w
-        return LinearFit(coef=np.concatenate([coef_a, coef_x]), chi2=float(wres @ wres),
-                         resid=resid, cov=cov, wres=wres, n_used=int(used.sum()))
+        return (LinearFit(coef=np.concatenate([coef_a, coef_x]), chi2=float(wres @ wres),
+                          resid=resid, cov=cov, wres=wres, n_used=int(used.sum())),
+                (x, xp, zp))
 
     def _cache(self, key: bytes, value, size: int) -> None:
         """Keep ``value`` among the cached projectors and factors: at most 64 of them and
@@ -283,16 +335,24 @@ class Problem:
         """The scans a model of the current columns plus raw ``extra`` (2n, q) keeps
         (standardized residual <= OUTLIER_Z on both axes), starting from every valid scan: a
         candidate that explains scans the current model rejects gets them back."""
+        return self.mask_fit(extra, iterations)[0]
+
+    def mask_fit(self, extra: np.ndarray, iterations: int = 2):
+        """:meth:`mask_for` and, when its last fit was over the scans it returns (the mask
+        settled) and the model's cached QR served, that fit: (LinearFit, (x, x_perp,
+        z_perp)) as :meth:`_added` gives them, else None."""
         used = self.valid.copy()
         m = self.current_columns().shape[1] + extra.shape[1]
+        last = None
         for _ in range(iterations):
-            f = self.fit_added(extra, used)
+            f, parts = self._added(extra, used)
+            last = (f, parts) if parts is not None else None
             r = np.abs(f.resid)
             keep = self.valid & (r[: self.n] <= OUTLIER_Z) & (r[self.n:] <= OUTLIER_Z)
             if keep.sum() < max(m, 3) or np.array_equal(keep, used):
-                break
+                return used, last
             used = keep
-        return used
+        return used, None
 
     def update_outliers(self, iterations: int = 2) -> None:
         """Reject scans whose standardized residual exceeds OUTLIER_Z on either axis (and,
@@ -365,7 +425,8 @@ class Problem:
         hit = self._perps.get(key)
         if hit is None:
             perp = self.projector(used)
-            hit = (perp, perp(self.y[:, None])[:, 0])
+            qr = self._current_qr(used)
+            hit = (perp, qr[4] if qr is not None else perp(self.y[:, None])[:, 0])
             # the basis is shared with the cached factors when the model's columns are
             # independent there (already counted)
             m = 1 if self._current_qr(used) is not None else self.current_columns().shape[1] + 1
@@ -478,7 +539,7 @@ def added_basis(q0: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.hstack([q0, q1]), np.abs(np.diag(r1))
 
 
-def heldout_lstsq(x: np.ndarray, z: np.ndarray, labels: np.ndarray,
+def heldout_lstsq(x: np.ndarray | None, z: np.ndarray, labels: np.ndarray,
                   basis: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray | None:
     """Residuals (rows as ``z``) of each group of rows (same ``labels``) predicted by a
     least-squares fit of ``z`` on ``x`` to the other groups, from one QR of ``x``: with Q its
@@ -498,7 +559,9 @@ def heldout_lstsq(x: np.ndarray, z: np.ndarray, labels: np.ndarray,
         return None
     e = z - q @ (q.T @ z)
     out = np.empty_like(e)
-    order = np.argsort(labels, kind="stable")
+    # the same order either way; small labels (nights, folds) sort by radix, in one pass
+    small = labels.size and labels.min() >= 0 and labels.max() < 2**15
+    order = np.argsort(labels.astype(np.int16) if small else labels, kind="stable")
     bounds = np.flatnonzero(np.diff(labels[order])) + 1
     eye = np.eye(q.shape[1])
     for rows in np.split(order, bounds):

@@ -214,13 +214,25 @@ def _fitted_signal(problem: Problem, res: TestResult) -> np.ndarray:
     return signal - cols @ beta
 
 
-def _signal_corr(problem: Problem, perp, a: TestResult, b: TestResult) -> float:
-    """Correlation of two candidates' fitted signatures after removing the model."""
-    if a.columns is None or b.columns is None or a.coef.size == 0 or b.coef.size == 0:
+def _fitted_perp(perp, a: TestResult) -> np.ndarray | None:
+    """A candidate's fitted signature with the model projected out (None without one)."""
+    cols = a.columns  # read once: a result may make its columns again on each read
+    if cols is None or a.coef.size == 0:
+        return None
+    return perp(cols) @ a.coef if a.coef.size == cols.shape[1] else perp(cols)[:, 0]
+
+
+def _signal_corr(problem: Problem, perp, a: TestResult, b: TestResult,
+                 sa: np.ndarray | None = None) -> float:
+    """Correlation of two candidates' fitted signatures after removing the model (``sa``:
+    :func:`_fitted_perp` of ``a`` when the caller has it)."""
+    if a.coef.size == 0 or b.coef.size == 0:
         return 0.0
-    sa = perp(a.columns) @ a.coef if a.coef.size == a.columns.shape[1] \
-        else perp(a.columns)[:, 0]
-    xb = perp(b.columns)
+    sa = _fitted_perp(perp, a) if sa is None else sa
+    cols_b = b.columns
+    if sa is None or cols_b is None:
+        return 0.0
+    xb = perp(cols_b)
     # how much of a's fitted signature b's span reproduces
     beta, *_ = np.linalg.lstsq(xb, sa, rcond=None)
     num = float(np.linalg.norm(xb @ beta))
@@ -292,11 +304,14 @@ def _alternatives(problem: Problem, perp, r: TestResult, ranked: list[TestResult
     out = []
     n_obs = 2 * int(problem.used.sum())
     siblings = [s for o in ranked for s in o.siblings]
+    sa = None
     for other in [*ranked, *siblings]:
         if other is r or log_p_family(problem, other, n_family) >= math.log(alpha) \
                 or _contains(other, r):
             continue
-        corr = _signal_corr(problem, perp, r, other)
+        if sa is None:
+            sa = _fitted_perp(perp, r)
+        corr = _signal_corr(problem, perp, r, other, sa)
         bic_gap = (r.delta_chi2 - r.dof * math.log(n_obs)) \
             - (other.delta_chi2 - other.dof * math.log(n_obs))
         if corr > DISTINGUISH_R:

@@ -41,7 +41,8 @@ class TestResult:
     trials: float
     p: float  # with the candidate's own look-elsewhere correction
     theta: Any = None
-    columns: np.ndarray | None = None  # raw (2n, q) columns at the best theta
+    #: raw (2n, q) columns at the best theta (read as ``columns``)
+    _columns: np.ndarray | None = None
     comp_names: tuple[str, ...] = ()
     coef: np.ndarray = field(default_factory=lambda: np.zeros(0))
     cov: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
@@ -63,6 +64,21 @@ class TestResult:
     #: whose look-elsewhere factor depends on the level (a change at an unknown time);
     #: None: ``trials`` at every level
     trials_at: Callable[[float], float] | None = None
+    #: makes ``columns`` again when they are read, for a test that did not keep them
+    _remake: Callable[[], np.ndarray] | None = field(default=None, repr=False)
+
+    @property
+    def columns(self) -> np.ndarray | None:
+        """Raw (2n, q) columns at the best theta. Made again from the candidate each time
+        they are read when the test did not keep them: every candidate's result holds
+        columns, and all of them were 0.5 GB at 200,000 scans, but few are read."""
+        if self._columns is None and self._remake is not None:
+            return self._remake()
+        return self._columns
+
+    @columns.setter
+    def columns(self, value: np.ndarray | None) -> None:
+        self._columns, self._remake = value, None
 
     def critical_chi2(self, level: float) -> float:
         """The chi^2 decrease whose p-value, look-elsewhere effect included, is ``level``
@@ -179,14 +195,19 @@ def sun_el_grid_deg(obs: Observations, t_grid: np.ndarray) -> np.ndarray:
     return out
 
 
-def nyholt_trials(cols: np.ndarray) -> float:
-    """Effective number of independent tests among correlated 1-column tests (Nyholt 2004)."""
+def nyholt_trials(cols: np.ndarray, overwrite: bool = False) -> float:
+    """Effective number of independent tests among correlated 1-column tests (Nyholt 2004);
+    ``overwrite``: ``cols`` may be normalized in place (no copy of them)."""
     m = cols.shape[1]
     if m <= 1:
         return 1.0
     norms = np.linalg.norm(cols, axis=0)
     ok = norms > 0
-    c = cols[:, ok] / norms[ok]
+    if overwrite and ok.all():
+        c = cols
+        c /= norms
+    else:
+        c = cols[:, ok] / norms[ok]
     lam = np.linalg.eigvalsh(c.T @ c)
     m = int(ok.sum())
     return float(max(1.0, 1.0 + (m - 1) * (1.0 - np.var(lam, ddof=1) / m))) if m > 1 else 1.0
@@ -284,17 +305,27 @@ class Candidate:
         """Best chi^2 decrease over the candidate's nonlinear parameters (if any)."""
         obs = problem.obs
         best = None
-        grid_cols = []
-        for theta in self.thetas(obs):
+        thetas = self.thetas(obs)
+        # the 1-column shapes over the current model's scans (``perp``'s), for the trials:
+        # filled in place (one copy of them, not a list and its stacked copy)
+        grid = np.empty((z_perp.size, len(thetas))) if len(thetas) > 1 else None
+        n_grid = 0
+        for theta in thetas:
             cols, names = self.columns(obs, theta)
-            res = self._linear(problem, perp, z_perp, cols, names, theta)
-            if cols.shape[1] == 1:
-                grid_cols.append(perp(problem.cand(cols))[:, 0])
+            res, xp = self._linear_xp(problem, cols, names, theta)
+            if cols.shape[1] == 1 and grid is not None:
+                grid[:, n_grid] = xp[:, 0] if np.array_equal(res.mask, problem.used) \
+                    else perp(problem.cand(cols))[:, 0]
+                n_grid += 1
             if best is None or res.delta_chi2 > best.delta_chi2:
                 best = res
+            del cols, xp
         assert best is not None
         best = self.refine(problem, perp, z_perp, best)
-        best.trials = nyholt_trials(np.column_stack(grid_cols)) if len(grid_cols) > 1 else 1.0
+        # in place only when the whole grid is filled (the same array as a stacked copy)
+        best.trials = nyholt_trials(grid[:, :n_grid], overwrite=n_grid == len(thetas)) \
+            if n_grid > 1 else 1.0
+        del grid
         best.p = with_trials(p_value(problem, best.delta_chi2, best.dof, best.chi2_now,
                                      best.mask), best.trials)
         if best.dof > 0:
@@ -307,32 +338,64 @@ class Candidate:
     def _linear(self, problem: Problem, perp, z_perp, cols: np.ndarray,
                 names: tuple[str, ...], theta: Any) -> TestResult:
         """chi^2 decrease from adding raw ``cols`` (scaled here by the offset scale), on the
-        scans a model with the candidate keeps."""
+        scans a model with the candidate keeps (``perp``, ``z_perp``: unused, the test
+        projects over those scans)."""
+        return self._linear_xp(problem, cols, names, theta)[0]
+
+    def _linear_xp(self, problem: Problem, cols: np.ndarray, names: tuple[str, ...],
+                   theta: Any) -> tuple[TestResult, np.ndarray]:
+        """:meth:`_linear` and the candidate's columns whitened and projected off the model
+        over the scans it kept (2 n_kept, q)."""
         raw = cols
         cols = problem.cand(cols)
-        mask = problem.mask_for(cols)
+        mask, last = problem.mask_fit(cols)
         perp, z_perp = problem.perp_for(mask)
-        xp = perp(cols)
+        # the mask's last fit projected the columns already (the same projection)
+        xp = perp(cols) if last is None else last[1][1]
         # degeneracy with the model is a property of the signature itself (before the
         # per-source offset scale): judge absorption and correlation on the raw columns
-        full = np.linalg.norm(problem.T(raw, mask), axis=0)
-        left = np.linalg.norm(perp(raw), axis=0)
+        if problem.unscaled:
+            full = np.linalg.norm(problem.T(raw, mask) if last is None else last[1][0], axis=0)
+            left = np.linalg.norm(xp, axis=0)
+        else:
+            full = np.linalg.norm(problem.T(raw, mask), axis=0)
+            left = np.linalg.norm(perp(raw), axis=0)
         with np.errstate(invalid="ignore", divide="ignore"):
             one_minus_r2 = np.where(full > 0, (left / full) ** 2, 0.0)
         keep = one_minus_r2 > ABSORBED_1MR2
         absorbed = tuple(n for n, k in zip(names, keep, strict=True) if not k)
         if not keep.any():
-            return TestResult(self, 0.0, 0, 1.0, 1.0, theta, cols, names, absorbed=absorbed,
-                              mask=mask)
-        xk = xp[:, keep]
-        coef, cov = _lstsq(xk, z_perp)
+            return TestResult(self, 0.0, 0, 1.0, 1.0, theta, None, names, absorbed=absorbed,
+                              mask=mask, _remake=self._remaker(problem, theta, cols)), xp
+        if last is not None and keep.all():  # the mask's last fit solved this problem
+            xk, coef, cov = xp, last[0].coef[-xp.shape[1]:], last[0].cov
+        else:
+            xk = xp[:, keep]
+            coef, cov = _lstsq(xk, z_perp)
         fitted = xk @ coef
         r = np.sqrt(np.clip(1.0 - one_minus_r2[keep], 0.0, 1.0))
         return TestResult(self, float(fitted @ fitted), int(keep.sum()), 1.0, 1.0, theta,
-                          cols[:, keep], tuple(n for n, k in zip(names, keep, strict=True)
-                                                if k), coef, cov, absorbed=absorbed,
-                          r_model=float(r.max()), mask=mask,
-                          chi2_now=float(z_perp @ z_perp))
+                          None, tuple(n for n, k in zip(names, keep, strict=True) if k),
+                          coef, cov, absorbed=absorbed, r_model=float(r.max()), mask=mask,
+                          chi2_now=float(z_perp @ z_perp),
+                          _remake=self._remaker(problem, theta, cols, keep)), xp
+
+    def _remaker(self, problem: Problem, theta: Any, cols: np.ndarray,
+                 keep: np.ndarray | None = None) -> Callable[[], np.ndarray]:
+        """A function that makes the candidate columns ``cols`` (scaled, 2n x q; the
+        ``keep`` ones) again from :meth:`columns` at ``theta``; it checks them against a
+        fingerprint of ``cols`` (a test of columns made otherwise must not be remade)."""
+        rows = slice(None, None, max(1, cols.shape[0] // 64))
+        mark, shape = cols[rows].copy(), cols.shape  # not ``cols``: the point is to free it
+
+        def remake() -> np.ndarray:
+            again = problem.cand(self.columns(problem.obs, theta)[0])
+            if again.shape != shape or not np.array_equal(again[rows], mark,
+                                                               equal_nan=True):
+                raise RuntimeError(f"{self.name}: columns at {theta!r} are not the tested ones")
+            return again if keep is None or keep.all() else again[:, keep]
+
+        return remake
 
     def _finish(self, problem: Problem, res: TestResult) -> None:
         """Parameters, and the model terms the candidate is most correlated with."""
@@ -342,13 +405,17 @@ class Candidate:
             cov = res.cov  # whitened units: the per-axis scale is already the noise
         res.params, res.amplitude, res.amplitude_sigma = self.params_from(
             problem.obs, res.theta, res.coef, cov, res.comp_names)
-        if res.columns is not None and res.columns.size and res.r_model > 0.5:
-            a = problem.T(problem.current_columns(), res.mask)
-            x = problem.T(res.columns, res.mask)
+        cols = res.columns if res.r_model > 0.5 else None  # read once (may be made again)
+        if cols is not None and cols.size:
+            x = problem.T(cols, res.mask)
             beta = problem.coef_on_current(x, res.mask)
             if beta is None:
+                a = problem.T(problem.current_columns(), res.mask)
                 beta, _ = _lstsq(a, x)
-            contrib = np.abs(beta) * np.linalg.norm(a, axis=0)[:, None]
+                norms = np.linalg.norm(a, axis=0)
+            else:  # the whitened model's column norms are its R's (Q is orthonormal)
+                norms = problem.current_norms(res.mask)
+            contrib = np.abs(beta) * norms[:, None]
             weight = contrib.max(axis=1)
             order = np.argsort(weight)[::-1]
             names = problem.current_names
