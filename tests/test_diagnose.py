@@ -706,20 +706,11 @@ def test_offset_scale_follows_the_width_the_reduction_assumed():
     np.testing.assert_allclose(offset_scale(told), 1.0, rtol=1e-12)
 
 
-def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits():
-    """Two code paths each: the current model plus a candidate's columns fitted by
-    Frisch-Waugh-Lovell on the model's cached QR (:meth:`Problem.fit_added`) against one
-    least-squares fit of the whole design (SVD), and each fold predicted by the closed
-    leave-group-out form (:func:`heldout_lstsq`) against refitting without it (also where a
-    fold is a tenth of the data). 150 scans, some unused, each with its own noise and offset
-    scale. They are the same projections computed in another order, so they agree to float
-    rounding: 1e-9 relative (measured: coefficients 4e-13, residuals and held-out residuals
-    1e-14 at most; the whitened design's condition number is 60, so rounding stays far below
-    1e-9 on any machine's BLAS), and the outlier masks the two fits give are identical."""
-    from antsim.diagnose.crossval import heldout_losses
-    from antsim.diagnose.problem import Prediction, Problem, _lstsq, _qr, added_basis, heldout_lstsq
+def _scans_with_unused_and_scaled(n: int = 150):
+    """A small problem: scans some unused, each with its own noise and offset scale, a 30"
+    sin 2A elevation error, the eight 1990 terms as the model (outliers rejected)."""
+    from antsim.diagnose.problem import Prediction, Problem
 
-    n = 150
     rng = np.random.default_rng(28)
     t = np.sort(rng.uniform(0.0, 6 * 86400.0, n))
     az = rng.uniform(0, 6.28, n)
@@ -732,6 +723,74 @@ def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits(
                       ["IA", "IE", "NPAE", "CA", "AN", "AW", "TF", "TX"],
                       offset_scale=rng.uniform(0.7, 1.0, n))
     problem.update_outliers()
+    return problem
+
+
+@pytest.mark.parametrize("scaled", [True, False])
+def test_a_candidates_test_is_the_projection_it_states(scaled):
+    """Two code paths: a candidate's test (:meth:`Candidate._linear`: it reuses its outlier
+    mask's last added-columns fit, whitens the raw columns once where the offset scale is 1,
+    and keeps no columns but makes them again when read) against the computation in its
+    definition (the mask, the cached projector over it, the columns projected and fitted by
+    SVD). The same numbers in another order: 1e-9 relative (the design's condition number
+    is 60, rounding is ~1e-14); the masks and the columns identical. A result's columns made
+    from another shape than the tested one are refused when read, not returned."""
+    from antsim.diagnose.candidates.base import ABSORBED_1MR2, nyholt_trials
+    from antsim.diagnose.problem import _lstsq
+
+    problem = _scans_with_unused_and_scaled()
+    if not scaled:
+        problem.f = np.ones(problem.n)
+    assert problem.unscaled is not scaled
+    for c, theta in ((candidate("az_track_2a"), None), (candidate("el_periodic_az"), 3),
+                     (candidate("refraction"), None)):
+        raw, names = c.columns(problem.obs, theta)
+        res = c._linear(problem, None, None, raw, names, theta)
+        cols = problem.cand(raw)
+        mask = problem.mask_for(cols)
+        perp, z_perp = problem.perp_for(mask)
+        full = np.linalg.norm(problem.T(raw, mask), axis=0)
+        left = np.linalg.norm(perp(raw), axis=0)
+        keep = (left / full) ** 2 > ABSORBED_1MR2
+        if not keep.any():  # refraction: TX, in the model already
+            assert res.dof == 0 and res.absorbed == names and np.array_equal(res.columns, cols)
+            continue
+        coef, cov = _lstsq(perp(cols)[:, keep], z_perp)
+        fitted = perp(cols)[:, keep] @ coef
+        assert np.array_equal(res.mask, mask) and res.comp_names == tuple(
+            n for n, k in zip(names, keep, strict=True) if k)
+        assert res.delta_chi2 == pytest.approx(float(fitted @ fitted), rel=1e-9)
+        np.testing.assert_allclose(res.coef, coef, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(res.cov, cov, rtol=1e-9, atol=1e-12)
+        assert res.chi2_now == pytest.approx(float(z_perp @ z_perp), rel=1e-9)
+        assert res._columns is None and np.array_equal(res.columns, cols[:, keep])
+    other, names = candidate("el_periodic_az").columns(problem.obs, 4)
+    res = candidate("el_periodic_az")._linear(problem, None, None, other, names, 3)
+    with pytest.raises(RuntimeError, match="not the tested ones"):
+        _ = res.columns
+    res.columns = other  # set: held as given
+    assert res.columns is other
+    grid = np.random.default_rng(1).normal(size=(300, 6))
+    assert nyholt_trials(grid.copy(), overwrite=True) == nyholt_trials(grid)
+
+
+def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits():
+    """Two code paths each: the current model plus a candidate's columns fitted by
+    Frisch-Waugh-Lovell on the model's cached QR (:meth:`Problem.fit_added`) against one
+    least-squares fit of the whole design (SVD), and each fold predicted by the closed
+    leave-group-out form (:func:`heldout_lstsq`) against refitting without it (also where a
+    fold is a tenth of the data). 150 scans, some unused, each with its own noise and offset
+    scale. They are the same projections computed in another order, so they agree to float
+    rounding: 1e-9 relative (measured: coefficients 4e-13, residuals and held-out residuals
+    1e-14 at most; the whitened design's condition number is 60, so rounding stays far below
+    1e-9 on any machine's BLAS), and the outlier masks the two fits give are identical."""
+    from antsim.diagnose.crossval import heldout_losses
+    from antsim.diagnose.problem import _lstsq, _qr, added_basis, heldout_lstsq
+
+    n = 150
+    problem = _scans_with_unused_and_scaled(n)
+    az = problem.obs.az_rad
+    rng = np.random.default_rng(29)
     extra = problem.cand(np.concatenate([np.zeros((n, 2)),
                                          np.column_stack([np.sin(2 * az), np.cos(2 * az)])]))
     whole = np.column_stack([problem.current_columns(), extra])

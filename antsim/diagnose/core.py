@@ -21,7 +21,15 @@ from .baseline import (
 from .candidates.terms import TermsCandidate
 from .data import Observations
 from .locate import Location, locate, where_signal
-from .problem import Prediction, Problem, _lstsq, folds_for, folds_words, term_columns
+from .problem import (
+    Prediction,
+    Problem,
+    _lstsq,
+    folds_for,
+    folds_words,
+    heldout_sky_rms,
+    term_columns,
+)
 from .select import Selection, Step, select
 
 __all__ = ["Diagnosis", "Finding", "diagnose"]
@@ -354,17 +362,19 @@ def diagnose(obs: Observations, scenario=None, model: str | None = None,
         return [float(np.sqrt(np.mean(r[a] ** 2))) if r.shape[1] else float("nan")
                 for a in range(2)]
 
+    # each model's held-out residuals once (a QR of the whole and a pass per night)
+    held = [problem.heldout_residuals(c, folds) for c in (base_cols, final)]
     summary = {
         "n_used": int(problem.used.sum()),
         "sky_rms_before_arcsec": problem.sky_rms(base_cols),
         "sky_rms_after_arcsec": problem.sky_rms(final),
-        "cv_sky_rms_before_arcsec": problem.cv_sky_rms(base_cols, folds),
-        "cv_sky_rms_after_arcsec": problem.cv_sky_rms(final, folds),
+        "cv_sky_rms_before_arcsec": heldout_sky_rms(held[0]),
+        "cv_sky_rms_after_arcsec": heldout_sky_rms(held[1]),
         # per axis (cross-axis, then elevation or declination): in-sample and held out
         "axis_rms_before_arcsec": axis_rms(problem.raw_residuals(base_cols)),
         "axis_rms_after_arcsec": axis_rms(problem.raw_residuals(final)),
-        "cv_axis_rms_before_arcsec": axis_rms(problem.heldout_residuals(base_cols, folds)),
-        "cv_axis_rms_after_arcsec": axis_rms(problem.heldout_residuals(final, folds)),
+        "cv_axis_rms_before_arcsec": axis_rms(held[0]),
+        "cv_axis_rms_after_arcsec": axis_rms(held[1]),
         "held_out": folds_words(obs),
         "gof_before": selection.gof_before, "gof_after": selection.gof_after,
         "n_candidates_tested": selection.n_family,

@@ -495,8 +495,7 @@ class Problem:
     def cv_sky_rms(self, columns: np.ndarray, folds: np.ndarray) -> float:
         """Held-out Sky RMS (arcsec): raw residuals of each fold predicted from an
         unweighted fit to the others."""
-        r = self.heldout_residuals(columns, folds)
-        return math.sqrt(float(np.sum(r**2)) / max(r.shape[1], 1))
+        return heldout_sky_rms(self.heldout_residuals(columns, folds))
 
     def heldout_residuals(self, columns: np.ndarray, folds: np.ndarray) -> np.ndarray:
         """(2, n_used) raw residuals (arcsec) of each fold's used scans predicted from an
@@ -504,10 +503,8 @@ class Problem:
         lab = folds[self.used]
         rows = self.rows(self.used)
         r = heldout_lstsq(columns[rows], self.y_raw[rows], np.concatenate([lab, lab]))
-        if r is not None:  # in the order of the loop below: fold by fold
-            r = r.reshape(2, -1)
-            return np.concatenate([r[:, lab == k] for k in np.unique(lab)], axis=1) \
-                if lab.size else np.zeros((2, 0))
+        if r is not None:  # in the order of the loop below: fold by fold, each in time
+            return r.reshape(2, -1)[:, np.argsort(lab, kind="stable")]
         parts = []
         for k in np.unique(folds[self.used]):
             test = self.used & (folds == k)
@@ -516,6 +513,11 @@ class Problem:
             coef, _ = _lstsq(columns[rows], self.y_raw[rows])
             parts.append((self.y_raw - columns @ coef).reshape(2, -1)[:, test])
         return np.concatenate(parts, axis=1) if parts else np.zeros((2, 0))
+
+
+def heldout_sky_rms(r: np.ndarray) -> float:
+    """Sky RMS (arcsec) of (2, n) held-out residuals (:meth:`Problem.heldout_residuals`)."""
+    return math.sqrt(float(np.sum(r**2)) / max(r.shape[1], 1))
 
 
 #: a held-out group whose leverage leaves less than this of some direction of the model to
