@@ -208,6 +208,7 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
             q, d1 = added_basis(q0, x[rows])
             new = heldout_losses((cur, x), problem.y_raw, problem.used, folds,
                                  (q, np.concatenate([d0, d1])))
+            del q, x  # not alive beside the next option's (2 n x m floats each)
             if best is None or new.sum() < best[0].sum():
                 best = (new, c, theta, raw, names)
         if best is None or not improves(now, best[0]):

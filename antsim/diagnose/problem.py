@@ -194,12 +194,19 @@ class Problem:
             self._chol[key] = hit
         return hit
 
-    def T(self, v: np.ndarray, used: np.ndarray | None = None) -> np.ndarray:
-        """Whiten raw rows ``v`` (2n,) or (2n, k) over the used scans: (2 n_used[, k])."""
+    def T(self, v: np.ndarray, used: np.ndarray | None = None,
+          fortran: bool = False) -> np.ndarray:
+        """Whiten raw rows ``v`` (2n,) or (2n, k) over the used scans: (2 n_used[, k]);
+        ``fortran``: a (2 n_used, k) result in Fortran order where the noise is white (what
+        LAPACK factors without a copy)."""
         used = self.used if used is None else used
         factors = self._factors(used)
         if all(f is None for f in factors):  # white: the used rows times their weights
             idx, wu = self._view(used)
+            if fortran and v.ndim == 2:
+                out = v.T.take(idx, axis=1).T
+                out *= wu[:, None]
+                return out
             out = v.take(idx, axis=0)
             out *= wu if v.ndim == 1 else wu[:, None]
             return out
@@ -265,7 +272,7 @@ class Problem:
         key = b"qr" + used.tobytes() + bytes([len(self.extra)])
         hit = self._perps.get(key)
         if hit is None:
-            q, r = _qr(self.T(self.current_columns(), used))
+            q, r = _qr(self.T(self.current_columns(), used, fortran=True), overwrite=True)
             d = np.abs(np.diag(r))
             full = bool(d.size) and d.min() > 1e-10 * max(float(d.max()), 1e-300)
             if full:
@@ -525,10 +532,11 @@ def heldout_sky_rms(r: np.ndarray) -> float:
 HELDOUT_MIN_EIG = 1e-8
 
 
-def _qr(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _qr(x: np.ndarray, overwrite: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Economic QR (LAPACK through scipy: on a tall matrix several times faster than
-    numpy's ``linalg.qr``)."""
-    return scipy.linalg.qr(x, mode="economic", check_finite=False)
+    numpy's ``linalg.qr``); ``overwrite``: ``x`` is not needed after (a Fortran-ordered
+    ``x`` is then factored in place, not copied)."""
+    return scipy.linalg.qr(x, mode="economic", check_finite=False, overwrite_a=overwrite)
 
 
 def added_basis(q0: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
