@@ -30,7 +30,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .candidates.base import DISTINGUISH_R, Candidate, TestResult, p_value, with_trials
-from .problem import Problem, _lstsq, _qr, added_basis, heldout_lstsq
+from .problem import Problem, _lstsq, _qr, added_basis, heldout_lstsq, rows_fortran
 
 __all__ = ["MAX_FINDINGS_CV", "contiguous_folds", "heldout_losses", "heldout_sky_rms",
            "loo_blocks", "loo_residuals", "loo_rms", "mimicked", "orthonormal"]
@@ -197,7 +197,7 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
         cur = problem.current_columns()
         # the model's basis over the used rows once; each option adds its columns to it
         rows = problem.rows()
-        q0, r0 = _qr(cur[rows])
+        q0, r0 = _qr(rows_fortran(cur, rows), overwrite=True)
         d0 = np.abs(np.diag(r0))
         now = heldout_losses(cur, problem.y_raw, problem.used, folds, (q0, d0))
         best = None

@@ -509,7 +509,8 @@ class Problem:
         unweighted fit to the other folds."""
         lab = folds[self.used]
         rows = self.rows(self.used)
-        r = heldout_lstsq(columns[rows], self.y_raw[rows], np.concatenate([lab, lab]))
+        r = heldout_lstsq(rows_fortran(columns, rows), self.y_raw[rows],
+                          np.concatenate([lab, lab]), overwrite=True)
         if r is not None:  # in the order of the loop below: fold by fold, each in time
             return r.reshape(2, -1)[:, np.argsort(lab, kind="stable")]
         parts = []
@@ -532,6 +533,12 @@ def heldout_sky_rms(r: np.ndarray) -> float:
 HELDOUT_MIN_EIG = 1e-8
 
 
+def rows_fortran(x: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """``x[rows]`` (rows a boolean mask of x's rows) in Fortran order: what LAPACK factors
+    in place (:func:`_qr` with ``overwrite``), not through a copy of the copy."""
+    return x.T.take(np.flatnonzero(rows), axis=1).T
+
+
 def _qr(x: np.ndarray, overwrite: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Economic QR (LAPACK through scipy: on a tall matrix several times faster than
     numpy's ``linalg.qr``); ``overwrite``: ``x`` is not needed after (a Fortran-ordered
@@ -550,7 +557,8 @@ def added_basis(q0: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def heldout_lstsq(x: np.ndarray | None, z: np.ndarray, labels: np.ndarray,
-                  basis: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray | None:
+                  basis: tuple[np.ndarray, np.ndarray] | None = None,
+                  overwrite: bool = False) -> np.ndarray | None:
     """Residuals (rows as ``z``) of each group of rows (same ``labels``) predicted by a
     least-squares fit of ``z`` on ``x`` to the other groups, from one QR of ``x``: with Q its
     orthonormal basis, e the full fit's residual and S a group's rows, the held-out residual
@@ -559,9 +567,10 @@ def heldout_lstsq(x: np.ndarray | None, z: np.ndarray, labels: np.ndarray,
     the group's rows rather than a factorization of the others per group. ``basis``: Q and
     |diag R| when the caller has them (:func:`added_basis`). None when ``x`` has dependent
     columns or a group alone determines a direction of the model (the caller then refits
-    per group, whose pseudo-inverse handles that)."""
+    per group, whose pseudo-inverse handles that). ``overwrite``: ``x`` may be factored in
+    place (:func:`_qr`)."""
     if basis is None:
-        q, r = _qr(x)
+        q, r = _qr(x, overwrite)
         d = np.abs(np.diag(r))
     else:
         q, d = basis
