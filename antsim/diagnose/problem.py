@@ -306,10 +306,13 @@ class Problem:
         whole design per call. ``cov`` is the extra columns' block only."""
         return self._added(extra, self.used if used is None else used)[0]
 
-    def _added(self, extra: np.ndarray, used: np.ndarray
+    def _added(self, extra: np.ndarray, used: np.ndarray, valid_only: bool = False
                ) -> tuple[LinearFit, tuple[np.ndarray, np.ndarray, np.ndarray] | None]:
         """:meth:`fit_added` and, when the model's cached QR served, the whitened ``extra``,
-        it projected off the model and the projected data (x, x_perp, z_perp)."""
+        it projected off the model and the projected data (x, x_perp, z_perp).
+        ``valid_only``: ``resid`` only where the scans are valid (NaN elsewhere), the used
+        rows' from the fit's own residual where the noise is white (what outlier masks
+        need, without a product of the whole design over all rows)."""
         qr = self._current_qr(used)
         if qr is None:
             f = self.fit(np.column_stack([self.current_columns(), extra]), used)
@@ -323,7 +326,15 @@ class Problem:
         coef_x, cov = _lstsq(xp, zp)
         coef_a = scipy.linalg.solve_triangular(r, qz - qx @ coef_x)
         wres = zp - xp @ coef_x
-        resid = (self.y - self.current_columns() @ coef_a - extra @ coef_x) * self.w
+        if valid_only and self.white(used):
+            # white: the used rows' whitened residual is the standardized residual
+            resid = np.full(2 * self.n, np.nan)
+            resid[self._view(used)[0]] = wres
+            rest = np.flatnonzero(self.rows(self.valid & ~used))
+            resid[rest] = (self.y[rest] - self.current_columns()[rest] @ coef_a
+                           - extra[rest] @ coef_x) * self.w[rest]
+        else:
+            resid = (self.y - self.current_columns() @ coef_a - extra @ coef_x) * self.w
         return (LinearFit(coef=np.concatenate([coef_a, coef_x]), chi2=float(wres @ wres),
                           resid=resid, cov=cov, wres=wres, n_used=int(used.sum())),
                 (x, xp, zp))
@@ -352,7 +363,7 @@ class Problem:
         m = self.current_columns().shape[1] + extra.shape[1]
         last = None
         for _ in range(iterations):
-            f, parts = self._added(extra, used)
+            f, parts = self._added(extra, used, valid_only=True)
             last = (f, parts) if parts is not None else None
             r = np.abs(f.resid)
             keep = self.valid & (r[: self.n] <= OUTLIER_Z) & (r[self.n:] <= OUTLIER_Z)
