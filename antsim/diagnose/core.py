@@ -321,10 +321,10 @@ def give_back_freed_arrays() -> None:
     """Have the C library return large freed arrays to the system at once. glibc raises its
     threshold for mapping an allocation each time a large one is freed (up to 32 MiB), then
     serves the next ones from its heap, which keeps freed memory: diagnose makes and drops
-    thousands of arrays of a few columns over all scans, and the heap grew 220 MiB over the
-    peak of the live arrays at 200,000 scans (827 against 1,049 MiB measured with the
-    threshold fixed; ``benchmarks/diagnose_scale.py``). A fixed threshold (glibc's
-    ``mallopt``) keeps them mapped; elsewhere (no glibc) nothing changes."""
+    thousands of arrays of a few columns over all scans (peak 1,049 MiB on the 200,000-scan
+    file of ``benchmarks/diagnose_scale.py``, 827 MiB with the threshold fixed by
+    ``MALLOC_MMAP_THRESHOLD_``). A fixed threshold (glibc's ``mallopt``) keeps them
+    mapped; elsewhere (no glibc) nothing changes."""
     import contextlib
     import ctypes
 
