@@ -112,9 +112,6 @@ def main(args: argparse.Namespace) -> int:
 
 
 def _diagnose(args: argparse.Namespace, out: Path | None) -> int:
-    from antsim.diagnose.core import give_back_freed_arrays
-
-    give_back_freed_arrays()  # before reading: the reader's arrays too
     scenario = None
     if args.scenario:
         from antsim.bundled import find

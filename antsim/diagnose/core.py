@@ -310,28 +310,6 @@ def _fmt(v: Any) -> str:
     return str(v)
 
 
-#: glibc's mallopt parameter: the size from which an allocation is its own mapping
-_M_MMAP_THRESHOLD = -3
-#: arrays from this size (bytes) are mapped and given back when freed (diagnose's arrays of a
-#: few columns over all scans are MBs)
-MMAP_FROM_BYTES = 256 * 1024
-
-
-def give_back_freed_arrays() -> None:
-    """Have the C library return large freed arrays to the system at once. glibc raises its
-    threshold for mapping an allocation each time a large one is freed (up to 32 MiB), then
-    serves the next ones from its heap, which keeps freed memory: diagnose makes and drops
-    thousands of arrays of a few columns over all scans (peak 1,049 MiB on the 200,000-scan
-    file of ``benchmarks/diagnose_scale.py``, 827 MiB with the threshold fixed by
-    ``MALLOC_MMAP_THRESHOLD_``). A fixed threshold (glibc's ``mallopt``) keeps them
-    mapped; elsewhere (no glibc) nothing changes."""
-    import contextlib
-    import ctypes
-
-    with contextlib.suppress(OSError, AttributeError):  # not glibc: nothing to set
-        ctypes.CDLL(None).mallopt(_M_MMAP_THRESHOLD, MMAP_FROM_BYTES)
-
-
 def diagnose(obs: Observations, scenario=None, model: str | None = None,
              n_sims: int = 8, cache_dir=None, use_cache: bool = True, jobs: int = 1,
              sim_baseline: SimulatedBaseline | None = None,
