@@ -253,6 +253,18 @@ def test_first_order_filter_is_lfilter_bit_for_bit():
     assert np.array_equal(first_order_filter(cube, 0.3, 0.97, state), expected)
 
 
+def test_a_long_series_is_filtered_by_lfilter_as_by_the_loop(monkeypatch):
+    """A series of LFILTER_SAMPLES or more goes to lfilter itself: the same bytes as the
+    loop that shorter ones take (the simulation's bytes do not depend on the length)."""
+    from antsim.world.effects import thermal
+
+    rng = np.random.default_rng(5)
+    x = rng.standard_normal(thermal.LFILTER_SAMPLES + 7).cumsum()
+    fast = thermal.first_order_filter(x, 0.02, 0.98, 1.5)
+    monkeypatch.setattr(thermal, "LFILTER_SAMPLES", x.size + 1)
+    assert np.array_equal(fast, thermal.first_order_filter(x, 0.02, 0.98, 1.5))
+
+
 def test_scalar_interpolator_is_np_interp_bit_for_bit():
     from antsim.world.effects.thermal import ScalarInterpolator
 

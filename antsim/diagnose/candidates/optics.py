@@ -6,12 +6,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 from scipy import optimize
 
-from controller.units import ARCSEC_PER_RAD
+from controller.units import ARCSEC_PER_RAD, RAD_PER_ARCMIN
 
 from .. import pvalues
 from ..data import Observations
@@ -125,6 +125,9 @@ class ExactTiltCandidate(Candidate):
     REFERENCE_DOF = 6
     STARTS = ((1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (0, 1, 1), (1, 0, -1), (0, 1, -1),
               (1, 1, 0), (1, -1, 0))
+    #: above this many scans the starts are tried on a subsample of about this many (every
+    #: k-th scan) and only the best is refined on all of them
+    SEARCH_SCANS = 20_000
 
     def __init__(self):
         from antsim.world.effects.optics import ExactTiltCollimation
@@ -137,60 +140,89 @@ class ExactTiltCandidate(Candidate):
         tn, te, c = (float(v) * 60.0 for v in theta)
         return np.array([-tn, te, -c])
 
+    @staticmethod
+    def _sky_error(sky, theta: Sequence[float]) -> np.ndarray:
+        """Error (2k,) arcsec of an exact tilt (north, east components) and collimation,
+        arcmin, at the directions ``sky`` (:class:`~antsim.world.effects.optics.TiltedSky`)."""
+        tn, te, c = (float(v) for v in theta)
+        d_az, d_el = sky.errors_rad(math.hypot(tn, te) * RAD_PER_ARCMIN, math.atan2(te, tn),
+                                    c * RAD_PER_ARCMIN)
+        return np.concatenate([d_az * sky.cos_el * ARCSEC_PER_RAD, d_el * ARCSEC_PER_RAD])
+
     def error(self, obs: Observations, theta: Sequence[float]) -> np.ndarray:
         """Error (2n,) arcsec of an exact tilt (north, east components) and collimation,
         arcmin."""
-        from antsim.world.effects.optics import ExactTiltCollimation
+        from antsim.world.effects.optics import TiltedSky
 
-        tn, te, c = (float(v) for v in theta)
-        eff = ExactTiltCollimation(tilt_arcmin=math.hypot(tn, te),
-                                   tilt_az_deg=math.degrees(math.atan2(te, tn)),
-                                   collimation_arcmin=c)
-        az_enc, el_enc = eff.encoder_from_true(obs.az_rad, obs.el_rad)
-        d_az = (az_enc - obs.az_rad + math.pi) % (2 * math.pi) - math.pi
-        return stacked(d_az * np.cos(obs.el_rad) * ARCSEC_PER_RAD,
-                     (el_enc - obs.el_rad) * ARCSEC_PER_RAD, obs.n)
+        return self._sky_error(TiltedSky(obs.az_rad, obs.el_rad), theta)
 
-    def test(self, problem, perp, z_perp, chi2_now):
+    def _shown(self, problem, rows: np.ndarray):
+        """theta -> the error as the recordings show it on the scans ``rows`` (both axes,
+        (2k,) arcsec): the model in use carries the linear part (else the scans would miss
+        the source), so the recordings show the linear part whole and the rest scaled by
+        each source's offset scale."""
+        from antsim.world.effects.optics import TiltedSky
+
         obs = problem.obs
-        perp, z_perp = problem.perp_for(problem.used)
-        f2 = np.concatenate([problem.f, problem.f])
-        lin_cols = term_columns(("AN", "AW", "CA"), obs)
+        sky = TiltedSky(obs.az_rad[rows], obs.el_rad[rows])
+        both = np.concatenate([rows, rows + obs.n])
+        lin_cols = term_columns(("AN", "AW", "CA"), obs)[both]
+        f2 = np.concatenate([problem.f, problem.f])[both]
 
         def err(theta):
-            # the model in use carries the linear part (else the scans would miss the
-            # source): the recordings show the linear part whole and the rest scaled by
-            # each source's offset scale
-            raw = self.error(obs, theta)
+            raw = self._sky_error(sky, theta)
             lin = lin_cols @ self.linear_terms(theta)
             return lin + f2 * (raw - lin)
 
+        return err
+
+    def _fit(self, problem, used: np.ndarray, starts) -> tuple[np.ndarray, float, float, Any]:
+        """The best of ``starts`` refined by Levenberg-Marquardt on the scans ``used``:
+        (theta, chi^2 left, chi^2 now, (err, proj) of those scans)."""
+        rows = np.flatnonzero(used)
+        err = self._shown(problem, rows)
+        proj, z_perp = _projection(problem, used, rows)
+
         def resid(theta):
-            return z_perp - perp(err(theta)[:, None])[:, 0]
+            return z_perp - proj(err(theta))
 
         base = float(z_perp @ z_perp)
         best_x, best_c = np.zeros(3), base
-        for start in self.STARTS:
-            for scale in (40.0,):
-                x0 = np.array(start, float) * scale
-                try:
-                    sol = optimize.least_squares(resid, x0, method="lm", x_scale=30.0,
-                                                 max_nfev=200)
-                except ValueError:
-                    continue
-                cost = float(sol.fun @ sol.fun)
-                if cost < best_c:
-                    best_c, best_x = cost, sol.x
+        for x0 in starts:
+            try:
+                sol = optimize.least_squares(resid, x0, method="lm", x_scale=30.0,
+                                             max_nfev=200)
+            except ValueError:
+                continue
+            cost = float(sol.fun @ sol.fun)
+            if cost < best_c:
+                best_c, best_x = cost, sol.x
+        return best_x, best_c, base, (err, proj, z_perp)
+
+    def test(self, problem, perp, z_perp, chi2_now):
+        obs = problem.obs
+        used = problem.used
+        perp, _ = problem.perp_for(used)
+        starts = [np.array(start, float) * 40.0 for start in self.STARTS]
+        n_used = int(used.sum())
+        if n_used > self.SEARCH_SCANS:
+            # many scans: the starts on every k-th of them, the best refined on all (each
+            # start's search is some 45 evaluations, each reading every scan)
+            sub = np.zeros_like(used)
+            sub[np.flatnonzero(used)[:: -(-n_used // self.SEARCH_SCANS)]] = True
+            x, left, now, _ = self._fit(problem, sub, starts)
+            if left < now:
+                starts = [x]
+        best_x, best_c, base, (err, proj, z_perp) = self._fit(problem, used, starts)
         dchi2 = max(base - best_c, 0.0)
         # covariance from the Jacobian at the optimum
         h = 0.5
-        jac = np.column_stack([
-            perp(((err(best_x + h * e) - err(best_x - h * e)) / (2 * h))[:, None])[:, 0]
-            for e in np.eye(3)])
+        jac = np.column_stack([proj((err(best_x + h * e) - err(best_x - h * e)) / (2 * h))
+                               for e in np.eye(3)])
         _, cov = _lstsq(jac, z_perp)
-        cols = err(best_x)[:, None]
+        cols = self._shown(problem, np.arange(obs.n))(best_x)[:, None]
         res = TestResult(self, dchi2, self.REFERENCE_DOF, 1.0, 1.0, tuple(best_x), cols,
-                         ("exact",), np.array([1.0]), cov, mask=problem.used.copy(),
+                         ("exact",), np.array([1.0]), cov, mask=used.copy(),
                          chi2_now=base)
         res.p = p_value(problem, dchi2, self.REFERENCE_DOF, base)
         # correlation of the nonlinear part (the error minus its best linear AN/AW/CA fit)
@@ -246,6 +278,24 @@ class ExactTiltCandidate(Candidate):
 
     def effect_from_params(self, params):
         return {k: params[k] for k in ("tilt_arcmin", "tilt_az_deg", "collimation_arcmin")}
+
+
+def _projection(problem, used: np.ndarray, rows: np.ndarray):
+    """(proj, z_perp) over the scans ``used`` (``rows`` their indices): proj maps raw values
+    (2k,) on those scans, xel rows then el rows, to the whitened residual with the current
+    model projected out (the problem's ``perp`` without the unused rows); z_perp the data's."""
+    perp, z_perp = problem.perp_for(used)
+    if problem.white(used):  # whitening is a weight per row: only the used rows
+        w = problem.w[np.concatenate([rows, rows + problem.n])]
+        q = problem.basis(used)
+        return (lambda v: w * v - q @ (q.T @ (w * v))), z_perp
+
+    def proj(v):
+        full = np.zeros(2 * problem.n)
+        full[np.concatenate([rows, rows + problem.n])] = v
+        return perp(full[:, None])[:, 0]
+
+    return proj, z_perp
 
 
 class SquintCandidate(Candidate):
