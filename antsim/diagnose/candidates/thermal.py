@@ -42,17 +42,30 @@ class _LaggedCandidate(Candidate):
         """The time constant between exp(log_lo) and exp(log_hi) that fits best (bounded
         search in log theta), or ``best`` if that fits better."""
         obs = problem.obs
+        tried: dict[float, TestResult] = {}
 
         def neg(log_theta: float) -> float:
             cols, names = self.columns(obs, math.exp(log_theta))
-            return -self._linear(problem, perp, z_perp, cols, names, None).delta_chi2
+            tried[log_theta] = self._linear(problem, perp, z_perp, cols, names, None)
+            return -tried[log_theta].delta_chi2
 
         opt = optimize.minimize_scalar(neg, bounds=(log_lo, log_hi), method="bounded",
                                        options={"xatol": 1e-3})
         theta = float(math.exp(opt.x))
-        cols, names = self.columns(obs, theta)
-        res = self._linear(problem, perp, z_perp, cols, names, theta)
+        res = tried.get(float(opt.x))  # the search's best point was tested in it
+        if res is None:
+            cols, names = self.columns(obs, theta)
+            res = self._linear(problem, perp, z_perp, cols, names, theta)
+        res.theta = theta
         return best if res.delta_chi2 < best.delta_chi2 else res
+
+    def _obs_key(self, obs: Observations) -> tuple:
+        """:func:`obs_key` of ``obs``, hashed once for the recordings the candidate last saw
+        (held, so that their identity stands for their content while they are)."""
+        last = getattr(self, "_last_obs", None)
+        if last is None or last[0] is not obs:
+            last = self._last_obs = (obs, obs_key(obs))
+        return last[1]
 
     def draw_shape(self, rng, obs):
         return {"tau_s": float(math.exp(rng.uniform(math.log(1800.0), math.log(10800.0)))),
@@ -94,7 +107,7 @@ class SunsetCandidate(_LaggedCandidate):
         from antsim.world.effects.thermal import sunset_level
 
         t = time_grid(obs)
-        key = (obs_key(obs), round(tau_s, 3))
+        key = (self._obs_key(obs), round(tau_s, 3))
         if key not in self._cache:
             # each level is n floats and the time-constant search asks for new ones: bounded
             # in bytes too (512 levels of 200,000 scans were 0.8 GB)
@@ -217,12 +230,22 @@ class TemperatureCandidate(_LaggedCandidate):
     def structure(self, obs: Observations, tau_s: float) -> tuple[np.ndarray, float]:
         from antsim.world.effects.drifts import structure_temperature_c
 
-        key = (obs_key(obs), round(tau_s, 3))
+        key = (self._obs_key(obs), round(tau_s, 3))
         if key not in self._cache:
             # each level is n floats and the time-constant search asks for new ones: bounded
             # in bytes too (512 levels of 200,000 scans were 0.8 GB)
             if len(self._cache) > 512 or 8 * obs.n * len(self._cache) > LEVEL_CACHE_BYTES:
                 self._cache.clear()
+            t, air = self._air(obs)
+            ts = np.interp(obs.t_s, t, structure_temperature_c(t, air, tau_s))
+            self._cache[key] = (ts, float(np.mean(ts[obs.good]) if obs.good.any() else 0.0))
+        return self._cache[key]
+
+    def _air(self, obs: Observations) -> tuple[np.ndarray, np.ndarray]:
+        """The time grid and the air temperature on it (C), the same for every time
+        constant: kept for the recordings last seen."""
+        key = self._obs_key(obs)
+        if getattr(self, "_air_grid", (None,))[0] != key:
             t = time_grid(obs)
             ok = np.isfinite(obs.air_temp_c)
             if obs.air_daily_c is not None and np.ptp(obs.t_s[ok]) < 72000.0:
@@ -236,9 +259,8 @@ class TemperatureCandidate(_LaggedCandidate):
                 air[outside] = curve[outside] + shift
             else:
                 air = periodic_interp(t, obs.t_s[ok], obs.air_temp_c[ok])
-            ts = np.interp(obs.t_s, t, structure_temperature_c(t, air, tau_s))
-            self._cache[key] = (ts, float(np.mean(ts[obs.good]) if obs.good.any() else 0.0))
-        return self._cache[key]
+            self._air_grid = (key, t, air)
+        return self._air_grid[1], self._air_grid[2]
 
     def thetas(self, obs):
         return list(self.TAUS)
