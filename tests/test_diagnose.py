@@ -879,6 +879,12 @@ def test_the_exact_tilts_subsample_search_finds_the_full_searchs_optimum(monkeyp
     full = np.zeros((2 * n, 2))
     full[np.concatenate([rows, rows + n])] = v
     np.testing.assert_allclose(proj(v), perp(full), rtol=0, atol=1e-12 * np.abs(v).max())
+    with monkeypatch.context() as m:  # and the path of correlated noise (through perp)
+        m.setattr(problem, "white", lambda used=None: False)
+        dense, _ = optics._projection(problem, problem.used, rows)
+        np.testing.assert_allclose(dense(v), perp(full), rtol=0, atol=1e-12 * np.abs(v).max())
+        np.testing.assert_allclose(dense(v[:, 0]), perp(full)[:, 0], rtol=0,
+                                   atol=1e-12 * np.abs(v).max())
     monkeypatch.setattr(type(tilt), "SEARCH_SCANS", 10 * n)
     whole = tilt.test(problem, perp, z_perp, float(z_perp @ z_perp))
     monkeypatch.setattr(type(tilt), "SEARCH_SCANS", 300)

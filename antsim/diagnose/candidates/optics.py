@@ -127,7 +127,7 @@ class ExactTiltCandidate(Candidate):
               (1, 1, 0), (1, -1, 0))
     #: above this many scans the starts are tried on a subsample of about this many (every
     #: k-th scan) and only the best is refined on all of them
-    SEARCH_SCANS = 20_000
+    SEARCH_SCANS = 10_000
 
     def __init__(self):
         from antsim.world.effects.optics import ExactTiltCollimation
@@ -319,7 +319,7 @@ def _projection(problem, used: np.ndarray, rows: np.ndarray):
     def proj(v):
         full = np.zeros((2 * problem.n, *v.shape[1:]))
         full[both] = v
-        return perp(full)[:, 0] if v.ndim == 1 else perp(full)
+        return perp(full[:, None])[:, 0] if v.ndim == 1 else perp(full)
 
     return proj, z_perp
 

@@ -106,17 +106,25 @@ class SunsetCandidate(_LaggedCandidate):
     def level(self, obs: Observations, tau_s: float) -> np.ndarray:
         from antsim.world.effects.thermal import sunset_level
 
-        t = time_grid(obs)
         key = (self._obs_key(obs), round(tau_s, 3))
         if key not in self._cache:
             # each level is n floats and the time-constant search asks for new ones: bounded
             # in bytes too (512 levels of 200,000 scans were 0.8 GB)
             if len(self._cache) > 512 or 8 * obs.n * len(self._cache) > LEVEL_CACHE_BYTES:
                 self._cache.clear()
-            night = (sun_el_grid_deg(obs, t) < 0.0).astype(float)
+            t, night = self._grid(obs)
             lev = sunset_level(night, GRID_STEP_S, tau_s, self.shape)
             self._cache[key] = np.interp(obs.t_s, t, lev)
         return self._cache[key]
+
+    def _grid(self, obs: Observations) -> tuple[np.ndarray, np.ndarray]:
+        """The time grid and 1 where the Sun is down on it, the same for every time constant:
+        kept for the recordings last seen."""
+        key = self._obs_key(obs)
+        if getattr(self, "_night", (None,))[0] != key:
+            t = time_grid(obs)
+            self._night = (key, t, (sun_el_grid_deg(obs, t) < 0.0).astype(float))
+        return self._night[1], self._night[2]
 
     def thetas(self, obs):
         return list(self.TAUS)
