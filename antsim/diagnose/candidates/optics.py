@@ -178,31 +178,19 @@ class ExactTiltCandidate(Candidate):
 
     def _fit(self, problem, used: np.ndarray, starts) -> tuple[np.ndarray, float, float, Any]:
         """The best of ``starts`` refined by Levenberg-Marquardt on the scans ``used``:
-        (theta, chi^2 left, chi^2 now, (err, proj) of those scans)."""
+        (theta, chi^2 left, chi^2 now, (err, proj, z_perp) of those scans)."""
         rows = np.flatnonzero(used)
         err = self._shown(problem, rows)
         proj, z_perp = _projection(problem, used, rows)
 
-        last: list = [None, None]  # the last theta and its error (the Jacobian's centre)
-
         def resid(theta):
-            last[0], last[1] = np.array(theta), err(theta)
-            return z_perp - proj(last[1])
-
-        def jac(theta):
-            # forward differences with MINPACK's steps, the three columns projected at once
-            # (one pass over the model's basis, not three)
-            e0 = last[1] if np.array_equal(theta, last[0]) else err(theta)
-            h = _FD_STEP * np.maximum(np.abs(theta), 1.0)
-            d = np.column_stack([(err(theta + h[j] * e) - e0) / h[j]
-                                 for j, e in enumerate(np.eye(3))])
-            return -proj(d)
+            return z_perp - proj(err(theta))
 
         base = float(z_perp @ z_perp)
         best_x, best_c = np.zeros(3), base
         for x0 in starts:
             try:
-                sol = optimize.least_squares(resid, x0, jac=jac, method="lm", x_scale=30.0,
+                sol = optimize.least_squares(resid, x0, method="lm", x_scale=30.0,
                                              max_nfev=200)
             except ValueError:
                 continue
@@ -219,7 +207,7 @@ class ExactTiltCandidate(Candidate):
         n_used = int(used.sum())
         if n_used > self.SEARCH_SCANS:
             # many scans: the starts on every k-th of them, the best refined on all (each
-            # start's search is some 45 evaluations, each reading every scan)
+            # start's search is some 40 evaluations of the error, each reading every scan)
             sub = np.zeros_like(used)
             sub[np.flatnonzero(used)[:: -(-n_used // self.SEARCH_SCANS)]] = True
             x, left, now, _ = self._fit(problem, sub, starts)
@@ -290,11 +278,6 @@ class ExactTiltCandidate(Candidate):
 
     def effect_from_params(self, params):
         return {k: params[k] for k in ("tilt_arcmin", "tilt_az_deg", "collimation_arcmin")}
-
-
-#: relative step of a forward difference (MINPACK's lmdif: the square root of the machine
-#: epsilon)
-_FD_STEP = math.sqrt(np.finfo(float).eps)
 
 
 def _projection(problem, used: np.ndarray, rows: np.ndarray):
