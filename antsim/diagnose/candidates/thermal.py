@@ -42,17 +42,20 @@ class _LaggedCandidate(Candidate):
         """The time constant between exp(log_lo) and exp(log_hi) that fits best (bounded
         search in log theta), or ``best`` if that fits better."""
         obs = problem.obs
-        tried: dict[float, TestResult] = {}
+        kept: list = [None, None]  # the best point so far and its test (n floats of columns)
 
         def neg(log_theta: float) -> float:
             cols, names = self.columns(obs, math.exp(log_theta))
-            tried[log_theta] = self._linear(problem, perp, z_perp, cols, names, None)
-            return -tried[log_theta].delta_chi2
+            res = self._linear(problem, perp, z_perp, cols, names, None)
+            if kept[1] is None or res.delta_chi2 >= kept[1].delta_chi2:
+                kept[:] = [log_theta, res]
+            return -res.delta_chi2
 
         opt = optimize.minimize_scalar(neg, bounds=(log_lo, log_hi), method="bounded",
                                        options={"xatol": 1e-3})
         theta = float(math.exp(opt.x))
-        res = tried.get(float(opt.x))  # the search's best point was tested in it
+        # the search's best point was tested in it
+        res = kept[1] if kept[0] == float(opt.x) else None
         if res is None:
             cols, names = self.columns(obs, theta)
             res = self._linear(problem, perp, z_perp, cols, names, theta)
@@ -112,19 +115,19 @@ class SunsetCandidate(_LaggedCandidate):
             # in bytes too (512 levels of 200,000 scans were 0.8 GB)
             if len(self._cache) > 512 or 8 * obs.n * len(self._cache) > LEVEL_CACHE_BYTES:
                 self._cache.clear()
-            t, night = self._grid(obs)
-            lev = sunset_level(night, GRID_STEP_S, tau_s, self.shape)
+            t = time_grid(obs)
+            lev = sunset_level(self._night(obs, t).astype(float), GRID_STEP_S, tau_s,
+                               self.shape)
             self._cache[key] = np.interp(obs.t_s, t, lev)
         return self._cache[key]
 
-    def _grid(self, obs: Observations) -> tuple[np.ndarray, np.ndarray]:
-        """The time grid and 1 where the Sun is down on it, the same for every time constant:
-        kept for the recordings last seen."""
+    def _night(self, obs: Observations, t: np.ndarray) -> np.ndarray:
+        """Where the Sun is down on the time grid ``t``, the same for every time constant:
+        kept for the recordings last seen (a byte a minute)."""
         key = self._obs_key(obs)
-        if getattr(self, "_night", (None,))[0] != key:
-            t = time_grid(obs)
-            self._night = (key, t, (sun_el_grid_deg(obs, t) < 0.0).astype(float))
-        return self._night[1], self._night[2]
+        if getattr(self, "_nights", (None,))[0] != key:
+            self._nights = (key, sun_el_grid_deg(obs, t) < 0.0)
+        return self._nights[1]
 
     def thetas(self, obs):
         return list(self.TAUS)
@@ -244,17 +247,16 @@ class TemperatureCandidate(_LaggedCandidate):
             # in bytes too (512 levels of 200,000 scans were 0.8 GB)
             if len(self._cache) > 512 or 8 * obs.n * len(self._cache) > LEVEL_CACHE_BYTES:
                 self._cache.clear()
-            t, air = self._air(obs)
-            ts = np.interp(obs.t_s, t, structure_temperature_c(t, air, tau_s))
+            t = time_grid(obs)
+            ts = np.interp(obs.t_s, t, structure_temperature_c(t, self._air(obs, t), tau_s))
             self._cache[key] = (ts, float(np.mean(ts[obs.good]) if obs.good.any() else 0.0))
         return self._cache[key]
 
-    def _air(self, obs: Observations) -> tuple[np.ndarray, np.ndarray]:
-        """The time grid and the air temperature on it (C), the same for every time
-        constant: kept for the recordings last seen."""
+    def _air(self, obs: Observations, t: np.ndarray) -> np.ndarray:
+        """The air temperature (C) on the time grid ``t``, the same for every time constant:
+        kept for the recordings last seen."""
         key = self._obs_key(obs)
         if getattr(self, "_air_grid", (None,))[0] != key:
-            t = time_grid(obs)
             ok = np.isfinite(obs.air_temp_c)
             if obs.air_daily_c is not None and np.ptp(obs.t_s[ok]) < 72000.0:
                 # a campaign much shorter than a day: the day before follows the scenario's
@@ -267,8 +269,8 @@ class TemperatureCandidate(_LaggedCandidate):
                 air[outside] = curve[outside] + shift
             else:
                 air = periodic_interp(t, obs.t_s[ok], obs.air_temp_c[ok])
-            self._air_grid = (key, t, air)
-        return self._air_grid[1], self._air_grid[2]
+            self._air_grid = (key, air)
+        return self._air_grid[1]
 
     def thetas(self, obs):
         return list(self.TAUS)
