@@ -42,11 +42,12 @@ class _LaggedCandidate(Candidate):
         """The time constant between exp(log_lo) and exp(log_hi) that fits best (bounded
         search in log theta), or ``best`` if that fits better."""
         obs = problem.obs
-        kept: list = [None, None]  # the best point so far and its test (n floats of columns)
+        kept: list = [None, None]  # the best point so far and its test
 
         def neg(log_theta: float) -> float:
-            cols, names = self.columns(obs, math.exp(log_theta))
-            res = self._linear(problem, perp, z_perp, cols, names, None)
+            theta = math.exp(log_theta)
+            cols, names = self.columns(obs, theta)
+            res = self._linear(problem, perp, z_perp, cols, names, theta)
             if kept[1] is None or res.delta_chi2 >= kept[1].delta_chi2:
                 kept[:] = [log_theta, res]
             return -res.delta_chi2
@@ -59,7 +60,6 @@ class _LaggedCandidate(Candidate):
         if res is None:
             cols, names = self.columns(obs, theta)
             res = self._linear(problem, perp, z_perp, cols, names, theta)
-        res.theta = theta
         return best if res.delta_chi2 < best.delta_chi2 else res
 
     def _obs_key(self, obs: Observations) -> tuple:
