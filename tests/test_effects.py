@@ -459,8 +459,8 @@ def test_tilted_sky_is_encoder_from_true_within_rounding():
     """diagnose's path to the exact tilt's error (TiltedSky: one rotation matrix, one arctan2)
     against the effect's own (Rodrigues per vector, arcsin then sine): the same formulas
     rearranged, so they differ by rounding, which the elevation's arcsin amplifies near the
-    zenith by 1/cos E (573 at 89.9 deg): measured 3e-7" at worst on the sky for errors of up
-    to 10,000" there; 1e-6" bounds it, far below any measured offset."""
+    zenith by 1/cos E (573 at 89.9 deg): measured 3e-7" at worst on the sky (tilts of 1' to
+    2 deg); 1e-6" bounds it, far below any measured offset."""
     from antsim.world.effects.optics import TiltedSky
 
     rng = np.random.default_rng(12)
