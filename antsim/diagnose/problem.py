@@ -204,7 +204,7 @@ class Problem:
         if all(f is None for f in factors):  # white: the used rows times their weights
             idx, wu = self._view(used)
             if fortran and v.ndim == 2:
-                out = v.T.take(idx, axis=1).T
+                out = take_rows_fortran(v, idx)
                 out *= wu[:, None]
                 return out
             out = v.take(idx, axis=0)
@@ -447,7 +447,7 @@ class Problem:
             hit = (perp, qr[4] if qr is not None else perp(self.y[:, None])[:, 0])
             # the basis is shared with the cached factors when the model's columns are
             # independent there (already counted)
-            m = 1 if self._current_qr(used) is not None else self.current_columns().shape[1] + 1
+            m = 1 if qr is not None else self.current_columns().shape[1] + 1
             self._cache(key, hit, 8 * hit[1].size * m)
         return hit
 
@@ -544,10 +544,16 @@ def heldout_sky_rms(r: np.ndarray) -> float:
 HELDOUT_MIN_EIG = 1e-8
 
 
+def take_rows_fortran(x: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """``x[idx]`` (idx row indices) in Fortran order: what LAPACK factors in place
+    (:func:`_qr` with ``overwrite``), not through a copy of the copy."""
+    return x.T.take(idx, axis=1).T
+
+
 def rows_fortran(x: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """``x[rows]`` (rows a boolean mask of x's rows) in Fortran order: what LAPACK factors
-    in place (:func:`_qr` with ``overwrite``), not through a copy of the copy."""
-    return x.T.take(np.flatnonzero(rows), axis=1).T
+    """``x[rows]`` (rows a boolean mask of x's rows) in Fortran order
+    (:func:`take_rows_fortran`)."""
+    return take_rows_fortran(x, np.flatnonzero(rows))
 
 
 def _qr(x: np.ndarray, overwrite: bool = False) -> tuple[np.ndarray, np.ndarray]:
