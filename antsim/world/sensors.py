@@ -86,7 +86,8 @@ def thermal_truth(params: dict[str, float]) -> dict[str, float]:
     (without the sensors' imperfections), so TEDFB and TSDRL are the dish's arcsec per
     kelvin, TEYFB and TSYRL the yoke's, TNPNS, TWPEW and TTILT the pedestal's tilt per
     kelvin."""
-    return {"TEDFB": params["dish_arcsec_per_k"], "TSDRL": params["dish_arcsec_per_k"],
+    return {"TEDFB": params["dish_arcsec_per_k"],
+            "TSDRL": params["dish_arcsec_per_k"] * params.get("dish_xel_factor", 1.0),
             "TEYFB": params["el_arcsec_per_k"], "TSYRL": params["xel_arcsec_per_k"],
             "TNPNS": params["tilt_arcsec_per_k"], "TWPEW": params["tilt_arcsec_per_k"],
             "TTILT": params["tilt_arcsec_per_k"]}

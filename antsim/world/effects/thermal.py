@@ -26,7 +26,7 @@ by default; the 1990 scenario uses them):
   ``dish_gradient_k * I * (s . x)`` (s: unit vector to the Sun, b: boresight, x: the
   direction of increasing azimuth) with the thin members' ``dish_tau_s`` (feed-support legs
   respond in minutes); they add ``dish_arcsec_per_k`` per kelvin in elevation and
-  cross-elevation;
+  ``dish_xel_factor`` times that in cross-elevation;
 * the pedestal: the Sun heats the side of the azimuth bearing's support that faces it; the
   gradient relaxes with ``pedestal_tau_s`` towards ``pedestal_gradient_k * I`` along the
   Sun's azimuth and tilts the azimuth axis away from the Sun by ``tilt_arcsec_per_k`` per
@@ -284,6 +284,9 @@ class ThermalEffect(Effect):
                                  min=0.0),
         "dish_tau_s": Param(600.0, "time constant of the dish gradients (s)", min=1.0),
         "dish_arcsec_per_k": Param(6.5, "pointing error per kelvin of dish gradient"),
+        "dish_xel_factor": Param(1.0, "cross-elevation error per kelvin of the dish's "
+                                 "left-right gradient over dish_arcsec_per_k", min=0.0,
+                                 max=10.0),
         "pedestal_gradient_k": Param(0.0, "pedestal gradient under full sun (K)", min=0.0),
         "pedestal_tau_s": Param(5400.0, "time constant of the pedestal gradient (s)",
                                 min=60.0),
@@ -408,7 +411,7 @@ class ThermalEffect(Effect):
             tilt_n = interp_rows(state.t_s, self.t_grid, self._tilt_n_arcsec)
             tilt_e = interp_rows(state.t_s, self.t_grid, self._tilt_e_arcsec)
         el = el + p["dish_arcsec_per_k"] * fb
-        xel = xel + p["dish_arcsec_per_k"] * lr
+        xel = xel + p["dish_arcsec_per_k"] * p["dish_xel_factor"] * lr
         sin_a, cos_a = _sin(state.az_rad), _cos(state.az_rad)
         tan_e = _tan(state.el_rad)
         d_az = -(tilt_n * sin_a + tilt_e * cos_a) * tan_e
@@ -435,7 +438,7 @@ class ThermalEffect(Effect):
         fb, lr = self._dish_block(t, state.az_rad, state.el_rad, sun_n, sun_e, sun_u,
                                   insolation)
         el = el + p["dish_arcsec_per_k"] * fb
-        xel = xel + p["dish_arcsec_per_k"] * lr
+        xel = xel + p["dish_arcsec_per_k"] * p["dish_xel_factor"] * lr
         sin_a, cos_a = np.sin(state.az_rad), np.cos(state.az_rad)
         d_az = -(tilt_n * sin_a + tilt_e * cos_a) * np.tan(state.el_rad)
         el = el + (-tilt_n * cos_a + tilt_e * sin_a)
