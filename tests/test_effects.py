@@ -76,6 +76,31 @@ def test_thermal_elevation_excursions_larger_by_day_than_by_night(ghigo_path, se
     assert np.std(el[day]) > 2.0 * np.std(el[~day])  # the excursion, not only the level
 
 
+def test_the_dish_cross_elevation_factor_scales_only_the_dish_left_right_error(ghigo_path):
+    """dish_xel_factor multiplies the dish's left-right error (arcsec per kelvin in
+    cross-elevation over elevation's) and nothing else: with the Sun up, the same seed's
+    thermal error less its error without the dish is scaled by the factor in cross-elevation
+    and unchanged in elevation (exact: the same series, one product)."""
+    base = load_scenario(ghigo_path)
+
+    def error(**params):
+        effects = tuple(EffectSpec(e.name, {**e.params, **params}) if e.name == "thermal"
+                        else e for e in base.effects)
+        world = World(dataclasses.replace(base, effects=effects), simpy.Environment(), seed=3)
+        thermal = _effect(world, "thermal")
+        # an afternoon instant (the campaign starts at local noon), the Sun (south-west) on
+        # the side of a dish facing south-east
+        return np.array(thermal.pointing_error(PointingState(3 * 3600.0, math.radians(130.0),
+                                                             math.radians(30.0))))
+
+    none, one, factor = (error(dish_gradient_k=0.0), error(dish_xel_factor=1.0),
+                         error(dish_xel_factor=0.4))
+    dish_one, dish_factor = one - none, factor - none
+    assert abs(dish_one[0]) > 1e-5  # the dish's left-right error is there (> 2")
+    assert dish_factor[0] == pytest.approx(0.4 * dish_one[0], rel=1e-9)
+    assert dish_factor[1] == pytest.approx(dish_one[1], rel=1e-12)
+
+
 @pytest.mark.parametrize("tau_s", [2700.0, 5400.0])
 def test_thermal_error_decays_after_sunset_with_gradient_tau(ghigo_text, write_scenario,
                                                              tau_s):

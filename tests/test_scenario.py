@@ -140,8 +140,8 @@ BAD = {
         [("gradient_tau_s = 5400.0", "gradient_tau_s = 10.0")],
         "truth.effects[0].gradient_tau_s", "10.0"),
     "unknown effect parameter": (
-        [("xel_rms_arcsec = 13.0", "xel_rms_arcsecs = 13.0")],
-        "truth.effects[1].xel_rms_arcsecs", "13.0"),
+        [("xel_rms_arcsec = 17.0", "xel_rms_arcsecs = 17.0")],
+        "truth.effects[1].xel_rms_arcsecs", "17.0"),
     "unknown term in the truth": (
         [("W10 = -1.79", "W11 = -1.79")], "truth.terms.W11", "-1.79"),
     "efficiency table length mismatch": (
