@@ -18,6 +18,7 @@ from antsim.scenario import load_scenario
 from controller.pointing.model import PointingModel
 from controller.pointing.modelio import load_model
 from controller.pointing.terms import GHIGO_EQUIVALENTS
+from controller.pointing.thermal import PROXY_TERMS
 from controller.pointing.tpoint import TPointModel, write_mod
 from controller.pointing.vocabulary import in_tpoint_terms
 
@@ -59,23 +60,41 @@ def test_table2_of_the_1990_report_is_reproduced(campaign):
 
 def test_table3_of_the_1990_report_is_reproduced(ghigo, campaign):
     """Ghigo (1990) Table 3 on the report's own functions (section II). The injected truth
-    is Table 3's values; fit A recovers each within 3 of its TPOINT sigma (the report's kind
-    of standard error), and those sigmas are the report's within 25% term by term: the same
-    ten functions, a similar spread of ~280 scans on the sky and a similar rms give the same
-    formal errors (measured at seed 1: 0.80-0.97 times the report's, as docs/results.md says;
-    W6, W9, W10, the terms that cannot reliably be distinguished, 0.90, 0.87, 0.90). The
-    honest sigma is not the
-    report's kind: with it W1 is 3.4 sigma off at this seed, the heating's bias that every
-    campaign shares (benchmarks/recovery.py); since issue 25's recalibration (the heating,
-    not the wind, makes the day's excess) W1 is 3.6 TPOINT sigma off at this seed too."""
+    is Table 3's values, and fit A's TPOINT sigmas (the report's kind of standard error) are
+    the report's within 25% term by term: the same ten functions, a similar spread of ~280
+    scans on the sky and a similar rms give the same formal errors (measured at seed 1:
+    0.80-0.97 times the report's, as docs/results.md says; W6, W9, W10, the terms that cannot
+    reliably be distinguished, 0.90, 0.87, 0.90).
+
+    With the Sun on the antenna (report section IV; since issue 25 the heating, not the wind,
+    makes the day's excess) "fit A within 3 sigma of the truth" is not the physics: fit A
+    fits the day and the night mixed with no thermal term, so every campaign shares the
+    heating's shift of W1, +33" against a TPOINT sigma of ~9.5" (within 3 sigma in 30% of
+    200 seeds, docs/results/recovery.txt). Seed 1's W1 is 3.6 sigma off and its W3 3.1. Fit
+    A's day-minus-night warning is no guarantee either: it compares fits D and E, whose W1
+    is four times less certain, and fires for W1 in 53% of heated seeds, not at seed 1
+    (+42" +- 20", 2.1 sigma). What the physics guarantees is that the shift is the heating's:
+    fit T, fit A plus the thermal proxies the data support (the Sun, no sensors in 1990),
+    recovers every W within 3 of its TPOINT sigma (100% of the 200 seeds of recovery.txt, so
+    a fixed seed is a fair test), and every W of fit A beyond 3 sigma is one that fit T moves
+    towards the truth; W1's shift is positive (+33" +- 9" over 200 seeds). This fails if the
+    proxies are lost or mis-signed, if fit A is off for a reason other than the heating, or
+    if the heating's sign or size changes."""
     _, fits = campaign
-    a = fits["A"]
+    a, t = fits["A"], fits["T"]
     truth = ghigo.truth_model.as_dict()
     for name, (value_arcmin, se_arcmin) in GHIGO1990.terms.items():
-        j = a.names.index(name)
+        j, k = a.names.index(name), t.names.index(name)
         assert truth[name] == pytest.approx(60.0 * value_arcmin)
-        assert abs(a.values_arcsec[j] - truth[name]) < 3.0 * a.sigma_arcsec[j], name
         assert a.sigma_arcsec[j] / 60.0 == pytest.approx(se_arcmin, rel=0.25), name
+        off_a = a.values_arcsec[j] - truth[name]
+        off_t = t.values_arcsec[k] - truth[name]
+        assert abs(off_t) < 3.0 * t.sigma_arcsec[k], name
+        if abs(off_a) >= 3.0 * a.sigma_arcsec[j]:
+            assert abs(off_t) < abs(off_a), name
+    added = set(t.names) - set(a.names)
+    assert added and added <= set(PROXY_TERMS), t.names
+    assert a.values_arcsec[a.names.index("W1")] - truth["W1"] > 0.0
     ratio = [a.sigma_arcsec[a.names.index(n)] / 60.0 / se for n, (_, se) in
              GHIGO1990.terms.items()]
     assert f"{min(ratio):.2f}-{max(ratio):.2f} of them at seed 1" in " ".join(RESULTS_MD.split())
