@@ -9,6 +9,7 @@ running the command named in its section and copying its output there.
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 
@@ -101,6 +102,13 @@ def test_the_plan_accuracy_is_the_benchmarks_output():
     assert f"the worst is the {variant} {worst[1]}, MC/F {ratios[worst]:.2f}" in section
 
 
+def _seeds_phrase(seeds: list[str]) -> str:
+    """'seed 5', 'seeds 8 and 11', 'seeds 1, 2 and 3'."""
+    if len(seeds) == 1:
+        return f"seed {seeds[0]}"
+    return f"seeds {', '.join(seeds[:-1])} and {seeds[-1]}"
+
+
 def test_the_sunset_drift_finding_is_the_benchmarks_output():
     output = (RESULTS / "blind_fomalont.txt").read_text(encoding="utf-8")
     seeds = re.findall(r"^seed (\d+): sunset_drift .*?tau (\d+) \+- (\d+) s \(([-+]\d+)%\); "
@@ -114,7 +122,31 @@ def test_the_sunset_drift_finding_is_the_benchmarks_output():
     assert f"named `sunset_drift` on {named} of 16 seeds" in section
     assert f"time constant {first[1]} +- {first[2]} s against 5400 s ({first[3]}%)" in section
     assert f"within 30% on {within} of 16 seeds" in section
-    assert all(float(s[9]) < float(s[8]) for s in seeds)  # fit A's el rms falls on every seed
+    # fit A's elevation rms with the drift removed: the count and the seeds where it does not
+    # fall, as the output prints them; and the physics: removing a real 1' drift lowers it
+    # on average, by more than 3 standard errors of the mean fall over the 16 seeds (the
+    # seeds are independent; each fall is a difference of two noisy rms, ~1" apart)
+    falls = [float(s[8]) - float(s[9]) for s in seeds]
+    assert f"the fit A elevation rms falls on {sum(f > 0 for f in falls)} of 16 seeds" in section
+    rest: dict[str, list[str]] = {}
+    for s, f in zip(seeds, falls, strict=True):
+        if f <= 0:
+            rest.setdefault("unchanged" if f == 0 else f"up by {-f:.1f}\"", []).append(s[0])
+    phrase = ", ".join(f"{how} on {_seeds_phrase(which)}" for how, which in rest.items())
+    assert phrase in section, phrase
+    mean = sum(falls) / len(falls)
+    sem = math.sqrt(sum((f - mean) ** 2 for f in falls) / (len(falls) - 1) / len(falls))
+    assert mean > 3.0 * sem, (mean, sem)
+    sd = sem * math.sqrt(len(falls))
+    assert f"mean fall {mean:.1f}\" with a standard deviation of {sd:.1f}\"" in section
+    night = sum(float(s[6]) - float(s[7]) for s in seeds) / len(seeds)
+    amp_sigma = sum(float(re.search(rf"^seed {s[0]}: sunset_drift [\d.]+ \+- ([\d.]+)", output,
+                                    re.M)[1]) for s in seeds) / len(seeds)
+    assert f"falls by {night:.1f}\" on average" in section
+    assert f"amplitude is good to {amp_sigma:.1f}\"" in section
+    # a normal fall of that mean and spread is at or below zero on this many of 16 seeds
+    below = 16 * 0.5 * math.erfc(mean / sd / math.sqrt(2.0))
+    assert f"leaves about {below:.0f} of 16 seeds at or below zero" in section
     assert f"({first[8]}\" -> {first[9]}\" at seed 1)" in section
     assert f"(seed 1: E {first[6]}\" -> {first[7]}\", D {first[4]}\" -> {first[5]}\")" in section
 
@@ -163,8 +195,14 @@ def test_the_changes_in_time_are_the_benchmarks_output():
     el, az = rows["step[el]"], rows["step[az]"]
     assert f"is named a step on {el[0]} of 16 seeds, in azimuth on {az[0]} of 16" in section
     both = int(el[0]) + int(az[0])
-    assert int(el[1]) + int(az[1]) == both and int(el[2]) + int(az[2]) == both
-    assert f"on all {both} and its size within 3 sigma on all {both}" in section
+    in_time, in_size = int(el[1]) + int(az[1]), int(el[2]) + int(az[2])
+    assert f"its time inside its 95% interval (+-10 min, the scan spacing) on {in_time} of " \
+        f"{both}" in section
+    size = f"all {both}" if in_size == both else f"{in_size} of {both}"
+    assert f"its size within 3 sigma on {size}" in section
+    # a 95% interval leaves out 5% of true times: 1.5 of 31 expected; 6 or more outside has a
+    # binomial probability of 0.5% (a too narrow interval), and the size's 3 sigma 0.3%
+    assert both - in_time <= 5 and both - in_size <= 2
     assert f"named as one ({rows['temperature_drift'][0]} of 16" in section
     assert f"nothing is named on {rows['none'][0]} of 16 campaigns without an effect" in section
     transient = rows["sunset_transient"]
@@ -312,8 +350,13 @@ def test_the_thermal_findings_are_the_benchmarks_and_the_plans_output():
     shares = dict(re.findall(r"(W\d+) (\d+)%/0%", output))
     assert (f"W8 in {shares['W8']}% of the heated campaigns, W1 in {shares['W1']}%, W2 in "
             f"{shares['W2']}%") in section
-    assert "campaigns with at least one warning" in output and \
-        re.search(r"at least one warning: \d+% with the heating, 0% without", output)
+    heated, quiet = re.search(r"campaigns with at least one warning: (\d+)% with the heating, "
+                              r"(\d+)% without", output).groups()
+    assert f"and for some term in {quiet}% of the 200 without heating" in section
+    # without heating a warning is a false alarm: 3 sigma of each of ten terms, 2.7% of
+    # campaigns if independent (SYSTEMATIC_SIGMAS); 200 campaigns give 5.4 +- 2.3, so more
+    # than 6% (12) would be a miscalibrated warning; with the heating most campaigns warn
+    assert int(quiet) <= 6 and int(heated) >= 50
     plan = " ".join((RESULTS / "ghigo1990_sensors_whatif.txt").read_text().split())
     days, hours, bias = re.search(r"duration: (\d+) days of 'day only, sensors' .*?; \d+ scans, "
                                   r"([\d.]+) h of scanning .*?\(W4 ([-+\d.]+)\"\)", plan).groups()
