@@ -491,7 +491,12 @@ def predict(shared: SharedSchedule, terms: Sequence[str], noise: NoiseModel,
                             axis=1).astype(float)
     y = -(noise.quiet_offsets[keep_scan] + model).T.reshape(-1)
     coef = b @ (a.T @ y)
-    rej = _rejections(a, y, unit_var, n, PointingModel(list(terms)).names)
+    # the same standard normals for every row whatever n_scans (common random numbers): the
+    # predictions for growing designs (antsim.plan.answers) differ by the rows added, not by
+    # a new draw of the rejections' simulation
+    normals = np.random.default_rng(REJECTION_SEED).standard_normal(
+        (REJECTION_DRAWS, 2 * scans.size))[:, unit_keep]
+    rej = _rejections(a, y, unit_var, n, PointingModel(list(terms)).names, normals)
     comps["rejection"] = rej.covariance
     shift = rej.mean_shift
     total = sum(comps.values())
@@ -514,12 +519,12 @@ class _Rejection:
 
 
 def _rejections(a: np.ndarray, y0: np.ndarray, unit_var: np.ndarray, n: int,
-                names: Sequence[str], draws: int | None = None) -> _Rejection:
-    """The robust fit's rejections, by simulation: ``draws`` data sets, the noise-free data
-    ``y0`` (xel rows, then el; arcsec) plus independent Gaussian noise of each row's
-    predicted variance ``unit_var``, fitted by the fitter's own stages
-    (:mod:`controller.pointing.robust`: LAD, 4x the mean absolute deviation, least squares,
-    3x the rms, least squares) and by least squares on every row. The robust estimates'
+                names: Sequence[str], normals: np.ndarray) -> _Rejection:
+    """The robust fit's rejections, by simulation: one data set per row of ``normals``
+    (draws, rows), the noise-free data ``y0`` (xel rows, then el; arcsec) plus independent
+    Gaussian noise of each row's predicted variance ``unit_var``, fitted by the fitter's own
+    stages (:mod:`controller.pointing.robust`: LAD, 4x the mean absolute deviation, least
+    squares, 3x the rms, least squares) and by least squares on every row. The robust estimates'
     covariance over the draws less least squares' is what the rejections add (negative
     where rejecting the noisiest rows makes a term more precise: the rejections depend on
     the noise, so their effect is not independent of least squares' estimate); their mean
@@ -531,12 +536,12 @@ def _rejections(a: np.ndarray, y0: np.ndarray, unit_var: np.ndarray, n: int,
     M observations and leaves the large deterministic residuals of a heated day larger and
     more variable than least squares does. On the 3-hour daytime run (33 observations, ten
     terms) that model predicted 0.30 rejections against the members' 0.90 and W5's sigma
-    9.7" against their 13.7"; on the 24-hour run 6.7 against 8.8, and W5 2.82" against
-    2.43". The same noise through the fitter's stages gives 0.86 and 13.5", 8.8 and 2.40".
+    9.7" against their 13.7"; on the 24-hour run W5 2.82" against 2.43". The same noise
+    through the fitter's stages (2000 and 400 draws) gives 0.86 and 13.5", and 2.40".
     Rows are independent here (the jitter's 120 s correlation is shorter than the scan
     spacing; the slow thermal errors enter by their variance): the least-squares part of
-    the covariance, with every correlation, is the sandwich of :func:`predict`. A fixed seed:
-    the same prediction every time."""
+    the covariance, with every correlation, is the sandwich of :func:`predict`. The normals
+    come from a fixed seed: the same prediction every time."""
     from controller.pointing.robust import (
         Equations,
         lad_fit,
@@ -545,10 +550,8 @@ def _rejections(a: np.ndarray, y0: np.ndarray, unit_var: np.ndarray, n: int,
         reject_beyond_rms,
     )
 
-    draws = REJECTION_DRAWS if draws is None else draws
-    rng = np.random.default_rng(REJECTION_SEED)
     a_f = np.asfortranarray(a)
-    ys = y0 + np.sqrt(np.clip(unit_var, 0.0, None)) * rng.standard_normal((draws, y0.size))
+    ys = y0 + np.sqrt(np.clip(unit_var, 0.0, None)) * normals
     every = ys @ (a @ np.linalg.pinv(a.T @ a))  # least squares on every row, each draw
     fits, rejected, sky = [], [], []
     for y, lsq in zip(ys, every, strict=True):
