@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import re
+import tomllib
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
@@ -367,3 +368,27 @@ def test_the_thermal_findings_are_the_benchmarks_and_the_plans_output():
     assert f"{days} days of daytime scans ({hours} h of scanning)" in section.replace("( ", "(")
     assert f"bias of {bias}\" left" in section
     assert f"takes {plain_days} days and leaves {plain_bias}\"" in section
+
+
+def test_the_readmes_thermal_figures_are_the_benchmarks_output():
+    """Issue 25 asks for the recovery's numbers in the README itself: each must be the one
+    benchmarks/recovery.py printed (docs/results/recovery.txt)."""
+    readme = " ".join((REPO / "README.md").read_text(encoding="utf-8").split())
+    line = readme[readme.index("**Thermal pointing**"):readme.index("**Your own data**")]
+    output = (RESULTS / "recovery.txt").read_text(encoding="utf-8")
+    sensors = _recovery_table(output, "ghigo1990_sensors, fit T (thermal terms in the")
+    within = sorted({int(row[9].rstrip("%")) for row in sensors.values()})
+    assert f"within 3 honest sigma in {within[0]}-{within[-1]}% of seeds" in line
+    worst = max(sensors, key=lambda n: abs(float(sensors[n][8])))
+    assert f"largest mean pull {sensors[worst][8]}, {worst})" in line
+    ratio = re.search(r"with fit T's terms: median ([\d.]+),", output)[1]
+    assert f"{ratio} times fit E's" in line
+    block = output[output.index("bias per W, fit A (no thermal terms)"):].split("\n\n")[0]
+    w1 = next(row.split() for row in block.splitlines() if row.startswith("W1 "))
+    assert f"from {w1[1]}\" to {w1[2]}\"" in line
+    seeds = re.search(r"fit T \(thermal terms in the structure temperatures\) \(seeds 1\.\.(\d+)",
+                      output)[1]
+    assert f"{seeds} simulated 1990 campaigns" in line
+    scenario = tomllib.loads((REPO / "scenarios" / "ghigo1990_sensors.toml").read_text())
+    count = len(scenario["structure_sensors"]["names"])
+    assert f"{ {12: 'twelve'}.get(count, str(count)) } structure thermometers" in line
