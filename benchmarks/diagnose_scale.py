@@ -11,7 +11,8 @@ diagnose has something to find), Gaussian noise of 20" (cross-elevation) and 30"
 air temperature and the Sun's elevation in their columns, and ghigo10 with zero coefficients
 as the model in use (the baseline diagnose starts from). Then it runs ``antsim diagnose FILE
 --no-cache --json`` and ``antsim fit FILE --json`` in child processes and prints each one's
-wall time and peak resident memory (the child's ``ru_maxrss``), and what diagnose named.
+wall time, CPU time (the child's user + system time: what the machine's load moves least) and
+peak resident memory (the child's ``ru_maxrss``), and what diagnose named.
 """
 
 from __future__ import annotations
@@ -111,9 +112,10 @@ def write_recordings(path: Path, n: int, seed: int) -> dict:
     return {"scans": m, "days": float(t_s[-1] / 86400.0)}
 
 
-def run_child(args: list[str]) -> tuple[float, float, int, str, str]:
-    """Wall time (s), peak resident memory (MiB, this child's own ``ru_maxrss`` from
-    ``wait4``), exit status, stdout and stderr of ``python -m antsim ARGS``."""
+def run_child(args: list[str]) -> tuple[float, float, float, int, str, str]:
+    """Wall time (s), CPU time (s, user + system), peak resident memory (MiB; both this
+    child's own, from ``wait4``'s resource usage), exit status, stdout and stderr of
+    ``python -m antsim ARGS``."""
     with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
         start = time.perf_counter()
         proc = subprocess.Popen([sys.executable, "-m", "antsim", *args], stdout=out,
@@ -123,7 +125,8 @@ def run_child(args: list[str]) -> tuple[float, float, int, str, str]:
         proc.returncode = os.waitstatus_to_exitcode(status)
         out.seek(0)
         err.seek(0)
-        return wall, usage.ru_maxrss / 1024.0, proc.returncode, out.read(), err.read()
+        cpu = usage.ru_utime + usage.ru_stime
+        return wall, cpu, usage.ru_maxrss / 1024.0, proc.returncode, out.read(), err.read()
 
 
 def main() -> int:
@@ -141,18 +144,19 @@ def main() -> int:
     print(f"{path}: {made['scans']} scans over {made['days']:.0f} days "
           f"({path.stat().st_size / 2**20:.0f} MiB), written in "
           f"{time.perf_counter() - start:.1f} s")
-    wall, mib, status, stdout, stderr = run_child(["diagnose", str(path), "--no-cache",
+    wall, cpu, mib, status, stdout, stderr = run_child(["diagnose", str(path), "--no-cache",
                                                    "--json", "--no-progress"])
     if status != 0:
         print(stderr)
         return 1
     found = json.loads(stdout)
     named = [f["effect"] for f in found["findings"]]
-    print(f"antsim diagnose: {wall:.1f} s wall, peak {mib:.0f} MiB (targets {TARGET_S:g} s, "
+    print(f"antsim diagnose: {wall:.1f} s wall ({cpu:.1f} s CPU), peak {mib:.0f} MiB (targets {TARGET_S:g} s, "
           f"{TARGET_MIB:g} MiB: {'met' if wall <= TARGET_S and mib <= TARGET_MIB else 'NOT met'})"
           f"; named {', '.join(named) or 'nothing'}")
-    wall, mib, status, _, stderr = run_child(["fit", str(path), "--json", "--no-progress"])
-    print(f"antsim fit:      {wall:.1f} s wall, peak {mib:.0f} MiB" if status == 0 else stderr)
+    wall, cpu, mib, status, _, stderr = run_child(["fit", str(path), "--json", "--no-progress"])
+    print(f"antsim fit:      {wall:.1f} s wall ({cpu:.1f} s CPU), peak {mib:.0f} MiB"
+          if status == 0 else stderr)
     return 0
 
 

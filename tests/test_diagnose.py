@@ -894,3 +894,44 @@ def test_the_exact_tilts_subsample_search_finds_the_full_searchs_optimum(monkeyp
     a, b = np.array(whole.theta), np.array(sub.theta)
     sig = np.sqrt(np.diag(whole.cov))
     assert min(np.abs(a - b).max() / sig.min(), np.abs(a + b).max() / sig.min()) < 0.05
+
+
+def _svd_reference_lstsq(a: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The pseudo-inverse least squares by the SVD of the whole ``a`` (what
+    :func:`antsim.diagnose.problem._lstsq` computed before its tall-matrix paths)."""
+    u, s, vt = np.linalg.svd(a, full_matrices=False)
+    keep = s > 1e-10 * s[0]
+    inv = np.where(keep, 1.0 / np.where(keep, s, 1.0), 0.0)
+    uz = u.T @ z
+    return vt.T @ ((inv[:, None] if uz.ndim == 2 else inv) * uz), (vt.T * inv**2) @ vt
+
+
+@pytest.mark.parametrize("rows, cols, cond", [(2000, 1, 1.0), (2000, 2, 3.0), (2000, 3, 9.9),
+                                              (2000, 3, 10.1), (2000, 6, 1e6),
+                                              (2000, 10, 1e12), (6, 4, 30.0)])
+def test_least_squares_paths_are_the_svds_solution(rows, cols, cond):
+    """Two code paths: :func:`_lstsq` on a tall matrix (the normal equations when its
+    condition number is at most 10, else a QR without Q and the SVD of R) against the SVD of
+    the whole. Tolerance: the normal equations' rounding grows as cond^2 eps (100 x 2.2e-16
+    here), the QR's like the SVD's own (both backward stable); 1e-12 of the largest
+    coefficient (and covariance entry) is a factor 40 over the first bound (measured at
+    most 7e-14, at cond 9.9; 3e-15 at cond 1e12). A rank-deficient matrix gets the SVD's
+    minimum-norm solution, and a NaN the SVD's ValueError."""
+    from antsim.diagnose.problem import _lstsq
+
+    rng = np.random.default_rng(rows + cols)
+    u, _ = np.linalg.qr(rng.normal(size=(rows, cols)))
+    v, _ = np.linalg.qr(rng.normal(size=(cols, cols)))
+    a = (u * np.geomspace(1.0, 1.0 / cond, cols)) @ v.T * 7.0
+    for z in (rng.normal(size=rows), rng.normal(size=(rows, 3))):
+        coef, cov = _lstsq(a, z)
+        ref_coef, ref_cov = _svd_reference_lstsq(a, z)
+        np.testing.assert_allclose(coef, ref_coef, rtol=0, atol=1e-12 * np.abs(ref_coef).max())
+        np.testing.assert_allclose(cov, ref_cov, rtol=0, atol=1e-12 * np.abs(ref_cov).max())
+    twice = np.column_stack([a[:, 0], 2.0 * a[:, 0]])  # rank 1: the same minimum-norm answer
+    z = rng.normal(size=rows)
+    np.testing.assert_allclose(_lstsq(twice, z)[0], _svd_reference_lstsq(twice, z)[0],
+                               rtol=1e-12)
+    a[rows // 2, 0] = np.nan
+    with pytest.raises(ValueError, match="infs or NaNs"):
+        _lstsq(a, z)

@@ -610,10 +610,41 @@ def heldout_lstsq(x: np.ndarray | None, z: np.ndarray, labels: np.ndarray,
     return out
 
 
+#: the least ratio of the smallest to the largest eigenvalue of a^T a (1 / cond(a)^2) at
+#: which :func:`_lstsq` solves from the normal equations: their rounding grows as
+#: cond(a)^2 eps, here at most 100 x 2.2e-16 (relative), and every singular value is then
+#: 1e9 times above the pseudo-inverse's cut, so the rank is the SVD's
+GRAM_MIN_RATIO = 1e-2
+
+
 def _lstsq(a: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Least squares with a pseudo-inverse covariance (rank-deficient columns get 0)."""
-    if a.shape[1] == 0:
+    """Least squares with a pseudo-inverse covariance (rank-deficient columns get 0).
+
+    The SVD of ``a`` defines it (singular values below 1e-10 of the largest are dropped).
+    A tall ``a`` (diagnose's are 2 n_used rows by a few columns) is not decomposed whole:
+    well conditioned (:data:`GRAM_MIN_RATIO`), from its Gram matrix a^T a = V S^2 V^T
+    (one pass over ``a``); else from a Householder QR without Q (LAPACK geqrf and ormqr
+    applying it to ``z``) and the SVD of the small R, whose singular values and
+    pseudo-inverse solution are ``a``'s, to rounding."""
+    m, k = a.shape
+    if k == 0:
         return np.zeros(0), np.zeros((0, 0))
+    if m >= 4 * k:
+        g = a.T @ a
+        az = a.T @ z
+        if np.isfinite(g).all() and np.isfinite(az).all() and np.isfinite(z).all():
+            w, v = np.linalg.eigh(g)
+            if w[0] > GRAM_MIN_RATIO * w[-1] > 0.0:
+                cov = (v / w) @ v.T
+                return cov @ az, cov
+        # a non-finite ``a`` or ``z`` raises here, as the SVD did
+        qz, r = scipy.linalg.qr_multiply(a, z.T, mode="right")
+        return _svd_lstsq(r, qz.T)
+    return _svd_lstsq(a, z)
+
+
+def _svd_lstsq(a: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_lstsq` by the SVD of ``a`` itself."""
     u, s, vt = scipy.linalg.svd(a, full_matrices=False, lapack_driver="gesdd")
     keep = s > 1e-10 * s[0] if s.size and s[0] > 0 else np.zeros_like(s, dtype=bool)
     inv = np.where(keep, 1.0 / np.where(keep, s, 1.0), 0.0)
