@@ -8,6 +8,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from controller.pointing.model import PointingModel
 
@@ -315,6 +316,17 @@ def diagnose(obs: Observations, scenario=None, model: str | None = None,
              sim_baseline: SimulatedBaseline | None = None,
              prediction: Prediction | None = None) -> Diagnosis:
     """Diagnose ``obs`` against the baseline (see :mod:`.baseline` for the rules)."""
+    # one BLAS thread: diagnose's products are thin (2n rows, a few columns), bound by
+    # memory, and a second OpenBLAS thread cost more than it gave (200,000 scans: 16% more
+    # time on an idle machine, up to 3.5 times more with the machine loaded; CHANGELOG)
+    with threadpool_limits(1, user_api="blas"):
+        return _diagnose(obs, scenario, model, n_sims, cache_dir, use_cache, jobs,
+                         sim_baseline, prediction)
+
+
+def _diagnose(obs: Observations, scenario, model: str | None, n_sims: int, cache_dir,
+              use_cache: bool, jobs: int, sim_baseline: SimulatedBaseline | None,
+              prediction: Prediction | None) -> Diagnosis:
     t0 = time.perf_counter()
     if scenario is not None and obs.air_daily_c is None:
         obs = replace(obs, air_daily_c=daily_air_curve(scenario))
