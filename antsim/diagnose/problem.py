@@ -270,7 +270,7 @@ class Problem:
         ``used`` (z the whitened data), cached with the projectors; None when its columns
         are not independent there (the callers then fit the whole design)."""
         key = b"qr" + used.tobytes() + bytes([len(self.extra)])
-        hit = self._perps.get(key)
+        hit = self._cached(key)
         if hit is None:
             q, r = _qr(self.T(self.current_columns(), used, fortran=True), overwrite=True)
             d = np.abs(np.diag(r))
@@ -342,12 +342,28 @@ class Problem:
     def _cache(self, key: bytes, value, size: int) -> None:
         """Keep ``value`` among the cached projectors and factors: at most 64 of them and
         PERP_CACHE_BYTES together (each holds a basis, 2 n_used x k floats: 200,000 scans
-        and 20 terms are 64 MB)."""
-        if len(self._perps) > 64 or sum(self._perp_bytes.values()) + size > PERP_CACHE_BYTES:
-            self._perps.clear()
-            self._perp_bytes.clear()
+        and 20 terms are 64 MB), the least recently used let go first (every candidate's
+        shape asks for the factors over the valid and the used scans: clearing all of
+        them for a third set of scans factored them again 99 times at 200,000 scans)."""
+        while self._perps and (len(self._perps) > 64 or sum(self._perp_bytes.values()) + size
+                               > PERP_CACHE_BYTES):
+            old = next(iter(self._perps))
+            # a projector over the same scans holds the factor's basis (counted once, with
+            # the factor): it goes with it
+            for k in (old, old[2:]) if old.startswith(b"qr") else (old,):
+                self._perps.pop(k, None)
+                self._perp_bytes.pop(k, None)
         self._perps[key] = value
         self._perp_bytes[key] = size
+
+    def _cached(self, key: bytes):
+        """The cached projector or factor ``key`` (None if not held), now the most recently
+        used."""
+        hit = self._perps.pop(key, None)
+        if hit is not None:
+            self._perps[key] = hit
+            self._perp_bytes[key] = self._perp_bytes.pop(key)
+        return hit
 
     def mask_for(self, extra: np.ndarray, iterations: int = 2) -> np.ndarray:
         """The scans a model of the current columns plus raw ``extra`` (2n, q) keeps
@@ -440,7 +456,7 @@ class Problem:
         """Cached projector of the current model over the scans ``used`` and the projected
         data: (perp, z_perp)."""
         key = used.tobytes() + bytes([len(self.extra)])
-        hit = self._perps.get(key)
+        hit = self._cached(key)
         if hit is None:
             perp = self.projector(used)
             qr = self._current_qr(used)
