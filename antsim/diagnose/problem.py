@@ -203,6 +203,9 @@ class Problem:
         factors = self._factors(used)
         if all(f is None for f in factors):  # white: the used rows times their weights
             idx, wu = self._view(used)
+            if idx.size == v.shape[0]:  # every row: the product alone, no gather
+                return np.multiply(v, wu if v.ndim == 1 else wu[:, None],
+                                   order="F" if fortran else "C")
             if fortran and v.ndim == 2:
                 out = take_rows_fortran(v, idx)
                 out *= wu[:, None]

@@ -357,6 +357,12 @@ class Candidate:
         if problem.unscaled:
             full = np.linalg.norm(problem.T(raw, mask) if last is None else last[1][0], axis=0)
             left = np.linalg.norm(xp, axis=0)
+        elif last is not None:  # the model's cached factor over the mask: whiten raw once
+            xr = problem.T(raw, mask)
+            q = problem.basis(mask)
+            full = np.linalg.norm(xr, axis=0)
+            left = np.linalg.norm(xr - q @ (q.T @ xr), axis=0)  # what perp(raw) computes
+            del xr
         else:
             full = np.linalg.norm(problem.T(raw, mask), axis=0)
             left = np.linalg.norm(perp(raw), axis=0)
