@@ -935,3 +935,36 @@ def test_least_squares_paths_are_the_svds_solution(rows, cols, cond):
     a[rows // 2, 0] = np.nan
     with pytest.raises(ValueError, match="infs or NaNs"):
         _lstsq(a, z)
+
+
+def test_cached_factors_let_the_least_recently_used_go_first(monkeypatch):
+    """The model's cached QR factors and projectors stay within PERP_CACHE_BYTES, and the
+    one asked for last stays when another set of scans needs room: every candidate shape
+    asks for the factors over the valid and the used scans (the cache cleared itself whole
+    before, and factored them again). A factor's projector (which holds its basis) goes
+    with it. Measured in the entries' own byte counts."""
+    import antsim.diagnose.problem as problem_module
+
+    problem = _scans_with_unused_and_scaled()
+    sets = [problem.used.copy() for _ in range(4)]
+    for k, used in enumerate(sets[1:], start=1):
+        used[np.flatnonzero(used)[:k]] = False  # three other sets of scans
+    one = 8 * (problem._current_qr(problem.used)[0].size + 2 * 2 * int(problem.used.sum()))
+    problem._perps.clear()
+    problem._perp_bytes.clear()
+    monkeypatch.setattr(problem_module, "PERP_CACHE_BYTES", int(2.5 * one))
+    key = [used.tobytes() + bytes([0]) for used in sets]  # a projector's; b"qr" + a factor's
+    qr0 = problem._current_qr(sets[0])
+    problem.perp_for(sets[0])  # its projector (a tenth of the factor's bytes here)
+    problem._current_qr(sets[1])
+    assert problem._current_qr(sets[0]) is qr0  # a hit, now the most recent
+    problem._current_qr(sets[2])  # no room for three factors: the oldest go, sets[0]'s stays
+    assert list(problem._perps) == [b"qr" + key[0], b"qr" + key[2]]
+    assert problem._current_qr(sets[0]) is qr0
+    problem.perp_for(sets[0])
+    problem._current_qr(sets[2])
+    problem.perp_for(sets[0])  # a hit: its projector newer than every factor
+    assert list(problem._perps) == [b"qr" + key[0], b"qr" + key[2], key[0]]
+    problem._current_qr(sets[3])  # sets[0]'s factor is the oldest: it goes, its projector too
+    assert list(problem._perps) == [b"qr" + key[2], b"qr" + key[3]]
+    assert sum(problem._perp_bytes.values()) <= problem_module.PERP_CACHE_BYTES
