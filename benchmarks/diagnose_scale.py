@@ -151,8 +151,9 @@ def main() -> int:
         return 1
     found = json.loads(stdout)
     named = [f["effect"] for f in found["findings"]]
-    print(f"antsim diagnose: {wall:.1f} s wall ({cpu:.1f} s CPU), peak {mib:.0f} MiB (targets {TARGET_S:g} s, "
-          f"{TARGET_MIB:g} MiB: {'met' if wall <= TARGET_S and mib <= TARGET_MIB else 'NOT met'})"
+    print(f"antsim diagnose: {wall:.1f} s wall ({cpu:.1f} s CPU), peak {mib:.0f} MiB "
+          f"(targets {TARGET_S:g} s, {TARGET_MIB:g} MiB: "
+          f"{'met' if wall <= TARGET_S and mib <= TARGET_MIB else 'NOT met'})"
           f"; named {', '.join(named) or 'nothing'}")
     wall, cpu, mib, status, _, stderr = run_child(["fit", str(path), "--json", "--no-progress"])
     print(f"antsim fit:      {wall:.1f} s wall ({cpu:.1f} s CPU), peak {mib:.0f} MiB"
