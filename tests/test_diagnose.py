@@ -968,3 +968,22 @@ def test_cached_factors_let_the_least_recently_used_go_first(monkeypatch):
     problem._current_qr(sets[3])  # sets[0]'s factor is the oldest: it goes, its projector too
     assert list(problem._perps) == [b"qr" + key[2], b"qr" + key[3]]
     assert sum(problem._perp_bytes.values()) <= problem_module.PERP_CACHE_BYTES
+
+
+def test_diagnose_runs_with_one_blas_thread(monkeypatch):
+    """diagnose limits BLAS to one thread while it runs (its products are thin and bound by
+    memory: a second OpenBLAS thread cost up to 3.5 times the time under load) and gives
+    the limit back after."""
+    from threadpoolctl import threadpool_info
+
+    import antsim.diagnose.core as core
+
+    def blas_threads() -> list[int]:
+        return [lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"]
+
+    seen = []
+    monkeypatch.setattr(core, "_diagnose", lambda *args: seen.append(blas_threads()))
+    before = blas_threads()
+    core.diagnose(None)
+    assert seen and seen[0] and all(n == 1 for n in seen[0])
+    assert blas_threads() == before
