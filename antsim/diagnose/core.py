@@ -317,8 +317,9 @@ def diagnose(obs: Observations, scenario=None, model: str | None = None,
              prediction: Prediction | None = None) -> Diagnosis:
     """Diagnose ``obs`` against the baseline (see :mod:`.baseline` for the rules)."""
     # one BLAS thread: diagnose's products are thin (2n rows, a few columns), bound by
-    # memory, and a second OpenBLAS thread cost more than it gave (200,000 scans: 16% more
-    # time on an idle machine, up to 3.5 times more with the machine loaded; CHANGELOG)
+    # memory, and a second OpenBLAS thread cost more than it gave (200,000 scans: 43.1 s
+    # against 36.0 s on an idle machine, 3.4 to 5.3 times the wall time at load 4-5;
+    # CHANGELOG)
     with threadpool_limits(1, user_api="blas"):
         return _diagnose(obs, scenario, model, n_sims, cache_dir, use_cache, jobs,
                          sim_baseline, prediction)
