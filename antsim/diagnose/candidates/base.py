@@ -287,6 +287,10 @@ class Candidate:
     def thetas(self, obs: Observations) -> list[Any]:
         return [None]
 
+    def release(self) -> None:
+        """Drop what the candidate keeps between its tests of the recordings last seen
+        (:func:`..select.select` calls it once it is done with them)."""
+
     def cv_thetas(self, problem) -> list[Any]:
         """The shapes the cross-validated stage (:mod:`..crossval`) compares: all of them
         unless there is one per scan (a step's change time)."""

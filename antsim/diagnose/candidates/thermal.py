@@ -28,9 +28,11 @@ from .terms import TermsCandidate
 __all__ = ['SensorTermsCandidate', 'SunsetCandidate', 'SunsetTransientCandidate',
            'TemperatureCandidate']
 
-#: the memory a lagged candidate's cached levels (sunset or air temperature, n floats each)
-#: may hold
-LEVEL_CACHE_BYTES = 64 * 2**20
+#: levels off a lagged candidate's time-constant grid that it keeps (n floats each): the
+#: searches ask for each of their points once, then for the best one again (its parameters
+#: and a result's columns, rebuilt when read); only the grid's levels are asked for again in
+#: every round and in the cross-validated stage
+OFF_GRID_LEVELS = 2
 
 
 class _LaggedCandidate(Candidate):
@@ -61,6 +63,36 @@ class _LaggedCandidate(Candidate):
             cols, names = self.columns(obs, theta)
             res = self._linear(problem, perp, z_perp, cols, names, theta)
         return best if res.delta_chi2 < best.delta_chi2 else res
+
+    TAUS: tuple[float, ...] = ()
+
+    def __init__(self):
+        self._cache: dict[tuple, Any] = {}
+
+    def _cached(self, obs: Observations, tau_s: float, make) -> Any:
+        """``make()``, the level of time constant ``tau_s`` for ``obs``, kept while it may be
+        asked for again: every level of the grid (:attr:`TAUS`) and the last
+        :data:`OFF_GRID_LEVELS` others (the searches' points), for the recordings last seen
+        (at 200,000 scans all levels asked for were 170 MB in three candidates, the grid's
+        56 MB)."""
+        key = (self._obs_key(obs), round(tau_s, 3))
+        cache = self._cache
+        hit = cache.pop(key, None)
+        if hit is None:
+            hit = make()
+            if any(k[0] != key[0] for k in cache):  # other recordings: not asked for again
+                cache.clear()
+            if tau_s not in self.TAUS:
+                off = [k for k in cache if k[1] not in self.TAUS]
+                for k in off[:max(len(off) - OFF_GRID_LEVELS + 1, 0)]:  # the oldest first
+                    del cache[k]
+        cache[key] = hit  # the most recently used last
+        return hit
+
+    def release(self) -> None:
+        """Drop the levels and grids kept for the recordings last seen."""
+        self._cache.clear()
+        self._last_obs = self._nights = self._air_grid = None
 
     def _obs_key(self, obs: Observations) -> tuple:
         """:func:`obs_key` of ``obs``, hashed once for the recordings the candidate last saw
@@ -98,9 +130,9 @@ class SunsetCandidate(_LaggedCandidate):
     def __init__(self):
         from antsim.world.effects.thermal import SunsetDrift
 
+        super().__init__()
         self.explanation = SunsetDrift.explanation + " (Fomalont 1973: 1' in the 4 h after " \
                                                       "sunset)"
-        self._cache: dict[tuple, np.ndarray] = {}
 
     def applicable(self, obs, known_noise):
         return super().applicable(obs, known_noise) and (
@@ -109,23 +141,19 @@ class SunsetCandidate(_LaggedCandidate):
     def level(self, obs: Observations, tau_s: float) -> np.ndarray:
         from antsim.world.effects.thermal import sunset_level
 
-        key = (self._obs_key(obs), round(tau_s, 3))
-        if key not in self._cache:
-            # each level is n floats and the time-constant search asks for new ones: bounded
-            # in bytes too (512 levels of 200,000 scans were 0.8 GB)
-            if len(self._cache) > 512 or 8 * obs.n * len(self._cache) > LEVEL_CACHE_BYTES:
-                self._cache.clear()
+        def make() -> np.ndarray:
             t = time_grid(obs)
             lev = sunset_level(self._night(obs, t).astype(float), GRID_STEP_S, tau_s,
                                self.shape)
-            self._cache[key] = np.interp(obs.t_s, t, lev)
-        return self._cache[key]
+            return np.interp(obs.t_s, t, lev)
+
+        return self._cached(obs, tau_s, make)
 
     def _night(self, obs: Observations, t: np.ndarray) -> np.ndarray:
         """Where the Sun is down on the time grid ``t``, the same for every time constant:
         kept for the recordings last seen (a byte a minute)."""
         key = self._obs_key(obs)
-        if getattr(self, "_nights", (None,))[0] != key:
+        if (getattr(self, "_nights", None) or (None,))[0] != key:
             self._nights = (key, sun_el_grid_deg(obs, t) < 0.0)
         return self._nights[1]
 
@@ -231,8 +259,8 @@ class TemperatureCandidate(_LaggedCandidate):
     def __init__(self):
         from antsim.world.effects.drifts import TemperatureDrift
 
+        super().__init__()
         self.explanation = TemperatureDrift.explanation
-        self._cache: dict[tuple, tuple[np.ndarray, float]] = {}
 
     def applicable(self, obs, known_noise):
         return super().applicable(obs, known_noise) and np.ptp(obs.t_s) > 4 * 3600 and \
@@ -241,22 +269,18 @@ class TemperatureCandidate(_LaggedCandidate):
     def structure(self, obs: Observations, tau_s: float) -> tuple[np.ndarray, float]:
         from antsim.world.effects.drifts import structure_temperature_c
 
-        key = (self._obs_key(obs), round(tau_s, 3))
-        if key not in self._cache:
-            # each level is n floats and the time-constant search asks for new ones: bounded
-            # in bytes too (512 levels of 200,000 scans were 0.8 GB)
-            if len(self._cache) > 512 or 8 * obs.n * len(self._cache) > LEVEL_CACHE_BYTES:
-                self._cache.clear()
+        def make() -> tuple[np.ndarray, float]:
             t = time_grid(obs)
             ts = np.interp(obs.t_s, t, structure_temperature_c(t, self._air(obs, t), tau_s))
-            self._cache[key] = (ts, float(np.mean(ts[obs.good]) if obs.good.any() else 0.0))
-        return self._cache[key]
+            return ts, float(np.mean(ts[obs.good]) if obs.good.any() else 0.0)
+
+        return self._cached(obs, tau_s, make)
 
     def _air(self, obs: Observations, t: np.ndarray) -> np.ndarray:
         """The air temperature (C) on the time grid ``t``, the same for every time constant:
         kept for the recordings last seen."""
         key = self._obs_key(obs)
-        if getattr(self, "_air_grid", (None,))[0] != key:
+        if (getattr(self, "_air_grid", None) or (None,))[0] != key:
             ok = np.isfinite(obs.air_temp_c)
             if obs.air_daily_c is not None and np.ptp(obs.t_s[ok]) < 72000.0:
                 # a campaign much shorter than a day: the day before follows the scenario's
