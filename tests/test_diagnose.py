@@ -833,11 +833,13 @@ def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits(
     assert rows.sum() == 2 * losses.size
     # the cross-validated stage's path: the model's basis plus the option's columns
     q0, r0 = _qr(problem.current_columns()[rows])
-    q, d1 = added_basis(q0, extra[rows])
+    blocks, d1 = added_basis(q0, extra[rows])
+    q = np.hstack(blocks)
     np.testing.assert_allclose(q.T @ q, np.eye(q.shape[1]), atol=1e-12)
-    via = heldout_losses(whole, problem.y_raw, problem.used, folds,
-                         (q, np.concatenate([np.abs(np.diag(r0)), d1])))
-    np.testing.assert_allclose(via, losses, rtol=1e-9)
+    d = np.concatenate([np.abs(np.diag(r0)), d1])
+    for basis in (blocks, q):  # in blocks (what the stage passes) and stacked
+        via = heldout_losses(whole, problem.y_raw, problem.used, folds, (basis, d))
+        np.testing.assert_allclose(via, losses, rtol=1e-9)
     assert problem.cv_chi2(whole, folds) == pytest.approx(
         sum(float(np.sum(problem.T(problem.y - whole @ problem.fit(whole, problem.used
             & (folds != k)).coef, problem.used & (folds == k)) ** 2)) for k in range(5)),

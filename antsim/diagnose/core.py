@@ -356,8 +356,8 @@ def _diagnose(obs: Observations, scenario, model: str | None, n_sims: int, cache
     problem = Problem(obs, prediction, spec.terms, offset_scale=offset_scale(obs, scenario))
     problem.update_outliers()
     location = locate(problem)
-    base_cols = problem.base
     selection = select(problem)
+    base_cols = problem.base  # now a view of the final model's columns
     findings = []
     for step in selection.steps:
         if step.signal is not None:

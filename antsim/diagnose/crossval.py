@@ -85,14 +85,13 @@ def loo_rms(h: tuple, e: np.ndarray, n: int) -> float:
 
 
 def heldout_losses(x: np.ndarray | tuple[np.ndarray, ...], y: np.ndarray, used: np.ndarray,
-                   folds: np.ndarray | None,
-                   basis: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+                   folds: np.ndarray | None, basis: tuple | None = None) -> np.ndarray:
     """Squared held-out residual (xel^2 + el^2, arcsec^2) of each ``used`` observation under
     an unweighted fit of ``y`` (2n,) on ``x`` (2n, k; or a tuple of column blocks, stacked
-    only if the closed form fails): each left out in turn (``folds``
-    None, closed form) or each fold predicted from the others (closed form,
-    :func:`heldout_lstsq`, with the used rows' ``basis`` of ``x`` when given). Infinite
-    where an observation alone determines a term."""
+    only if the closed form fails): each left out in turn (``folds`` None, closed form) or
+    each fold predicted from the others (closed form, :func:`heldout_lstsq`, with the used
+    rows' ``basis`` of ``x`` when given: (Q or its column blocks, |diag R|)). Infinite where
+    an observation alone determines a term."""
     n = used.size
     rows = np.concatenate([used, used])
     if folds is None:
@@ -205,10 +204,10 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
         for c, theta, raw, names in _options(problem, candidates, taken, model_terms):
             tried += 1
             x = problem.cand(raw)
-            q, d1 = added_basis(q0, x[rows])
+            q, d1 = added_basis(q0, x[rows])  # (q0, the option's block): q0 not copied
             new = heldout_losses((cur, x), problem.y_raw, problem.used, folds,
                                  (q, np.concatenate([d0, d1])))
-            del q, x  # not alive beside the next option's (2 n x m floats each)
+            del q, x  # not alive beside the next option's
             if best is None or new.sum() < best[0].sum():
                 best = (new, c, theta, raw, names)
         if best is None or not improves(now, best[0]):

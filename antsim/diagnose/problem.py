@@ -246,7 +246,15 @@ class Problem:
         if not self.extra:
             return self.base
         if self._stacked is None or self._stacked[0] != len(self.extra):
-            self._stacked = (len(self.extra), np.column_stack([self.base, *self.extra]))
+            whole = np.column_stack([self.base, *self.extra])
+            # the base and the accepted columns as views of the whole: the model's columns
+            # held once, not twice
+            k = self.base.shape[1]
+            self.base = whole[:, :k]
+            for i, part in enumerate(self.extra):
+                self.extra[i] = whole[:, k:k + part.shape[1]]
+                k += part.shape[1]
+            self._stacked = (len(self.extra), whole)
         return self._stacked[1]
 
     @property
@@ -341,6 +349,12 @@ class Problem:
         return (LinearFit(coef=np.concatenate([coef_a, coef_x]), chi2=float(wres @ wres),
                           resid=resid, cov=cov, wres=wres, n_used=int(used.sum())),
                 (x, xp, zp))
+
+    def release(self) -> None:
+        """Drop the cached projectors and factors (selection calls it when it is done: what
+        follows fits whole designs)."""
+        self._perps.clear()
+        self._perp_bytes.clear()
 
     def _cache(self, key: bytes, value, size: int) -> None:
         """Keep ``value`` among the cached projectors and factors: at most 64 of them and
@@ -516,8 +530,9 @@ class Problem:
         used = self.used if used is None else used
         if refit is None and self.white(used):
             lab = folds[used]
-            r = heldout_lstsq(self.T(columns, used), self.T(self.y, used),
-                              np.concatenate([lab, lab]))
+            # whitened in Fortran order and factored in place: one copy of the design
+            r = heldout_lstsq(self.T(columns, used, fortran=True), self.T(self.y, used),
+                              np.concatenate([lab, lab]), overwrite=True)
             if r is not None:
                 return float(r @ r)
         total = 0.0
@@ -583,26 +598,29 @@ def _qr(x: np.ndarray, overwrite: bool = False) -> tuple[np.ndarray, np.ndarray]
     return scipy.linalg.qr(x, mode="economic", check_finite=False, overwrite_a=overwrite)
 
 
-def added_basis(q0: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """An orthonormal basis of [span(q0), x] and the diagonal magnitudes of its R (those of
-    a QR of the whole, to rounding): ``x`` projected off ``q0`` twice (classical
-    Gram-Schmidt loses orthogonality once, not twice) and factored alone."""
+def added_basis(q0: np.ndarray, x: np.ndarray
+                ) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray]:
+    """An orthonormal basis of [span(q0), x] as its two blocks (q0, q1), not stacked (a copy
+    of q0 per call), and the diagonal magnitudes of q1's R (those of a QR of the whole, to
+    rounding): ``x`` projected off ``q0`` twice (classical Gram-Schmidt loses orthogonality
+    once, not twice) and factored alone."""
     rest = x - q0 @ (q0.T @ x)
     rest -= q0 @ (q0.T @ rest)
     q1, r1 = _qr(rest)
-    return np.hstack([q0, q1]), np.abs(np.diag(r1))
+    return (q0, q1), np.abs(np.diag(r1))
 
 
 def heldout_lstsq(x: np.ndarray | None, z: np.ndarray, labels: np.ndarray,
-                  basis: tuple[np.ndarray, np.ndarray] | None = None,
+                  basis: tuple[np.ndarray | tuple[np.ndarray, ...], np.ndarray] | None = None,
                   overwrite: bool = False) -> np.ndarray | None:
     """Residuals (rows as ``z``) of each group of rows (same ``labels``) predicted by a
     least-squares fit of ``z`` on ``x`` to the other groups, from one QR of ``x``: with Q its
     orthonormal basis, e the full fit's residual and S a group's rows, the held-out residual
     is (I - Q_S Q_S^T)^-1 e_S = e_S + Q_S (I - Q_S^T Q_S)^-1 Q_S^T e_S (Woodbury; the
     textbook leave-group-out identity), exactly what refitting without S gives, at a cost in
-    the group's rows rather than a factorization of the others per group. ``basis``: Q and
-    |diag R| when the caller has them (:func:`added_basis`). None when ``x`` has dependent
+    the group's rows rather than a factorization of the others per group. ``basis``: Q (or
+    its column blocks, stacked a group's rows at a time) and |diag R| when the caller has
+    them (:func:`added_basis`). None when ``x`` has dependent
     columns or a group alone determines a direction of the model (the caller then refits
     per group, whose pseudo-inverse handles that). ``overwrite``: ``x`` may be factored in
     place (:func:`_qr`)."""
@@ -613,15 +631,18 @@ def heldout_lstsq(x: np.ndarray | None, z: np.ndarray, labels: np.ndarray,
         q, d = basis
     if not d.size or d.min() <= 1e-10 * max(float(d.max()), 1e-300):
         return None
-    e = z - q @ (q.T @ z)
+    blocks = q if isinstance(q, tuple) else (q,)
+    e = z
+    for b in blocks:
+        e = e - b @ (b.T @ z)
     out = np.empty_like(e)
     # the same order either way; small labels (nights, folds) sort by radix, in one pass
     small = labels.size and labels.min() >= 0 and labels.max() < 2**15
     order = np.argsort(labels.astype(np.int16) if small else labels, kind="stable")
     bounds = np.flatnonzero(np.diff(labels[order])) + 1
-    eye = np.eye(q.shape[1])
+    eye = np.eye(sum(b.shape[1] for b in blocks))
     for rows in np.split(order, bounds):
-        qs = q[rows]
+        qs = blocks[0][rows] if len(blocks) == 1 else np.hstack([b[rows] for b in blocks])
         m = eye - qs.T @ qs
         w, v = np.linalg.eigh(m)
         if w.min() < HELDOUT_MIN_EIG:

@@ -277,6 +277,7 @@ def _simplest_form(problem: Problem, res: TestResult, vocabulary: list[str]
         part = slice(start, start + SIMPLEST_CHUNK)
         xp = perp(problem.cand(term_columns(names[part], problem.obs)))
         norm2[part], xz[part] = np.einsum("ij,ij->j", xp, xp), xp.T @ z_perp
+    del xp, perp, z_perp  # not alive beside the fits below (2 n x chunk, 2 n x m floats)
     with np.errstate(invalid="ignore", divide="ignore"):
         gain = np.where(norm2 > 1e-9 * max(float(norm2.max()), 1e-300), xz ** 2 / norm2, 0.0)
     best = int(np.argmax(gain))
@@ -459,6 +460,7 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
             break
     if stop == "no further candidate is significant":
         refused += _below_detection(problem, offsets, n_family, alpha)
+    del perp, z_perp  # the last round's projector (2 n x m floats): not used below
     if not known and steps and len(steps) < MAX_FINDINGS_CV:
         added = _cross_validated(problem, usable, accepted, n_family,
                                  MAX_FINDINGS_CV - len(steps))
@@ -477,6 +479,9 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
     # best first; the cross-validated findings after the significant ones, in the order
     # they were added (each one's held-out figures continue the previous one's)
     steps.sort(key=lambda s: (s.heldout is not None, s.log_p if s.heldout is None else 0.0))
+    for c in usable:  # what they kept for these recordings: not asked for again
+        c.release()
+    problem.release()
     return Selection(steps, refused, absorbed, first_round, not_applicable, n_family,
                      gof_before, problem.gof(), stop)
 

@@ -1,0 +1,74 @@
+"""What diagnose keeps between its tests, and that keeping less changes no number (issue 28:
+diagnose on 200,000 scans within 600 MiB; ``benchmarks/diagnose_scale.py`` measures it)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from antsim.diagnose.candidates.thermal import (
+    OFF_GRID_LEVELS,
+    SunsetCandidate,
+    TemperatureCandidate,
+)
+from antsim.diagnose.data import Observations
+from antsim.diagnose.problem import Prediction, Problem
+
+
+def _week(n: int = 600) -> Observations:
+    """A week of scans with air temperatures and Sun elevations (no site: the Sun from the
+    recorded column)."""
+    rng = np.random.default_rng(34)
+    t = np.sort(rng.uniform(0.0, 7 * 86400.0, n))
+    day = 2 * np.pi * t / 86400.0
+    return Observations(t_s=t, az_rad=rng.uniform(0, 6.28, n),
+                        el_rad=np.radians(rng.uniform(15.0, 85.0, n)),
+                        xel_arcsec=rng.normal(0.0, 5.0, n), el_arcsec=rng.normal(0.0, 5.0, n),
+                        good=np.ones(n, dtype=bool), air_temp_c=5.0 + 8.0 * np.sin(day),
+                        sun_el_deg=40.0 * np.sin(day - 1.0))
+
+
+def test_lagged_candidates_keep_their_grid_and_the_last_few_other_levels():
+    """A thermal candidate keeps every level of its time-constant grid (asked for again in
+    every round and in the cross-validated stage) and only the last OFF_GRID_LEVELS others
+    (a search's points); a level made again after it was let go is the same numbers, and
+    release() lets every one go."""
+    obs = _week()
+    for cand, level in ((SunsetCandidate(), lambda c, tau: c.level(obs, tau)),
+                        (TemperatureCandidate(), lambda c, tau: c.structure(obs, tau)[0])):
+        first = {tau: level(cand, tau).copy() for tau in cand.TAUS}
+        off = [777.0, 1234.5, 4321.0, 9876.0]
+        made = {tau: level(cand, tau).copy() for tau in off}
+        taus = [key[1] for key in cand._cache]
+        assert set(cand.TAUS) <= set(taus)
+        assert [tau for tau in taus if tau not in cand.TAUS] == off[-OFF_GRID_LEVELS:]
+        for tau in (*cand.TAUS, *off):  # kept or made again: the same bytes
+            np.testing.assert_array_equal(level(cand, tau), {**first, **made}[tau])
+        assert level(cand, cand.TAUS[0]) is level(cand, cand.TAUS[0])  # a grid level: kept
+        cand.release()
+        assert not cand._cache
+
+
+def test_the_models_columns_are_held_once_and_released_factors_are_made_again():
+    """Once a finding is accepted the base and the accepted columns are views of the stacked
+    model (held once), with the values they had; the cached factors released after the
+    selection are made again, equal, when asked for."""
+    rng = np.random.default_rng(7)
+    n = 200
+    obs = _week(n)
+    problem = Problem(obs, Prediction("white", np.zeros(n), np.zeros(n), np.full(n, 5.0),
+                                      np.full(n, 5.0)), ["IA", "IE", "CA", "AN", "AW"])
+    base = problem.base.copy()
+    extra = rng.normal(size=(2 * n, 2))
+    problem.extra.append(extra.copy())
+    whole = problem.current_columns()
+    np.testing.assert_array_equal(whole, np.column_stack([base, extra]))
+    assert np.shares_memory(problem.base, whole) and np.shares_memory(problem.extra[0], whole)
+    np.testing.assert_array_equal(problem.base, base)
+    np.testing.assert_array_equal(problem.extra[0], extra)
+    before = problem._current_qr(problem.used)
+    problem.release()
+    assert not problem._perps
+    again = problem._current_qr(problem.used)
+    assert again is not before
+    for a, b in zip(before, again, strict=True):
+        np.testing.assert_array_equal(a, b)
