@@ -102,6 +102,11 @@ class StepCandidate(Candidate):
     def thetas(self, obs):
         return [(axis, float(t)) for axis in self.AXES for t in self.change_times(obs)]
 
+    def _theta(self, times: np.ndarray, k: int) -> tuple[str, float]:
+        """``thetas(obs)[k]`` from ``change_times(obs)``: the tests need one or two of them,
+        not the list (two tuples a scan: 35 MB at 200,000 scans)."""
+        return self.AXES[k // times.size], float(times[k % times.size])
+
     def _all_columns(self, obs) -> np.ndarray:
         """Every step column (2n, 2 m): azimuth steps at each change time, then elevation."""
         times = self.change_times(obs)
@@ -140,21 +145,28 @@ class StepCandidate(Candidate):
         order = np.argsort(t, kind="stable")
         start = np.searchsorted(t[order], times, side="right")  # first scan after each time
 
-        def after(x: np.ndarray) -> np.ndarray:  # sums over the scans after each time
-            tail = np.cumsum(x[::-1], axis=0)[::-1]
-            return np.concatenate([tail, np.zeros((1, *x.shape[1:]))])[start]
+        past = start >= n_used  # no scan after the time (the last ones)
 
-        cz, sq, qc = [], [], []
+        def after(x: np.ndarray) -> np.ndarray:  # sums over the scans after each time
+            out = np.cumsum(x[::-1], axis=0)[::-1][np.where(past, 0, start)]
+            out[past] = 0.0
+            return out
+
+        cz, sq = [], []
+        # filled in place, an axis at a time: no copy of the n x k sums beside them
+        qc_all = np.empty((2 * times.size, q.shape[1]))
+        qz = q.T @ z_perp
         for axis in range(2):
             rows = slice(axis * n_used, (axis + 1) * n_used)
             g = problem.f[used] * problem.w[axis * n:(axis + 1) * n][used]
             if axis == 0:  # an azimuth step shows as dA cos E in cross-elevation
                 g = g * np.cos(obs.el_rad[used])
             g = g[order]
-            qc.append(after(g[:, None] * q[rows][order]))
+            qc = qc_all[axis * times.size:(axis + 1) * times.size]
+            qc[:] = after(g[:, None] * q[rows][order])
             sq.append(after(g * g))
-            cz.append(after(g * z_perp[rows][order]) - qc[-1] @ (q.T @ z_perp))
-        sq_all, qc_all = np.concatenate(sq), np.vstack(qc)
+            cz.append(after(g * z_perp[rows][order]) - qc @ qz)
+        sq_all = np.concatenate(sq)
         norm2 = sq_all - np.einsum("ij,ij->i", qc_all, qc_all)
         return (np.concatenate(cz), norm2,
                 lambda a, b: sq_all[b] - np.einsum("ij,ij->i", qc_all[a], qc_all[b]))
@@ -172,20 +184,22 @@ class StepCandidate(Candidate):
         fits at every gap between scans would refit the model once per scan (n^2: hours
         for 200,000 scans)."""
         gain = self._gains(problem, *problem.perp_for(problem.used))[0]
-        thetas = self.thetas(problem.obs)
-        m = len(thetas) // 2
-        return [thetas[int(np.argmax(gain[:m]))], thetas[m + int(np.argmax(gain[m:]))]]
+        times = self.change_times(problem.obs)
+        m = times.size
+        return [self._theta(times, int(np.argmax(gain[:m]))),
+                self._theta(times, m + int(np.argmax(gain[m:])))]
 
     def test(self, problem: Problem, perp, z_perp, chi2_now) -> TestResult:
         obs = problem.obs
-        thetas = self.thetas(obs)
+        times = self.change_times(obs)
         gain, ok, norm2, dot = self._gains(problem, perp, z_perp)
         best = int(np.argmax(gain))
-        cols, names = self.columns(obs, thetas[best])
-        res = self._linear(problem, perp, z_perp, cols, names, thetas[best])
+        theta = self._theta(times, best)
+        cols, names = self.columns(obs, theta)
+        res = self._linear(problem, perp, z_perp, cols, names, theta)
         if not res.testable:
             return res
-        m = len(thetas) // 2
+        m = times.size
         length = 0.0
         for axis in (slice(0, m), slice(m, 2 * m)):  # the kept columns' two curves
             k = np.flatnonzero(ok[axis]) + axis.start
@@ -196,9 +210,8 @@ class StepCandidate(Candidate):
                             res.trials)
         # the profile over the change time on the chosen axis: a 95% interval
         axis_gain = gain[:m] if best < m else gain[m:]
-        times = np.array([t for _, t in thetas[:m]])
         inside = times[axis_gain >= axis_gain.max() - PROFILE_95]
-        res.theta = (thetas[best][0], thetas[best][1], float(inside.min()), float(inside.max()))
+        res.theta = (*theta, float(inside.min()), float(inside.max()))
         self._finish(problem, res)
         return res
 
