@@ -397,8 +397,12 @@ def _fast_table(text: str, end: int):
             return None
         if names_end + 1 >= end:  # no rows (numpy would warn on stderr): astropy's reader
             return None
-        values = np.loadtxt(_lines(text, names_end + 1, end), dtype=dtype,
-                            delimiter=delimiter, quotechar='"', comments=None, ndmin=1)
+        with warnings.catch_warnings():
+            # NumPy < 2 parses "1.5" in an integer column as 1 with this warning (2.x
+            # refuses it): refused on every version, astropy's reader then decides
+            warnings.simplefilter("error", DeprecationWarning)
+            values = np.loadtxt(_lines(text, names_end + 1, end), dtype=dtype,
+                                delimiter=delimiter, quotechar='"', comments=None, ndmin=1)
         table = Table(meta=dict(header.get("meta") or {}))  # an !!omap: (key, value) pairs
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # an unknown unit is refused later, by name
