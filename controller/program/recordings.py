@@ -26,6 +26,7 @@ from __future__ import annotations
 import io
 import math
 import os
+import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -472,6 +473,11 @@ def read_recordings(path: str | Path, purpose: str = "fit"):
                 table = Table.read(text, format="ascii.ecsv")
         except Exception as err:  # astropy raises many types for malformed ECSV
             message = " ".join(str(err).split())[:200]
+            # a value its column's declared datatype cannot hold: the column and the value
+            bad = re.match(r"column '([^']+)' failed to convert: .*?'([^']*)'$", message)
+            if bad:
+                raise InputError(where, bad[1], bad[2], "is not of the column's declared "
+                                 f"datatype (astropy: {message})") from None
             raise InputError(where, "ECSV", type(err).__name__,
                              f"cannot be parsed: {message}") from None
         lines = _data_lines(text)
