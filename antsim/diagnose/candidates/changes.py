@@ -147,8 +147,11 @@ class StepCandidate(Candidate):
 
         past = start >= n_used  # no scan after the time (the last ones)
 
-        def after(x: np.ndarray) -> np.ndarray:  # sums over the scans after each time
-            out = np.cumsum(x[::-1], axis=0)[::-1][np.where(past, 0, start)]
+        at = np.where(past, 0, start)
+
+        def after(x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+            """Sums of ``x`` (n_used, in time order) over the scans after each time."""
+            out = np.take(np.cumsum(x[::-1])[::-1], at, out=out)
             out[past] = 0.0
             return out
 
@@ -163,7 +166,11 @@ class StepCandidate(Candidate):
                 g = g * np.cos(obs.el_rad[used])
             g = g[order]
             qc = qc_all[axis * times.size:(axis + 1) * times.size]
-            qc[:] = after(g[:, None] * q[rows][order])
+            q_axis = q[rows]
+            # a column at a time (the same sums: a cumulative sum runs down each column
+            # alone): no n x k products, reversed sums and gathered copies beside ``qc``
+            for j in range(q.shape[1]):
+                after(g * q_axis[order, j], out=qc[:, j])
             sq.append(after(g * g))
             cz.append(after(g * z_perp[rows][order]) - qc @ qz)
         sq_all = np.concatenate(sq)
