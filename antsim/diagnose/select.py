@@ -442,6 +442,11 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
         separation = Separation(r.r_model, r.partners, local_sigma(problem, r),
                                 correlation_words(r.name, r.r_model, r.partners))
         simplest = _simplest_form(problem, r, vocabulary)
+        # every cached factor and projector is of the model without ``r`` (keyed by the
+        # number of accepted columns): none is asked for again; let them go (and this
+        # round's projector) before the fits of the whole design below
+        problem.release()
+        perp = z_perp = None
         before = problem.sky_rms()
         signal = _fitted_signal(problem, r)
         after = problem.sky_rms(np.column_stack([problem.current_columns(), r.columns]))
