@@ -475,6 +475,7 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
         if added:
             stop = (f"the limit of {MAX_FINDINGS_CV} findings" if len(steps) >= MAX_FINDINGS_CV
                     else "no further candidate lowers the held-out Sky RMS")
+    problem.release()  # no factor is asked for below: not beside the whole design's fit
     # channel candidates (other recorded quantities): decided once, in the same family
     sky = problem.sky_rms()
     for r in channel_results:
@@ -486,7 +487,6 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
     steps.sort(key=lambda s: (s.heldout is not None, s.log_p if s.heldout is None else 0.0))
     for c in usable:  # what they kept for these recordings: not asked for again
         c.release()
-    problem.release()
     return Selection(steps, refused, absorbed, first_round, not_applicable, n_family,
                      gof_before, problem.gof(), stop)
 
