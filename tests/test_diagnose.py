@@ -993,6 +993,24 @@ def test_selection_lets_the_models_factors_go_when_it_accepts_a_finding(monkeypa
     assert held and held == [0] * len(held)
 
 
+def test_the_held_out_check_whitens_column_blocks_as_their_stack():
+    """The held-out check of a finding takes the model's columns and the finding's as two
+    blocks, whitened a column at a time into one Fortran-ordered design (no stacked copy
+    beside it): the same numbers as the stacked columns whitened (the same products, each
+    element alone), so the same held-out chi^2 to the last bit, on scans some unused."""
+    problem = _scans_with_unused_and_scaled()
+    cur = problem.current_columns()
+    extra = np.column_stack([np.sin(2 * problem.obs.az_rad), np.cos(2 * problem.obs.az_rad)])
+    extra = np.vstack([np.zeros_like(extra), extra])
+    whole = np.column_stack([cur, extra])
+    used = problem.used
+    design = problem._whitened_fortran((cur, extra), used)
+    assert design.flags.f_contiguous
+    assert np.array_equal(design, problem.T(whole, used, fortran=True))
+    folds = np.arange(problem.n) % 5
+    assert problem.cv_chi2((cur, extra), folds) == problem.cv_chi2(whole, folds)
+
+
 def test_diagnose_runs_with_one_blas_thread(monkeypatch):
     """diagnose limits BLAS to one thread while it runs (its products are thin and bound by
     memory: a second OpenBLAS thread cost up to 3.5 times the time under load) and gives

@@ -523,18 +523,23 @@ class Problem:
         coef, _ = _lstsq(columns[rows], self.y_raw[rows])
         return (self.y_raw - columns @ coef).reshape(2, -1)[:, used]
 
-    def cv_chi2(self, columns: np.ndarray, folds: np.ndarray,
+    def cv_chi2(self, columns: np.ndarray | tuple[np.ndarray, ...], folds: np.ndarray,
                 refit=None, used: np.ndarray | None = None) -> float:
         """Held-out chi^2: each fold predicted from a fit to the others (whitened units).
-        ``refit(train_mask) -> columns`` re-derives nonlinear shapes on the training data."""
+        ``columns``: raw (2n, k), or its column blocks (stacked only where the noise is not
+        white or ``refit`` is given). ``refit(train_mask) -> columns`` re-derives nonlinear
+        shapes on the training data."""
         used = self.used if used is None else used
+        blocks = columns if isinstance(columns, tuple) else (columns,)
         if refit is None and self.white(used):
             lab = folds[used]
-            # whitened in Fortran order and factored in place: one copy of the design
-            r = heldout_lstsq(self.T(columns, used, fortran=True), self.T(self.y, used),
+            # whitened in Fortran order and factored in place: one copy of the design (and
+            # none of the blocks stacked)
+            r = heldout_lstsq(self._whitened_fortran(blocks, used), self.T(self.y, used),
                               np.concatenate([lab, lab]), overwrite=True)
             if r is not None:
                 return float(r @ r)
+        columns = np.column_stack(blocks) if len(blocks) > 1 else blocks[0]
         total = 0.0
         for k in np.unique(folds[used]):
             test = used & (folds == k)
@@ -544,6 +549,22 @@ class Problem:
             r = self.T(self.y - cols @ f.coef, test)
             total += float(r @ r)
         return total
+
+    def _whitened_fortran(self, blocks: tuple[np.ndarray, ...], used: np.ndarray
+                          ) -> np.ndarray:
+        """:meth:`T` of the column blocks side by side (white noise), in Fortran order, a
+        column at a time into the one array (the same numbers as whitening them stacked)."""
+        if len(blocks) == 1:
+            return self.T(blocks[0], used, fortran=True)
+        idx, wu = self._view(used)
+        out = np.empty((idx.size, sum(b.shape[1] for b in blocks)), order="F")
+        j = 0
+        for b in blocks:
+            for c in range(b.shape[1]):
+                np.take(b[:, c], idx, out=out[:, j])
+                j += 1
+        out *= wu[:, None]
+        return out
 
     def cv_sky_rms(self, columns: np.ndarray, folds: np.ndarray) -> float:
         """Held-out Sky RMS (arcsec): raw residuals of each fold predicted from an

@@ -278,6 +278,8 @@ def _simplest_form(problem: Problem, res: TestResult, vocabulary: list[str]
         xp = perp(problem.cand(term_columns(names[part], problem.obs)))
         norm2[part], xz[part] = np.einsum("ij,ij->j", xp, xp), xp.T @ z_perp
     del xp, perp, z_perp  # not alive beside the fits below (2 n x chunk, 2 n x m floats)
+    # the finding is being accepted: the model's cached factors are not asked for again
+    problem.release()
     with np.errstate(invalid="ignore", divide="ignore"):
         gain = np.where(norm2 > 1e-9 * max(float(norm2.max()), 1e-300), xz ** 2 / norm2, 0.0)
     best = int(np.argmax(gain))
@@ -388,7 +390,7 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
         if r.refit is not None:
             def refit(train, _r=r, _cur=cur):
                 return np.column_stack([_cur, _r.refit(train)])
-        cv_with = problem.cv_chi2(np.column_stack([cur, r.columns]), folds, refit, used=r.mask)
+        cv_with = problem.cv_chi2((cur, r.columns), folds, refit, used=r.mask)
         r.note = f"held-out chi2 {cv_without:.1f} -> {cv_with:.1f}"
         if not cv_with < cv_without:
             refused.append(Refusal(r, f"{r.name} is significant in-sample but does not "
@@ -441,12 +443,13 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
         alternatives = _alternatives(problem, perp, r, ranked, n_family, alpha)
         separation = Separation(r.r_model, r.partners, local_sigma(problem, r),
                                 correlation_words(r.name, r.r_model, r.partners))
-        simplest = _simplest_form(problem, r, vocabulary)
         # every cached factor and projector is of the model without ``r`` (keyed by the
-        # number of accepted columns): none is asked for again; let them go (and this
-        # round's projector) before the fits of the whole design below
-        problem.release()
+        # number of accepted columns): none is asked for again after the simplest form's
+        # projection; let them go (and this round's projector) before the fits of the
+        # whole design below
         perp = z_perp = None
+        simplest = _simplest_form(problem, r, vocabulary)
+        problem.release()
         before = problem.sky_rms()
         signal = _fitted_signal(problem, r)
         after = problem.sky_rms(np.column_stack([problem.current_columns(), r.columns]))
