@@ -263,7 +263,8 @@ def _single_terms(candidates: tuple[Candidate, ...]) -> list[str]:
 def _simplest_form(problem: Problem, res: TestResult, vocabulary: list[str]
                    ) -> SimplestForm | None:
     """One TPOINT term that explains as much as the finding's terms (None if none does, or
-    the finding is one term already)."""
+    the finding is one term already). Selection calls it as it accepts ``res``: the model's
+    cached factors are let go once its projection is done."""
     if not isinstance(res.candidate, TermsCandidate) or len(res.comp_names) < 2:
         return None
     names = [t for t in vocabulary if t not in _model_terms(problem)]
