@@ -69,9 +69,6 @@ COMPONENTS = ("receiver", "jitter", "gusts", "thermal")
 #: rejection component's variance to sqrt(2 / 64) = 18%, a few percent of a sigma
 REJECTION_DRAWS = 64
 REJECTION_SEED = 1990
-#: the fitter's thresholds (Ghigo 1990, section III; controller.pointing.robust)
-LAD_FACTOR = 4.0
-RMS_FACTOR = 3.0
 
 
 @dataclass
@@ -543,6 +540,8 @@ def _rejections(a: np.ndarray, y0: np.ndarray, unit_var: np.ndarray, n: int,
     the covariance, with every correlation, is the sandwich of :func:`predict`. The normals
     come from a fixed seed: the same prediction every time."""
     from controller.pointing.robust import (
+        LAD_FACTOR,
+        RMS_FACTOR,
         Equations,
         lad_fit,
         least_squares_fit,

@@ -20,7 +20,7 @@ from .data import PointingData, require_pointing_data
 from .jackknife import BLOCK_PHASES, JackknifeResult
 from .model import NAMED_MODELS, PointingModel
 from .result import FitResult, _readonly
-from .robust import fit_terms
+from .robust import LAD_FACTOR, RMS_FACTOR, fit_terms
 from .terms import Term
 
 __all__ = ["fit_model", "without_fixed"]
@@ -44,8 +44,8 @@ def fit_model(
     robust: bool = True,
     weighted: bool = False,
     name: str = "custom",
-    lad_factor: float = 4.0,
-    rms_factor: float = 3.0,
+    lad_factor: float = LAD_FACTOR,
+    rms_factor: float = RMS_FACTOR,
     block_s: float = 3600.0,
     block_phases: int = BLOCK_PHASES,
     fixed: Mapping[str, float] | None = None,

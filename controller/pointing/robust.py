@@ -60,6 +60,12 @@ from .solvers import _independent_columns, _lad, _least_squares, _matvec, _Solut
 __all__ = ["CORRELATION_WARNING_LEVEL", "Equations", "fit_terms", "lad_fit",
            "least_squares_fit", "reject_beyond_mad", "reject_beyond_rms"]
 
+#: the 1990 report's rejection thresholds (Ghigo 1990, section III): an observation goes when
+#: an axis' residual exceeds LAD_FACTOR times that axis' mean absolute deviation from the LAD
+#: fit, then RMS_FACTOR times the rms of a least-squares fit to the rest
+LAD_FACTOR = 4.0
+RMS_FACTOR = 3.0
+
 #: |correlation| above which TPOINT warns that two terms "cannot reliably be distinguished".
 CORRELATION_WARNING_LEVEL = 0.95
 
@@ -176,7 +182,8 @@ def _check_enough(used: np.ndarray, m: int, stage: str) -> None:
 # the fit
 # ---------------------------------------------------------------------------------------------
 def fit_terms(data: PointingData, start: LinearModel, *, robust: bool = True,
-              weighted: bool = False, lad_factor: float = 4.0, rms_factor: float = 3.0,
+              weighted: bool = False, lad_factor: float = LAD_FACTOR,
+              rms_factor: float = RMS_FACTOR,
               block_s: float = 3600.0, block_phases: int = BLOCK_PHASES) -> FitResult:
     """Fit the terms of ``start`` (its coefficients are not used) to ``data``: the stages of
     the module docstring, then the statistics; ``result.model`` is ``start`` with the fitted
