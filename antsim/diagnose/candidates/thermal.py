@@ -68,6 +68,8 @@ class _LaggedCandidate(Candidate):
 
     def __init__(self):
         self._cache: dict[tuple, Any] = {}
+        self._last_obs: tuple[Observations, tuple] | None = None
+        self._grids: dict[str, tuple[tuple, np.ndarray]] = {}  # name -> (recordings, grid)
 
     def _cached(self, obs: Observations, tau_s: float, make) -> Any:
         """``make()``, the level of time constant ``tau_s`` for ``obs``, kept while it may be
@@ -92,12 +94,22 @@ class _LaggedCandidate(Candidate):
     def release(self) -> None:
         """Drop the levels and grids kept for the recordings last seen."""
         self._cache.clear()
-        self._last_obs = self._nights = self._air_grid = None
+        self._grids.clear()
+        self._last_obs = None
+
+    def _grid(self, name: str, obs: Observations, make) -> np.ndarray:
+        """``make()``, a quantity on the time grid that is the same for every time constant
+        (the night, the air temperature): kept for the recordings last seen."""
+        key = self._obs_key(obs)
+        hit = self._grids.get(name)
+        if hit is None or hit[0] != key:
+            hit = self._grids[name] = (key, make())
+        return hit[1]
 
     def _obs_key(self, obs: Observations) -> tuple:
         """:func:`obs_key` of ``obs``, hashed once for the recordings the candidate last saw
         (held, so that their identity stands for their content while they are)."""
-        last = getattr(self, "_last_obs", None)
+        last = self._last_obs
         if last is None or last[0] is not obs:
             last = self._last_obs = (obs, obs_key(obs))
         return last[1]
@@ -152,10 +164,7 @@ class SunsetCandidate(_LaggedCandidate):
     def _night(self, obs: Observations, t: np.ndarray) -> np.ndarray:
         """Where the Sun is down on the time grid ``t``, the same for every time constant:
         kept for the recordings last seen (a byte a minute)."""
-        key = self._obs_key(obs)
-        if (getattr(self, "_nights", None) or (None,))[0] != key:
-            self._nights = (key, sun_el_grid_deg(obs, t) < 0.0)
-        return self._nights[1]
+        return self._grid("night", obs, lambda: sun_el_grid_deg(obs, t) < 0.0)
 
     def thetas(self, obs):
         return list(self.TAUS)
@@ -279,8 +288,7 @@ class TemperatureCandidate(_LaggedCandidate):
     def _air(self, obs: Observations, t: np.ndarray) -> np.ndarray:
         """The air temperature (C) on the time grid ``t``, the same for every time constant:
         kept for the recordings last seen."""
-        key = self._obs_key(obs)
-        if (getattr(self, "_air_grid", None) or (None,))[0] != key:
+        def make() -> np.ndarray:
             ok = np.isfinite(obs.air_temp_c)
             if obs.air_daily_c is not None and np.ptp(obs.t_s[ok]) < 72000.0:
                 # a campaign much shorter than a day: the day before follows the scenario's
@@ -293,8 +301,9 @@ class TemperatureCandidate(_LaggedCandidate):
                 air[outside] = curve[outside] + shift
             else:
                 air = periodic_interp(t, obs.t_s[ok], obs.air_temp_c[ok])
-            self._air_grid = (key, air)
-        return self._air_grid[1]
+            return air
+
+        return self._grid("air", obs, make)
 
     def thetas(self, obs):
         return list(self.TAUS)
