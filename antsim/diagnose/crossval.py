@@ -28,9 +28,18 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
+import scipy.linalg
 
 from .candidates.base import DISTINGUISH_R, Candidate, TestResult, p_value, with_trials
-from .problem import Problem, _lstsq, _qr, added_basis, heldout_lstsq, rows_fortran
+from .problem import (
+    HELDOUT_MIN_EIG,
+    Problem,
+    _lstsq,
+    _qr,
+    added_basis,
+    heldout_lstsq,
+    rows_fortran,
+)
 
 __all__ = ["MAX_FINDINGS_CV", "contiguous_folds", "heldout_losses", "heldout_sky_rms",
            "loo_blocks", "loo_residuals", "loo_rms", "mimicked", "orthonormal"]
@@ -155,10 +164,12 @@ def mimicked(problem: Problem, raw: np.ndarray) -> bool:
     ``DISTINGUISH_R`` over the used scans (its correlation with the model's span)."""
     whitened = problem.T(raw)
     q = problem.basis()
-    full = np.linalg.norm(whitened, axis=0)
-    left = np.linalg.norm(whitened - q @ (q.T @ whitened), axis=0)  # perp(raw), whitened once
+    full2 = np.einsum("ij,ij->j", whitened, whitened)
+    # the squared norm of the part in the model's span (q orthonormal): r^2 without
+    # forming the projection off it (2 n_used x q floats per option)
+    inside = q.T @ whitened
     with np.errstate(invalid="ignore", divide="ignore"):
-        r2 = np.where(full > 0, 1.0 - (left / full) ** 2, 1.0)
+        r2 = np.where(full2 > 0, np.einsum("ij,ij->j", inside, inside) / full2, 1.0)
     return bool(np.any(r2 > DISTINGUISH_R**2))
 
 
@@ -199,17 +210,17 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
         q0, r0 = _qr(rows_fortran(cur, rows), overwrite=True)
         d0 = np.abs(np.diag(r0))
         now = heldout_losses(cur, problem.y_raw, problem.used, folds, (q0, d0))
-        best = None
-        tried = 0
+        sums = FoldSums(q0, problem.y_raw[rows], np.concatenate([folds[problem.used]] * 2),
+                        np.flatnonzero(rows))
+        ranked = []  # (the held-out losses' sum, candidate, theta, component names)
         for c, theta, raw, names in _options(problem, candidates, taken, model_terms):
-            tried += 1
-            x = problem.cand(raw)
-            q, d1 = added_basis(q0, x[rows])  # (q0, the option's block): q0 not copied
-            new = heldout_losses((cur, x), problem.y_raw, problem.used, folds,
-                                 (q, np.concatenate([d0, d1])))
-            del q, x  # not alive beside the next option's
-            if best is None or new.sum() < best[0].sum():
-                best = (new, c, theta, raw, names)
+            total = sums.total(problem.cand(raw))
+            if total is None:  # degenerate there: the per-option losses say it
+                total = float(_losses(problem, cur, q0, d0, folds, raw).sum())
+            ranked.append((total, c, theta, names))
+        del sums
+        tried = len(ranked)
+        best = _best(problem, cur, q0, d0, folds, ranked)
         if best is None or not improves(now, best[0]):
             break
         new, c, theta, raw, names = best
@@ -227,6 +238,117 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
         out.append((res, (math.sqrt(float(np.mean(now))), math.sqrt(float(np.mean(new)))),
                     (sky_before, problem.sky_rms()), signal))
     return out
+
+
+#: options whose summed held-out losses (from :class:`FoldSums`) lie within this fraction of
+#: the least are told apart by their losses computed in full (:func:`heldout_losses`), in the
+#: order tried: the sums agree with those to rounding (~1e-14 relative; tests/
+#: test_crossval.py), so the choice is the one the full losses make
+TIE_RTOL = 1e-9
+
+
+def _losses(problem: Problem, cur: np.ndarray, q0: np.ndarray, d0: np.ndarray,
+            folds: np.ndarray, raw: np.ndarray) -> np.ndarray:
+    """:func:`heldout_losses` of the model plus the option's raw columns, from the model's
+    basis ``q0`` (|diag R| ``d0``) over the used rows."""
+    x = problem.cand(raw)
+    q, d1 = added_basis(q0, x[problem.rows()])  # (q0, the option's block): q0 not copied
+    return heldout_losses((cur, x), problem.y_raw, problem.used, folds,
+                          (q, np.concatenate([d0, d1])))
+
+
+def _best(problem: Problem, cur: np.ndarray, q0: np.ndarray, d0: np.ndarray,
+          folds: np.ndarray, ranked: list):
+    """(losses, candidate, theta, raw columns, names) of the option with the least summed
+    held-out losses (the first of equals, as tried), or None without options: the sums rank,
+    the full losses decide among those within :data:`TIE_RTOL` of the least."""
+    if not ranked:
+        return None
+    least = min(r[0] for r in ranked)
+    best = None
+    for total, c, theta, names in ranked:
+        if not total <= least + TIE_RTOL * abs(least):
+            continue
+        raw, _ = c.columns(problem.obs, theta)
+        new = _losses(problem, cur, q0, d0, folds, raw)
+        if best is None or new.sum() < best[0].sum():
+            best = (new, c, theta, raw, names)
+    return best
+
+
+class FoldSums:
+    """The summed held-out losses of :func:`heldout_losses` (contiguous folds) of the model
+    plus one option at a time, from small per-fold matrices. With Q = [q0, q1] an orthonormal
+    basis of the model (q0, fixed for the round) and the option (q1), e the full fit's
+    residual and S a fold's rows, the held-out residual is r_S = e_S + Q_S u with
+    u = (I - Q_S^T Q_S)^-1 Q_S^T e_S (:func:`heldout_lstsq`), so
+    |r_S|^2 = |e_S|^2 + 2 u.(Q_S^T e_S) + u.(Q_S^T Q_S) u, and e = e0 - q1 (q1^T e0) (e0 the
+    model's residual). The option's columns x enter through q1 = (x - q0 C) L^-T
+    (C = q0^T x, L L^T the Cholesky factor of their part off q0), so every fold's matrices
+    follow from [q0, e0, x]_S^T x_S: one pass over the rows per option, what depends on the
+    model alone formed once per round. The sums rank the options (:func:`_best`); they are
+    the full losses' sums to rounding, and None where rounding could matter (an option
+    nearly inside the model's span, a fold that nearly determines a direction)."""
+
+    #: an option whose part off the model keeps less than this of a column's squared norm,
+    #: or whose Cholesky factor is this ill-conditioned, is left to the full losses (the
+    #: Gram matrices' rounding grows as the inverse of it: 1e-16 / 1e-4 stays far below
+    #: :data:`TIE_RTOL`)
+    MIN_OFF = 1e-4
+
+    def __init__(self, q0: np.ndarray, y: np.ndarray, labels: np.ndarray, rows: np.ndarray):
+        """``q0`` (2 n_used, k0) and ``y`` over the used rows ``rows`` (indices of the 2n
+        rows), ``labels`` their folds."""
+        order = np.argsort(labels, kind="stable")
+        self.idx = rows[order]
+        self.k0 = k0 = q0.shape[1]
+        # [q0, e0] with the rows grouped by fold (each fold a slice), in Fortran order: its
+        # slices are what BLAS multiplies without a copy
+        self.w = np.empty((y.size, k0 + 1), order="F")
+        np.take(q0, order, axis=0, out=self.w[:, :k0])
+        self.w[:, k0] = (y - q0 @ (q0.T @ y))[order]
+        cut = np.flatnonzero(np.diff(labels[order])) + 1
+        self.slices = [slice(a, b) for a, b in zip(np.r_[0, cut], np.r_[cut, y.size], strict=True)]
+        self.grams = [self.w[s].T @ self.w[s] for s in self.slices]
+
+    def total(self, x: np.ndarray) -> float | None:
+        """Summed held-out losses with the option's columns ``x`` (2n, q) added; None where
+        the full losses must say it (see the class docstring)."""
+        k0 = self.k0
+        xg = x.take(self.idx, axis=0)
+        wx = [(self.w[s].T @ xg[s], xg[s].T @ xg[s]) for s in self.slices]
+        c0 = sum(a[:k0] for a, _ in wx)  # q0^T x
+        xx = sum(g for _, g in wx)
+        off = xx - c0.T @ c0  # (x - q0 C)^T (x - q0 C)
+        if not np.all(np.diag(off) > self.MIN_OFF * np.diag(xx)):
+            return None
+        try:
+            chol = np.linalg.cholesky(off)
+        except np.linalg.LinAlgError:
+            return None
+        dl = np.diag(chol)
+        if dl.min() <= self.MIN_OFF * dl.max():
+            return None
+        inv = scipy.linalg.solve_triangular(chol, np.eye(dl.size), lower=True)  # L^-1
+        xe = sum(a[k0] for a, _ in wx)  # x^T e0 (q0^T e0 = 0)
+        c = inv @ xe  # q1^T e0
+        k = k0 + dl.size
+        total = 0.0
+        for (a, g), g0 in zip(wx, self.grams, strict=True):
+            g00, g0e, gee = g0[:k0, :k0], g0[:k0, k0], g0[k0, k0]
+            p0 = (a[:k0] - g00 @ c0) @ inv.T  # q0_S^T q1_S
+            pe = (a[k0] - g0e @ c0) @ inv.T  # e0_S^T q1_S
+            m = g - c0.T @ a[:k0]
+            p1 = inv @ (m - a[:k0].T @ c0 + c0.T @ g00 @ c0) @ inv.T  # q1_S^T q1_S
+            gram = np.block([[g00, p0], [p0.T, p1]])
+            b = np.concatenate([g0e - p0 @ c, pe - p1 @ c])
+            ee = gee - 2.0 * float(pe @ c) + float(c @ p1 @ c)
+            w, v = np.linalg.eigh(np.eye(k) - gram)
+            if w.min() < HELDOUT_MIN_EIG:
+                return None
+            u = v @ ((v.T @ b) / w)
+            total += ee + 2.0 * float(u @ b) + float(u @ gram @ u)
+        return total
 
 
 def _tested(problem: Problem, c: Candidate, theta, raw: np.ndarray, names: tuple[str, ...],
