@@ -29,6 +29,7 @@ from .problem import (
     folds_for,
     folds_words,
     heldout_sky_rms,
+    sky_of,
     term_columns,
 )
 from .select import Selection, Step, select
@@ -375,17 +376,19 @@ def _diagnose(obs: Observations, scenario, model: str | None, n_sims: int, cache
         return [float(np.sqrt(np.mean(r[a] ** 2))) if r.shape[1] else float("nan")
                 for a in range(2)]
 
-    # each model's held-out residuals once (a QR of the whole and a pass per night)
+    # each model's held-out residuals once (a QR of the whole and a pass per night), and
+    # its in-sample ones once (the Sky RMS and the axes' rms from the same fit)
     held = [problem.heldout_residuals(c, folds) for c in (base_cols, final)]
+    raw = [problem.raw_residuals(c) for c in (base_cols, final)]
     summary = {
         "n_used": int(problem.used.sum()),
-        "sky_rms_before_arcsec": problem.sky_rms(base_cols),
-        "sky_rms_after_arcsec": problem.sky_rms(final),
+        "sky_rms_before_arcsec": sky_of(raw[0]),
+        "sky_rms_after_arcsec": sky_of(raw[1]),
         "cv_sky_rms_before_arcsec": heldout_sky_rms(held[0]),
         "cv_sky_rms_after_arcsec": heldout_sky_rms(held[1]),
         # per axis (cross-axis, then elevation or declination): in-sample and held out
-        "axis_rms_before_arcsec": axis_rms(problem.raw_residuals(base_cols)),
-        "axis_rms_after_arcsec": axis_rms(problem.raw_residuals(final)),
+        "axis_rms_before_arcsec": axis_rms(raw[0]),
+        "axis_rms_after_arcsec": axis_rms(raw[1]),
         "cv_axis_rms_before_arcsec": axis_rms(held[0]),
         "cv_axis_rms_after_arcsec": axis_rms(held[1]),
         "held_out": folds_words(obs),

@@ -141,6 +141,11 @@ class Problem:
         self.used = ok.copy()
         self.extra: list[np.ndarray] = []  # accepted columns (raw, error convention)
         self.extra_names: list[str] = []
+        # the last fit of the current model and the last raw residuals of it or of it plus
+        # given columns, by what they depend on: outlier updates, goodness of fit, Sky RMS
+        # and the summary ask for the same fits again (each a QR of 2 n_used rows)
+        self._fit_memo: tuple | None = None
+        self._raw_memo: tuple | None = None
 
     # ------------------------------------------------------------------ candidates
     @property
@@ -274,7 +279,13 @@ class Problem:
                          n_used=int(used.sum()))
 
     def fit_current(self, used: np.ndarray | None = None) -> LinearFit:
-        return self.fit(self.current_columns(), used)
+        """:meth:`fit` of the current model (the last one kept: the same fit is not made
+        twice; treat it as read-only)."""
+        used = self.used if used is None else used
+        key = (used.tobytes(), self.scale.tobytes(), len(self.extra))
+        if self._fit_memo is None or self._fit_memo[0] != key:
+            self._fit_memo = (key, self.fit(self.current_columns(), used))
+        return self._fit_memo[1]
 
     def _current_qr(self, used: np.ndarray):
         """(q, r, q^T z, z, z projected off q) of the whitened current model over the scans
@@ -510,18 +521,36 @@ class Problem:
     def sky_rms(self, columns: np.ndarray | None = None, used: np.ndarray | None = None) -> float:
         """TPOINT Sky RMS (arcsec) of the raw total errors after an unweighted fit of
         ``columns`` (default: the current model) over the used scans."""
-        r = self.raw_residuals(columns, used)
-        return math.sqrt(float(np.mean(r[0] ** 2 + r[1] ** 2)))
+        return sky_of(self.raw_residuals(columns, used))
+
+    def sky_rms_added(self, extra: np.ndarray) -> float:
+        """:meth:`sky_rms` of the current model plus raw columns ``extra`` (2n, q)."""
+        return sky_of(self.raw_residuals(extra=extra))
 
     def raw_residuals(self, columns: np.ndarray | None = None,
-                      used: np.ndarray | None = None) -> np.ndarray:
+                      used: np.ndarray | None = None, extra: np.ndarray | None = None
+                      ) -> np.ndarray:
         """(2, n_used) raw residuals (arcsec; cross-axis, then along the second axis) of the
-        used scans after an unweighted fit of ``columns`` (default: the current model)."""
-        columns = self.current_columns() if columns is None else columns
+        used scans after an unweighted fit of ``columns`` (default: the current model, plus
+        ``extra`` when given). Those of the current model (plus ``extra``) are kept for the
+        next call: treat them as read-only."""
         used = self.used if used is None else used
+        key = None
+        if columns is None or columns is self.current_columns():
+            # the same fit when the scans, the model and the added columns are the same
+            key = (used.tobytes(), len(self.extra), extra)
+            memo = self._raw_memo
+            if memo is not None and memo[0][:2] == key[:2] and memo[0][2] is extra:
+                return memo[1]
+            columns = self.current_columns()
+            if extra is not None:
+                columns = np.column_stack([columns, extra])
         rows = self.rows(used)
         coef, _ = _lstsq(columns[rows], self.y_raw[rows])
-        return (self.y_raw - columns @ coef).reshape(2, -1)[:, used]
+        r = (self.y_raw - columns @ coef).reshape(2, -1)[:, used]
+        if key is not None:
+            self._raw_memo = (key, r)
+        return r
 
     def cv_chi2(self, columns: np.ndarray | tuple[np.ndarray, ...], folds: np.ndarray,
                 refit=None, used: np.ndarray | None = None) -> float:
@@ -588,6 +617,11 @@ class Problem:
             coef, _ = _lstsq(columns[rows], self.y_raw[rows])
             parts.append((self.y_raw - columns @ coef).reshape(2, -1)[:, test])
         return np.concatenate(parts, axis=1) if parts else np.zeros((2, 0))
+
+
+def sky_of(r: np.ndarray) -> float:
+    """Sky RMS (arcsec) of (2, n) in-sample raw residuals (:meth:`Problem.raw_residuals`)."""
+    return math.sqrt(float(np.mean(r[0] ** 2 + r[1] ** 2)))
 
 
 def heldout_sky_rms(r: np.ndarray) -> float:

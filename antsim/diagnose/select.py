@@ -289,7 +289,7 @@ def _simplest_form(problem: Problem, res: TestResult, vocabulary: list[str]
     term = names[best]
     col = problem.cand(term_columns([term], problem.obs))
     rms = problem.sky_rms(np.column_stack([problem.current_columns(), col]))
-    pair = problem.sky_rms(np.column_stack([problem.current_columns(), res.columns]))
+    pair = problem.sky_rms_added(res.columns)  # the Sky RMS after the finding: kept for it
     return SimplestForm((term,), float(gain[best]), rms,
                         f"{term} alone explains as much as {' '.join(res.comp_names)} "
                         f"(Sky RMS {rms:.3f}\" against {pair:.3f}\"; chi2 decrease "
@@ -453,7 +453,7 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
         problem.release()
         before = problem.sky_rms()
         signal = _fitted_signal(problem, r)
-        after = problem.sky_rms(np.column_stack([problem.current_columns(), r.columns]))
+        after = problem.sky_rms_added(r.columns)
         problem.extra.append(r.columns)
         problem.extra_names.extend(f"{r.name}:{n}" for n in r.comp_names)
         accepted.add(r.name)
