@@ -846,6 +846,95 @@ def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits(
         rel=1e-9)
 
 
+def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do():
+    """Two code paths of the cross-validated stage's choice: the options' summed held-out
+    losses from per-fold Gram matrices (:class:`FoldSums`) against the losses computed in
+    full (:func:`heldout_losses`, the reference: every option's, the least sum winning, the
+    first of equals). The same projections in another order: 1e-9 relative (measured 1e-15;
+    the design's condition number is 60), the choice the same; an option nearly inside the
+    model's span (r^2 = 1 - 1e-8) is left to the full losses (None), and of two options with
+    the same columns the first is chosen, as the full losses choose it."""
+    from antsim.diagnose.crossval import FoldSums, _best, _losses, contiguous_folds
+    from antsim.diagnose.problem import _qr, rows_fortran
+
+    problem = _scans_with_unused_and_scaled()
+    obs, n = problem.obs, problem.n
+    folds = contiguous_folds(obs.t_s, 5)
+    cur, rows = problem.current_columns(), problem.rows()
+    q0, r0 = _qr(rows_fortran(cur, rows))
+    d0 = np.abs(np.diag(r0))
+    sums = FoldSums(q0, problem.y_raw[rows], np.concatenate([folds[problem.used]] * 2),
+                    np.flatnonzero(rows))
+    options = [(candidate("el_periodic_az"), k) for k in (1, 2, 3, 4)] + [
+        (candidate("az_track_2a"), None), (candidate("az_runout_1a"), None)]
+    ranked = []
+    for c, theta in options:
+        raw, names = c.columns(obs, theta)
+        total = sums.total(problem.cand(raw))
+        losses = _losses(problem, cur, q0, d0, folds, raw)
+        assert total == pytest.approx(float(losses.sum()), rel=1e-9)
+        ranked.append((total, c, theta, names))
+    def best_of(ranked):  # the reference: the least full sum, the first of equals
+        i = min(range(len(ranked)), key=lambda i: (float(_losses(
+            problem, cur, q0, d0, folds, ranked[i][1].columns(obs, ranked[i][2])[0]).sum()), i))
+        return ranked[i][1].name, ranked[i][2]
+
+    got = _best(problem, cur, q0, d0, folds, ranked)
+    assert (got[1].name, got[2]) == best_of(ranked)
+    assert got[1].name in ("el_periodic_az", "az_track_2a")  # the hidden 30" sin 2A
+    np.testing.assert_array_equal(got[0], _losses(problem, cur, q0, d0, folds, got[3]))
+    # el_periodic_az[2] has az_track_2a's columns: sums equal to rounding, and the full
+    # losses decide between them as the reference does, in either order
+    twin, track = ranked[1], ranked[4]
+    assert twin[0] == pytest.approx(track[0], rel=1e-12)
+    for pair in ([track, twin], [twin, track]):
+        assert (lambda b: (b[1].name, b[2]))(_best(problem, cur, q0, d0, folds, pair)) \
+            == best_of(pair)
+    inside = cur[:, :1] + 1e-4 * np.std(cur[:, 0]) * np.random.default_rng(5).normal(
+        size=(2 * n, 1))
+    assert sums.total(inside) is None
+    assert _best(problem, cur, q0, d0, folds, []) is None
+
+
+def test_the_current_models_fits_are_kept_while_what_they_depend_on_stays():
+    """The current model's last fit (:meth:`Problem.fit_current`) and raw residuals
+    (:meth:`Problem.raw_residuals`, alone or with a finding's columns) are reused while the
+    scans, the noise scale and the model stay, and made again (the same numbers as a fresh
+    fit, bit for bit: one code path) when any of them changes."""
+    problem = _scans_with_unused_and_scaled()
+    n = problem.n
+    az = problem.obs.az_rad
+    extra = problem.cand(np.concatenate([np.zeros((n, 2)),
+                                         np.column_stack([np.sin(2 * az), np.cos(2 * az)])]))
+
+    def same(f, g):
+        return f.chi2 == g.chi2 and np.array_equal(f.coef, g.coef) and np.array_equal(
+            f.resid, g.resid)
+
+    f = problem.fit_current()
+    assert problem.fit_current() is f and same(f, problem.fit(problem.current_columns()))
+    problem.scale[0] *= 1.5
+    assert problem.fit_current() is not f
+    assert same(problem.fit_current(), problem.fit(problem.current_columns()))
+    less = problem.used.copy()
+    less[np.flatnonzero(less)[:5]] = False
+    assert same(problem.fit_current(less), problem.fit(problem.current_columns(), less))
+    r = problem.raw_residuals()
+    assert problem.raw_residuals() is r and problem.raw_residuals(
+        problem.current_columns()) is r
+    whole = np.column_stack([problem.current_columns(), extra])
+    added = problem.sky_rms_added(extra)
+    assert added == problem.sky_rms(whole) and problem.sky_rms_added(extra) == added
+    assert problem.raw_residuals() is not r
+    np.testing.assert_array_equal(problem.raw_residuals(), r)
+    problem.extra.append(extra)
+    problem.extra_names += ["x:HESA2", "x:HECA2"]
+    assert same(problem.fit_current(), problem.fit(whole))
+    assert problem.sky_rms() == problem.sky_rms(whole) == added
+    problem.used = less
+    np.testing.assert_array_equal(problem.raw_residuals(), problem.raw_residuals(whole, less))
+
+
 def test_the_exact_tilts_subsample_search_finds_the_full_searchs_optimum(monkeypatch):
     """Two code paths of the exact tilt's fit: its nine starts on all the scans, and (many
     scans) on every k-th scan with only the best refined on all. On 3,000 scans with a 30'
