@@ -935,6 +935,33 @@ def test_the_current_models_fits_are_kept_while_what_they_depend_on_stays():
     np.testing.assert_array_equal(problem.raw_residuals(), problem.raw_residuals(whole, less))
 
 
+def test_the_hours_since_sunset_are_those_of_the_last_sunset_before_each_scan():
+    """Two code paths: the hours since the last sunset of each scan looked up at once
+    (sorted search) against the definition's scan-by-scan search of the sunsets before it;
+    the same subtraction, so bit for bit (one machine, one expression): NaN by day and before
+    the first sunset."""
+    from dataclasses import replace
+
+    from antsim.diagnose.candidates.base import sun_el_grid_deg, time_grid
+    from antsim.diagnose.locate import _hours_since_sunset
+
+    obs = synthetic(n=400, seed=4)
+    rng = np.random.default_rng(4)
+    t = np.sort(rng.uniform(0.0, 5 * 86400.0, obs.n))
+    obs = replace(obs, kind="ecsv", t_s=t, sun_el_deg=40.0 * np.sin(2 * np.pi * (t / 86400.0 - 0.3)))
+    got = _hours_since_sunset(obs)
+    grid = time_grid(obs)
+    sun = sun_el_grid_deg(obs, grid)
+    sets = grid[1:][(sun[:-1] >= 0.0) & (sun[1:] < 0.0)]
+    want = np.full(obs.n, np.nan)
+    for i, ti in enumerate(t):
+        before = sets[sets <= ti]
+        if before.size and not obs.sun_el_deg[i] >= 0.0:
+            want[i] = (ti - before[-1]) / 3600.0
+    np.testing.assert_array_equal(got, want)
+    assert 50 < np.isfinite(got).sum() < obs.n - 50 and sets.size >= 4
+
+
 def test_the_exact_tilts_subsample_search_finds_the_full_searchs_optimum(monkeypatch):
     """Two code paths of the exact tilt's fit: its nine starts on all the scans, and (many
     scans) on every k-th scan with only the best refined on all. On 3,000 scans with a 30'

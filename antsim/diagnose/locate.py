@@ -73,11 +73,11 @@ def _hours_since_sunset(obs: Observations) -> np.ndarray | None:
     except ValueError:
         return None
     sets = t[1:][(sun[:-1] >= 0.0) & (sun[1:] < 0.0)]
+    # the last sunset at or before each scan (the grid's sunsets are in time order)
+    last = np.searchsorted(sets, obs.t_s, side="right") - 1
     out = np.full(obs.n, np.nan)
-    for i, ti in enumerate(obs.t_s):
-        before = sets[sets <= ti]
-        if before.size:
-            out[i] = (ti - before[-1]) / 3600.0
+    after = last >= 0
+    out[after] = (obs.t_s[after] - sets[last[after]]) / 3600.0
     if obs.sun_el_deg is not None:
         out[obs.sun_el_deg >= 0.0] = np.nan  # by day: not "after sunset"
     return out
