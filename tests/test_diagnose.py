@@ -948,7 +948,8 @@ def test_the_hours_since_sunset_are_those_of_the_last_sunset_before_each_scan():
     obs = synthetic(n=400, seed=4)
     rng = np.random.default_rng(4)
     t = np.sort(rng.uniform(0.0, 5 * 86400.0, obs.n))
-    obs = replace(obs, kind="ecsv", t_s=t, sun_el_deg=40.0 * np.sin(2 * np.pi * (t / 86400.0 - 0.3)))
+    obs = replace(obs, kind="ecsv", t_s=t,
+                  sun_el_deg=40.0 * np.sin(2 * np.pi * (t / 86400.0 - 0.3)))
     got = _hours_since_sunset(obs)
     grid = time_grid(obs)
     sun = sun_el_grid_deg(obs, grid)
