@@ -925,6 +925,11 @@ def test_the_current_models_fits_are_kept_while_what_they_depend_on_stays():
     whole = np.column_stack([problem.current_columns(), extra])
     added = problem.sky_rms_added(extra)
     assert added == problem.sky_rms(whole) and problem.sky_rms_added(extra) == added
+    kept = problem._raw_memo[-1][1]
+    assert problem.sky_rms_added(extra.copy()) == added and problem._raw_memo[-1][1] is kept
+    assert problem.raw_residuals() is r  # the last two kept
+    assert problem.sky_rms_added(extra[:, :1]) != added  # other columns: fitted again
+    problem.sky_rms_added(extra[:, 1:])
     assert problem.raw_residuals() is not r
     np.testing.assert_array_equal(problem.raw_residuals(), r)
     problem.extra.append(extra)

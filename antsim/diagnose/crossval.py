@@ -242,8 +242,8 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
 
 #: options whose summed held-out losses (from :class:`FoldSums`) lie within this fraction of
 #: the least are told apart by their losses computed in full (:func:`heldout_losses`), in the
-#: order tried: the sums agree with those to rounding (~1e-14 relative; tests/
-#: test_crossval.py), so the choice is the one the full losses make
+#: order tried: the sums agree with those to rounding (~1e-15 relative; tests/
+#: test_diagnose.py), so the choice is the one the full losses make
 TIE_RTOL = 1e-9
 
 

@@ -145,7 +145,7 @@ class Problem:
         # given columns, by what they depend on: outlier updates, goodness of fit, Sky RMS
         # and the summary ask for the same fits again (each a QR of 2 n_used rows)
         self._fit_memo: tuple | None = None
-        self._raw_memo: tuple | None = None
+        self._raw_memo: list[tuple] = []
 
     # ------------------------------------------------------------------ candidates
     @property
@@ -537,19 +537,22 @@ class Problem:
         used = self.used if used is None else used
         key = None
         if columns is None or columns is self.current_columns():
-            # the same fit when the scans, the model and the added columns are the same
+            # the same fit when the scans, the model and the added columns are the same (a
+            # finding's columns compared by value: a result may make them again when read)
             key = (used.tobytes(), len(self.extra), extra)
-            memo = self._raw_memo
-            if memo is not None and memo[0][:2] == key[:2] and memo[0][2] is extra:
-                return memo[1]
+            for old, r in self._raw_memo:
+                if old[:2] == key[:2] and (old[2] is extra or (
+                        extra is not None and old[2] is not None
+                        and np.array_equal(old[2], extra))):
+                    return r
             columns = self.current_columns()
             if extra is not None:
                 columns = np.column_stack([columns, extra])
         rows = self.rows(used)
         coef, _ = _lstsq(columns[rows], self.y_raw[rows])
         r = (self.y_raw - columns @ coef).reshape(2, -1)[:, used]
-        if key is not None:
-            self._raw_memo = (key, r)
+        if key is not None:  # the last two: the Sky RMS before and after a finding
+            self._raw_memo = [*self._raw_memo[-1:], (key, r)]
         return r
 
     def cv_chi2(self, columns: np.ndarray | tuple[np.ndarray, ...], folds: np.ndarray,
