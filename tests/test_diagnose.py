@@ -863,8 +863,8 @@ def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do()
     cur, rows = problem.current_columns(), problem.rows()
     q0, r0 = _qr(rows_fortran(cur, rows))
     d0 = np.abs(np.diag(r0))
-    sums = FoldSums(q0, problem.y_raw[rows], np.concatenate([folds[problem.used]] * 2),
-                    np.flatnonzero(rows))
+    labels = np.concatenate([folds[problem.used]] * 2)
+    sums = FoldSums(q0, d0, problem.y_raw[rows], labels, np.flatnonzero(rows))
     options = [(candidate("el_periodic_az"), k) for k in (1, 2, 3, 4)] + [
         (candidate("az_track_2a"), None), (candidate("az_runout_1a"), None)]
     ranked = []
@@ -893,6 +893,13 @@ def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do()
     inside = cur[:, :1] + 1e-4 * np.std(cur[:, 0]) * np.random.default_rng(5).normal(
         size=(2 * n, 1))
     assert sums.total(inside) is None
+    assert sums.total(1e-9 * problem.cand(options[0][0].columns(obs, 1)[0])) is None  # tiny
+    # a model with dependent columns: the full losses refit fold by fold, no sums
+    twice = np.column_stack([cur, cur[:, :1]])
+    q2, r2 = _qr(rows_fortran(twice, rows))
+    assert FoldSums(q2, np.abs(np.diag(r2)), problem.y_raw[rows], labels,
+                    np.flatnonzero(rows)).total(problem.cand(ranked[4][1].columns(
+                        obs, None)[0])) is None
     assert _best(problem, cur, q0, d0, folds, []) is None
 
 

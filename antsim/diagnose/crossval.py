@@ -210,8 +210,8 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
         q0, r0 = _qr(rows_fortran(cur, rows), overwrite=True)
         d0 = np.abs(np.diag(r0))
         now = heldout_losses(cur, problem.y_raw, problem.used, folds, (q0, d0))
-        sums = FoldSums(q0, problem.y_raw[rows], np.concatenate([folds[problem.used]] * 2),
-                        np.flatnonzero(rows))
+        sums = FoldSums(q0, d0, problem.y_raw[rows],
+                        np.concatenate([folds[problem.used]] * 2), np.flatnonzero(rows))
         ranked = []  # (the held-out losses' sum, candidate, theta, component names)
         for c, theta, raw, names in _options(problem, candidates, taken, model_terms):
             total = sums.total(problem.cand(raw))
@@ -287,8 +287,9 @@ class FoldSums:
     (C = q0^T x, L L^T the Cholesky factor of their part off q0), so every fold's matrices
     follow from [q0, e0, x]_S^T x_S: one pass over the rows per option, what depends on the
     model alone formed once per round. The sums rank the options (:func:`_best`); they are
-    the full losses' sums to rounding, and None where rounding could matter (an option
-    nearly inside the model's span, a fold that nearly determines a direction)."""
+    the full losses' sums to rounding, and None where rounding could matter or the full
+    losses take another path (a model or an option whose columns are nearly dependent, a
+    fold that nearly determines a direction)."""
 
     #: an option whose part off the model keeps less than this of a column's squared norm,
     #: or whose Cholesky factor is this ill-conditioned, is left to the full losses (the
@@ -296,9 +297,14 @@ class FoldSums:
     #: :data:`TIE_RTOL`)
     MIN_OFF = 1e-4
 
-    def __init__(self, q0: np.ndarray, y: np.ndarray, labels: np.ndarray, rows: np.ndarray):
-        """``q0`` (2 n_used, k0) and ``y`` over the used rows ``rows`` (indices of the 2n
-        rows), ``labels`` their folds."""
+    def __init__(self, q0: np.ndarray, d0: np.ndarray, y: np.ndarray, labels: np.ndarray,
+                 rows: np.ndarray):
+        """``q0`` (2 n_used, k0; |diag R| ``d0``) and ``y`` over the used rows ``rows``
+        (indices of the 2n rows), ``labels`` their folds."""
+        # the full losses refit fold by fold where the model's columns are dependent
+        # (heldout_lstsq's rule): no sums then
+        self.d0max = float(d0.max()) if d0.size else 0.0
+        self.dependent = bool(d0.size) and float(d0.min()) <= 1e-10 * max(self.d0max, 1e-300)
         order = np.argsort(labels, kind="stable")
         self.idx = rows[order]
         self.k0 = k0 = q0.shape[1]
@@ -314,6 +320,8 @@ class FoldSums:
     def total(self, x: np.ndarray) -> float | None:
         """Summed held-out losses with the option's columns ``x`` (2n, q) added; None where
         the full losses must say it (see the class docstring)."""
+        if self.dependent:
+            return None
         k0 = self.k0
         xg = x.take(self.idx, axis=0)
         wx = [(self.w[s].T @ xg[s], xg[s].T @ xg[s]) for s in self.slices]
@@ -326,8 +334,8 @@ class FoldSums:
             chol = np.linalg.cholesky(off)
         except np.linalg.LinAlgError:
             return None
-        dl = np.diag(chol)
-        if dl.min() <= self.MIN_OFF * dl.max():
+        dl = np.diag(chol)  # the option's |diag R| off the model, to rounding
+        if dl.min() <= self.MIN_OFF * max(float(dl.max()), self.d0max):
             return None
         inv = scipy.linalg.solve_triangular(chol, np.eye(dl.size), lower=True)  # L^-1
         xe = sum(a[k0] for a, _ in wx)  # x^T e0 (q0^T e0 = 0)
