@@ -155,6 +155,33 @@ def test_mmt_fit_through_the_cli_json(capsys):
     assert doc["n_input"] == doc["n_used"] == 80 and doc["n_rejected"] == 0
 
 
+def test_fit_command_runs_with_one_blas_thread(monkeypatch, capsys):
+    """``antsim fit`` fits (and makes its jackknife sigma) with BLAS on one thread and gives
+    the limit back after: its products are thin, and a second OpenBLAS thread cost up to 6
+    times the time when the other core was busy (antsim.blas)."""
+    from threadpoolctl import threadpool_info
+
+    import controller.pointing.fitting as fitting_module
+
+    def blas_threads() -> list[int]:
+        return [lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"]
+
+    seen = []
+    real_fit = fitting_module.fit_model
+
+    def spy(*args, **kwargs):
+        seen.append(blas_threads())
+        return real_fit(*args, **kwargs)
+
+    monkeypatch.setattr(fitting_module, "fit_model", spy)
+    before = blas_threads()
+    status = cli_main(["fit", str(real_file("mmt_20210821_k_and_e.dat")), "--terms",
+                       ",".join(MMT_TERMS), "--json"])
+    assert status == 0 and json.loads(capsys.readouterr().out)["n_used"] > 0
+    assert seen and seen[0] and all(n == 1 for n in seen[0])
+    assert blas_threads() == before
+
+
 def test_mmt_fit_with_a_mod_file_and_robust_default(capsys):
     path = real_file("mmt_20210821_k_and_e.dat")
     status = cli_main(["fit", str(path), "--model", str(DATA / "mmt_k_and_e_tpoint.mod"),

@@ -198,9 +198,10 @@ def main(args: argparse.Namespace) -> int:
     if target is not None and (target.is_dir() or not target.parent.is_dir()):
         raise InputError("command line", "--write-model", str(target),
                          "is a directory" if target.is_dir() else "its folder does not exist")
+    from antsim.blas import one_blas_thread
     from antsim.progress import Progress
 
-    with Progress("fit", args.progress) as progress:
+    with Progress("fit", args.progress) as progress, one_blas_thread():
         progress.stage("reading")
         data = _read_data(path, fmt, args.include_masked, args.mount,
                           say=lambda text: progress.write(text, file=sys.stderr), terms=terms,

@@ -8,10 +8,10 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
 from controller.pointing.model import PointingModel
 
+from ..blas import one_blas_thread
 from .baseline import (
     BaselineSpec,
     SimulatedBaseline,
@@ -317,11 +317,9 @@ def diagnose(obs: Observations, scenario=None, model: str | None = None,
              sim_baseline: SimulatedBaseline | None = None,
              prediction: Prediction | None = None) -> Diagnosis:
     """Diagnose ``obs`` against the baseline (see :mod:`.baseline` for the rules)."""
-    # one BLAS thread: diagnose's products are thin (2n rows, a few columns), bound by
-    # memory, and a second OpenBLAS thread cost more than it gave (200,000 scans: 43.1 s
-    # against 36.0 s on an idle machine, 3.4 to 5.3 times the wall time at load 4-5;
-    # CHANGELOG)
-    with threadpool_limits(1, user_api="blas"):
+    # one BLAS thread: diagnose's products are thin (see antsim.blas; 200,000 scans: 43.1 s
+    # with two threads against 36.0 s with one on an idle machine)
+    with one_blas_thread():
         return _diagnose(obs, scenario, model, n_sims, cache_dir, use_cache, jobs,
                          sim_baseline, prediction)
 
