@@ -22,7 +22,7 @@ from controller.pointing.model import PointingModel
 from . import pvalues
 from .data import Observations
 
-__all__ = ["Prediction", "Problem", "term_columns"]
+__all__ = ["Prediction", "Problem", "ShapeFit", "term_columns"]
 
 #: a scan whose whitened residual on either axis exceeds this is an outlier (gusts)
 OUTLIER_Z = 4.0
@@ -101,6 +101,26 @@ VIEW_CACHE = 4
 
 #: the bound on the memory cached projectors hold (their bases; see Problem.perp_for)
 PERP_CACHE_BYTES = 128 * 2**20
+
+
+#: :meth:`Problem.shape_fit` corrects the model's fit over its used scans by at most this
+#: many rows (another set of scans); beyond, the explicit path factors the model over it
+ROW_UPDATE_MAX = 4096
+
+#: the least 1 - R^2 of a column on the model at which :meth:`Problem.shape_fit` takes its
+#: norm off the model from x^T x - (q^T x)^T (q^T x): the difference loses log10(1 / (1 -
+#: R^2)) of the 16 digits, here at most 5 (11 kept: relative error about 2.2e-16 / (1 -
+#: R^2) <= 2.2e-11, far below the 6 significant digits diagnose prints); closer columns
+#: take the explicit projection
+GRAM_1MR2_MIN = 1e-5
+
+#: a candidate whose every (raw) column has a 1 - R^2 on the model below this is absorbed
+#: whole (four decades below the candidates' ABSORBED_1MR2, beyond the Gram's rounding): it
+#: tests nothing (0 parameters, as the explicit path finds), so no figure depends on its
+#: fit, and :meth:`Problem.shape_fit` gives it the mask of the model alone (the explicit
+#: path's fits the columns' parts off the model, at most 1e-5 of them: the same scans but
+#: where a residual lies within about 1e-3 of OUTLIER_Z)
+ABSORBED_WHOLE_1MR2 = 1e-10
 
 
 class Problem:
@@ -360,6 +380,115 @@ class Problem:
         return (LinearFit(coef=np.concatenate([coef_a, coef_x]), chi2=float(wres @ wres),
                           resid=resid, cov=cov, wres=wres, n_used=int(used.sum())),
                 (x, xp, zp))
+
+    def shape_fit(self, extra: np.ndarray, raw: np.ndarray | None = None) -> ShapeFit | None:
+        """:meth:`mask_fit` of raw ``extra`` (2n, k) and the fit over the mask it returns, from
+        one pass over the model's cached basis over its used scans U (``q^T x``), not two
+        factors and projections: the same masks and numbers to rounding, or None where the
+        explicit path must serve (correlated noise, dependent model columns, a column within
+        :data:`GRAM_1MR2_MIN` of the model's span, an ill-conditioned candidate Gram, more
+        than :data:`ROW_UPDATE_MAX` rows between U and a scan set tried).
+
+        Algebra (white noise: whitening is a weight per row). With the model in its basis
+        q = A_U R^-1 and x the whitened columns over U, every row i of the valid scans has
+        model coordinates g_i (q_i on U, a_i R^-1 elsewhere), the data's residual e_i of the
+        model's fit over U (z_perp on U) and the columns' part p_i = x_i - g_i^T q^T x left by
+        that fit. Over U, sum g g^T = I, sum g p^T = 0, sum g e = 0, sum p e = x^T z_perp and
+        sum p p^T = x^T x - (q^T x)^T (q^T x) (Frisch-Waugh-Lovell from inner products); over
+        any other set of scans S these sums change by the rows S adds and removes, so the fit
+        of model + columns over S is a small (m + k) system. Its residuals on U are
+        z_perp_i - x_i c - q_i d (d the change of the model's coordinates): |q_i d| <= |q_i|
+        |d|, so only rows whose z_perp_i - x_i c lies within that of OUTLIER_Z can fall on
+        the other side; those rows are computed exactly, and the mask is the same set.
+        ``raw``: columns whose norms and norms off the model are returned beside (the
+        unscaled signature's, for absorption), fitted alongside but not into the mask."""
+        used = self.used
+        qr = self._current_qr(used) if self.white(used) else None
+        if qr is None:
+            return None
+        q, _, _, _, zp = qr
+        rn_max, idx_o, g_o, e_o, zz, uscan, oscan = self._shape_base(used, qr)
+        k = extra.shape[1]
+        blocks = (extra,) if raw is None else (extra, raw)
+        x = self._whitened_fortran(blocks, used)
+        qx = q.T @ x  # the one pass over the model's basis
+        xx = x.T @ x
+        gram = xx - qx.T @ qx
+        d = np.diag(xx)
+        if not np.isfinite(xx).all() or not (d > 0).all():
+            return None
+        ratio = np.diag(gram) / d  # 1 - R^2 of each column on the model
+        if (ratio[k:] if raw is not None else ratio).max() < ABSORBED_WHOLE_1MR2:
+            fitted = np.arange(0)  # a signature the model absorbs whole: the model alone
+        elif ratio[:k].min() < ABSORBED_WHOLE_1MR2:
+            return None  # a column off the model by rounding only, beside others
+        else:
+            fitted = np.arange(k)
+        xz = x.T @ zp
+        x_o = np.column_stack([b[idx_o] for b in blocks]) * self.w[idx_o][:, None]
+        p_o = x_o - g_o @ qx
+        m = self.current_columns().shape[1] + extra.shape[1]
+        u_rows, o_rows = np.concatenate([uscan, uscan]), np.concatenate([oscan, oscan])
+
+        def fit(scans: np.ndarray):
+            drop = ~scans[uscan]
+            rm = np.flatnonzero(np.concatenate([drop, drop]))
+            add = scans[oscan]
+            ad = np.flatnonzero(np.concatenate([add, add]))
+            if rm.size + ad.size > ROW_UPDATE_MAX:
+                return None
+            out = _rows_fit(q, x, qx, zp, gram, xz, xx, zz, g_o, p_o, x_o, e_o, rm, ad,
+                            fitted)
+            if out is None:
+                return None
+            schur, rhs, chi2_now, fullsq, coef, cov, b = out
+            # the standardized residuals of model + columns on the used scans' rows are
+            # z_perp - x c - q d; |q_i d| <= max_i |q_i| |d| = bound, so only rows whose
+            # |z_perp - x c| exceeds OUTLIER_Z - bound can exceed OUTLIER_Z (a margin of
+            # 1e-9 of both for rounding): those are computed exactly
+            dv = b - qx[:, fitted] @ coef
+            bound = rn_max * float(np.linalg.norm(dv)) * (1 + 1e-9) + 1e-9
+            u = zp - x[:, fitted] @ coef
+            near = np.flatnonzero(np.abs(u) > OUTLIER_Z - bound)
+            out_u = near[np.abs(u[near] - q[near] @ dv) > OUTLIER_Z]
+            r_o = np.abs(e_o - g_o @ b - p_o[:, fitted] @ coef)
+            keep = self.valid.copy()
+            keep[u_rows[out_u]] = False
+            keep[o_rows[~(r_o <= OUTLIER_Z)]] = False
+            return keep, ShapeFit(scans, schur, rhs, chi2_now, fullsq, coef, cov, x, qx)
+
+        # mask_fit's iterations: from every valid scan, twice
+        scans = self.valid
+        for _ in range(2):
+            out = fit(scans)
+            if out is None:
+                return None
+            keep, res = out
+            if keep.sum() < max(m, 3) or np.array_equal(keep, scans):
+                return res
+            scans = keep
+        out = fit(scans)
+        return None if out is None else out[1]
+
+    def _shape_base(self, used: np.ndarray, qr: tuple):
+        """What :meth:`shape_fit` keeps per model and used scans: the largest row norm of
+        the model's basis q, the rows of the valid scans outside ``used`` (indices into 2n, the
+        model's coordinates there and the data's residual of the model's fit over
+        ``used``), ||z_perp||^2, and the scans of both sets."""
+        key = b"sb" + used.tobytes() + bytes([len(self.extra)])
+        hit = self._cached(key)
+        if hit is None:
+            q, r, qz, _, zp = qr
+            rn_max = float(np.sqrt(np.einsum("ij,ij->i", q, q).max())) if q.size else 0.0
+            other = self.valid & ~used
+            idx_o = np.flatnonzero(self.rows(other))
+            a_o = self.current_columns()[idx_o] * self.w[idx_o][:, None]
+            g_o = scipy.linalg.solve_triangular(r, a_o.T, trans="T").T
+            e_o = self.y[idx_o] * self.w[idx_o] - g_o @ qz
+            hit = (rn_max, idx_o, g_o, e_o, float(zp @ zp), np.flatnonzero(used),
+                   np.flatnonzero(other))
+            self._cache(key, hit, 8 * zp.size)
+        return hit
 
     def release(self) -> None:
         """Drop the cached projectors and factors (selection calls it when it is done: what
@@ -647,6 +776,79 @@ def rows_fortran(x: np.ndarray, rows: np.ndarray) -> np.ndarray:
     """``x[rows]`` (rows a boolean mask of x's rows) in Fortran order
     (:func:`take_rows_fortran`)."""
     return take_rows_fortran(x, np.flatnonzero(rows))
+
+
+@dataclass
+class ShapeFit:
+    """:meth:`Problem.shape_fit`: the scans a model with the candidate keeps and, over them,
+    the candidate's columns (then ``raw``'s) projected off the model as inner products."""
+
+    mask: np.ndarray
+    gram: np.ndarray  # (kk, kk) X_perp^T X_perp over ``mask``
+    rhs: np.ndarray  # (kk,) X_perp^T z_perp over ``mask``
+    chi2_now: float  # z_perp^T z_perp over ``mask`` (the model alone)
+    full_sq: np.ndarray  # (kk,) squared norms of the whitened columns over ``mask``
+    #: (k,) the candidate's coefficients over ``mask`` (none: the model absorbs its
+    #: signature whole, ABSORBED_WHOLE_1MR2)
+    coef: np.ndarray
+    cov: np.ndarray  # (k, k) their covariance (whitened units)
+    x: np.ndarray  # (2 n_used, kk) the whitened columns over the model's used scans
+    qx: np.ndarray  # (m, kk) q^T x there (q the model's basis)
+
+
+def _rows_fit(q, x, qx, zp, gram, xz, xx, zz, g_o, p_o, x_o, e_o, rm, ad, fitted):
+    """:meth:`Problem.shape_fit`'s fit over the used scans less the rows ``rm`` (positions
+    on them) plus the rows ``ad`` (positions among the other valid rows): the sums over the
+    used scans corrected by those rows, the model's block eliminated. None where the rows
+    removed carry half of some direction of the model, or :func:`gram_solve` refuses the
+    columns ``fitted``. Returns (Schur complement, its right-hand side, chi^2 of the model
+    alone, squared column norms, the ``fitted`` columns' coefficients and covariance, the
+    model's change of coordinates)."""
+    m, kk = q.shape[1], x.shape[1]
+    full_sq = np.diag(xx).copy()
+    if rm.size or ad.size:
+        q_rm = q[rm]
+        g = np.vstack([q_rm, g_o[ad]])
+        p = np.vstack([x[rm] - q_rm @ qx, p_o[ad]])
+        e = np.concatenate([zp[rm], e_o[ad]])
+        s = np.concatenate([-np.ones(rm.size), np.ones(ad.size)])
+        gs = g.T * s
+        w, v = np.linalg.eigh(np.eye(m) + gs @ g)
+        if w[0] < 0.5:
+            return None
+        ps = p.T * s
+        cgp = gs @ p
+        sg = (v / w) @ (v.T @ np.column_stack([cgp, gs @ e]))
+        schur = gram + ps @ p - cgp.T @ sg[:, :kk]
+        rhs = xz + ps @ e - cgp.T @ sg[:, kk]
+        chi2_now = zz + float((e * s) @ e) - float((gs @ e) @ sg[:, kk])
+        full_sq += np.vstack([x[rm], x_o[ad]]).T ** 2 @ s
+    else:
+        sg = np.zeros((m, kk + 1))
+        schur, rhs, chi2_now = gram, xz, zz
+    solved = gram_solve(schur[np.ix_(fitted, fitted)], rhs[fitted])
+    if solved is None:
+        return None
+    coef, cov = solved
+    return schur, rhs, chi2_now, full_sq, coef, cov, sg[:, kk] - sg[:, fitted] @ coef
+
+
+def gram_solve(gram: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """Least-squares coefficients and covariance from the columns' Gram matrix and their
+    inner products with the data (the normal equations); None where the columns'
+    correlation matrix has an eigenvalue below :data:`GRAM_MIN_RATIO` of its largest (the
+    normal equations' rounding grows as its inverse: :func:`_lstsq`'s QR then serves)."""
+    if not rhs.size:
+        return np.zeros(0), np.zeros((0, 0))
+    d = np.diag(gram)
+    if not (d > 0).all():
+        return None
+    s = 1.0 / np.sqrt(d)
+    w, v = np.linalg.eigh(gram * np.outer(s, s))
+    if not w[0] > GRAM_MIN_RATIO * w[-1] > 0.0:
+        return None
+    cov = (v / w) @ v.T * np.outer(s, s)
+    return cov @ rhs, cov
 
 
 def _qr(x: np.ndarray, overwrite: bool = False) -> tuple[np.ndarray, np.ndarray]:

@@ -17,8 +17,8 @@ from .. import pvalues
 from ..data import Observations
 from ..problem import Problem, _lstsq
 
-__all__ = ["DISTINGUISH_R", "Candidate", "TestResult", "nyholt_trials", "obs_key", "p_value",
-           "periodic_interp", "source_rates_arcsec_s", "stacked", "sun_el_grid_deg",
+__all__ = ["DISTINGUISH_R", "Candidate", "TestResult", "nyholt_gram", "nyholt_trials", "obs_key",
+           "p_value", "periodic_interp", "source_rates_arcsec_s", "stacked", "sun_el_grid_deg",
            "time_grid", "with_trials"]
 
 SIDEREAL_RATE_RAD_S = 7.2921158553e-5
@@ -208,9 +208,42 @@ def nyholt_trials(cols: np.ndarray, overwrite: bool = False) -> float:
         c /= norms
     else:
         c = cols[:, ok] / norms[ok]
-    lam = np.linalg.eigvalsh(c.T @ c)
-    m = int(ok.sum())
+    return _nyholt(np.linalg.eigvalsh(c.T @ c), int(ok.sum()))
+
+
+def nyholt_gram(gram: np.ndarray) -> float:
+    """:func:`nyholt_trials` of columns given by their Gram matrix (inner products)."""
+    d = np.diag(gram)
+    ok = d > 0
+    s = np.sqrt(d[ok])
+    return _nyholt(np.linalg.eigvalsh(gram[np.ix_(ok, ok)] / np.outer(s, s)), int(ok.sum()))
+
+
+def _nyholt(lam: np.ndarray, m: int) -> float:
+    """Nyholt's effective number of tests from the eigenvalues ``lam`` of the ``m`` tests'
+    correlation matrix."""
     return float(max(1.0, 1.0 + (m - 1) * (1.0 - np.var(lam, ddof=1) / m))) if m > 1 else 1.0
+
+
+def _grid_trials(problem: Problem, grid: np.ndarray, qgrid: list[np.ndarray | None]) -> float:
+    """:func:`nyholt_trials` of the 1-column shapes projected off the model over its used
+    scans, from ``grid`` (their whitened columns there, or projected ones where ``qgrid``
+    holds None) and ``qgrid`` (q^T of each): the Gram of the projections is
+    grid^T grid - QX^T QX, without a projection per shape. Where a shape is within
+    GRAM_1MR2_MIN of the model (the difference would lose digits), the grid is projected
+    explicitly instead."""
+    from ..problem import GRAM_1MR2_MIN
+
+    if all(g is None for g in qgrid):
+        return nyholt_trials(grid, overwrite=True)
+    m = next(g.size for g in qgrid if g is not None)
+    qx = np.column_stack([np.zeros(m) if g is None else g for g in qgrid])
+    xx = grid.T @ grid
+    gram = xx - qx.T @ qx
+    if (np.diag(gram) >= GRAM_1MR2_MIN * np.diag(xx)).all():
+        return nyholt_gram(gram)
+    grid -= problem.basis() @ qx
+    return nyholt_trials(grid, overwrite=True)
 
 
 def with_trials(p: float, trials: float) -> float:
@@ -310,25 +343,25 @@ class Candidate:
         obs = problem.obs
         best = None
         thetas = self.thetas(obs)
-        # the 1-column shapes over the current model's scans (``perp``'s), for the trials:
-        # filled in place (one copy of them, not a list and its stacked copy)
+        # the 1-column shapes whitened over the current model's scans (``perp``'s), for the
+        # trials: filled in place (one copy of them, not a list and its stacked copy), each
+        # with q^T x (q the model's basis there; zero for a column projected off it already)
         grid = np.empty((z_perp.size, len(thetas))) if len(thetas) > 1 else None
-        n_grid = 0
+        qgrid: list[np.ndarray | None] = []
         for theta in thetas:
             cols, names = self.columns(obs, theta)
-            res, xp = self._linear_xp(problem, cols, names, theta)
+            res, xu, qxu = self._linear_xp(problem, cols, names, theta)
             if cols.shape[1] == 1 and grid is not None:
-                grid[:, n_grid] = xp[:, 0] if np.array_equal(res.mask, problem.used) \
+                grid[:, len(qgrid)] = xu[:, 0] if xu is not None \
                     else perp(problem.cand(cols))[:, 0]
-                n_grid += 1
+                qgrid.append(None if qxu is None else qxu[:, 0])
             if best is None or res.delta_chi2 > best.delta_chi2:
                 best = res
-            del cols, xp
+            del cols, xu
         assert best is not None
         best = self.refine(problem, perp, z_perp, best)
-        # in place only when the whole grid is filled (the same array as a stacked copy)
-        best.trials = nyholt_trials(grid[:, :n_grid], overwrite=n_grid == len(thetas)) \
-            if n_grid > 1 else 1.0
+        best.trials = _grid_trials(problem, grid[:, :len(qgrid)], qgrid) \
+            if len(qgrid) > 1 else 1.0
         del grid
         best.p = with_trials(p_value(problem, best.delta_chi2, best.dof, best.chi2_now,
                                      best.mask), best.trials)
@@ -347,11 +380,64 @@ class Candidate:
         return self._linear_xp(problem, cols, names, theta)[0]
 
     def _linear_xp(self, problem: Problem, cols: np.ndarray, names: tuple[str, ...],
-                   theta: Any) -> tuple[TestResult, np.ndarray]:
-        """:meth:`_linear` and the candidate's columns whitened and projected off the model
-        over the scans it kept (2 n_kept, q)."""
+                   theta: Any) -> tuple[TestResult, np.ndarray | None, np.ndarray | None]:
+        """:meth:`_linear`, the candidate's columns whitened over the model's used scans and
+        q^T of them (q the model's basis there; None: the columns are projected off it
+        already), or (None, None) where they were not formed there. From the model's cached
+        basis by inner products (:meth:`Problem.shape_fit`) where it serves, else by
+        explicit projections (:meth:`_linear_explicit`)."""
         raw = cols
         cols = problem.cand(cols)
+        sf = problem.shape_fit(cols, None if problem.unscaled else raw)
+        res = None if sf is None else self._from_shape_fit(problem, sf, cols, names, theta)
+        if res is not None:
+            k = cols.shape[1]
+            return res, sf.x[:, :k], sf.qx[:, :k]
+        res, xp = self._linear_explicit(problem, raw, cols, names, theta)
+        return res, xp if np.array_equal(res.mask, problem.used) else None, None
+
+    def _from_shape_fit(self, problem: Problem, sf, cols: np.ndarray, names: tuple[str, ...],
+                        theta: Any) -> TestResult | None:
+        """:meth:`_linear_explicit`'s result from :meth:`Problem.shape_fit`'s inner products
+        over the same scans (the same least-squares problem); None where a column kept is
+        within GRAM_1MR2_MIN of the model's span or the kept ones' Gram is ill-conditioned
+        (the explicit path then serves)."""
+        from ..problem import GRAM_1MR2_MIN, gram_solve
+
+        k = cols.shape[1]
+        j = slice(0, k) if problem.unscaled else slice(k, 2 * k)  # the raw signature's
+        full_sq, left_sq = sf.full_sq[j], np.diag(sf.gram)[j]
+        if not (full_sq > 0).all():
+            return None
+        one_minus_r2 = left_sq / full_sq
+        keep = one_minus_r2 > ABSORBED_1MR2
+        absorbed = tuple(n for n, kp in zip(names, keep, strict=True) if not kp)
+        if not keep.any():
+            return TestResult(self, 0.0, 0, 1.0, 1.0, theta, None, names, absorbed=absorbed,
+                              mask=sf.mask, _remake=self._remaker(problem, theta, cols))
+        ratio = np.diag(sf.gram)[:k] / sf.full_sq[:k]
+        if min(one_minus_r2[keep].min(), ratio[keep].min()) < GRAM_1MR2_MIN:
+            return None
+        kept = np.flatnonzero(keep)
+        if keep.all() and sf.coef.size == k:  # the mask's last fit solved this problem
+            coef, cov = sf.coef, sf.cov
+        else:
+            solved = gram_solve(sf.gram[np.ix_(kept, kept)], sf.rhs[kept])
+            if solved is None:
+                return None
+            coef, cov = solved
+        r = np.sqrt(np.clip(1.0 - one_minus_r2[keep], 0.0, 1.0))
+        return TestResult(self, float(sf.rhs[kept] @ coef), kept.size, 1.0, 1.0, theta, None,
+                          tuple(n for n, kp in zip(names, keep, strict=True) if kp), coef,
+                          cov, absorbed=absorbed, r_model=float(r.max()), mask=sf.mask,
+                          chi2_now=float(sf.chi2_now),
+                          _remake=self._remaker(problem, theta, cols, keep))
+
+    def _linear_explicit(self, problem: Problem, raw: np.ndarray, cols: np.ndarray,
+                         names: tuple[str, ...], theta: Any) -> tuple[TestResult, np.ndarray]:
+        """:meth:`_linear` by explicit projections (the reference :meth:`_from_shape_fit`
+        is tested against, and the path where it does not serve), and the candidate's
+        columns whitened and projected off the model over the scans it kept (2 n_kept, q)."""
         mask, last = problem.mask_fit(cols)
         perp, z_perp = problem.perp_for(mask)
         # the mask's last fit projected the columns already (the same projection)
