@@ -774,6 +774,81 @@ def test_a_candidates_test_is_the_projection_it_states(scaled):
     assert nyholt_trials(grid.copy(), overwrite=True) == nyholt_trials(grid)
 
 
+@pytest.mark.parametrize("scaled", [True, False])
+def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
+    """Two code paths: a shape's test from inner products with the model's cached basis over
+    its used scans (:meth:`Problem.shape_fit`: one pass over it, the other scan sets the
+    outlier mask tries by row corrections, the mask from a bound on what the rest of the
+    fit changes) against the explicit projections it replaces (:meth:`_linear_explicit`,
+    today's reference). 150 scans, some unused, noise and offset scale per scan, a 30"
+    sin 2A elevation error the model leaves out, so that az_track_2a takes back scans the
+    model rejects (the row corrections serve). The same least-squares problems in another
+    order: 1e-9 relative (the design's condition number is 60 and every column kept is far
+    from the model's span, 1 - R^2 > 1e-3, so the Gram's rounding is ~1e-13); the masks,
+    kept and absorbed columns identical. The trials of a grid of 1-column shapes from its
+    Gram against Nyholt's count of the projected columns: 1e-9 relative, also where one
+    shape is in the model's span (the grid is then projected) or came projected."""
+    from antsim.diagnose.candidates.base import _grid_trials, nyholt_trials
+
+    problem = _scans_with_unused_and_scaled()
+    if not scaled:
+        problem.f = np.ones(problem.n)
+    obs = problem.obs
+    served, checked = [], []
+    shapes = [(candidate("az_track_2a"), None), (candidate("el_periodic_az"), 3),
+              (candidate("el_periodic_az"), 5), (candidate("refraction"), None)]
+    for c, theta in shapes:
+        raw, names = c.columns(obs, theta)
+        fast = c._linear_xp(problem, raw, names, theta)[0]
+        ref = c._linear_explicit(problem, raw, problem.cand(raw), names, theta)[0]
+        served.append(problem.shape_fit(problem.cand(raw),
+                                        None if problem.unscaled else raw) is not None)
+        assert fast.dof == 0 or np.array_equal(fast.columns, ref.columns)
+        checked.append((fast, ref))
+    # columns that take back the scans the model rejects (each one's error, plus a shape
+    # over every scan): the row corrections serve
+    out = np.flatnonzero(problem.valid & ~problem.used)
+    raw = np.zeros((2 * obs.n, out.size))
+    raw[out, np.arange(out.size)] = problem.y[out]
+    raw[obs.n:] = 0.1 * np.sin(np.outer(obs.az_rad, np.arange(1, out.size + 1)))
+    names = tuple(f"s{i}" for i in range(out.size))
+    c = candidate("az_track_2a")
+    fast = c._linear_xp(problem, raw, names, None)[0]
+    ref = c._linear_explicit(problem, raw, problem.cand(raw), names, None)[0]
+    assert out.size == 2 and fast.mask[out].all()
+    served.append(problem.shape_fit(problem.cand(raw),
+                                    None if problem.unscaled else raw) is not None)
+    checked.append((fast, ref))
+    for fast, ref in checked:
+        assert np.array_equal(fast.mask, ref.mask) and fast.dof == ref.dof
+        assert (fast.comp_names, fast.absorbed) == (ref.comp_names, ref.absorbed)
+        assert fast.delta_chi2 == pytest.approx(ref.delta_chi2, rel=1e-9, abs=1e-9)
+        np.testing.assert_allclose(fast.coef, ref.coef, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(fast.cov, ref.cov, rtol=1e-9, atol=1e-12)
+        if fast.dof:
+            assert fast.chi2_now == pytest.approx(ref.chi2_now, rel=1e-9)
+            assert fast.r_model == pytest.approx(ref.r_model, rel=1e-9, abs=1e-12)
+    assert all(served) and checked[3][0].dof == 0  # refraction: TX is in the model
+    az, el = obs.az_rad, obs.el_rad
+    cols = [np.concatenate([np.zeros(obs.n), np.sin(n * az + 0.3 * n)]) for n in range(1, 6)]
+    cols += [term_columns(("TX",), obs)[:, 0]]  # in the model's span
+    q = problem.basis()
+    perp, _ = problem.perp_for(problem.used)
+    near = cols[5] + 1e-3 * np.std(cols[5]) / np.std(cols[0]) * cols[0]  # 1 - R^2 ~ 1e-6
+    xn = problem.T(near[:, None])
+    assert 1e-8 < float(np.sum(perp(near[:, None]) ** 2) / np.sum(xn**2)) < 1e-5
+    ref = nyholt_trials(perp(np.column_stack(cols[:5])))
+    for shapes_now in (cols[:5], cols, [*cols[:5], near]):
+        x = problem.T(np.column_stack(shapes_now))
+        grid, qgrid = x.copy(), [q.T @ x[:, i] for i in range(x.shape[1])]
+        grid[:, 1], qgrid[1] = perp(shapes_now[1][:, None])[:, 0], None  # came projected
+        # the shape in the model's span (rounding off it) is no trial
+        want = nyholt_trials(perp(np.column_stack(shapes_now))) if len(
+            shapes_now) == 6 and shapes_now[5] is near else ref
+        assert _grid_trials(problem, grid, qgrid) == pytest.approx(want, rel=1e-9)
+    assert 1.0 < ref < 5.0 and np.cos(el).size  # correlated shapes: fewer than 5 trials
+
+
 def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits():
     """Two code paths each: the current model plus a candidate's columns fitted by
     Frisch-Waugh-Lovell on the model's cached QR (:meth:`Problem.fit_added`) against one

@@ -229,10 +229,11 @@ def _grid_trials(problem: Problem, grid: np.ndarray, qgrid: list[np.ndarray | No
     """:func:`nyholt_trials` of the 1-column shapes projected off the model over its used
     scans, from ``grid`` (their whitened columns there, or projected ones where ``qgrid``
     holds None) and ``qgrid`` (q^T of each): the Gram of the projections is
-    grid^T grid - QX^T QX, without a projection per shape. Where a shape is within
-    GRAM_1MR2_MIN of the model (the difference would lose digits), the grid is projected
-    explicitly instead."""
-    from ..problem import GRAM_1MR2_MIN
+    grid^T grid - QX^T QX, without a projection per shape. A shape the model absorbs whole
+    (ABSORBED_WHOLE_1MR2: its projection is rounding) is no trial, as a zero column is not;
+    where a shape is within GRAM_1MR2_MIN of the model (the difference would lose digits),
+    the grid is projected explicitly instead."""
+    from ..problem import ABSORBED_WHOLE_1MR2, GRAM_1MR2_MIN
 
     if all(g is None for g in qgrid):
         return nyholt_trials(grid, overwrite=True)
@@ -240,9 +241,12 @@ def _grid_trials(problem: Problem, grid: np.ndarray, qgrid: list[np.ndarray | No
     qx = np.column_stack([np.zeros(m) if g is None else g for g in qgrid])
     xx = grid.T @ grid
     gram = xx - qx.T @ qx
-    if (np.diag(gram) >= GRAM_1MR2_MIN * np.diag(xx)).all():
-        return nyholt_gram(gram)
-    grid -= problem.basis() @ qx
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = np.where(np.diag(xx) > 0, np.diag(gram) / np.diag(xx), 1.0)
+    shapes = np.flatnonzero(ratio >= ABSORBED_WHOLE_1MR2)
+    if (ratio[shapes] >= GRAM_1MR2_MIN).all():
+        return nyholt_gram(gram[np.ix_(shapes, shapes)])
+    grid = grid[:, shapes] - problem.basis() @ qx[:, shapes]
     return nyholt_trials(grid, overwrite=True)
 
 
