@@ -381,8 +381,9 @@ class Problem:
                           resid=resid, cov=cov, wres=wres, n_used=int(used.sum())),
                 (x, xp, zp))
 
-    def shape_fit(self, extra: np.ndarray, raw: np.ndarray | None = None) -> ShapeFit | None:
-        """:meth:`mask_fit` of raw ``extra`` (2n, k) and the fit over the mask it returns, from
+    def shape_fit(self, raw: np.ndarray) -> ShapeFit | None:
+        """:meth:`mask_fit` of the candidate's columns (raw ``raw`` (2n, k), scaled by
+        :meth:`cand`) and the fit over the mask it returns, from
         one pass over the model's cached basis over its used scans U (``q^T x``), not two
         factors and projections: the same masks and numbers to rounding, or None where the
         explicit path must serve (correlated noise, dependent model columns, a column within
@@ -400,17 +401,30 @@ class Problem:
         z_perp_i - x_i c - q_i d (d the change of the model's coordinates): |q_i d| <= |q_i|
         |d|, so only rows whose z_perp_i - x_i c lies within that of OUTLIER_Z can fall on
         the other side; those rows are computed exactly, and the mask is the same set.
-        ``raw``: columns whose norms and norms off the model are returned beside (the
-        unscaled signature's, for absorption), fitted alongside but not into the mask."""
+        Where the offset scale is not 1 the raw columns' norms and norms off the model come
+        beside (the signature's, for absorption): x is then [scaled, raw]."""
         used = self.used
         qr = self._current_qr(used) if self.white(used) else None
         if qr is None:
             return None
         q, _, _, _, zp = qr
         rn_max, idx_o, g_o, e_o, zz, uscan, oscan = self._shape_base(used, qr)
-        k = extra.shape[1]
-        blocks = (extra,) if raw is None else (extra, raw)
-        x = self._whitened_fortran(blocks, used)
+        k = raw.shape[1]
+        scaled = not self.unscaled
+        idx, wu = self._view(used)
+        # whitened over U in Fortran order, each column gathered once: the scaled columns
+        # (raw times the offset scale, as cand() makes them) then the raw ones
+        x = np.empty((idx.size, 2 * k if scaled else k), order="F")
+        for c in range(k):
+            np.take(raw[:, c], idx, out=x[:, x.shape[1] - k + c])
+        x_o = raw[idx_o]
+        if scaled:
+            fu = self.f[uscan]
+            f2u = np.concatenate([fu, fu])
+            np.multiply(x[:, k:], f2u[:, None], out=x[:, :k])
+            x_o = np.column_stack([x_o * self.f[idx_o % self.n][:, None], x_o])
+        x *= wu[:, None]
+        x_o = x_o * self.w[idx_o][:, None]
         qx = q.T @ x  # the one pass over the model's basis
         xx = x.T @ x
         gram = xx - qx.T @ qx
@@ -418,26 +432,24 @@ class Problem:
         if not np.isfinite(xx).all() or not (d > 0).all():
             return None
         ratio = np.diag(gram) / d  # 1 - R^2 of each column on the model
-        if (ratio[k:] if raw is not None else ratio).max() < ABSORBED_WHOLE_1MR2:
+        if ratio[x.shape[1] - k:].max() < ABSORBED_WHOLE_1MR2:
             fitted = np.arange(0)  # a signature the model absorbs whole: the model alone
         elif ratio[:k].min() < ABSORBED_WHOLE_1MR2:
             return None  # a column off the model by rounding only, beside others
         else:
             fitted = np.arange(k)
         xz = x.T @ zp
-        x_o = np.column_stack([b[idx_o] for b in blocks]) * self.w[idx_o][:, None]
         p_o = x_o - g_o @ qx
-        m = self.current_columns().shape[1] + extra.shape[1]
-        u_rows, o_rows = np.concatenate([uscan, uscan]), np.concatenate([oscan, oscan])
+        m = self.current_columns().shape[1] + k
+        nu, no = uscan.size, oscan.size
 
         def fit(scans: np.ndarray):
-            drop = ~scans[uscan]
-            rm = np.flatnonzero(np.concatenate([drop, drop]))
-            add = scans[oscan]
-            ad = np.flatnonzero(np.concatenate([add, add]))
-            if rm.size + ad.size > ROW_UPDATE_MAX:
+            rm = np.searchsorted(uscan, np.flatnonzero(used & ~scans))
+            ad = np.flatnonzero(scans[oscan])
+            if 2 * (rm.size + ad.size) > ROW_UPDATE_MAX:
                 return None
-            out = _rows_fit(q, x, qx, zp, gram, xz, xx, zz, g_o, p_o, x_o, e_o, rm, ad,
+            out = _rows_fit(q, x, qx, zp, gram, xz, xx, zz, g_o, p_o, x_o, e_o,
+                            np.concatenate([rm, rm + nu]), np.concatenate([ad, ad + no]),
                             fitted)
             if out is None:
                 return None
@@ -446,15 +458,18 @@ class Problem:
             # z_perp - x c - q d; |q_i d| <= max_i |q_i| |d| = bound, so only rows whose
             # |z_perp - x c| exceeds OUTLIER_Z - bound can exceed OUTLIER_Z (a margin of
             # 1e-9 of both for rounding): those are computed exactly
-            dv = b - qx[:, fitted] @ coef
+            cols = slice(0, fitted.size)  # the fitted columns (a view, not a copy)
+            dv = b - qx[:, cols] @ coef
             bound = rn_max * float(np.linalg.norm(dv)) * (1 + 1e-9) + 1e-9
-            u = zp - x[:, fitted] @ coef
+            u = x[:, cols] @ coef
+            np.subtract(zp, u, out=u)
             near = np.flatnonzero(np.abs(u) > OUTLIER_Z - bound)
             out_u = near[np.abs(u[near] - q[near] @ dv) > OUTLIER_Z]
-            r_o = np.abs(e_o - g_o @ b - p_o[:, fitted] @ coef)
+            out_o = np.flatnonzero(~(np.abs(e_o - g_o @ b - p_o[:, cols] @ coef)
+                                     <= OUTLIER_Z))
             keep = self.valid.copy()
-            keep[u_rows[out_u]] = False
-            keep[o_rows[~(r_o <= OUTLIER_Z)]] = False
+            keep[uscan[out_u % nu]] = False
+            keep[oscan[out_o % no]] = False
             return keep, ShapeFit(scans, schur, rhs, chi2_now, fullsq, coef, cov, x, qx)
 
         # mask_fit's iterations: from every valid scan, twice

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
+import scipy.linalg
 
 from controller.units import ARCSEC_PER_RAD
 
@@ -66,6 +67,9 @@ class TestResult:
     trials_at: Callable[[float], float] | None = None
     #: makes ``columns`` again when they are read, for a test that did not keep them
     _remake: Callable[[], np.ndarray] | None = field(default=None, repr=False)
+    #: q^T x of the columns whitened over the model's used scans (q the model's basis
+    #: there), where the test formed it and ``mask`` is those scans (m, q)
+    _qx: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def columns(self) -> np.ndarray | None:
@@ -391,16 +395,15 @@ class Candidate:
         basis by inner products (:meth:`Problem.shape_fit`) where it serves, else by
         explicit projections (:meth:`_linear_explicit`)."""
         raw = cols
-        cols = problem.cand(cols)
-        sf = problem.shape_fit(cols, None if problem.unscaled else raw)
-        res = None if sf is None else self._from_shape_fit(problem, sf, cols, names, theta)
+        sf = problem.shape_fit(raw)
+        res = None if sf is None else self._from_shape_fit(problem, sf, raw, names, theta)
         if res is not None:
-            k = cols.shape[1]
+            k = raw.shape[1]
             return res, sf.x[:, :k], sf.qx[:, :k]
-        res, xp = self._linear_explicit(problem, raw, cols, names, theta)
+        res, xp = self._linear_explicit(problem, raw, problem.cand(raw), names, theta)
         return res, xp if np.array_equal(res.mask, problem.used) else None, None
 
-    def _from_shape_fit(self, problem: Problem, sf, cols: np.ndarray, names: tuple[str, ...],
+    def _from_shape_fit(self, problem: Problem, sf, raw: np.ndarray, names: tuple[str, ...],
                         theta: Any) -> TestResult | None:
         """:meth:`_linear_explicit`'s result from :meth:`Problem.shape_fit`'s inner products
         over the same scans (the same least-squares problem); None where a column kept is
@@ -408,7 +411,7 @@ class Candidate:
         (the explicit path then serves)."""
         from ..problem import GRAM_1MR2_MIN, gram_solve
 
-        k = cols.shape[1]
+        k = raw.shape[1]
         j = slice(0, k) if problem.unscaled else slice(k, 2 * k)  # the raw signature's
         full_sq, left_sq = sf.full_sq[j], np.diag(sf.gram)[j]
         if not (full_sq > 0).all():
@@ -418,7 +421,7 @@ class Candidate:
         absorbed = tuple(n for n, kp in zip(names, keep, strict=True) if not kp)
         if not keep.any():
             return TestResult(self, 0.0, 0, 1.0, 1.0, theta, None, names, absorbed=absorbed,
-                              mask=sf.mask, _remake=self._remaker(problem, theta, cols))
+                              mask=sf.mask, _remake=self._remaker(problem, theta, raw, raw=True))
         ratio = np.diag(sf.gram)[:k] / sf.full_sq[:k]
         if min(one_minus_r2[keep].min(), ratio[keep].min()) < GRAM_1MR2_MIN:
             return None
@@ -435,7 +438,8 @@ class Candidate:
                           tuple(n for n, kp in zip(names, keep, strict=True) if kp), coef,
                           cov, absorbed=absorbed, r_model=float(r.max()), mask=sf.mask,
                           chi2_now=float(sf.chi2_now),
-                          _remake=self._remaker(problem, theta, cols, keep))
+                          _remake=self._remaker(problem, theta, raw, keep, raw=True),
+                          _qx=sf.qx[:, kept])
 
     def _linear_explicit(self, problem: Problem, raw: np.ndarray, cols: np.ndarray,
                          names: tuple[str, ...], theta: Any) -> tuple[TestResult, np.ndarray]:
@@ -481,12 +485,18 @@ class Candidate:
                           _remake=self._remaker(problem, theta, cols, keep)), xp
 
     def _remaker(self, problem: Problem, theta: Any, cols: np.ndarray,
-                 keep: np.ndarray | None = None) -> Callable[[], np.ndarray]:
+                 keep: np.ndarray | None = None, raw: bool = False
+                 ) -> Callable[[], np.ndarray]:
         """A function that makes the candidate columns ``cols`` (scaled, 2n x q; the
         ``keep`` ones) again from :meth:`columns` at ``theta``; it checks them against a
-        fingerprint of ``cols`` (a test of columns made otherwise must not be remade)."""
+        fingerprint of ``cols`` (a test of columns made otherwise must not be remade).
+        ``raw``: ``cols`` are the raw columns (the fingerprint scales their rows as
+        :meth:`Problem.cand` does)."""
         rows = slice(None, None, max(1, cols.shape[0] // 64))
-        mark, shape = cols[rows].copy(), cols.shape  # not ``cols``: the point is to free it
+        # not ``cols``: the point is to free it
+        mark = cols[rows] * np.concatenate([problem.f, problem.f])[rows][:, None] if raw \
+            else cols[rows].copy()
+        shape = cols.shape
 
         def remake() -> np.ndarray:
             again = problem.cand(self.columns(problem.obs, theta)[0])
@@ -505,8 +515,17 @@ class Candidate:
             cov = res.cov  # whitened units: the per-axis scale is already the noise
         res.params, res.amplitude, res.amplitude_sigma = self.params_from(
             problem.obs, res.theta, res.coef, cov, res.comp_names)
-        cols = res.columns if res.r_model > 0.5 else None  # read once (may be made again)
-        if cols is not None and cols.size:
+        if res.r_model <= 0.5:
+            return
+        qr = problem._current_qr(res.mask) if res._qx is not None and np.array_equal(
+            res.mask, problem.used) else None
+        if qr is not None:  # the shape test's q^T x over these scans: no columns again
+            beta = scipy.linalg.solve_triangular(qr[1], res._qx)
+            norms = problem.current_norms(res.mask)
+        else:
+            cols = res.columns  # read once (may be made again)
+            if cols is None or not cols.size:
+                return
             x = problem.T(cols, res.mask)
             beta = problem.coef_on_current(x, res.mask)
             if beta is None:
@@ -515,12 +534,12 @@ class Candidate:
                 norms = np.linalg.norm(a, axis=0)
             else:  # the whitened model's column norms are its R's (Q is orthonormal)
                 norms = problem.current_norms(res.mask)
-            contrib = np.abs(beta) * norms[:, None]
-            weight = contrib.max(axis=1)
-            order = np.argsort(weight)[::-1]
-            names = problem.current_names
-            top = [names[i] for i in order[:3] if weight[i] > 0.2 * weight[order[0]]]
-            res.partners = tuple(top)
+        contrib = np.abs(beta) * norms[:, None]
+        weight = contrib.max(axis=1)
+        order = np.argsort(weight)[::-1]
+        names = problem.current_names
+        top = [names[i] for i in order[:3] if weight[i] > 0.2 * weight[order[0]]]
+        res.partners = tuple(top)
 
     # -- blind harness ------------------------------------------------------------------------
     def draw_shape(self, rng: np.random.Generator, obs: Observations) -> dict[str, Any]:
