@@ -1143,16 +1143,16 @@ def test_least_squares_paths_are_the_svds_solution(rows, cols, cond):
 
 def test_cached_factors_let_the_least_recently_used_go_first(monkeypatch):
     """The model's cached QR factors and projectors stay within PERP_CACHE_BYTES, and the
-    one asked for last stays when another set of scans needs room: every candidate shape
-    asks for the factors over the valid and the used scans (the cache cleared itself whole
-    before, and factored them again). A factor's projector (which holds its basis) goes
-    with it. Measured in the entries' own byte counts."""
+    one asked for last stays when another set of scans needs room (the cache cleared itself
+    whole before, and factored them again). A factor's projector (which holds its basis)
+    goes with it. Those over the model's used scans stay whatever their age: every shape
+    test reads them. Measured in the entries' own byte counts."""
     import antsim.diagnose.problem as problem_module
 
     problem = _scans_with_unused_and_scaled()
     sets = [problem.used.copy() for _ in range(4)]
-    for k, used in enumerate(sets[1:], start=1):
-        used[np.flatnonzero(used)[:k]] = False  # three other sets of scans
+    for k, used in enumerate(sets, start=1):
+        used[np.flatnonzero(used)[:k]] = False  # four sets of scans, not the model's
     one = 8 * (problem._current_qr(problem.used)[0].size + 2 * 2 * int(problem.used.sum()))
     problem._perps.clear()
     problem._perp_bytes.clear()
@@ -1172,6 +1172,12 @@ def test_cached_factors_let_the_least_recently_used_go_first(monkeypatch):
     problem._current_qr(sets[3])  # sets[0]'s factor is the oldest: it goes, its projector too
     assert list(problem._perps) == [b"qr" + key[2], b"qr" + key[3]]
     assert sum(problem._perp_bytes.values()) <= problem_module.PERP_CACHE_BYTES
+    own = b"qr" + problem.used.tobytes() + bytes([0])
+    mine = problem._current_qr(problem.used)
+    problem._current_qr(sets[0])
+    problem._current_qr(sets[1])  # the model's is the oldest, but stays
+    assert list(problem._perps) == [own, b"qr" + key[1]]
+    assert problem._current_qr(problem.used) is mine
 
 
 def test_selection_lets_the_models_factors_go_when_it_accepts_a_finding(monkeypatch):

@@ -99,8 +99,10 @@ def correlation_matrix(t_s: np.ndarray, model: tuple[tuple[float, float], ...]) 
 #: weights: 6 MB at 200,000 scans)
 VIEW_CACHE = 4
 
-#: the bound on the memory cached projectors hold (their bases; see Problem.perp_for)
-PERP_CACHE_BYTES = 128 * 2**20
+#: the bound on the memory cached projectors hold (their bases; see Problem.perp_for): one
+#: factor of the model over its used scans and its projectors at 200,000 scans (49 MiB),
+#: what the shape tests read (Problem.shape_fit corrects it by rows for other scan sets)
+PERP_CACHE_BYTES = 64 * 2**20
 
 
 #: :meth:`Problem.shape_fit` corrects the model's fit over its used scans by at most this
@@ -514,13 +516,17 @@ class Problem:
     def _cache(self, key: bytes, value, size: int) -> None:
         """Keep ``value`` among the cached projectors and factors: at most 64 of them and
         PERP_CACHE_BYTES together (each holds a basis, 2 n_used x k floats: 200,000 scans
-        and 20 terms are 64 MB), the least recently used let go first (every candidate's
-        shape asks for the factors over the valid and the used scans: clearing all of
-        them for another set of scans factored the model 35 times at 200,000 scans, 21
-        now)."""
-        while self._perps and (len(self._perps) > 64 or sum(self._perp_bytes.values()) + size
-                               > PERP_CACHE_BYTES):
-            old = next(iter(self._perps))
+        and 20 terms are 64 MB), the least recently used let go first, but never those over
+        the model's used scans (its factor, projector and :meth:`shape_fit`'s rows), which
+        every shape test reads (a model larger than the bound would be factored again per
+        shape)."""
+        used = self.used.tobytes() + bytes([len(self.extra)])
+        pinned = {used, b"qr" + used, b"sb" + used}
+        while len(self._perps) > 64 or sum(self._perp_bytes.values()) + size \
+                > PERP_CACHE_BYTES:
+            old = next((k for k in self._perps if k not in pinned), None)
+            if old is None:
+                break
             # a projector over the same scans holds the factor's basis (counted once, with
             # the factor): it goes with it
             for k in (old, old[2:]) if old.startswith(b"qr") else (old,):
