@@ -788,6 +788,8 @@ def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
     kept and absorbed columns identical. The trials of a grid of 1-column shapes from its
     Gram against Nyholt's count of the projected columns: 1e-9 relative, also where one
     shape is in the model's span (the grid is then projected) or came projected."""
+    import scipy.linalg
+
     from antsim.diagnose.candidates.base import _grid_trials, nyholt_trials
 
     problem = _scans_with_unused_and_scaled()
@@ -827,6 +829,16 @@ def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
             assert fast.chi2_now == pytest.approx(ref.chi2_now, rel=1e-9)
             assert fast.r_model == pytest.approx(ref.r_model, rel=1e-9, abs=1e-12)
     assert all(served) and checked[3][0].dof == 0  # refraction: TX is in the model
+    # the partners' inputs: the columns' coefficients on the model over the mask (here
+    # not the model's scans) and the model's whitened column norms there, against its
+    # factor over those scans
+    r = problem._current_qr(problem.used)[1]
+    on_model, gram = fast._on_model
+    x = problem.T(problem.cand(raw), fast.mask)
+    np.testing.assert_allclose(scipy.linalg.solve_triangular(r, on_model),
+                               problem.coef_on_current(x, fast.mask), rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(np.sqrt(np.diag(r.T @ gram @ r)),
+                               problem.current_norms(fast.mask), rtol=1e-9)
     az, el = obs.az_rad, obs.el_rad
     cols = [np.concatenate([np.zeros(obs.n), np.sin(n * az + 0.3 * n)]) for n in range(1, 6)]
     cols += [term_columns(("TX",), obs)[:, 0]]  # in the model's span

@@ -455,7 +455,7 @@ class Problem:
                             fitted)
             if out is None:
                 return None
-            schur, rhs, chi2_now, fullsq, coef, cov, b = out
+            schur, rhs, chi2_now, fullsq, coef, cov, b, model, on_model = out
             # the standardized residuals of model + columns on the used scans' rows are
             # z_perp - x c - q d; |q_i d| <= max_i |q_i| |d| = bound, so only rows whose
             # |z_perp - x c| exceeds OUTLIER_Z - bound can exceed OUTLIER_Z (a margin of
@@ -472,7 +472,8 @@ class Problem:
             keep = self.valid.copy()
             keep[uscan[out_u % nu]] = False
             keep[oscan[out_o % no]] = False
-            return keep, ShapeFit(scans, schur, rhs, chi2_now, fullsq, coef, cov, x, qx)
+            return keep, ShapeFit(scans, schur, rhs, chi2_now, fullsq, coef, cov, x, qx,
+                                  model, on_model)
 
         # mask_fit's iterations: from every valid scan, twice
         scans = self.valid
@@ -815,6 +816,12 @@ class ShapeFit:
     cov: np.ndarray  # (k, k) their covariance (whitened units)
     x: np.ndarray  # (2 n_used, kk) the whitened columns over the model's used scans
     qx: np.ndarray  # (m, kk) q^T x there (q the model's basis)
+    #: (m, m) the whitened model's Gram over ``mask`` in q's coordinates (R^-T A^T A R^-1,
+    #: R the model's factor over its used scans; the identity over them)
+    model_gram: np.ndarray
+    #: (m, kk) the columns' least-squares coefficients on the model over ``mask``, in q's
+    #: coordinates (R times the model's coefficients; q^T x over the used scans)
+    on_model: np.ndarray
 
 
 def _rows_fit(q, x, qx, zp, gram, xz, xx, zz, g_o, p_o, x_o, e_o, rm, ad, fitted):
@@ -824,7 +831,8 @@ def _rows_fit(q, x, qx, zp, gram, xz, xx, zz, g_o, p_o, x_o, e_o, rm, ad, fitted
     removed carry half of some direction of the model, or :func:`gram_solve` refuses the
     columns ``fitted``. Returns (Schur complement, its right-hand side, chi^2 of the model
     alone, squared column norms, the ``fitted`` columns' coefficients and covariance, the
-    model's change of coordinates)."""
+    model's change of coordinates, the model's Gram and the columns' least-squares
+    coefficients on the model, both in its coordinates over U)."""
     m, kk = q.shape[1], x.shape[1]
     full_sq = np.diag(xx).copy()
     if rm.size or ad.size:
@@ -839,6 +847,7 @@ def _rows_fit(q, x, qx, zp, gram, xz, xx, zz, g_o, p_o, x_o, e_o, rm, ad, fitted
             return None
         ps = p.T * s
         cgp = gs @ p
+        model = (v * w) @ v.T
         sg = (v / w) @ (v.T @ np.column_stack([cgp, gs @ e]))
         schur = gram + ps @ p - cgp.T @ sg[:, :kk]
         rhs = xz + ps @ e - cgp.T @ sg[:, kk]
@@ -846,12 +855,13 @@ def _rows_fit(q, x, qx, zp, gram, xz, xx, zz, g_o, p_o, x_o, e_o, rm, ad, fitted
         full_sq += np.vstack([x[rm], x_o[ad]]).T ** 2 @ s
     else:
         sg = np.zeros((m, kk + 1))
-        schur, rhs, chi2_now = gram, xz, zz
+        schur, rhs, chi2_now, model = gram, xz, zz, np.eye(m)
     solved = gram_solve(schur[np.ix_(fitted, fitted)], rhs[fitted])
     if solved is None:
         return None
     coef, cov = solved
-    return schur, rhs, chi2_now, full_sq, coef, cov, sg[:, kk] - sg[:, fitted] @ coef
+    return (schur, rhs, chi2_now, full_sq, coef, cov, sg[:, kk] - sg[:, fitted] @ coef, model,
+            qx + sg[:, :kk])
 
 
 def gram_solve(gram: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:

@@ -67,9 +67,10 @@ class TestResult:
     trials_at: Callable[[float], float] | None = None
     #: makes ``columns`` again when they are read, for a test that did not keep them
     _remake: Callable[[], np.ndarray] | None = field(default=None, repr=False)
-    #: q^T x of the columns whitened over the model's used scans (q the model's basis
-    #: there), where the test formed it and ``mask`` is those scans (m, q)
-    _qx: np.ndarray | None = field(default=None, repr=False)
+    #: the columns' least-squares coefficients on the model over ``mask`` and the model's
+    #: Gram there, both in the coordinates of the model's basis over its used scans (R
+    #: times the coefficients, R^-T A^T A R^-1), where the test formed them
+    _on_model: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
 
     @property
     def columns(self) -> np.ndarray | None:
@@ -439,7 +440,7 @@ class Candidate:
                           cov, absorbed=absorbed, r_model=float(r.max()), mask=sf.mask,
                           chi2_now=float(sf.chi2_now),
                           _remake=self._remaker(problem, theta, raw, keep, raw=True),
-                          _qx=sf.qx[:, kept])
+                          _on_model=(sf.on_model[:, kept], sf.model_gram))
 
     def _linear_explicit(self, problem: Problem, raw: np.ndarray, cols: np.ndarray,
                          names: tuple[str, ...], theta: Any) -> tuple[TestResult, np.ndarray]:
@@ -517,11 +518,11 @@ class Candidate:
             problem.obs, res.theta, res.coef, cov, res.comp_names)
         if res.r_model <= 0.5:
             return
-        qr = problem._current_qr(res.mask) if res._qx is not None and np.array_equal(
-            res.mask, problem.used) else None
-        if qr is not None:  # the shape test's q^T x over these scans: no columns again
-            beta = scipy.linalg.solve_triangular(qr[1], res._qx)
-            norms = problem.current_norms(res.mask)
+        qr = problem._current_qr(problem.used) if res._on_model is not None else None
+        if qr is not None:  # from the shape test's inner products: no columns again
+            on_model, gram = res._on_model
+            beta = scipy.linalg.solve_triangular(qr[1], on_model)
+            norms = np.sqrt(np.clip(np.einsum("ij,ik,kj->j", qr[1], gram, qr[1]), 0.0, None))
         else:
             cols = res.columns  # read once (may be made again)
             if cols is None or not cols.size:
