@@ -388,9 +388,10 @@ class Problem:
         :meth:`cand`) and the fit over the mask it returns, from
         one pass over the model's cached basis over its used scans U (``q^T x``), not two
         factors and projections: the same masks and numbers to rounding, or None where the
-        explicit path must serve (correlated noise, dependent model columns, a column within
-        :data:`GRAM_1MR2_MIN` of the model's span, an ill-conditioned candidate Gram, more
-        than :data:`ROW_UPDATE_MAX` rows between U and a scan set tried).
+        explicit path must serve (correlated noise, dependent model columns, a column off
+        the model's span by rounding only beside others, an ill-conditioned candidate Gram,
+        more than :data:`ROW_UPDATE_MAX` rows between U and a scan set tried; the caller
+        refuses columns within :data:`GRAM_1MR2_MIN` of the span).
 
         Algebra (white noise: whitening is a weight per row). With the model in its basis
         q = A_U R^-1 and x the whitened columns over U, every row i of the valid scans has
