@@ -297,6 +297,10 @@ class FoldSums:
     #: :data:`TIE_RTOL`)
     MIN_OFF = 1e-4
 
+    #: where the folds' rows make this many runs or more (scans not in time order), they are
+    #: grouped by fold in a copy of the model's basis; below, the basis is read in place
+    MAX_RUNS = 64
+
     def __init__(self, q0: np.ndarray, d0: np.ndarray, y: np.ndarray, labels: np.ndarray,
                  rows: np.ndarray):
         """``q0`` (2 n_used, k0; |diag R| ``d0``) and ``y`` over the used rows ``rows``
@@ -305,17 +309,35 @@ class FoldSums:
         # (heldout_lstsq's rule): no sums then
         self.d0max = float(d0.max()) if d0.size else 0.0
         self.dependent = bool(d0.size) and float(d0.min()) <= 1e-10 * max(self.d0max, 1e-300)
-        order = np.argsort(labels, kind="stable")
-        self.idx = rows[order]
-        self.k0 = k0 = q0.shape[1]
-        # [q0, e0] with the rows grouped by fold (each fold a slice), in Fortran order: its
-        # slices are what BLAS multiplies without a copy
-        self.w = np.empty((y.size, k0 + 1), order="F")
-        np.take(q0, order, axis=0, out=self.w[:, :k0])
-        self.w[:, k0] = (y - q0 @ (q0.T @ y))[order]
-        cut = np.flatnonzero(np.diff(labels[order])) + 1
-        self.slices = [slice(a, b) for a, b in zip(np.r_[0, cut], np.r_[cut, y.size], strict=True)]
-        self.grams = [self.w[s].T @ self.w[s] for s in self.slices]
+        e0 = y - q0 @ (q0.T @ y)
+        cut = np.flatnonzero(np.diff(labels)) + 1
+        if cut.size >= self.MAX_RUNS:
+            # rows of a fold scattered (scans not in time order): grouped by fold in a copy
+            order = np.argsort(labels, kind="stable")
+            q = np.empty(q0.shape, order="F")
+            for j in range(q0.shape[1]):  # a column at a time: np.take buffers a strided out
+                np.take(q0[:, j], order, out=q[:, j], mode="clip")  # order: a permutation
+            q0, e0, labels, rows = q, e0[order], labels[order], rows[order]
+            cut = np.flatnonzero(np.diff(labels)) + 1
+        # q0 as given where each fold is a few runs of rows (scans in time order: one run per
+        # fold and axis), not a copy of it grouped by fold
+        self.q0, self.e0, self.idx = q0, e0, rows
+        self.k0 = q0.shape[1]
+        self.folds: dict[int, list[slice]] = {}
+        for a, b in zip(np.r_[0, cut], np.r_[cut, y.size], strict=True):
+            self.folds.setdefault(int(labels[a]), []).append(slice(int(a), int(b)))
+        self.grams = [sum(self._gram(s) for s in runs)
+                      for runs in self.folds.values()]
+
+    def _gram(self, s: slice) -> np.ndarray:
+        """[q0, e0]^T [q0, e0] over the rows ``s`` (from its blocks: no stacked copy)."""
+        q, e = self.q0[s], self.e0[s]
+        qe = (q.T @ e)[:, None]
+        return np.block([[q.T @ q, qe], [qe.T, np.array([[e @ e]])]])
+
+    def _products(self, s: slice, x: np.ndarray) -> np.ndarray:
+        """[q0, e0]^T x over the rows ``s`` (x: those rows)."""
+        return np.vstack([self.q0[s].T @ x, self.e0[s] @ x])
 
     def total(self, x: np.ndarray) -> float | None:
         """Summed held-out losses with the option's columns ``x`` (2n, q) added; None where
@@ -324,7 +346,8 @@ class FoldSums:
             return None
         k0 = self.k0
         xg = x.take(self.idx, axis=0)
-        wx = [(self.w[s].T @ xg[s], xg[s].T @ xg[s]) for s in self.slices]
+        wx = [(sum(self._products(s, xg[s]) for s in runs), sum(xg[s].T @ xg[s] for s in runs))
+              for runs in self.folds.values()]
         c0 = sum(a[:k0] for a, _ in wx)  # q0^T x
         xx = sum(g for _, g in wx)
         off = xx - c0.T @ c0  # (x - q0 C)^T (x - q0 C)

@@ -628,8 +628,9 @@ class Problem:
         q = self.basis(used)
 
         def perp(v: np.ndarray) -> np.ndarray:
-            vr = self.T(v, used)
-            return vr - q @ (q.T @ vr)
+            vr = self.T(v, used)  # a new array: the model's part taken off in place
+            vr -= q @ (q.T @ vr)
+            return vr
 
         return perp
 
@@ -971,7 +972,10 @@ def _lstsq(a: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
                 cov = (v / w) @ v.T
                 return cov @ az, cov
         # a non-finite ``a`` or ``z`` raises here, as the SVD did
-        qz, r = scipy.linalg.qr_multiply(a, z.T, mode="right")
+        # factored in a Fortran-ordered copy of our own, overwritten (qr_multiply without
+        # overwrite_a makes two copies of ``a``); the same LAPACK calls on the same numbers
+        qz, r = scipy.linalg.qr_multiply(np.array(a, order="F"), z.T, mode="right",
+                                         overwrite_a=True)
         return _svd_lstsq(r, qz.T)
     return _svd_lstsq(a, z)
 

@@ -209,6 +209,7 @@ def _fitted_signal(problem: Problem, res: TestResult) -> np.ndarray:
     cols = problem.current_columns()
     full = np.column_stack([cols, res.columns])
     f = problem.fit(full)
+    del full  # the joint design (2n x m floats): not beside the fit below
     signal = res.columns @ f.coef[cols.shape[1]:]
     beta, *_ = np.linalg.lstsq(problem.T(cols), problem.T(signal), rcond=None)
     return signal - cols @ beta
