@@ -509,11 +509,15 @@ class Problem:
             self._cache(key, hit, 8 * zp.size)
         return hit
 
-    def release(self) -> None:
+    def release(self, keep: np.ndarray | None = None) -> None:
         """Drop the cached projectors and factors (selection calls it when it is done: what
-        follows fits whole designs)."""
-        self._perps.clear()
-        self._perp_bytes.clear()
+        follows fits whole designs), but those of the current model over the scans ``keep``
+        when given (what is asked for next)."""
+        held = set() if keep is None else {
+            p + keep.tobytes() + bytes([len(self.extra)]) for p in (b"", b"qr", b"sb")}
+        for k in [k for k in self._perps if k not in held]:
+            del self._perps[k]
+            self._perp_bytes.pop(k, None)
 
     def _cache(self, key: bytes, value, size: int) -> None:
         """Keep ``value`` among the cached projectors and factors: at most 64 of them and

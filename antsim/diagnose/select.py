@@ -450,6 +450,9 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
         # projection; let them go (and this round's projector) before the fits of the
         # whole design below
         perp = z_perp = None
+        # the simplest form projects over the finding's scans: the factors over others (the
+        # model's used scans' among them, 2 n x m floats) are not beside its own
+        problem.release(keep=r.mask)
         simplest = _simplest_form(problem, r, vocabulary)
         problem.release()
         before = problem.sky_rms()
