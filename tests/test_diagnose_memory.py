@@ -72,3 +72,25 @@ def test_the_models_columns_are_held_once_and_released_factors_are_made_again():
     assert again is not before
     for a, b in zip(before, again, strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+def test_release_keeps_only_the_factors_over_the_scans_asked_for_next():
+    """Before a finding's simplest form, the selection lets go of every cached factor and
+    projector but those over the finding's scans (``release(keep=...)``): the model's used
+    scans' go, the finding's stay (the same objects, not made again)."""
+    n = 200
+    problem = Problem(_week(n), Prediction("white", np.zeros(n), np.zeros(n),
+                                           np.full(n, 5.0), np.full(n, 5.0)),
+                      ["IA", "IE", "CA", "AN", "AW"])
+    mask = problem.used.copy()
+    mask[:7] = False
+    problem.perp_for(problem.used)
+    kept = problem.perp_for(mask)
+    factor = problem._current_qr(mask)
+    assert len(problem._perps) >= 4
+    problem.release(keep=mask)
+    assert problem._perps and all(mask.tobytes() in k for k in problem._perps)
+    assert set(problem._perps) == set(problem._perp_bytes)
+    assert problem.perp_for(mask) is kept and problem._current_qr(mask) is factor
+    problem.release()
+    assert not problem._perps and not problem._perp_bytes
