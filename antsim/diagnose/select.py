@@ -409,6 +409,9 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
                 continue
             if any(r.result.name == c.name for r in refused):
                 continue
+            # a factor over other scans than the model's (a shape's mask on the explicit
+            # path, 2 n x m floats) served its own test: not kept beside the next ones
+            problem.release(keep=problem.used)
             res = c.test(problem, perp, z_perp, chi2_now)
             if not res.testable:
                 if round_no == 0:
