@@ -447,13 +447,27 @@ def test_the_transient_after_sunset_and_the_step_effect():
     axis."""
     from antsim.world.effects.base import PointingState
     from antsim.world.effects.steps import Step
-    from antsim.world.effects.thermal import relax, sunset_level
+    from antsim.world.effects.thermal import (
+        relax,
+        since_sunset,
+        sunset_level,
+        transient_level,
+    )
 
     night = np.r_[np.zeros(100), np.ones(300), np.zeros(200), np.ones(100)]
     transient = sunset_level(night, 60.0, 600.0, "transient")
     assert np.all(transient[:100] == 0.0) and transient[100] == 1.0
     assert transient[110] == pytest.approx(math.exp(-1.0), rel=1e-12)
     assert transient[600] == 1.0  # the next sunset starts it again
+    # from the steps since sunset kept for every tau (the diagnose candidate's way): the
+    # bytes of the direct formula
+    idx = np.arange(night.size)
+    sets = np.r_[False, (night[1:] > 0.5) & (night[:-1] < 0.5)]
+    last = np.maximum.accumulate(np.where(sets, idx, -1))
+    steps = since_sunset(night)
+    for tau_s in (600.0, 1234.567, 10800.0):
+        direct = np.where(last >= 0, np.exp(-(idx - last) * 60.0 / tau_s), 0.0)
+        assert transient_level(steps, 60.0, tau_s).tobytes() == direct.tobytes()
     np.testing.assert_array_equal(sunset_level(night, 60.0, 600.0),
                                   relax(night, 60.0, 600.0, 0.0))
     with pytest.raises(ValueError, match="shape"):

@@ -303,6 +303,40 @@ def test_lad_is_the_exact_optimum(model_name):
     np.testing.assert_allclose(fast, full, rtol=0, atol=1e-4)
 
 
+def test_a_lad_block_solved_again_gives_the_same_bytes(monkeypatch):
+    """The remembered LAD solutions (diagnose's fit variants solve the same cross-elevation
+    block before and after removing an elevation-only finding): a block solved again gives
+    the first solve's bytes without solving, the generator left where the solve left it, so
+    that the next block draws the same subsample; other data or another generator state are
+    solved anew."""
+    monkeypatch.setattr(fitting, "_LAD_MEMO", type(fitting._LAD_MEMO)())
+    rng = np.random.default_rng(5)
+    data = synthetic(ghigo_truth(), rng, 8000, 20.0, 30.0)  # 8000 rows: the subsampled path
+    model = PointingModel("ghigo10")
+    b_az, b_el = model.design_matrix(data.az_rad, data.el_rad)
+    a = np.vstack([b_az * np.cos(data.el_rad)[:, None], b_el])
+    y = -np.concatenate([data.xel_arcsec, data.el_arcsec])
+    first = fitting._lad(a, y, n_xel=8000)
+    solves = []
+    real = fitting._lad_dense
+    monkeypatch.setattr(fitting, "_lad_dense", lambda *args: solves.append(1) or real(*args))
+    assert fitting._lad(a, y, n_xel=8000).tobytes() == first.tobytes()
+    assert solves == []
+    y_el = y.copy()
+    y_el[8000:] += 30.0 * np.sin(2 * data.az_rad)  # an elevation-only signal removed
+    monkeypatch.setattr(fitting, "_LAD_MEMO", type(fitting._LAD_MEMO)())
+    monkeypatch.setattr(fitting, "_LAD_MEMO_SIZE", 0)  # remembering nothing: the reference
+    reference = fitting._lad(a, y_el, n_xel=8000)
+    monkeypatch.setattr(fitting, "_LAD_MEMO_SIZE", 4)
+    fitting._lad(a, y, n_xel=8000)
+    solves.clear()
+    assert fitting._lad(a, y_el, n_xel=8000).tobytes() == reference.tobytes()
+    # three blocks remembered: y's two, y_el's elevation one (its cross-elevation one is y's)
+    assert solves and len(fitting._LAD_MEMO) == 3
+    xel = (a[:8000] != 0).any(axis=0)
+    np.testing.assert_array_equal(reference[xel], first[xel])
+
+
 @pytest.mark.parametrize(("rows", "cols", "rank"), [(20000, 11, 11), (7, 3, 3), (5000, 6, 4)])
 def test_blocked_qr_matches_lapack(rows, cols, rank):
     """The tall-skinny QR gives the R of one Householder QR (up to row signs)."""

@@ -151,12 +151,17 @@ class SunsetCandidate(_LaggedCandidate):
             obs.sun_el_deg is not None or "epoch_utc" in obs.meta) and np.ptp(obs.t_s) > 4 * 3600
 
     def level(self, obs: Observations, tau_s: float) -> np.ndarray:
-        from antsim.world.effects.thermal import sunset_level
+        from antsim.world.effects.thermal import since_sunset, sunset_level, transient_level
 
         def make() -> np.ndarray:
             t = time_grid(obs)
-            lev = sunset_level(self._night(obs, t).astype(float), GRID_STEP_S, tau_s,
-                               self.shape)
+            if self.shape == "transient":  # the steps since sunset: the same for every tau
+                steps = self._grid("since_sunset", obs,
+                                   lambda: since_sunset(self._night(obs, t).astype(float)))
+                lev = transient_level(steps, GRID_STEP_S, tau_s)
+            else:
+                lev = sunset_level(self._night(obs, t).astype(float), GRID_STEP_S, tau_s,
+                                   self.shape)
             return np.interp(obs.t_s, t, lev)
 
         return self._cached(obs, tau_s, make)

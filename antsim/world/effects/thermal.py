@@ -48,7 +48,7 @@ from controller.units import RAD_PER_ARCSEC
 from .base import Effect, Param, PointingState
 
 __all__ = ["SUNSET_SHAPES", "OUProcess", "SunsetDrift", "ThermalEffect", "interp_rows",
-           "ou_series", "relax", "sunset_level"]
+           "ou_series", "relax", "since_sunset", "sunset_level", "transient_level"]
 
 GRID_STEP_S = 60.0
 SPINUP_S = 86400.0
@@ -496,11 +496,23 @@ def sunset_level(night: np.ndarray, step_s: float, tau_s: float,
         return relax(night, step_s, tau_s, float(night[0]))
     if shape != "transient":
         raise ValueError(f"unknown sunset drift shape {shape!r}; known: {SUNSET_SHAPES}")
+    return transient_level(since_sunset(night), step_s, tau_s)
+
+
+def since_sunset(night: np.ndarray) -> np.ndarray:
+    """Grid steps since the last sunset (the last step from 0 to 1 of ``night``), int32;
+    -1 before the grid's first sunset: the part of a transient level that is the same for
+    every time constant (a caller that tries many keeps it)."""
     idx = np.arange(night.size)
     sets = np.zeros(night.size, dtype=bool)
     sets[1:] = (night[1:] > 0.5) & (night[:-1] < 0.5)
     last = np.maximum.accumulate(np.where(sets, idx, -1))
-    return np.where(last >= 0, np.exp(-(idx - last) * step_s / tau_s), 0.0)
+    return np.where(last >= 0, idx - last, -1).astype(np.int32)
+
+
+def transient_level(steps: np.ndarray, step_s: float, tau_s: float) -> np.ndarray:
+    """:func:`sunset_level`'s ``"transient"`` shape from :func:`since_sunset`'s ``steps``."""
+    return np.where(steps >= 0, np.exp(-steps * step_s / tau_s), 0.0)
 
 
 class SunsetDrift(Effect):
