@@ -47,6 +47,21 @@ def synthetic(n: int = 160, seed: int = 3, noise_arcsec: float = 1.0,
                         el_arcsec=err[n:], good=geo.good, meta=geo.meta, kind="tpoint")
 
 
+def test_term_columns_scale_by_the_kept_cosine_of_elevation():
+    """term_columns reads cos(el) kept on the observations (asked for ~150 times at 200,000
+    scans): the bytes of computing it each time, read-only, and a selection's its own."""
+    from controller.pointing.model import PointingModel
+
+    obs = synthetic(n=50)
+    names = ["IA", "CA", "HESA2", "HECA7"]
+    ba, be = PointingModel(obs.terms(names)).design_matrix(obs.az_rad, obs.el_rad)
+    direct = -np.vstack([ba * np.cos(obs.el_rad)[:, None], be])
+    assert term_columns(names, obs).tobytes() == direct.tobytes()
+    assert not obs.cos_el.flags.writeable
+    part = obs.select(obs.el_rad > np.median(obs.el_rad))
+    assert part.cos_el.tobytes() == np.cos(part.el_rad).tobytes()
+
+
 # ------------------------------------------------------------------------------ the library
 def test_library_covers_the_signature_table_and_the_non_harmonic_effects():
     names = {c.name for c in CANDIDATES}

@@ -69,7 +69,7 @@ def term_columns(terms: Sequence[str], obs: Observations) -> np.ndarray:
     model = PointingModel(obs.terms(terms))
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         ba, be = model.design_matrix(obs.az_rad, obs.el_rad, aux=obs.structure)
-    return -np.vstack([ba * np.cos(obs.el_rad)[:, None], be])
+    return -np.vstack([ba * obs.cos_el[:, None], be])
 
 
 @dataclass
