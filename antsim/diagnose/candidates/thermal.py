@@ -34,6 +34,12 @@ __all__ = ['SensorTermsCandidate', 'SunsetCandidate', 'SunsetTransientCandidate'
 #: every round and in the cross-validated stage
 OFF_GRID_LEVELS = 2
 
+#: the time-constant searches' tolerance in log theta: 1% of tau, some 20 times finer than
+#: tau's own standard error (Fomalont's drift, 16 seeds: 22-31% of tau,
+#: docs/results/blind_fomalont.txt); 1e-3 took 68 tests at 200,000 scans where this takes
+#: 51, for time constants that moved by under 1% of their sigma
+XATOL_LOG_THETA = 1e-2
+
 
 class _LaggedCandidate(Candidate):
     """An effect with one time constant ``tau_s`` (a lag or a relaxation): the blind
@@ -55,7 +61,7 @@ class _LaggedCandidate(Candidate):
             return -res.delta_chi2
 
         opt = optimize.minimize_scalar(neg, bounds=(log_lo, log_hi), method="bounded",
-                                       options={"xatol": 1e-3})
+                                       options={"xatol": XATOL_LOG_THETA})
         theta = float(math.exp(opt.x))
         # the search's best point was tested in it
         res = kept[1] if kept[0] == float(opt.x) else None
