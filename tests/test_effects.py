@@ -506,6 +506,22 @@ def test_tilted_sky_is_encoder_from_true_within_rounding():
         assert np.abs(fast_el - (el_enc - el)).max() / ARCSEC < 1e-6
 
 
+def test_wrap_pi_is_the_remainder_formula_bit_for_bit():
+    """TiltedSky's wrap of the azimuth error (the remainder only outside (0, 2 pi)) gives the
+    bytes of ``(x + pi) % (2 pi) - pi``: small errors, whole turns, the edges, NaN and inf."""
+    from antsim.world.effects.optics import wrap_pi
+
+    rng = np.random.default_rng(4)
+    edges = [math.pi, -math.pi, 0.0, -0.0, 3 * math.pi, -3 * math.pi, np.nan, np.inf,
+             -np.inf, np.nextafter(math.pi, 0.0), np.nextafter(-math.pi, 0.0)]
+    x = np.concatenate([rng.normal(0.0, 1e-3, 10_000), rng.uniform(-20.0, 20.0, 10_000),
+                        edges])
+    with np.errstate(invalid="ignore"):
+        expected = (x + math.pi) % (2 * math.pi) - math.pi
+        got = wrap_pi(x.copy())
+    assert got.tobytes() == expected.tobytes()
+
+
 def test_exact_tilt_departs_from_linear_terms_near_the_zenith():
     """Near the zenith the linear dA = t tan E sin(A - phi) diverges, the exact one does not:
     at 89.5 deg the encoder azimuths differ by more than 1' and the sky positions by more

@@ -215,7 +215,21 @@ class TiltedSky:
         da = np.arctan2(math.sin(collimation_rad), cos_c * np.cos(el_enc))
         d_az = np.arctan2(y * self.cos_az - x * self.sin_az,
                           x * self.cos_az + y * self.sin_az) - da
-        return (d_az + math.pi) % (2 * math.pi) - math.pi, el_enc - self.el_rad
+        return wrap_pi(d_az), el_enc - self.el_rad
+
+
+def wrap_pi(angle_rad: np.ndarray) -> np.ndarray:
+    """``(angle_rad + pi) % (2 pi) - pi``, bit for bit, in place of ``angle_rad``: the
+    remainder (5 ms at 200,000 values, each evaluation of a fit's exact error) only where
+    ``angle_rad + pi`` is outside (0, 2 pi), since inside it is that value itself."""
+    two_pi = 2 * math.pi
+    a = np.add(angle_rad, math.pi, out=angle_rad)
+    inside = (a > 0.0) & (a < two_pi)
+    if not inside.all():
+        outside = ~inside
+        a[outside] = np.remainder(a[outside], two_pi)
+    a -= math.pi
+    return a
 
 
 def _rotate(v: np.ndarray, axis: np.ndarray, angle: float) -> np.ndarray:
