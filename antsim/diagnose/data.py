@@ -94,6 +94,15 @@ class Observations:
         out.flags.writeable = False
         return out
 
+    @cached_property
+    def good_sources(self) -> tuple[np.ndarray, np.ndarray]:
+        """The sources of the good scans and how many each has (``np.unique`` with counts):
+        a source candidate asks for them several times a round (0.02 s each at 200,000
+        scans, strings sorted)."""
+        names, counts = np.unique(self.source[self.good], return_counts=True)
+        names.flags.writeable = counts.flags.writeable = False
+        return names, counts
+
     def has(self, name: str) -> bool:
         """Whether column ``name`` exists and has some finite values (or, for text, values)."""
         value = getattr(self, name, None)

@@ -353,7 +353,9 @@ def input_format(path: str | Path) -> str:
     from controller.pointing.tpoint import sniff_format
 
     text = read_text_file(path)
-    if not text.startswith("# %ECSV") and looks_like_csv(path, text):
+    if text.startswith("# %ECSV"):  # sniff_format's first test, without reading it again
+        return "ecsv"
+    if looks_like_csv(path, text):
         return "csv"
     return sniff_format(path)
 

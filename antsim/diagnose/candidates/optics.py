@@ -48,7 +48,7 @@ class SourceCandidate(Candidate):
         self.explanation = SourceStructure.explanation
 
     def thetas(self, obs):
-        names, counts = np.unique(obs.source[obs.good], return_counts=True)
+        names, counts = obs.good_sources
         return [str(s) for s, c in zip(names, counts, strict=True) if c >= self.MIN_SCANS]
 
     def applicable(self, obs, known_noise):
@@ -156,18 +156,22 @@ class ExactTiltCandidate(Candidate):
 
         return self._sky_error(TiltedSky(obs.az_rad, obs.el_rad), theta)
 
-    def _shown(self, problem, rows: np.ndarray):
-        """theta -> the error as the recordings show it on the scans ``rows`` (both axes,
-        (2k,) arcsec): the model in use carries the linear part (else the scans would miss
-        the source), so the recordings show the linear part whole and the rest scaled by
-        each source's offset scale."""
+    def _shown(self, problem, rows: np.ndarray | None, lin: np.ndarray):
+        """theta -> the error as the recordings show it on the scans ``rows`` (every scan if
+        None; both axes, (2k,) arcsec): the model in use carries the linear part (else the
+        scans would miss the source), so the recordings show the linear part whole and the
+        rest scaled by each source's offset scale. ``lin``: the AN, AW, CA columns of every
+        scan (:func:`term_columns`, made once a test)."""
         from antsim.world.effects.optics import TiltedSky
 
         obs = problem.obs
-        sky = TiltedSky(obs.az_rad[rows], obs.el_rad[rows])
-        both = np.concatenate([rows, rows + obs.n])
-        lin_cols = term_columns(("AN", "AW", "CA"), obs)[both]
-        f2 = np.concatenate([problem.f, problem.f])[both]
+        f2 = np.concatenate([problem.f, problem.f])
+        if rows is None:
+            sky, lin_cols = TiltedSky(obs.az_rad, obs.el_rad), lin
+        else:
+            sky = TiltedSky(obs.az_rad[rows], obs.el_rad[rows])
+            both = np.concatenate([rows, rows + obs.n])
+            lin_cols, f2 = lin[both], f2[both]
 
         def err(theta):
             raw = self._sky_error(sky, theta)
@@ -176,11 +180,13 @@ class ExactTiltCandidate(Candidate):
 
         return err
 
-    def _fit(self, problem, used: np.ndarray, starts) -> tuple[np.ndarray, float, float, Any]:
+    def _fit(self, problem, used: np.ndarray, starts,
+             lin: np.ndarray) -> tuple[np.ndarray, float, float, Any]:
         """The best of ``starts`` refined by Levenberg-Marquardt on the scans ``used``:
-        (theta, chi^2 left, chi^2 now, (err, proj, z_perp) of those scans)."""
+        (theta, chi^2 left, chi^2 now, (err, proj, z_perp) of those scans); ``lin`` as
+        :meth:`_shown`'s."""
         rows = np.flatnonzero(used)
-        err = self._shown(problem, rows)
+        err = self._shown(problem, rows, lin)
         proj, z_perp = _projection(problem, used, rows)
 
         def resid(theta):
@@ -205,28 +211,28 @@ class ExactTiltCandidate(Candidate):
         perp, _ = problem.perp_for(used)
         starts = [np.array(start, float) * 40.0 for start in self.STARTS]
         n_used = int(used.sum())
+        lin = term_columns(("AN", "AW", "CA"), obs)
         if n_used > self.SEARCH_SCANS:
             # many scans: the starts on every k-th of them, the best refined on all (each
             # start's search is some 40 evaluations of the error, each reading every scan)
             sub = np.zeros_like(used)
             sub[np.flatnonzero(used)[:: -(-n_used // self.SEARCH_SCANS)]] = True
-            x, left, now, _ = self._fit(problem, sub, starts)
+            x, left, now, _ = self._fit(problem, sub, starts, lin)
             if left < now:
                 starts = [x]
-        best_x, best_c, base, (err, proj, z_perp) = self._fit(problem, used, starts)
+        best_x, best_c, base, (err, proj, z_perp) = self._fit(problem, used, starts, lin)
         dchi2 = max(base - best_c, 0.0)
         # covariance from the Jacobian at the optimum
         h = 0.5
         jac = np.column_stack([proj((err(best_x + h * e) - err(best_x - h * e)) / (2 * h))
                                for e in np.eye(3)])
         _, cov = _lstsq(jac, z_perp)
-        cols = self._shown(problem, np.arange(obs.n))(best_x)[:, None]
+        cols = self._shown(problem, None, lin)(best_x)[:, None]
         res = TestResult(self, dchi2, self.REFERENCE_DOF, 1.0, 1.0, tuple(best_x), cols,
                          ("exact",), np.array([1.0]), cov, mask=used.copy(),
                          chi2_now=base)
         res.p = p_value(problem, dchi2, self.REFERENCE_DOF, base)
         # correlation of the nonlinear part (the error minus its best linear AN/AW/CA fit)
-        lin = term_columns(("AN", "AW", "CA"), obs)
         beta, _ = _lstsq(lin, cols[:, 0])
         quad = (cols[:, 0] - lin @ beta)[:, None]
         xp = perp(quad)
