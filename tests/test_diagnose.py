@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import math
 import re
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -61,6 +62,30 @@ def test_term_columns_scale_by_the_kept_cosine_of_elevation():
     part = obs.select(obs.el_rad > np.median(obs.el_rad))
     assert part.cos_el.tobytes() == np.cos(part.el_rad).tobytes()
 
+
+
+def test_source_candidate_reads_the_kept_sources_of_the_good_scans():
+    """The source candidate's sources come from ``Observations.good_sources``, counted once
+    per recordings (several times a round at 200,000 scans): np.unique's, read-only, and a
+    selection's its own."""
+    from antsim.diagnose.candidates.optics import SourceCandidate
+
+    obs = synthetic(n=60)
+    names = np.array(["3C84", "Cygnus A", "Orion A"])[np.arange(60) % 3]
+    good = np.ones(60, dtype=bool)
+    good[[2, 5, 8, 1]] = False  # Orion A keeps 17 good scans, Cygnus A 19, 3C84 all 20
+    obs = replace(obs, source=names, good=good)
+    want, counts = np.unique(names[good], return_counts=True)
+    got, got_counts = obs.good_sources
+    assert got.tolist() == want.tolist() and got_counts.tolist() == counts.tolist()
+    assert not got.flags.writeable and not got_counts.flags.writeable
+    part = obs.select(np.arange(60) < 20)
+    assert part.good_sources[1].tolist() == np.unique(names[:20][good[:20]],
+                                                      return_counts=True)[1].tolist()
+    c = SourceCandidate()
+    c.MIN_SCANS = 18
+    assert c.thetas(obs) == ["3C84", "Cygnus A"]
+    assert counts.tolist() == [20, 19, 17]
 
 # ------------------------------------------------------------------------------ the library
 def test_library_covers_the_signature_table_and_the_non_harmonic_effects():
