@@ -508,6 +508,12 @@ def test_the_transient_after_sunset_and_the_step_effect():
     for tau_s in (600.0, 1234.567, 10800.0):
         direct = np.where(last >= 0, np.exp(-(idx - last) * 60.0 / tau_s), 0.0)
         assert transient_level(steps, 60.0, tau_s).tobytes() == direct.tobytes()
+    # a grid's length (SIMD loops and their tails) and steps of up to two years: the bytes of
+    # the expression transient_level computed in place
+    many = np.random.default_rng(5).integers(-1, 1_000_000, 100_003).astype(np.int32)
+    for tau_s in (600.0, 1234.567, 10800.0):
+        direct = np.where(many >= 0, np.exp(-many * 60.0 / tau_s), 0.0)
+        assert transient_level(many, 60.0, tau_s).tobytes() == direct.tobytes()
     np.testing.assert_array_equal(sunset_level(night, 60.0, 600.0),
                                   relax(night, 60.0, 600.0, 0.0))
     with pytest.raises(ValueError, match="shape"):
