@@ -64,6 +64,27 @@ def test_term_columns_scale_by_the_kept_cosine_of_elevation():
 
 
 
+def test_polarization_differences_of_scans_with_both_hands_only():
+    """XR minus XL of each scan that has both, good (arcsec); NaN elsewhere, and for
+    recordings of the average alone (which skip the loop over the scans)."""
+    from antsim.diagnose.data import from_columns
+
+    pol = np.array(["AVG", "XR", "XL", "AVG", "XR", "AVG", "XR", "XL"])
+    cols = {"scan": np.array([0, 0, 0, 1, 1, 2, 2, 2]), "polarization": pol,
+            "t_s": np.array([0.0, 0, 0, 60, 60, 120, 120, 120]),
+            "az_deg": np.full(8, 100.0), "el_deg": np.full(8, 40.0),
+            "xel_arcmin": np.array([0.0, 0.5, 0.2, 0, 0.1, 0, 0.3, 0.4]),
+            "el_arcmin": np.array([0.0, -0.1, 0.1, 0, 0, 0, 0.2, 0.2]),
+            "good": np.array([True, True, True, True, True, True, True, False])}
+    obs = from_columns(cols)
+    np.testing.assert_allclose(obs.pol_xel_arcsec[0], 18.0, rtol=1e-12)
+    np.testing.assert_allclose(obs.pol_el_arcsec[0], -12.0, rtol=1e-12)
+    assert np.isnan(obs.pol_xel_arcsec[1:]).all()  # scan 1 has no XL, scan 2's XL is bad
+    avg = pol == "AVG"
+    alone = from_columns({k: v[avg] for k, v in cols.items()})
+    assert np.isnan(alone.pol_xel_arcsec).all() and np.isnan(alone.pol_el_arcsec).all()
+    assert alone.xel_arcsec.tobytes() == obs.xel_arcsec.tobytes()
+
 def test_source_candidate_reads_the_kept_sources_of_the_good_scans():
     """The source candidate's sources come from ``Observations.good_sources``, counted once
     per recordings (several times a round at 200,000 scans): np.unique's, read-only, and a
