@@ -207,7 +207,7 @@ def from_columns(cols: Mapping[str, np.ndarray], meta: Mapping[str, Any] | None 
     mx = np.asarray(cols["xel_arcmin"], dtype=float)
     me = np.asarray(cols["el_arcmin"], dtype=float)
     # recordings of the average alone (no XR or XL row): no scan has a pair, and no loop
-    # over the scans (0.1 s at 200,000)
+    # over the scans (0.04 s at 200,000)
     index_of_scan = {int(s): i for i, s in enumerate(scan[avg])} if xr and xl else {}
     for s, i in index_of_scan.items():
         r, ell = xr.get(s), xl.get(s)
