@@ -14,7 +14,7 @@ import json
 import sys
 from pathlib import Path
 
-from controller.errors import InputError
+from controller.errors import InputError, read_text_file
 from controller.pointing.model import NAMED_MODELS
 
 #: default model per input format: TPOINT users (and a CSV of one's own measurements) start
@@ -167,7 +167,10 @@ def main(args: argparse.Namespace) -> int:
     from controller.program.csvdata import input_format
 
     path = Path(args.recordings)
-    fmt = input_format(path)
+    text: str | None = read_text_file(path)  # once, for the format and the recordings
+    fmt = input_format(path, text)
+    if fmt != "ecsv":  # the other readers read it themselves
+        text = None
     if args.csv and fmt != "csv":
         raise InputError("command line", "--csv", args.csv[0], f"{path} is not a CSV file")
     if fmt == "mod":
@@ -182,7 +185,7 @@ def main(args: argparse.Namespace) -> int:
     if fmt == "ecsv":
         from controller.program.recordings import read_recordings, recording_notes
 
-        table = read_recordings(path)
+        table = read_recordings(path, text=text)
         for line in recording_notes(table, "fit"):
             _note(f"{path}: {line}")
     equatorial = (float(table.meta["site"]["latitude_deg"])

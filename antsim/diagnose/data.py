@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from controller.errors import InputError
+from controller.errors import InputError, read_text_file
 from controller.pointing.model import PointingModel
 from controller.pointing.thermal import sensor_aux, structure_sensor_names
 
@@ -315,7 +315,10 @@ def load_observations(path: str | Path, mount: str | None = None,
     path = Path(path)
     if not path.exists():
         raise InputError(str(path), "RECORDINGS", str(path), "no such file")
-    fmt = input_format(path)
+    text: str | None = read_text_file(path)  # once, for the format and the recordings
+    fmt = input_format(path, text)
+    if fmt != "ecsv":  # the other readers read it themselves
+        text = None
     if csv_options and fmt != "csv":
         raise InputError("command line", "--csv", csv_options[0], f"{path} is not a CSV file")
     if fmt == "csv":
@@ -334,7 +337,8 @@ def load_observations(path: str | Path, mount: str | None = None,
     from controller.astro.frames import MOUNT_KINDS
     from controller.program.recordings import read_recordings, recording_notes
 
-    table = read_recordings(path, purpose="diagnose")
+    table = read_recordings(path, purpose="diagnose", text=text)
+    text = None  # 44 MB at 200,000 scans, let go before the observations are made
     mount = table.meta.get("mount", "altaz")
     if mount not in MOUNT_KINDS:
         raise InputError(str(path), "mount", mount, "is not a mount diagnose knows",

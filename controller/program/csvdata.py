@@ -347,12 +347,14 @@ def _site_meta(settings: Mapping[str, str], where: str) -> dict[str, Any]:
     return {"site": site} if site else {}
 
 
-def input_format(path: str | Path) -> str:
+def input_format(path: str | Path, text: str | None = None) -> str:
     """``"csv"``, ``"ecsv"``, ``"tpoint"`` (pointing data) or ``"mod"`` (a model), judged by
-    the name (``.csv``) and content (:func:`controller.pointing.tpoint.sniff_format`)."""
+    the name (``.csv``) and content (:func:`controller.pointing.tpoint.sniff_format`);
+    ``text``: the file's, when the caller has read it (:func:`read_text_file`)."""
     from controller.pointing.tpoint import sniff_format
 
-    text = read_text_file(path)
+    if text is None:
+        text = read_text_file(path)
     if text.startswith("# %ECSV"):  # sniff_format's first test, without reading it again
         return "ecsv"
     if looks_like_csv(path, text):
