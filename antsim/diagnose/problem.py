@@ -388,10 +388,11 @@ class Problem:
         :meth:`cand`) and the fit over the mask it returns, from
         one pass over the model's cached basis over its used scans U (``q^T x``), not two
         factors and projections: the same masks and numbers to rounding, or None where the
-        explicit path must serve (correlated noise, dependent model columns, a column off
-        the model's span by rounding only beside others, an ill-conditioned candidate Gram,
-        more than :data:`ROW_UPDATE_MAX` rows between U and a scan set tried; the caller
-        refuses columns within :data:`GRAM_1MR2_MIN` of the span).
+        explicit path must serve (correlated noise, dependent model columns, an
+        ill-conditioned candidate Gram, more than :data:`ROW_UPDATE_MAX` rows between U and
+        a scan set tried; the caller refuses columns within :data:`GRAM_1MR2_MIN` of the
+        span). The mask's fits leave out the columns within :data:`ABSORBED_WHOLE_1MR2` of
+        the model's span (the explicit path fits their rounding-level remainder).
 
         Algebra (white noise: whitening is a weight per row). With the model in its basis
         q = A_U R^-1 and x the whitened columns over U, every row i of the valid scans has
@@ -437,10 +438,13 @@ class Problem:
         ratio = np.diag(gram) / d  # 1 - R^2 of each column on the model
         if ratio[x.shape[1] - k:].max() < ABSORBED_WHOLE_1MR2:
             fitted = np.arange(0)  # a signature the model absorbs whole: the model alone
-        elif ratio[:k].min() < ABSORBED_WHOLE_1MR2:
-            return None  # a column off the model by rounding only, beside others
         else:
-            fitted = np.arange(k)
+            # the columns the model leaves a part of: one off it by rounding only (a
+            # signature partly absorbed, e.g. by an accepted term) is not fitted, as a
+            # signature absorbed whole is not (its direction would be rounding)
+            fitted = np.flatnonzero(ratio[:k] >= ABSORBED_WHOLE_1MR2)
+        # the fitted columns of x and q^T x (a view where they are the first ones)
+        cols = fitted if 0 < fitted.size < k else slice(0, fitted.size)
         xz = x.T @ zp
         p_o = x_o - g_o @ qx
         m = self.current_columns().shape[1] + k
@@ -461,7 +465,6 @@ class Problem:
             # z_perp - x c - q d; |q_i d| <= max_i |q_i| |d| = bound, so only rows whose
             # |z_perp - x c| exceeds OUTLIER_Z - bound can exceed OUTLIER_Z (a margin of
             # 1e-9 of both for rounding): those are computed exactly
-            cols = slice(0, fitted.size)  # the fitted columns (a view, not a copy)
             dv = b - qx[:, cols] @ coef
             bound = rn_max * float(np.linalg.norm(dv)) * (1 + 1e-9) + 1e-9
             u = x[:, cols] @ coef
@@ -816,8 +819,8 @@ class ShapeFit:
     rhs: np.ndarray  # (kk,) X_perp^T z_perp over ``mask``
     chi2_now: float  # z_perp^T z_perp over ``mask`` (the model alone)
     full_sq: np.ndarray  # (kk,) squared norms of the whitened columns over ``mask``
-    #: (k,) the candidate's coefficients over ``mask`` (none: the model absorbs its
-    #: signature whole, ABSORBED_WHOLE_1MR2)
+    #: the candidate's coefficients over ``mask``, of the columns the model leaves a part of
+    #: (ABSORBED_WHOLE_1MR2; none: the model absorbs its signature whole)
     coef: np.ndarray
     cov: np.ndarray  # (k, k) their covariance (whitened units)
     x: np.ndarray  # (2 n_used, kk) the whitened columns over the model's used scans
