@@ -940,6 +940,35 @@ def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
     assert 1.0 < ref < 5.0 and np.cos(el).size  # correlated shapes: fewer than 5 trials
 
 
+def test_a_partly_absorbed_signature_is_fitted_on_the_columns_the_model_leaves():
+    """A signature one of whose columns is in the model's span (TX beside az_track_2a's sin
+    2A and cos 2A, offset scale 1: what an accepted term leaves of a signature) is tested
+    from inner products (:meth:`Problem.shape_fit`; the explicit path served it before), its
+    outlier mask fitted on the columns the model leaves a part of (the explicit path fitted
+    the in-span column's rounding-level remainder too). Against the explicit path on those
+    columns and on all of them: the same mask, kept and absorbed columns, and numbers to
+    1e-9 relative (as the test above: the design's condition number is 60, the kept columns
+    far from the span, 1 - R^2 > 1e-3)."""
+    problem = _scans_with_unused_and_scaled()
+    problem.f = np.ones(problem.n)
+    obs = problem.obs
+    c = candidate("az_track_2a")
+    two_a, names2 = c.columns(obs, None)
+    raw = np.column_stack([term_columns(("TX",), obs), two_a])
+    names = ("TX", *names2)
+    assert problem.shape_fit(raw) is not None
+    fast = c._linear_xp(problem, raw, names, None)[0]
+    assert fast.absorbed == ("TX",) and fast.comp_names == names2 and fast.dof == len(names2)
+    for ref in (c._linear_explicit(problem, two_a, two_a, names2, None)[0],
+                c._linear_explicit(problem, raw, raw, names, None)[0]):
+        assert np.array_equal(fast.mask, ref.mask) and fast.comp_names == ref.comp_names
+        assert fast.delta_chi2 == pytest.approx(ref.delta_chi2, rel=1e-9)
+        np.testing.assert_allclose(fast.coef, ref.coef, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(fast.cov, ref.cov, rtol=1e-9, atol=1e-12)
+        assert fast.chi2_now == pytest.approx(ref.chi2_now, rel=1e-9)
+        assert fast.r_model == pytest.approx(ref.r_model, rel=1e-9, abs=1e-12)
+
+
 def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits():
     """Two code paths each: the current model plus a candidate's columns fitted by
     Frisch-Waugh-Lovell on the model's cached QR (:meth:`Problem.fit_added`) against one
