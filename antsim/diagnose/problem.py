@@ -19,6 +19,8 @@ import scipy.linalg
 
 from controller.pointing.model import PointingModel
 
+from ..heap import trim_heap
+
 from . import pvalues
 from .data import Observations
 
@@ -579,6 +581,7 @@ class Problem:
     def update_outliers(self, iterations: int = 2) -> None:
         """Reject scans whose standardized residual exceeds OUTLIER_Z on either axis (and,
         with unknown noise, re-estimate each axis' noise scale from the kept scans)."""
+        trim_heap()  # fits of the whole design follow: not beside freed, resident heap
         for _ in range(iterations):
             f = self.fit_current()
             if not self.pred.known_noise:
@@ -708,6 +711,7 @@ class Problem:
             columns = self.current_columns()
             if extra is not None:
                 columns = np.column_stack([columns, extra])
+        trim_heap()  # a copy of the design's used rows follows
         rows = self.rows(used)
         coef, _ = _lstsq(columns[rows], self.y_raw[rows])
         r = (self.y_raw - columns @ coef).reshape(2, -1)[:, used]
@@ -722,6 +726,7 @@ class Problem:
         white or ``refit`` is given). ``refit(train_mask) -> columns`` re-derives nonlinear
         shapes on the training data."""
         used = self.used if used is None else used
+        trim_heap()  # a whitened copy of the design follows
         blocks = columns if isinstance(columns, tuple) else (columns,)
         if refit is None and self.white(used):
             lab = folds[used]

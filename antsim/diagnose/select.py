@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..heap import trim_heap
 from . import pvalues
 from .candidates.base import DISTINGUISH_R, Candidate, TestResult, p_value
 from .candidates.library import CANDIDATES
@@ -206,6 +207,7 @@ class Selection:
 def _fitted_signal(problem: Problem, res: TestResult) -> np.ndarray:
     """The candidate's fitted error (2n, arcsec) in a joint fit with the current model, less
     the part the model's own terms can take (what the candidate adds)."""
+    trim_heap()  # the joint design follows: not beside freed, resident heap
     cols = problem.current_columns()
     full = np.column_stack([cols, res.columns])
     f = problem.fit(full)
@@ -271,6 +273,7 @@ def _simplest_form(problem: Problem, res: TestResult, vocabulary: list[str]
     names = [t for t in vocabulary if t not in _model_terms(problem)]
     if not names:
         return None
+    trim_heap()  # a factor over the finding's scans and the chunks' columns follow
     perp, z_perp = problem.perp_for(res.mask)
     # a few terms at a time: the whole vocabulary's columns over 200,000 scans are 0.5 GB
     # per copy, and each column's numbers are its own
@@ -306,6 +309,7 @@ def _alternatives(problem: Problem, perp, r: TestResult, ranked: list[TestResult
     """The significant candidates the data cannot distinguish from ``r`` or that fit almost
     as well, and the other orders of a harmonic family (``TestResult.siblings``, of ``r``'s
     own or of another candidate's) that the data cannot distinguish from it."""
+    trim_heap()  # the alternatives' projections follow: not beside freed, resident heap
     out = []
     n_obs = 2 * int(problem.used.sum())
     siblings = [s for o in ranked for s in o.siblings]
@@ -506,6 +510,7 @@ def _cross_validated(problem: Problem, usable: list[Candidate], accepted: set[st
                      n_family: int, room: int) -> list[Step]:
     """The cross-validated stage (:mod:`.crossval`) as findings, with their statistics (the
     family-corrected p-value of each, every option tried counted as a trial)."""
+    trim_heap()  # the stage's bases follow: not beside the rounds' freed, resident heap
     out = []
     for res, heldout, (before, after), signal in cv_stage(
             problem, usable, accepted, _model_terms(problem), room, _fitted_signal):
