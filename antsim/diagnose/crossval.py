@@ -221,11 +221,17 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
         del sums
         tried = len(ranked)
         best = _best(problem, cur, q0, d0, folds, ranked)
+        # the model's unweighted basis (2 n_used x m floats): not beside the test's factor
+        # and the whole-design fits below
+        del q0, r0
         if best is None or not improves(now, best[0]):
             break
         new, c, theta, raw, names = best
         perp, z_perp = problem.perp_for(problem.used)
         res = _tested(problem, c, theta, raw, names, perp, z_perp, tried)
+        # the model's factor and projector: not asked for by the fits below
+        del perp, z_perp
+        problem.release()
         if not res.testable:
             break
         sky_before = problem.sky_rms()
