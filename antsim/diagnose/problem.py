@@ -20,7 +20,6 @@ import scipy.linalg
 from controller.pointing.model import PointingModel
 
 from ..heap import trim_heap
-
 from . import pvalues
 from .data import Observations
 
