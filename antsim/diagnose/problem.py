@@ -489,7 +489,9 @@ class Problem:
             keep, res = out
             if keep.sum() < max(m, 3) or np.array_equal(keep, scans):
                 return res
-            scans = keep
+            # the model's own scans as one array, not a copy per result (most candidates
+            # keep them: a mask of n bytes each, held by every result of the round)
+            scans = used if np.array_equal(keep, used) else keep
         out = fit(scans)
         return None if out is None else out[1]
 
