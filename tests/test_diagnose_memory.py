@@ -94,3 +94,53 @@ def test_release_keeps_only_the_factors_over_the_scans_asked_for_next():
     assert problem.perp_for(mask) is kept and problem._current_qr(mask) is factor
     problem.release()
     assert not problem._perps and not problem._perp_bytes
+
+
+def test_a_shape_mask_equal_to_the_models_scans_is_that_array():
+    """A candidate's outlier mask that keeps the model's own scans is the model's array, not
+    a copy per result (every result of a round holds its mask: n bytes each)."""
+    from antsim.diagnose.candidates.library import CANDIDATES
+
+    n = 300
+    obs = _week(n)
+    el = obs.el_arcsec.copy()
+    el[::50] += 200.0  # six outliers: the masks differ from every valid scan
+    obs = Observations(t_s=obs.t_s, az_rad=obs.az_rad, el_rad=obs.el_rad,
+                       xel_arcsec=obs.xel_arcsec, el_arcsec=el, good=obs.good)
+    problem = Problem(obs, Prediction("white", np.zeros(n), np.zeros(n), np.full(n, 5.0),
+                                      np.full(n, 5.0)), ["IA", "IE", "CA", "AN", "AW"])
+    problem.update_outliers()
+    assert not problem.used[::50].any()
+    c = next(c for c in CANDIDATES if c.name == "az_track_2a")
+    raw, names = c.columns(obs, None)
+    res = c._linear_xp(problem, raw, names, None)[0]
+    assert np.array_equal(res.mask, problem.used) and res.mask is problem.used
+
+
+def test_trim_heap_gives_freed_heap_pages_back_where_the_c_library_can(monkeypatch):
+    """glibc keeps freed heap pages resident; :func:`trim_heap` gives them back (RSS falls by
+    most of 96 MB freed below the top of the heap), and is a no-op where there is no
+    ``malloc_trim`` (another platform)."""
+    import sys
+    from pathlib import Path
+
+    from antsim import heap
+
+    monkeypatch.setattr(sys, "platform", "darwin")
+    assert heap._malloc_trim() is None
+    monkeypatch.undo()
+    if not heap.trim_heap():
+        return  # no glibc here: nothing to give back by this route
+
+    def rss_mib() -> float:
+        return int(Path("/proc/self/statm").read_text().split()[1]) * 4096 / 2**20
+
+    # 1,000 arrays of 96 KB (below glibc's mmap threshold: on the heap), the last one kept
+    # so that the freed ones lie below the heap's top (not returned by free itself)
+    parts = [np.ones(12_000) for _ in range(1000)]
+    top = parts.pop()
+    del parts
+    before = rss_mib()
+    assert heap.trim_heap()
+    assert before - rss_mib() > 48.0  # half of what was freed, whatever else the heap holds
+    del top
