@@ -144,3 +144,53 @@ def test_trim_heap_gives_freed_heap_pages_back_where_the_c_library_can(monkeypat
     assert heap.trim_heap()
     assert before - rss_mib() > 48.0  # half of what was freed, whatever else the heap holds
     del top
+
+
+def _lagged_problem(cand, tau_s: float, n: int = 3000):
+    """A week of scans whose elevation residuals are ``cand``'s signal of time constant
+    ``tau_s`` (40" of it, 5" noise, fixed seed), and the grid's best test of it."""
+    clean = _week(n)
+    signal = 40.0 * cand.unit_signal(clean, {"tau_s": tau_s})
+    noise = np.random.default_rng(5).normal(0.0, 5.0, 2 * n)
+    obs = Observations(t_s=clean.t_s, az_rad=clean.az_rad, el_rad=clean.el_rad,
+                       xel_arcsec=signal[:n] + noise[:n], el_arcsec=signal[n:] + noise[n:],
+                       good=clean.good, air_temp_c=clean.air_temp_c,
+                       sun_el_deg=clean.sun_el_deg)
+    problem = Problem(obs, Prediction("white", np.zeros(n), np.zeros(n), np.full(n, 5.0),
+                                      np.full(n, 5.0)), ["IA", "IE", "CA", "AN", "AW"])
+    perp, z_perp = problem.perp_for(problem.used)
+    tests = [cand._linear(problem, perp, z_perp, *cand.columns(obs, tau), tau)
+             for tau in cand.TAUS]
+    return problem, perp, z_perp, max(tests, key=lambda res: res.delta_chi2)
+
+
+def test_a_time_constant_at_a_bound_is_the_bound_within_the_searchs_tolerance():
+    """Where the grid's best is its end, the search tests the bound past it and a point
+    XATOL_LOG_THETA inside: a fit at least as good at the bound ends it there, within the
+    bounded search's tolerance of that search's answer (which creeps to the bound), and no
+    worse; an optimum inside leaves the bounded search's answer as it was."""
+    import math
+
+    from antsim.diagnose.candidates.thermal import XATOL_LOG_THETA, SunsetTransientCandidate
+
+    cand = SunsetTransientCandidate()
+    problem, perp, z_perp, best = _lagged_problem(cand, 300.0)  # below the bound (400 s)
+    assert best.theta == cand.TAUS[0]
+    lo, b = math.log(cand.TAUS[0] / 1.5), math.log(cand.TAUS[1])
+    old = cand._refine_log_theta(problem, perp, z_perp, best, lo, b)
+    new = cand._refine_log_theta(problem, perp, z_perp, best, lo, b, lo)
+    assert math.isclose(new.theta, cand.TAUS[0] / 1.5, rel_tol=1e-12)  # exp(log(400 s))
+    assert new.theta != old.theta
+    # the bounded search stops within its tolerance of the bound (2x: Brent's stopping
+    # rule bounds the distance to the optimum by twice its tolerance)
+    assert abs(math.log(old.theta) - lo) <= 2 * XATOL_LOG_THETA
+    assert new.delta_chi2 >= old.delta_chi2
+
+    cand = TemperatureCandidate()
+    problem, perp, z_perp, best = _lagged_problem(cand, 26000.0)  # inside (21600, 32400)
+    assert best.theta == cand.TAUS[-1]
+    a, hi = math.log(cand.TAUS[-2]), math.log(cand.TAUS[-1] * 1.5)
+    old = cand._refine_log_theta(problem, perp, z_perp, best, a, hi)
+    new = cand._refine_log_theta(problem, perp, z_perp, best, a, hi, hi)
+    assert new.theta == old.theta < cand.TAUS[-1] * 1.5
+    assert new.delta_chi2 == old.delta_chi2

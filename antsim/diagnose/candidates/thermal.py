@@ -46,11 +46,25 @@ class _LaggedCandidate(Candidate):
     harness draws tau log-uniformly between 30 min and 3 h, with either sign."""
 
     def _refine_log_theta(self, problem: Problem, perp, z_perp, best: TestResult,
-                          log_lo: float, log_hi: float) -> TestResult:
+                          log_lo: float, log_hi: float,
+                          end: float | None = None) -> TestResult:
         """The time constant between exp(log_lo) and exp(log_hi) that fits best (bounded
-        search in log theta), or ``best`` if that fits better."""
+        search in log theta), or ``best`` if that fits better.
+
+        ``end`` (log_lo or log_hi, where the grid's best is its first or last point): the
+        bound past the grid. Where the fit there is at least as good as at the grid's best
+        and XATOL_LOG_THETA inside it, the optimum of a unimodal decrease lies within that
+        tolerance of the bound, and the bound is the answer (two tests; the bounded search
+        takes ten to creep to a bound by its golden-section steps)."""
         obs = problem.obs
         kept: list = [None, None]  # the best point so far and its test
+        if end is not None:
+            inside = end + (XATOL_LOG_THETA if end == log_lo else -XATOL_LOG_THETA)
+            at_end, near = (self._linear(problem, perp, z_perp, *self.columns(obs, theta),
+                                         theta)
+                            for theta in (math.exp(end), math.exp(inside)))
+            if at_end.delta_chi2 >= max(near.delta_chi2, best.delta_chi2):
+                return at_end
 
         def neg(log_theta: float) -> float:
             theta = math.exp(log_theta)
@@ -193,7 +207,8 @@ class SunsetCandidate(_LaggedCandidate):
         b = math.log(self.TAUS[min(i + 1, len(self.TAUS) - 1)]) if i < len(self.TAUS) - 1 \
             else hi
 
-        res = self._refine_log_theta(problem, perp, z_perp, best, a, b)
+        end = lo if i == 0 else hi if i == len(self.TAUS) - 1 else None
+        res = self._refine_log_theta(problem, perp, z_perp, best, a, b, end)
         # joint covariance of (amplitude, log tau) from the Jacobian
         tau = float(res.theta)
         h = 0.01
@@ -335,7 +350,8 @@ class TemperatureCandidate(_LaggedCandidate):
             a = math.log(taus[i - 1]) if taus[i - 1] > 0 else math.log(60.0)
             b = math.log(taus[i + 1]) if i + 1 < len(taus) else math.log(taus[-1] * 1.5)
 
-            res = self._refine_log_theta(problem, perp, z_perp, best, a, b)
+            res = self._refine_log_theta(problem, perp, z_perp, best, a, b,
+                                         b if i + 1 == len(taus) else None)
         tau = float(res.theta)
         if tau > 0:
             h = 0.01
