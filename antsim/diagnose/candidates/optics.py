@@ -178,6 +178,14 @@ class ExactTiltCandidate(Candidate):
             lin = lin_cols @ self.linear_terms(theta)
             return lin + f2 * (raw - lin)
 
+        def jac(theta):  # d err / d theta, (2k, 3) arcsec per arcmin, analytic
+            d_az, d_el = sky.derivatives_rad(*(float(v) * RAD_PER_ARCMIN for v in theta))
+            raw = np.concatenate([d_az * sky.cos_el, d_el], axis=1).T \
+                * (ARCSEC_PER_RAD * RAD_PER_ARCMIN)
+            lin = lin_cols * self.linear_terms((1.0, 1.0, 1.0))
+            return lin + f2[:, None] * (raw - lin)
+
+        err.jac = jac
         return err
 
     def _fit(self, problem, used: np.ndarray, starts,
@@ -192,12 +200,15 @@ class ExactTiltCandidate(Candidate):
         def resid(theta):
             return z_perp - proj(err(theta))
 
+        def resid_jac(theta):
+            return -proj(err.jac(theta))
+
         base = float(z_perp @ z_perp)
         best_x, best_c = np.zeros(3), base
         for x0 in starts:
             try:
-                sol = optimize.least_squares(resid, x0, method="lm", x_scale=30.0,
-                                             max_nfev=200)
+                sol = optimize.least_squares(resid, x0, jac=resid_jac, method="lm",
+                                             x_scale=30.0, max_nfev=200)
             except ValueError:
                 continue
             cost = float(sol.fun @ sol.fun)
@@ -223,10 +234,7 @@ class ExactTiltCandidate(Candidate):
         best_x, best_c, base, (err, proj, z_perp) = self._fit(problem, used, starts, lin)
         dchi2 = max(base - best_c, 0.0)
         # covariance from the Jacobian at the optimum
-        h = 0.5
-        jac = np.column_stack([proj((err(best_x + h * e) - err(best_x - h * e)) / (2 * h))
-                               for e in np.eye(3)])
-        _, cov = _lstsq(jac, z_perp)
+        _, cov = _lstsq(proj(err.jac(best_x)), z_perp)
         cols = self._shown(problem, None, lin)(best_x)[:, None]
         res = TestResult(self, dchi2, self.REFERENCE_DOF, 1.0, 1.0, tuple(best_x), cols,
                          ("exact",), np.array([1.0]), cov, mask=used.copy(),

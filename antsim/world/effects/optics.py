@@ -204,18 +204,67 @@ class TiltedSky:
                    collimation_rad: float) -> tuple[np.ndarray, np.ndarray]:
         """Encoder minus true (azimuth, elevation), rad, of an azimuth axis tilted by
         ``tilt_rad`` towards ``tilt_az_rad`` and a collimation error ``collimation_rad``."""
-        k = np.array([-math.sin(tilt_az_rad), math.cos(tilt_az_rad), 0.0])
-        # Rodrigues' rotation by -tilt about k as a matrix (see _rotate)
-        cos_a, sin_a = math.cos(-tilt_rad), math.sin(-tilt_rad)
-        cross = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-        rot = cos_a * np.eye(3) + sin_a * cross + (1.0 - cos_a) * np.outer(k, k)
-        x, y, z = rot @ self.v
+        x, y, z = _rotation(tilt_rad, tilt_az_rad) @ self.v
         cos_c = math.cos(collimation_rad)
         el_enc = np.arcsin(np.clip(z / cos_c, -1.0, 1.0))
         da = np.arctan2(math.sin(collimation_rad), cos_c * np.cos(el_enc))
         d_az = np.arctan2(y * self.cos_az - x * self.sin_az,
                           x * self.cos_az + y * self.sin_az) - da
         return wrap_pi(d_az), el_enc - self.el_rad
+
+    def derivatives_rad(self, tilt_north_rad: float, tilt_east_rad: float,
+                        collimation_rad: float) -> tuple[np.ndarray, np.ndarray]:
+        """d(azimuth error)/dp and d(elevation error)/dp, each (3, k), of :meth:`errors_rad`
+        with respect to p = (the tilt's north and east components, the collimation), rad,
+        analytic: the axis rotation R = exp([r]x), r = (east, -north, 0), moves a direction
+        u = R v by (J_l(r) dr) x u (J_l the left Jacobian of the rotation group)."""
+        tilt = math.hypot(tilt_north_rad, tilt_east_rad)
+        u = _rotation(tilt, math.atan2(tilt_east_rad, tilt_north_rad)) @ self.v
+        x, y, z = u
+        r_hat = np.array([tilt_east_rad, -tilt_north_rad, 0.0])
+        skew = np.array([[0.0, -r_hat[2], r_hat[1]], [r_hat[2], 0.0, -r_hat[0]],
+                         [-r_hat[1], r_hat[0], 0.0]])
+        if tilt < 1e-4:  # the series: 1/2 - t^2/24, 1/6 - t^2/120 (rounding below 1e-16)
+            c1, c2 = 0.5 - tilt**2 / 24.0, 1.0 / 6.0 - tilt**2 / 120.0
+        else:
+            c1 = 2.0 * math.sin(0.5 * tilt) ** 2 / tilt**2
+            c2 = (tilt - math.sin(tilt)) / tilt**3
+        j_left = np.eye(3) + c1 * skew + c2 * (skew @ skew)
+        # dr/d(north) = (0, -1, 0), dr/d(east) = (1, 0, 0)
+        axes = (-j_left[:, 1], j_left[:, 0])
+        du = [np.stack([a[1] * z - a[2] * y, a[2] * x - a[0] * z, a[0] * y - a[1] * x])
+              for a in axes]
+        cos_c, sin_c = math.cos(collimation_rad), math.sin(collimation_rad)
+        sin_enc = z / cos_c
+        el_enc = np.arcsin(np.clip(sin_enc, -1.0, 1.0))
+        cos_e, sin_e = np.cos(el_enc), np.sin(el_enc)
+        # d(arcsin s) = ds / cos E; zero where errors_rad clips s (a direction past the pole)
+        inv = np.divide(1.0, cos_c * cos_e, out=np.zeros_like(cos_e),
+                        where=np.abs(sin_enc) < 1.0)
+        # arctan2(sin c, cos c cos E) = da: d(da) = (q dp - p dq) / (p^2 + q^2)
+        q = cos_c * cos_e
+        pq = sin_c**2 + q**2
+        big_y = y * self.cos_az - x * self.sin_az
+        big_x = x * self.cos_az + y * self.sin_az
+        r2 = big_x**2 + big_y**2
+        d_el, d_az = np.empty((3, u.shape[1])), np.empty((3, u.shape[1]))
+        for i, (dx, dy, dz) in enumerate(du):
+            d_el[i] = dz * inv
+            d_da = sin_c * cos_c * sin_e * d_el[i] / pq
+            d_az[i] = (big_x * (dy * self.cos_az - dx * self.sin_az)
+                       - big_y * (dx * self.cos_az + dy * self.sin_az)) / r2 - d_da
+        d_el[2] = sin_enc * sin_c * inv
+        d_az[2] = -(q * cos_c - sin_c * (-sin_c * cos_e - cos_c * sin_e * d_el[2])) / pq
+        return d_az, d_el
+
+
+def _rotation(tilt_rad: float, tilt_az_rad: float) -> np.ndarray:
+    """The 3x3 matrix that rotates true directions to the tilted axis' frame: Rodrigues'
+    rotation by -tilt about the horizontal axis k perpendicular to the tilt (see _rotate)."""
+    k = np.array([-math.sin(tilt_az_rad), math.cos(tilt_az_rad), 0.0])
+    cos_a, sin_a = math.cos(-tilt_rad), math.sin(-tilt_rad)
+    cross = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return cos_a * np.eye(3) + sin_a * cross + (1.0 - cos_a) * np.outer(k, k)
 
 
 def wrap_pi(angle_rad: np.ndarray) -> np.ndarray:
