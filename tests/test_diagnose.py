@@ -1265,7 +1265,7 @@ def test_the_exact_tilts_analytic_jacobian_ends_where_finite_differences_did(mon
                       term_columns(("AN", "AW", "CA"), obs))
     h = 1e-4
     for theta in ((25.0, 17.0, 5.0), (-3.0, 1.0, -2.0)):
-        jac = err.jac(np.array(theta))
+        jac = err.jac_rows(np.array(theta)).T
         fd = np.column_stack([(err(np.add(theta, h * e)) - err(np.subtract(theta, h * e)))
                               / (2 * h) for e in np.eye(3)])
         assert np.abs(jac - fd).max() < 1e-6 * np.abs(jac).max()

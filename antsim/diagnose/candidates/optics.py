@@ -178,14 +178,22 @@ class ExactTiltCandidate(Candidate):
             lin = lin_cols @ self.linear_terms(theta)
             return lin + f2 * (raw - lin)
 
-        def jac(theta):  # d err / d theta, (2k, 3) arcsec per arcmin, analytic
-            d_az, d_el = sky.derivatives_rad(*(float(v) * RAD_PER_ARCMIN for v in theta))
-            raw = np.concatenate([d_az * sky.cos_el, d_el], axis=1).T \
-                * (ARCSEC_PER_RAD * RAD_PER_ARCMIN)
-            lin = lin_cols * self.linear_terms((1.0, 1.0, 1.0))
-            return lin + f2[:, None] * (raw - lin)
+        # d err / d theta = lin' + f2 (raw' - lin'): the linear part's (constant) share
+        lin_rows = (1.0 - f2) * (lin_cols * self.linear_terms((1.0, 1.0, 1.0))).T
+        k = sky.cos_el.size
+        scale_az = sky.cos_el * (ARCSEC_PER_RAD * RAD_PER_ARCMIN)
 
-        err.jac = jac
+        def jac_rows(theta):
+            """d err / d theta, one row (2k,) per parameter, arcsec per arcmin: analytic."""
+            d_az, d_el = sky.derivatives_rad(*(float(v) * RAD_PER_ARCMIN for v in theta))
+            rows = np.empty_like(lin_rows)
+            np.multiply(d_az, scale_az, out=rows[:, :k])
+            np.multiply(d_el, ARCSEC_PER_RAD * RAD_PER_ARCMIN, out=rows[:, k:])
+            rows *= f2
+            rows += lin_rows
+            return rows
+
+        err.jac_rows = jac_rows
         return err
 
     def _fit(self, problem, used: np.ndarray, starts,
@@ -201,7 +209,7 @@ class ExactTiltCandidate(Candidate):
             return z_perp - proj(err(theta))
 
         def resid_jac(theta):
-            return -proj(err.jac(theta))
+            return -np.column_stack([proj(row) for row in err.jac_rows(theta)])
 
         base = float(z_perp @ z_perp)
         best_x, best_c = np.zeros(3), base
@@ -234,7 +242,7 @@ class ExactTiltCandidate(Candidate):
         best_x, best_c, base, (err, proj, z_perp) = self._fit(problem, used, starts, lin)
         dchi2 = max(base - best_c, 0.0)
         # covariance from the Jacobian at the optimum
-        _, cov = _lstsq(proj(err.jac(best_x)), z_perp)
+        _, cov = _lstsq(np.column_stack([proj(row) for row in err.jac_rows(best_x)]), z_perp)
         cols = self._shown(problem, None, lin)(best_x)[:, None]
         res = TestResult(self, dchi2, self.REFERENCE_DOF, 1.0, 1.0, tuple(best_x), cols,
                          ("exact",), np.array([1.0]), cov, mask=used.copy(),

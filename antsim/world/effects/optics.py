@@ -200,11 +200,15 @@ class TiltedSky:
         self.v = np.stack([self.cos_el * self.cos_az, self.cos_el * self.sin_az,
                            np.sin(self.el_rad)])
 
+    def _rotated(self, tilt_rad: float, tilt_az_rad: float) -> np.ndarray:
+        """The directions in the tilted axis' frame, (3, k): x, y, z."""
+        return _rotation(tilt_rad, tilt_az_rad) @ self.v
+
     def errors_rad(self, tilt_rad: float, tilt_az_rad: float,
                    collimation_rad: float) -> tuple[np.ndarray, np.ndarray]:
         """Encoder minus true (azimuth, elevation), rad, of an azimuth axis tilted by
         ``tilt_rad`` towards ``tilt_az_rad`` and a collimation error ``collimation_rad``."""
-        x, y, z = _rotation(tilt_rad, tilt_az_rad) @ self.v
+        x, y, z = self._rotated(tilt_rad, tilt_az_rad)
         cos_c = math.cos(collimation_rad)
         el_enc = np.arcsin(np.clip(z / cos_c, -1.0, 1.0))
         da = np.arctan2(math.sin(collimation_rad), cos_c * np.cos(el_enc))
@@ -217,44 +221,38 @@ class TiltedSky:
         """d(azimuth error)/dp and d(elevation error)/dp, each (3, k), of :meth:`errors_rad`
         with respect to p = (the tilt's north and east components, the collimation), rad,
         analytic: the axis rotation R = exp([r]x), r = (east, -north, 0), moves a direction
-        u = R v by (J_l(r) dr) x u (J_l the left Jacobian of the rotation group)."""
+        u = R v = (x, y, z) by du = a x u, a = J_l(r) dr (J_l the rotation group's left
+        Jacobian), so that the azimuth arctan2 moves by a_z - z (a_x x + a_y y) / (x^2 + y^2)
+        (the true azimuth's turn drops out) and z by a_x y - a_y x."""
         tilt = math.hypot(tilt_north_rad, tilt_east_rad)
-        u = _rotation(tilt, math.atan2(tilt_east_rad, tilt_north_rad)) @ self.v
-        x, y, z = u
-        r_hat = np.array([tilt_east_rad, -tilt_north_rad, 0.0])
-        skew = np.array([[0.0, -r_hat[2], r_hat[1]], [r_hat[2], 0.0, -r_hat[0]],
-                         [-r_hat[1], r_hat[0], 0.0]])
+        x, y, z = self._rotated(tilt, math.atan2(tilt_east_rad, tilt_north_rad))
+        skew = np.array([[0.0, 0.0, -tilt_north_rad], [0.0, 0.0, -tilt_east_rad],
+                         [tilt_north_rad, tilt_east_rad, 0.0]])  # [r]x
         if tilt < 1e-4:  # the series: 1/2 - t^2/24, 1/6 - t^2/120 (rounding below 1e-16)
             c1, c2 = 0.5 - tilt**2 / 24.0, 1.0 / 6.0 - tilt**2 / 120.0
         else:
             c1 = 2.0 * math.sin(0.5 * tilt) ** 2 / tilt**2
             c2 = (tilt - math.sin(tilt)) / tilt**3
         j_left = np.eye(3) + c1 * skew + c2 * (skew @ skew)
-        # dr/d(north) = (0, -1, 0), dr/d(east) = (1, 0, 0)
-        axes = (-j_left[:, 1], j_left[:, 0])
-        du = [np.stack([a[1] * z - a[2] * y, a[2] * x - a[0] * z, a[0] * y - a[1] * x])
-              for a in axes]
         cos_c, sin_c = math.cos(collimation_rad), math.sin(collimation_rad)
-        sin_enc = z / cos_c
-        el_enc = np.arcsin(np.clip(sin_enc, -1.0, 1.0))
-        cos_e, sin_e = np.cos(el_enc), np.sin(el_enc)
-        # d(arcsin s) = ds / cos E; zero where errors_rad clips s (a direction past the pole)
-        inv = np.divide(1.0, cos_c * cos_e, out=np.zeros_like(cos_e),
-                        where=np.abs(sin_enc) < 1.0)
-        # arctan2(sin c, cos c cos E) = da: d(da) = (q dp - p dq) / (p^2 + q^2)
+        sin_e = np.clip(z / cos_c, -1.0, 1.0)  # the encoder elevation's sine
+        cos_e = np.sqrt(1.0 - sin_e**2)
+        # d(arcsin s) = ds / cos E: zero where errors_rad clips s (a direction past the pole)
+        inv = np.divide(1.0 / cos_c, cos_e, out=np.zeros_like(cos_e), where=cos_e > 0.0)
+        # the collimation's azimuth term da = arctan2(sin c, q), q = cos c cos E:
+        # d(da) = (q d(sin c) - sin c dq) / (sin^2 c + q^2)
         q = cos_c * cos_e
         pq = sin_c**2 + q**2
-        big_y = y * self.cos_az - x * self.sin_az
-        big_x = x * self.cos_az + y * self.sin_az
-        r2 = big_x**2 + big_y**2
-        d_el, d_az = np.empty((3, u.shape[1])), np.empty((3, u.shape[1]))
-        for i, (dx, dy, dz) in enumerate(du):
-            d_el[i] = dz * inv
-            d_da = sin_c * cos_c * sin_e * d_el[i] / pq
-            d_az[i] = (big_x * (dy * self.cos_az - dx * self.sin_az)
-                       - big_y * (dx * self.cos_az + dy * self.sin_az)) / r2 - d_da
-        d_el[2] = sin_enc * sin_c * inv
-        d_az[2] = -(q * cos_c - sin_c * (-sin_c * cos_e - cos_c * sin_e * d_el[2])) / pq
+        inv_pq = np.divide(1.0, pq, out=np.zeros_like(pq), where=pq > 0.0)
+        z_rho = z / (x * x + y * y)
+        k_da = (sin_c * cos_c) * sin_e * inv_pq  # d(da)/dE for a fixed collimation
+        d_az, d_el = np.empty((3, z.size)), np.empty((3, z.size))
+        # dr/d(north) = (0, -1, 0), dr/d(east) = (1, 0, 0)
+        for i, a in enumerate((-j_left[:, 1], j_left[:, 0])):
+            d_el[i] = (a[0] * y - a[1] * x) * inv
+            d_az[i] = a[2] - z_rho * (a[0] * x + a[1] * y) - k_da * d_el[i]
+        d_el[2] = sin_e * sin_c * inv
+        d_az[2] = -(q * cos_c + sin_c * (sin_c * cos_e + cos_c * sin_e * d_el[2])) * inv_pq
         return d_az, d_el
 
 
