@@ -1176,20 +1176,13 @@ def test_the_hours_since_sunset_are_those_of_the_last_sunset_before_each_scan():
     assert 50 < np.isfinite(got).sum() < obs.n - 50 and sets.size >= 4
 
 
-def test_the_exact_tilts_subsample_search_finds_the_full_searchs_optimum(monkeypatch):
-    """Two code paths of the exact tilt's fit: its nine starts on all the scans, and (many
-    scans) on every k-th scan with only the best refined on all. On 3,000 scans with a 30'
-    tilt and 5' of collimation hidden (their linear part in the model's AN, AW, CA) both end
-    in the same optimum, up to the sign the even signature cannot tell: Levenberg-Marquardt
-    stops when the chi^2 falls by less than 1e-8 of itself, which leaves the chi^2 decrease
-    within 1e-6 of itself (measured 2e-12) and each parameter within sqrt(2e-8 chi^2) ~ 0.04
-    of its sigma (measured 5e-4; 0.05 asked)."""
-    from antsim.diagnose.candidates import optics
+def _tilted(n: int, rng: np.random.Generator):
+    """``n`` scans with a 30' exact tilt towards 60 deg and 5' of collimation hidden (5"
+    noise; their linear part in the model's AN, AW, CA): the problem, its projector and
+    projected data over the used scans, and the candidate."""
     from antsim.diagnose.problem import Prediction, Problem
     from antsim.world.effects.optics import ExactTiltCollimation
 
-    n = 3000
-    rng = np.random.default_rng(30)
     az = rng.uniform(0.0, 2 * math.pi, n)
     el = np.radians(rng.uniform(10.0, 87.0, n))
     effect = ExactTiltCollimation(tilt_arcmin=30.0, tilt_az_deg=60.0, collimation_arcmin=5.0)
@@ -1202,8 +1195,34 @@ def test_the_exact_tilts_subsample_search_finds_the_full_searchs_optimum(monkeyp
     problem = Problem(obs, Prediction("white", np.zeros(n), np.zeros(n), np.full(n, 5.0),
                                       np.full(n, 5.0)),
                       ["IA", "IE", "NPAE", "CA", "AN", "AW", "TF", "TX"])
-    perp, z_perp = problem.perp_for(problem.used)
-    tilt = candidate("exact_tilt_collimation")
+    return (problem, *problem.perp_for(problem.used), candidate("exact_tilt_collimation"))
+
+
+def _same_tilt(res, other) -> np.ndarray:
+    """Assert that two exact-tilt tests of :func:`_tilted`'s scans found the hidden 30' and
+    the same optimum, up to the sign the even signature cannot tell (tolerances: the tests'
+    docstrings); ``res``'s sigmas."""
+    assert res.params["tilt_arcmin"] == pytest.approx(30.0, abs=3 * res.amplitude_sigma)
+    assert other.delta_chi2 == pytest.approx(res.delta_chi2, rel=1e-6)
+    a, b = np.array(res.theta), np.array(other.theta)
+    sig = np.sqrt(np.diag(res.cov))
+    assert min(np.abs(a - b).max() / sig.min(), np.abs(a + b).max() / sig.min()) < 0.05
+    return sig
+
+
+def test_the_exact_tilts_subsample_search_finds_the_full_searchs_optimum(monkeypatch):
+    """Two code paths of the exact tilt's fit: its nine starts on all the scans, and (many
+    scans) on every k-th scan with only the best refined on all. On 3,000 scans with a 30'
+    tilt and 5' of collimation hidden (their linear part in the model's AN, AW, CA) both end
+    in the same optimum, up to the sign the even signature cannot tell: Levenberg-Marquardt
+    stops when the chi^2 falls by less than 1e-8 of itself, which leaves the chi^2 decrease
+    within 1e-6 of itself (measured 2e-12) and each parameter within sqrt(2e-8 chi^2) ~ 0.04
+    of its sigma (measured 5e-4; 0.05 asked)."""
+    from antsim.diagnose.candidates import optics
+
+    n = 3000
+    rng = np.random.default_rng(30)
+    problem, perp, z_perp, tilt = _tilted(n, rng)
     # the projection of the used scans alone is the problem's own projector
     rows = np.flatnonzero(problem.used)
     proj, _ = optics._projection(problem, problem.used, rows)
@@ -1221,11 +1240,7 @@ def test_the_exact_tilts_subsample_search_finds_the_full_searchs_optimum(monkeyp
     whole = tilt.test(problem, perp, z_perp, float(z_perp @ z_perp))
     monkeypatch.setattr(type(tilt), "SEARCH_SCANS", 300)
     sub = tilt.test(problem, perp, z_perp, float(z_perp @ z_perp))
-    assert whole.params["tilt_arcmin"] == pytest.approx(30.0, abs=3 * whole.amplitude_sigma)
-    assert sub.delta_chi2 == pytest.approx(whole.delta_chi2, rel=1e-6)
-    a, b = np.array(whole.theta), np.array(sub.theta)
-    sig = np.sqrt(np.diag(whole.cov))
-    assert min(np.abs(a - b).max() / sig.min(), np.abs(a + b).max() / sig.min()) < 0.05
+    _same_tilt(whole, sub)
 
 
 
@@ -1242,27 +1257,13 @@ def test_the_exact_tilts_analytic_jacobian_ends_where_finite_differences_did(mon
     from scipy import optimize
 
     from antsim.diagnose.candidates import optics
-    from antsim.diagnose.problem import Prediction, Problem, _lstsq, term_columns
-    from antsim.world.effects.optics import ExactTiltCollimation
+    from antsim.diagnose.problem import _lstsq, term_columns
 
     n = 3000
     rng = np.random.default_rng(30)
-    az = rng.uniform(0.0, 2 * math.pi, n)
-    el = np.radians(rng.uniform(10.0, 87.0, n))
-    effect = ExactTiltCollimation(tilt_arcmin=30.0, tilt_az_deg=60.0, collimation_arcmin=5.0)
-    az_enc, el_enc = effect.encoder_from_true(az, el)
-    d_az = (az_enc - az + math.pi) % (2 * math.pi) - math.pi
-    obs = Observations(t_s=np.arange(n) * 300.0, az_rad=az, el_rad=el,
-                       xel_arcsec=d_az * np.cos(el) / RAD_PER_ARCSEC + rng.normal(0, 5.0, n),
-                       el_arcsec=(el_enc - el) / RAD_PER_ARCSEC + rng.normal(0, 5.0, n),
-                       good=np.ones(n, bool), meta={"latitude_deg": 38.43})
-    problem = Problem(obs, Prediction("white", np.zeros(n), np.zeros(n), np.full(n, 5.0),
-                                      np.full(n, 5.0)),
-                      ["IA", "IE", "NPAE", "CA", "AN", "AW", "TF", "TX"])
-    perp, z_perp = problem.perp_for(problem.used)
-    tilt = candidate("exact_tilt_collimation")
+    problem, perp, z_perp, tilt = _tilted(n, rng)
     err = tilt._shown(problem, np.flatnonzero(problem.used),
-                      term_columns(("AN", "AW", "CA"), obs))
+                      term_columns(("AN", "AW", "CA"), problem.obs))
     h = 1e-4
     for theta in ((25.0, 17.0, 5.0), (-3.0, 1.0, -2.0)):
         jac = err.jac_rows(np.array(theta)).T
@@ -1278,11 +1279,7 @@ def test_the_exact_tilts_analytic_jacobian_ends_where_finite_differences_did(mon
 
     monkeypatch.setattr(optics.optimize, "least_squares", differences)
     old = tilt.test(problem, perp, z_perp, float(z_perp @ z_perp))
-    assert new.params["tilt_arcmin"] == pytest.approx(30.0, abs=3 * new.amplitude_sigma)
-    assert new.delta_chi2 == pytest.approx(old.delta_chi2, rel=1e-6)
-    a, b = np.array(new.theta), np.array(old.theta)
-    sig = np.sqrt(np.diag(new.cov))
-    assert min(np.abs(a - b).max() / sig.min(), np.abs(a + b).max() / sig.min()) < 0.05
+    sig = _same_tilt(new, old)
     rows = np.flatnonzero(problem.used)
     proj, z_used = optics._projection(problem, problem.used, rows)
     x = np.array(new.theta)
