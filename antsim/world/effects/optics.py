@@ -244,7 +244,8 @@ class TiltedSky:
         q = cos_c * cos_e
         pq = sin_c**2 + q**2
         inv_pq = np.divide(1.0, pq, out=np.zeros_like(pq), where=pq > 0.0)
-        z_rho = z / (x * x + y * y)
+        rho2 = x * x + y * y  # zero only exactly at the pole, where arctan2 is taken as 0
+        z_rho = np.divide(z, rho2, out=np.zeros_like(z), where=rho2 > 0.0)
         k_da = (sin_c * cos_c) * sin_e * inv_pq  # d(da)/dE for a fixed collimation
         d_az, d_el = np.empty((3, z.size)), np.empty((3, z.size))
         # dr/d(north) = (0, -1, 0), dr/d(east) = (1, 0, 0)
