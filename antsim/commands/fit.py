@@ -14,7 +14,7 @@ import json
 import sys
 from pathlib import Path
 
-from controller.errors import InputError, read_text_file
+from controller.errors import InputError
 from controller.pointing.model import NAMED_MODELS
 
 #: default model per input format: TPOINT users (and a CSV of one's own measurements) start
@@ -164,13 +164,10 @@ def _note(line: str) -> None:
 
 def main(args: argparse.Namespace) -> int:
     from controller.pointing.fitting import fit_model
-    from controller.program.csvdata import input_format
+    from controller.program.csvdata import input_format_and_text
 
     path = Path(args.recordings)
-    text: str | None = read_text_file(path)  # once, for the format and the recordings
-    fmt = input_format(path, text)
-    if fmt != "ecsv":  # the other readers read it themselves
-        text = None
+    fmt, text = input_format_and_text(path)
     if args.csv and fmt != "csv":
         raise InputError("command line", "--csv", args.csv[0], f"{path} is not a CSV file")
     if fmt == "mod":

@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from controller.errors import InputError, read_text_file
+from controller.errors import InputError
 from controller.pointing.model import PointingModel
 from controller.pointing.thermal import sensor_aux, structure_sensor_names
 
@@ -310,15 +310,12 @@ def load_observations(path: str | Path, mount: str | None = None,
     (:mod:`controller.program.csvdata`, with its ``--csv`` settings), detected by content;
     InputError if none. ``mount="altaz"`` reads a TPOINT file's decimal records as Az/El
     (``--mount altaz``)."""
-    from controller.program.csvdata import input_format
+    from controller.program.csvdata import input_format_and_text
 
     path = Path(path)
     if not path.exists():
         raise InputError(str(path), "RECORDINGS", str(path), "no such file")
-    text: str | None = read_text_file(path)  # once, for the format and the recordings
-    fmt = input_format(path, text)
-    if fmt != "ecsv":  # the other readers read it themselves
-        text = None
+    fmt, text = input_format_and_text(path)
     if csv_options and fmt != "csv":
         raise InputError("command line", "--csv", csv_options[0], f"{path} is not a CSV file")
     if fmt == "csv":

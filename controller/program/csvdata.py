@@ -362,6 +362,15 @@ def input_format(path: str | Path, text: str | None = None) -> str:
     return sniff_format(path)
 
 
+def input_format_and_text(path: str | Path) -> tuple[str, str | None]:
+    """:func:`input_format` of ``path`` and, for an ECSV file, its text (read once, for the
+    format and the recordings: 44 MB at 200,000 scans; None for the other formats, whose
+    readers read the file themselves)."""
+    text = read_text_file(path)
+    fmt = input_format(path, text)
+    return fmt, (text if fmt == "ecsv" else None)
+
+
 def pointing_data(data: CsvData):
     """The measurements as :class:`~controller.pointing.data.PointingData` (total pointing
     error, indicated minus true, arcsec)."""
