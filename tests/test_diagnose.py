@@ -1406,6 +1406,31 @@ def test_the_held_out_check_whitens_column_blocks_as_their_stack():
     assert problem.cv_chi2((cur, extra), folds) == problem.cv_chi2(whole, folds)
 
 
+def test_rows_gathered_into_fortran_order_a_block_at_a_time_are_the_whole_gathered():
+    """:func:`take_rows_fortran` gathers (and scales) a block of rows at a time: the same
+    numbers, bit for bit, as gathering the whole, scaling it and copying it into Fortran
+    order (a copy and one product per element either way), over several blocks, a last
+    partial one, a strided view and into columns of a larger array."""
+    from antsim.diagnose.problem import FORTRAN_BLOCK, take_rows_fortran
+
+    rng = np.random.default_rng(5)
+    n = 3 * FORTRAN_BLOCK + 17
+    whole = rng.standard_normal((n, 7))
+    x = whole[:, 1:5]  # a strided view, as the model's base columns are
+    idx = np.flatnonzero(rng.random(n) < 0.9)
+    scale = rng.random(idx.size) + 0.5
+    gathered = x[idx]
+    gathered *= scale[:, None]
+    out = take_rows_fortran(x, idx, scale)
+    assert out.flags.f_contiguous and np.array_equal(out, gathered)
+    copied = take_rows_fortran(x)
+    assert copied.flags.f_contiguous and np.array_equal(copied, np.array(x, order="F"))
+    assert np.array_equal(take_rows_fortran(x, idx), x[idx])
+    into = np.full((idx.size, 6), np.nan, order="F")
+    take_rows_fortran(x, idx, scale, into[:, 1:5])
+    assert np.array_equal(into[:, 1:5], gathered) and np.isnan(into[:, [0, 5]]).all()
+
+
 def test_diagnose_runs_with_one_blas_thread(monkeypatch):
     """diagnose limits BLAS to one thread while it runs (its products are thin and bound by
     memory: a second OpenBLAS thread cost up to 3.5 times the time under load) and gives
