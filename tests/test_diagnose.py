@@ -1120,10 +1120,12 @@ def test_the_current_models_fits_are_kept_while_what_they_depend_on_stays():
             f.resid, g.resid)
 
     f = problem.fit_current()
-    assert problem.fit_current() is f and same(f, problem.fit(problem.current_columns()))
+    assert problem.fit_current() is f and same(f, problem.fit(problem.current_columns().copy()))
+    # the model's own columns over its scans (the summary's degeneracies): the kept fit
+    assert problem.fit(problem.current_columns()) is f
     problem.scale[0] *= 1.5
     assert problem.fit_current() is not f
-    assert same(problem.fit_current(), problem.fit(problem.current_columns()))
+    assert same(problem.fit_current(), problem.fit(problem.current_columns().copy()))
     less = problem.used.copy()
     less[np.flatnonzero(less)[:5]] = False
     assert same(problem.fit_current(less), problem.fit(problem.current_columns(), less))
@@ -1146,6 +1148,36 @@ def test_the_current_models_fits_are_kept_while_what_they_depend_on_stays():
     assert problem.sky_rms() == problem.sky_rms(whole) == added
     problem.used = less
     np.testing.assert_array_equal(problem.raw_residuals(), problem.raw_residuals(whole, less))
+
+
+def test_a_findings_fitted_signal_comes_from_the_fit_the_outlier_update_starts_from():
+    """A finding's fitted signal is taken from the current model's kept fit once the finding
+    is added (:meth:`Problem.add`), the fit the outlier update then starts from: the same
+    numbers, bit for bit, as its definition (a joint fit of the model's columns and the
+    finding's, the finding's part less what the model's terms take); and the update makes no
+    second fit of that design."""
+    from antsim.diagnose.select import _fitted_signal
+
+    problem = _scans_with_unused_and_scaled()
+    n = problem.n
+    az = problem.obs.az_rad
+    extra = problem.cand(np.concatenate([np.zeros((n, 2)),
+                                         np.column_stack([np.sin(2 * az), np.cos(2 * az)])]))
+    cols = problem.current_columns()
+    joint = problem.fit(np.column_stack([cols, extra]))
+    signal = extra @ joint.coef[cols.shape[1]:]
+    beta, *_ = np.linalg.lstsq(problem.T(cols), problem.T(signal), rcond=None)
+    want = signal - cols @ beta
+    before = problem.add("sin2a", extra, ("HESA2", "HECA2"))
+    assert before is cols and problem.current_names[-2:] == ["sin2a:HESA2", "sin2a:HECA2"]
+    assert np.array_equal(_fitted_signal(problem, before, extra), want)
+    assert problem.fit_current().chi2 == joint.chi2
+    kept = (problem.used.tobytes(), problem.scale.tobytes())
+    made = []
+    fit = problem._fit
+    problem._fit = lambda c, u: made.append((u.tobytes(), problem.scale.tobytes())) or fit(c, u)
+    problem.update_outliers()
+    assert made and kept not in made  # fits of other scans or noise scales only
 
 
 def test_the_hours_since_sunset_are_those_of_the_last_sunset_before_each_scan():
@@ -1378,9 +1410,9 @@ def test_selection_lets_the_models_factors_go_when_it_accepts_a_finding(monkeypa
     held = []
     fitted_signal = select_module._fitted_signal
 
-    def watched(problem_, res):
+    def watched(problem_, cols, extra):
         held.append(sum(problem_._perp_bytes.values()))
-        return fitted_signal(problem_, res)
+        return fitted_signal(problem_, cols, extra)
 
     monkeypatch.setattr(select_module, "_fitted_signal", watched)
     sel = select_module.select(problem)

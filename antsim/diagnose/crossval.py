@@ -200,7 +200,8 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
              model_terms: set[str], room: int, signal_of):
     """Up to ``room`` cross-validated findings (see the module docstring), added to
     ``problem``; returns [(TestResult, (held-out Sky RMS before, after), (in-sample Sky RMS
-    before, after), ``signal_of(problem, result)`` before it was added)]."""
+    before, after), ``signal_of(problem, the model's columns before, the result's columns)``
+    once it is added)]."""
     folds = contiguous_folds(problem.obs.t_s, K_FOLDS)
     out = []
     while len(out) < room:
@@ -235,11 +236,11 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
         if not res.testable:
             break
         sky_before = problem.sky_rms()
-        signal = signal_of(problem, res)
         taken.add(c.name)
         model_terms |= set(res.comp_names)
-        problem.extra.append(res.columns)
-        problem.extra_names.extend(f"{c.name}:{n}" for n in res.comp_names)
+        extra = res.columns  # read once (a result may make its columns again when read)
+        signal = signal_of(problem, problem.add(c.name, extra, res.comp_names), extra)
+        del extra
         problem.update_outliers()
         out.append((res, (math.sqrt(float(np.mean(now))), math.sqrt(float(np.mean(new)))),
                     (sky_before, problem.sky_rms()), signal))

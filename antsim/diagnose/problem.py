@@ -283,14 +283,30 @@ class Problem:
             self._stacked = (len(self.extra), whole)
         return self._stacked[1]
 
+    def add(self, name: str, extra: np.ndarray, comp_names: Sequence[str]) -> np.ndarray:
+        """Add a finding's raw columns ``extra`` (2n, q) to the model, named
+        ``name:component``; returns the model's columns before it (kept: the finding's
+        fitted signal is taken off them)."""
+        before = self.current_columns()
+        self.extra.append(extra)
+        self.extra_names.extend(f"{name}:{n}" for n in comp_names)
+        return before
+
     @property
     def current_names(self) -> list[str]:
         return [*self.base_terms, *self.extra_names]
 
     # ------------------------------------------------------------------ fitting
     def fit(self, columns: np.ndarray, used: np.ndarray | None = None) -> LinearFit:
-        """Generalized least squares of the data on ``columns`` over the used scans."""
-        used = self.used if used is None else used
+        """Generalized least squares of the data on ``columns`` over the used scans (the
+        current model's columns themselves over the model's scans: :meth:`fit_current`,
+        the same fit, kept; treat it as read-only)."""
+        if used is None and columns is self.current_columns():
+            return self.fit_current()
+        return self._fit(columns, self.used if used is None else used)
+
+    def _fit(self, columns: np.ndarray, used: np.ndarray) -> LinearFit:
+        """:meth:`fit`, made."""
         a = self.T(columns, used)
         z = self.T(self.y, used)
         coef, cov = _lstsq(a, z)
@@ -305,7 +321,7 @@ class Problem:
         used = self.used if used is None else used
         key = (used.tobytes(), self.scale.tobytes(), len(self.extra))
         if self._fit_memo is None or self._fit_memo[0] != key:
-            self._fit_memo = (key, self.fit(self.current_columns(), used))
+            self._fit_memo = (key, self._fit(self.current_columns(), used))
         return self._fit_memo[1]
 
     def _current_qr(self, used: np.ndarray):

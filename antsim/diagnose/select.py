@@ -204,15 +204,15 @@ class Selection:
     stop_reason: str
 
 
-def _fitted_signal(problem: Problem, res: TestResult) -> np.ndarray:
-    """The candidate's fitted error (2n, arcsec) in a joint fit with the current model, less
-    the part the model's own terms can take (what the candidate adds)."""
+def _fitted_signal(problem: Problem, cols: np.ndarray, extra: np.ndarray) -> np.ndarray:
+    """The fitted error (2n, arcsec) of a finding's raw columns ``extra`` just added to the
+    model (the model's columns before it: ``cols``) in the joint fit, less the part the
+    model's own terms can take (what the finding adds). The joint fit is the current
+    model's (:meth:`Problem.fit_current`): the outlier update after the finding starts
+    from it, not from a fit of the same design again."""
     trim_heap()  # the joint design follows: not beside freed, resident heap
-    cols = problem.current_columns()
-    full = np.column_stack([cols, res.columns])
-    f = problem.fit(full)
-    del full  # the joint design (2n x m floats): not beside the fit below
-    signal = res.columns @ f.coef[cols.shape[1]:]
+    f = problem.fit_current()
+    signal = extra @ f.coef[cols.shape[1]:]
     beta, *_ = np.linalg.lstsq(problem.T(cols), problem.T(signal), rcond=None)
     return signal - cols @ beta
 
@@ -241,6 +241,28 @@ def _signal_corr(problem: Problem, perp, a: TestResult, b: TestResult,
     num = float(np.linalg.norm(xb @ beta))
     den = float(np.linalg.norm(sa))
     return num / den if den > 0 else 0.0
+
+
+class _Correlations:
+    """:func:`_signal_corr` over one round's projector ``perp``, each candidate's projected
+    fitted signature and each pair's correlation made once: the simpler-equivalent check
+    and the alternatives ask for the same pairs (each a projection of 2 n_used rows and a
+    least-squares fit). Holds the projector (the model's basis): let it go with the round's."""
+
+    def __init__(self, problem: Problem, perp):
+        self.problem, self.perp = problem, perp
+        self._sa: dict[int, tuple[TestResult, np.ndarray | None]] = {}
+        self._r: dict[tuple[int, int], tuple[TestResult, TestResult, float]] = {}
+
+    def __call__(self, a: TestResult, b: TestResult) -> float:
+        """:func:`_signal_corr` of ``a`` and ``b``."""
+        key = (id(a), id(b))  # the results are held beside their ids: no id reused
+        if key not in self._r:
+            if a.coef.size and b.coef.size and id(a) not in self._sa:
+                self._sa[id(a)] = (a, _fitted_perp(self.perp, a))
+            sa = self._sa.get(id(a), (a, None))[1]
+            self._r[key] = (a, b, _signal_corr(self.problem, self.perp, a, b, sa))
+        return self._r[key][2]
 
 
 def _model_terms(problem: Problem) -> set[str]:
@@ -304,8 +326,8 @@ def _label(r: TestResult) -> str:
     return r.candidate.label(r.theta)
 
 
-def _alternatives(problem: Problem, perp, r: TestResult, ranked: list[TestResult],
-                  n_family: int, alpha: float) -> list[Alternative]:
+def _alternatives(problem: Problem, corr_of: _Correlations, r: TestResult,
+                  ranked: list[TestResult], n_family: int, alpha: float) -> list[Alternative]:
     """The significant candidates the data cannot distinguish from ``r`` or that fit almost
     as well, and the other orders of a harmonic family (``TestResult.siblings``, of ``r``'s
     own or of another candidate's) that the data cannot distinguish from it."""
@@ -313,14 +335,11 @@ def _alternatives(problem: Problem, perp, r: TestResult, ranked: list[TestResult
     out = []
     n_obs = 2 * int(problem.used.sum())
     siblings = [s for o in ranked for s in o.siblings]
-    sa = None
     for other in [*ranked, *siblings]:
         if other is r or log_p_family(problem, other, n_family) >= math.log(alpha) \
                 or _contains(other, r):
             continue
-        if sa is None:
-            sa = _fitted_perp(perp, r)
-        corr = _signal_corr(problem, perp, r, other, sa)
+        corr = corr_of(r, other)
         bic_gap = (r.delta_chi2 - r.dof * math.log(n_obs)) \
             - (other.delta_chi2 - other.dof * math.log(n_obs))
         if corr > DISTINGUISH_R:
@@ -344,8 +363,9 @@ def _contains(big: TestResult, small: TestResult) -> bool:
             and set(small.comp_names) <= set(big.comp_names))
 
 
-def _simpler_equivalent(problem: Problem, perp, r: TestResult, ranked: list[TestResult],
-                        n_family: int, alpha: float) -> TestResult | None:
+def _simpler_equivalent(problem: Problem, corr_of: _Correlations, r: TestResult,
+                        ranked: list[TestResult], n_family: int, alpha: float
+                        ) -> TestResult | None:
     """A significant candidate with fewer parameters to choose instead of ``r`` (the best
     such), else None: one made of part of ``r``'s terms when the rest of ``r`` is not
     significant on its own (at the family's level: a fuller form must earn its extra terms
@@ -360,7 +380,7 @@ def _simpler_equivalent(problem: Problem, perp, r: TestResult, ranked: list[Test
             rest = float(pvalues.chi2_logsf(r.delta_chi2 - other.delta_chi2, r.dof - other.dof))
             ok = rest + math.log(n_family) >= math.log(alpha)
         else:
-            ok = _signal_corr(problem, perp, r, other) > DISTINGUISH_R \
+            ok = corr_of(r, other) > DISTINGUISH_R \
                 and explains_as_much(problem, other.delta_chi2, other.dof, r)
         if ok and (best is None or other.delta_chi2 > best.delta_chi2):
             best = other
@@ -443,30 +463,31 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
             break
         if chosen is None:
             break
-        simpler = _simpler_equivalent(problem, perp, chosen[0], ranked, n_family, alpha)
+        corr_of = _Correlations(problem, perp)
+        simpler = _simpler_equivalent(problem, corr_of, chosen[0], ranked, n_family, alpha)
         if simpler is not None:
             cv = confirmed(simpler)
             if cv is not None:
                 chosen = (simpler, log_p_family(problem, simpler, n_family), *cv)
         r, lp, cv0, cv1 = chosen
-        alternatives = _alternatives(problem, perp, r, ranked, n_family, alpha)
+        alternatives = _alternatives(problem, corr_of, r, ranked, n_family, alpha)
         separation = Separation(r.r_model, r.partners, local_sigma(problem, r),
                                 correlation_words(r.name, r.r_model, r.partners))
         # every cached factor and projector is of the model without ``r`` (keyed by the
         # number of accepted columns): none is asked for again after the simplest form's
         # projection; let them go (and this round's projector) before the fits of the
         # whole design below
-        perp = z_perp = None
+        perp = z_perp = corr_of = None
         # the simplest form projects over the finding's scans: the factors over others (the
         # model's used scans' among them, 2 n x m floats) are not beside its own
         problem.release(keep=r.mask)
         simplest = _simplest_form(problem, r, vocabulary)
         problem.release()
         before = problem.sky_rms()
-        signal = _fitted_signal(problem, r)
-        after = problem.sky_rms_added(r.columns)
-        problem.extra.append(r.columns)
-        problem.extra_names.extend(f"{r.name}:{n}" for n in r.comp_names)
+        extra = r.columns  # read once (a result may make its columns again when read)
+        after = problem.sky_rms_added(extra)
+        signal = _fitted_signal(problem, problem.add(r.name, extra, r.comp_names), extra)
+        del extra
         accepted.add(r.name)
         problem.update_outliers()
         step = Step(r, min(1.0, math.exp(lp)), lp, before, after, cv0, cv1, alternatives,
