@@ -169,6 +169,7 @@ class Problem:
         # and the summary ask for the same fits again (each a QR of 2 n_used rows)
         self._fit_memo: tuple | None = None
         self._raw_memo: list[tuple] = []
+        self._cv_memo: tuple | None = None  # the current model's last held-out chi^2
 
     # ------------------------------------------------------------------ candidates
     @property
@@ -745,12 +746,27 @@ class Problem:
         blocks = columns if isinstance(columns, tuple) else (columns,)
         if refit is None and self.white(used):
             lab = folds[used]
-            # whitened in Fortran order and factored in place: one copy of the design (and
-            # none of the blocks stacked)
-            r = heldout_lstsq(self._whitened_fortran(blocks, used), self.T(self.y, used),
-                              np.concatenate([lab, lab]), overwrite=True)
-            if r is not None:
-                return float(r @ r)
+            if blocks[0] is self.current_columns() and len(blocks) == 1:
+                # the current model's: its cached factor over ``used`` (what the finding's
+                # simplest form projects with next), and the figure kept (a simpler
+                # equivalent is checked over the same scans)
+                key = (used.tobytes(), self.scale.tobytes(), len(self.extra), folds)
+                memo = self._cv_memo
+                if memo is not None and memo[0][:3] == key[:3] and memo[0][3] is folds:
+                    return memo[1]
+                qr = self._current_qr(used)
+                r = None if qr is None else heldout_lstsq(
+                    None, qr[3], np.concatenate([lab, lab]), (qr[0], np.abs(np.diag(qr[1]))))
+                if r is not None:
+                    self._cv_memo = (key, float(r @ r))
+                    return self._cv_memo[1]
+            else:
+                # whitened in Fortran order and factored in place: one copy of the design
+                # (and none of the blocks stacked)
+                r = heldout_lstsq(self._whitened_fortran(blocks, used), self.T(self.y, used),
+                                  np.concatenate([lab, lab]), overwrite=True)
+                if r is not None:
+                    return float(r @ r)
         columns = np.column_stack(blocks) if len(blocks) > 1 else blocks[0]
         total = 0.0
         for k in np.unique(folds[used]):
