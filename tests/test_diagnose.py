@@ -1438,6 +1438,29 @@ def test_the_held_out_check_whitens_column_blocks_as_their_stack():
     assert problem.cv_chi2((cur, extra), folds) == problem.cv_chi2(whole, folds)
 
 
+def test_the_current_models_held_out_chi2_is_kept_and_from_its_cached_factor():
+    """The current model's held-out chi^2 comes from its cached factor over the scans asked
+    for (the same factorization of the same whitened design: the same bits as whitening and
+    factoring a copy of its columns) and is kept while the scans, the noise scale, the model
+    and the folds stay."""
+    problem = _scans_with_unused_and_scaled()
+    cur = problem.current_columns()
+    folds = np.arange(problem.n) % 5
+    some = problem.used.copy()
+    some[np.flatnonzero(some)[:3]] = False
+    for used in (problem.used, some):
+        want = problem.cv_chi2(cur.copy(), folds, used=used)
+        got = problem.cv_chi2(cur, folds, used=used)
+        assert got == want and problem._cv_memo[1] == got
+        assert b"qr" + used.tobytes() + bytes([0]) in problem._perps
+        problem._cv_memo = (problem._cv_memo[0], -1.0)  # a kept figure is what is returned
+        assert problem.cv_chi2(cur, folds, used=used) == -1.0
+        assert problem.cv_chi2(cur, folds.copy(), used=used) == want  # other folds: made
+    problem.scale[1] *= 2.0
+    problem._rescale(problem.fit_current())  # a new noise scale (the cached factors go)
+    assert problem.cv_chi2(cur, folds) == problem.cv_chi2(cur.copy(), folds) != want
+
+
 def test_rows_gathered_into_fortran_order_a_block_at_a_time_are_the_whole_gathered():
     """:func:`take_rows_fortran` gathers (and scales) a block of rows at a time: the same
     numbers, bit for bit, as gathering the whole, scaling it and copying it into Fortran
