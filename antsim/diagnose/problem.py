@@ -432,11 +432,10 @@ class Problem:
         k = raw.shape[1]
         scaled = not self.unscaled
         idx, wu = self._view(used)
-        # whitened over U in Fortran order, each column gathered once: the scaled columns
+        # whitened over U in Fortran order, the rows gathered once: the scaled columns
         # (raw times the offset scale, as cand() makes them) then the raw ones
         x = np.empty((idx.size, 2 * k if scaled else k), order="F")
-        for c in range(k):
-            np.take(raw[:, c], idx, out=x[:, x.shape[1] - k + c])
+        take_rows_fortran(raw, idx, out=x[:, x.shape[1] - k:])
         x_o = raw[idx_o]
         if scaled:
             fu = self.f[uscan]
