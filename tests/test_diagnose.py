@@ -1049,7 +1049,7 @@ def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do(m
     the design's condition number is 60), the choice the same; an option nearly inside the
     model's span (r^2 = 1 - 1e-8) is left to the full losses (None), and of two options with
     the same columns the first is chosen, as the full losses choose it."""
-    from antsim.diagnose.crossval import FoldSums, _best, _losses, contiguous_folds
+    from antsim.diagnose.crossval import FoldSums, _best, _losses, contiguous_folds, mimicked
     from antsim.diagnose.problem import _qr, rows_fortran
 
     problem = _scans_with_unused_and_scaled()
@@ -1063,9 +1063,17 @@ def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do(m
     options = [(candidate("el_periodic_az"), k) for k in (1, 2, 3, 4)] + [
         (candidate("az_track_2a"), None), (candidate("az_runout_1a"), None)]
     ranked = []
+    idx = np.flatnonzero(rows)
+    f2 = np.concatenate([problem.f, problem.f])
     for c, theta in options:
         raw, names = c.columns(obs, theta)
         total = sums.total(problem.cand(raw))
+        # the option's rows gathered once for the mimicry check and the sums (cv_stage):
+        # the same products, the same bits
+        xg = raw.take(idx, axis=0)
+        assert sums.total_rows(xg * f2[idx, None]) == total
+        assert mimicked(problem, raw, xg) == mimicked(problem, raw)
+        assert np.array_equal(xg * problem.weights()[:, None], problem.T(raw))
         losses = _losses(problem, cur, q0, d0, folds, raw)
         assert total == pytest.approx(float(losses.sum()), rel=1e-9)
         # the basis grouped by fold in a copy (scans out of time order) instead of read in

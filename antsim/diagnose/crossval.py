@@ -159,10 +159,12 @@ def contiguous_folds(t_s: np.ndarray, k: int) -> np.ndarray:
     return folds
 
 
-def mimicked(problem: Problem, raw: np.ndarray) -> bool:
+def mimicked(problem: Problem, raw: np.ndarray, rows: np.ndarray | None = None) -> bool:
     """Whether the current model mimics any of the raw columns (2n, q) above
-    ``DISTINGUISH_R`` over the used scans (its correlation with the model's span)."""
-    whitened = problem.T(raw)
+    ``DISTINGUISH_R`` over the used scans (its correlation with the model's span).
+    ``rows``: the columns' used rows [xel; el] when the caller has them (white noise: the
+    whitened columns are those rows times their weights, as :meth:`Problem.T` makes them)."""
+    whitened = problem.T(raw) if rows is None else rows * problem.weights()[:, None]
     q = problem.basis()
     full2 = np.einsum("ij,ij->j", whitened, whitened)
     # the squared norm of the part in the model's span (q orthonormal): r^2 without
@@ -174,14 +176,15 @@ def mimicked(problem: Problem, raw: np.ndarray) -> bool:
 
 
 def _options(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
-             model_terms: set[str]):
-    """(candidate, theta, raw columns, component names) of every linear option not yet in
-    the model and not mimicked by it (:func:`mimicked`). Only a significance test can
-    accept a term the model mimics (its size is then set by the terms it is confused with,
-    and prediction cannot tell it from a change of theirs): on the AuxTel file the stage
-    would otherwise add HESE2/HECE2 at 1744" (r = 1.00 with IE, TF, TX), which predicts
-    held-out stars better (the procedure's leave-one-star-out Sky RMS 10.37" with it,
-    benchmarks/blind.py --real --nested) but measures nothing."""
+             model_terms: set[str], idx: np.ndarray | None):
+    """(candidate, theta, raw columns, component names, the raw columns' rows ``idx`` or
+    None without them) of every linear option not yet in the model and not mimicked by it
+    (:func:`mimicked`; ``idx``: the used rows, gathered once for both, white noise only).
+    Only a significance test can accept a term the model mimics (its size is then set by
+    the terms it is confused with, and prediction cannot tell it from a change of theirs):
+    on the AuxTel file the stage would otherwise add HESE2/HECE2 at 1744" (r = 1.00 with
+    IE, TF, TX), which predicts held-out stars better (the procedure's leave-one-star-out
+    Sky RMS 10.37" with it, benchmarks/blind.py --real --nested) but measures nothing."""
     obs = problem.obs
     for c in candidates:
         if c.kind != "offsets" or c.name in taken:
@@ -191,9 +194,12 @@ def _options(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
                 cols, names = c.columns(obs, theta)
             except NotImplementedError:  # a nonlinear signature (exact tilt)
                 break
-            if set(names) <= model_terms or mimicked(problem, cols):
+            if set(names) <= model_terms:
                 continue
-            yield c, theta, cols, names
+            rows = None if idx is None else cols.take(idx, axis=0)
+            if mimicked(problem, cols, rows):
+                continue
+            yield c, theta, cols, names, rows
 
 
 def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
@@ -211,11 +217,21 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
         q0, r0 = _qr(rows_fortran(cur, rows), overwrite=True)
         d0 = np.abs(np.diag(r0))
         now = heldout_losses(cur, problem.y_raw, problem.used, folds, (q0, d0))
+        idx = np.flatnonzero(rows)
         sums = FoldSums(q0, d0, problem.y_raw[rows],
-                        np.concatenate([folds[problem.used]] * 2), np.flatnonzero(rows))
+                        np.concatenate([folds[problem.used]] * 2), idx)
+        # each option's used rows gathered once (white noise, the folds' rows in place): for
+        # the mimicry check and, times the offset scale where it is not 1 (as cand() makes
+        # the columns), for the sums
+        share = problem.white() and sums.idx is idx
+        f2 = None if problem.unscaled else np.concatenate([problem.f, problem.f])[idx, None]
         ranked = []  # (the held-out losses' sum, candidate, theta, component names)
-        for c, theta, raw, names in _options(problem, candidates, taken, model_terms):
-            total = sums.total(problem.cand(raw))
+        for c, theta, raw, names, xg in _options(problem, candidates, taken, model_terms,
+                                                 idx if share else None):
+            if xg is None:
+                total = sums.total(problem.cand(raw))
+            else:
+                total = sums.total_rows(xg if f2 is None else xg * f2)
             if total is None:  # degenerate there: the per-option losses say it
                 total = float(_losses(problem, cur, q0, d0, folds, raw).sum())
             ranked.append((total, c, theta, names))
@@ -351,8 +367,13 @@ class FoldSums:
         the full losses must say it (see the class docstring)."""
         if self.dependent:
             return None
+        return self.total_rows(x.take(self.idx, axis=0))
+
+    def total_rows(self, xg: np.ndarray) -> float | None:
+        """:meth:`total` from the columns' rows ``xg`` (x's rows ``idx``, in that order)."""
+        if self.dependent:
+            return None
         k0 = self.k0
-        xg = x.take(self.idx, axis=0)
         wx = [(sum(self._products(s, xg[s]) for s in runs), sum(xg[s].T @ xg[s] for s in runs))
               for runs in self.folds.values()]
         c0 = sum(a[:k0] for a, _ in wx)  # q0^T x

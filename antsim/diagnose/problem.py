@@ -254,6 +254,12 @@ class Problem:
         out = np.vstack(parts)
         return out[:, 0] if flat else out
 
+    def weights(self, used: np.ndarray | None = None) -> np.ndarray:
+        """The weights (1 / predicted noise) of the rows [xel; el] of the scans ``used``
+        (default: the model's): white noise's whitening is the rows times these (kept,
+        read-only)."""
+        return self._view(self.used if used is None else used)[1]
+
     def _view(self, used: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(indices, weights) of the rows [xel; el] of the scans ``used``, kept for the last
         few sets of scans (one boolean selection and stacking per set, not per call)."""
