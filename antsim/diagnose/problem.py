@@ -350,6 +350,12 @@ class Problem:
             self._cache(key, hit, 8 * (q.size + 2 * q.shape[0]) if full else 0)
         return hit or None
 
+    def current_r(self, used: np.ndarray) -> np.ndarray | None:
+        """The R factor (m, m) of the whitened current model over the scans ``used`` (its
+        cached QR), or None when the model's columns are not independent there."""
+        qr = self._current_qr(used)
+        return None if qr is None else qr[1]
+
     def coef_on_current(self, x: np.ndarray, used: np.ndarray) -> np.ndarray | None:
         """Least-squares coefficients of whitened columns ``x`` (2 n_used, k) on the whitened
         current model over ``used``, from its cached QR (R^-1 Q^T x); None when the model's
@@ -948,11 +954,21 @@ def gram_solve(gram: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarra
     if not (d > 0).all():
         return None
     s = 1.0 / np.sqrt(d)
-    w, v = np.linalg.eigh(gram * np.outer(s, s))
+    inv = _gram_inverse(gram * np.outer(s, s))
+    if inv is None:
+        return None
+    cov = inv * np.outer(s, s)
+    return cov @ rhs, cov
+
+
+def _gram_inverse(g: np.ndarray) -> np.ndarray | None:
+    """The inverse of a Gram matrix ``g`` from its eigendecomposition, or None where its
+    smallest eigenvalue is below :data:`GRAM_MIN_RATIO` of its largest (the normal
+    equations' rounding grows as the ratio's inverse)."""
+    w, v = np.linalg.eigh(g)
     if not w[0] > GRAM_MIN_RATIO * w[-1] > 0.0:
         return None
-    cov = (v / w) @ v.T * np.outer(s, s)
-    return cov @ rhs, cov
+    return (v / w) @ v.T
 
 
 def _qr(x: np.ndarray, overwrite: bool = False) -> tuple[np.ndarray, np.ndarray]:
@@ -1038,9 +1054,8 @@ def _lstsq(a: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         g = a.T @ a
         az = a.T @ z
         if np.isfinite(g).all() and np.isfinite(az).all() and np.isfinite(z).all():
-            w, v = np.linalg.eigh(g)
-            if w[0] > GRAM_MIN_RATIO * w[-1] > 0.0:
-                cov = (v / w) @ v.T
+            cov = _gram_inverse(g)
+            if cov is not None:
                 return cov @ az, cov
         # a non-finite ``a`` or ``z`` raises here, as the SVD did
         # factored in a Fortran-ordered copy of our own, overwritten (qr_multiply without

@@ -518,11 +518,11 @@ class Candidate:
             problem.obs, res.theta, res.coef, cov, res.comp_names)
         if res.r_model <= 0.5:
             return
-        qr = problem._current_qr(problem.used) if res._on_model is not None else None
-        if qr is not None:  # from the shape test's inner products: no columns again
+        r = problem.current_r(problem.used) if res._on_model is not None else None
+        if r is not None:  # from the shape test's inner products: no columns again
             on_model, gram = res._on_model
-            beta = scipy.linalg.solve_triangular(qr[1], on_model)
-            norms = np.sqrt(np.clip(np.einsum("ij,ik,kj->j", qr[1], gram, qr[1]), 0.0, None))
+            beta = scipy.linalg.solve_triangular(r, on_model)
+            norms = np.sqrt(np.clip(np.einsum("ij,ik,kj->j", r, gram, r), 0.0, None))
         else:
             cols = res.columns  # read once (may be made again)
             if cols is None or not cols.size:
