@@ -45,6 +45,7 @@ The linear algebra (QR with rank analysis, LAD by linear programming) is in
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -55,9 +56,18 @@ import numpy as np
 from .data import LinearModel, PointingData, require_pointing_data
 from .jackknife import BLOCK_PHASES, Rejection, cluster_jackknife, within_rms
 from .result import FitResult, _readonly
-from .solvers import _independent_columns, _lad, _least_squares, _matvec, _Solution
+from .solvers import (
+    _independent_columns,
+    _lad_blocks,
+    _LadBlock,
+    _least_squares,
+    _matvec,
+    _Rank,
+    _Solution,
+)
 
-__all__ = ["CORRELATION_WARNING_LEVEL", "Equations", "fit_terms", "lad_fit",
+__all__ = ["CORRELATION_WARNING_LEVEL", "Equations", "fit_terms", "fit_terms_before_after",
+           "lad_fit",
            "least_squares_fit", "reject_beyond_mad", "reject_beyond_rms"]
 
 #: the 1990 report's rejection thresholds (Ghigo 1990, section III): an observation goes when
@@ -109,6 +119,12 @@ class Equations:
                 f"term {names[col]} is infinite at observation {obs} (elevation "
                 f"{math.degrees(data.el_rad[obs]):.4g} deg); remove the term or the observation"
             )
+        return cls._of_design(data, names, design, weighted)
+
+    @classmethod
+    def _of_design(cls, data: PointingData, names: Sequence[str], design: np.ndarray,
+                   weighted: bool) -> Equations:
+        n = len(data)
         target = -np.concatenate([data.xel_arcsec, data.el_arcsec])
         if weighted:
             root_w = np.sqrt(np.concatenate([data.weight_xel, data.weight_el]))
@@ -122,6 +138,23 @@ class Equations:
         floor = 1e-9 * float(np.abs(y_w).max())
         return cls(tuple(names), n, design, target, a_w, y_w, floor)
 
+    def select(self, keep: np.ndarray, data: PointingData, weighted: bool = False
+               ) -> Equations:
+        """The equations of ``data``, the observations ``keep`` (boolean, one per observation
+        of these equations) of this one's: the design's rows taken, not evaluated again (the
+        same numbers: each row is its observation's alone)."""
+        rows = np.concatenate([keep, keep])
+        if int(keep.sum()) != len(data):
+            raise ValueError(f"{int(keep.sum())} observations kept, the data hold {len(data)}")
+        return self._of_design(data, self.names, np.asfortranarray(self.design[rows]),
+                               weighted)
+
+    def for_data(self, data: PointingData, weighted: bool = False) -> Equations:
+        """The equations of other data at the same observations (the same design)."""
+        if len(data) != self.n:
+            raise ValueError(f"{len(data)} observations, the design has {self.n}")
+        return self._of_design(data, self.names, self.design, weighted)
+
     def abs_residuals(self, coeffs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """|weighted residual| of every observation, xel and el, for coefficients ``coeffs``."""
         r = self.y_w - _matvec(self.a_w, coeffs)
@@ -134,12 +167,31 @@ class Equations:
 def lad_fit(eq: Equations) -> np.ndarray:
     """Stage 1: least-absolute-deviation coefficients of every observation (0 for terms the
     data cannot determine)."""
-    rank = _independent_columns(eq.a_w, eq.names)
+    return _lad_stage(eq).coeffs
+
+
+@dataclass(frozen=True)
+class _LadFit:
+    """Stage 1's coefficients, the design's rank analysis and the LAD's blocks (what a fit of
+    the same design to other data can take from it)."""
+
+    coeffs: np.ndarray
+    rank: _Rank
+    blocks: list[_LadBlock | None]
+
+
+def _lad_stage(eq: Equations, prior: _LadFit | None = None) -> _LadFit:
+    """:func:`lad_fit`; ``prior``: that of the same design (``eq.a_w``) fitted to other data,
+    whose rank analysis is this one's and whose blocks of unchanged data are not solved
+    again."""
+    rank = prior.rank if prior is not None else _independent_columns(eq.a_w, eq.names)
     coeffs = np.zeros(len(eq.names))
+    blocks: list[_LadBlock | None] = []
     if rank.kept:
         k = list(rank.kept)
-        coeffs[k] = _lad(eq.a_w[:, k], eq.y_w, eq.n)
-    return coeffs
+        coeffs[k], blocks = _lad_blocks(eq.a_w[:, k], eq.y_w, eq.n,
+                                        None if prior is None else prior.blocks)
+    return _LadFit(coeffs, rank, blocks)
 
 
 def reject_beyond_mad(eq: Equations, coeffs: np.ndarray, factor: float) -> np.ndarray:
@@ -191,16 +243,48 @@ def fit_terms(data: PointingData, start: LinearModel, *, robust: bool = True,
     require_pointing_data(data)
     _check_options(data, start, weighted, lad_factor, rms_factor, block_phases)
     eq = Equations.of(data, start, weighted)
+    return _fit_equations(data, start, eq, robust=robust, weighted=weighted,
+                          lad_factor=lad_factor, rms_factor=rms_factor, block_s=block_s,
+                          block_phases=block_phases)[0]
+
+
+def fit_terms_before_after(data: PointingData, start: LinearModel, minus_xel_arcsec: np.ndarray,
+                           minus_el_arcsec: np.ndarray, equations: Equations | None = None
+                           ) -> tuple[FitResult, FitResult]:
+    """The robust, unweighted :func:`fit_terms` of ``data`` and of ``data`` less a signal
+    (``minus_*_arcsec``, one per observation), as two calls give them: one design for both
+    (``equations``: :meth:`Equations.select` of a larger set's, or made here), one rank
+    analysis, and an axis' LAD block that the signal leaves unchanged solved once."""
+    require_pointing_data(data)
+    _check_options(data, start, False, LAD_FACTOR, RMS_FACTOR, BLOCK_PHASES)
+    after = dataclasses.replace(data, xel_arcsec=data.xel_arcsec - minus_xel_arcsec,
+                                el_arcsec=data.el_arcsec - minus_el_arcsec)
+    eq = Equations.of(data, start, False) if equations is None else equations
+    options = {"robust": True, "weighted": False, "lad_factor": LAD_FACTOR,
+               "rms_factor": RMS_FACTOR, "block_s": 3600.0, "block_phases": BLOCK_PHASES}
+    first, lad = _fit_equations(data, start, eq, **options)
+    second, _ = _fit_equations(after, start, eq.for_data(after), prior=lad, **options)
+    return first, second
+
+
+def _fit_equations(data: PointingData, start: LinearModel, eq: Equations, *, robust: bool,
+                   weighted: bool, lad_factor: float, rms_factor: float, block_s: float,
+                   block_phases: int, prior: _LadFit | None = None
+                   ) -> tuple[FitResult, _LadFit | None]:
+    """:func:`fit_terms` of the equations ``eq`` of ``data``, and its LAD stage (``prior``:
+    :func:`_lad_stage`'s)."""
     used = np.ones(eq.n, dtype=bool)
     rejection = None
+    lad = None
     if robust:
-        used = reject_beyond_mad(eq, lad_fit(eq), lad_factor)
+        lad = _lad_stage(eq, prior)
+        used = reject_beyond_mad(eq, lad.coeffs, lad_factor)
         kept_lad = used.copy()
         used = reject_beyond_rms(eq, least_squares_fit(eq, used).coeffs, used, rms_factor)
         rejection = Rejection(kept_lad, rms_factor, eq.floor, eq.y_w)
     sol = least_squares_fit(eq, used)
     return _result(data, start, eq, sol, used, rejection, robust=robust, weighted=weighted,
-                   block_s=block_s, block_phases=block_phases)
+                   block_s=block_s, block_phases=block_phases), lad
 
 
 def _check_options(data: PointingData, start: LinearModel, weighted: bool, lad_factor: float,

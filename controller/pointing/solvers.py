@@ -9,9 +9,7 @@ not fitted, its value is 0 and its sigma NaN (null in JSON), and a warning names
 
 from __future__ import annotations
 
-import hashlib
 import math
-from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -39,12 +37,6 @@ RANK_RTOL = 1e-10
 _LAD_DIRECT_ROWS = 3000
 _LAD_BAND_ROWS = 3000
 _LAD_SEED = 19900208  # fixed: the subsample only affects speed, never the optimum
-#: the last few exact LAD solutions of a block (its design, data and the subsampling
-#: generator's state, by digest, -> coefficients and the generator's state after): a block
-#: solved again gives the same bytes without HiGHS (diagnose's fit variants before and after
-#: removing an elevation-only finding solve the same cross-elevation blocks twice)
-_LAD_MEMO: OrderedDict[tuple, tuple[np.ndarray, dict]] = OrderedDict()
-_LAD_MEMO_SIZE = 4
 
 
 # ---------------------------------------------------------------------------------------------
@@ -266,13 +258,37 @@ def _lad_dense(a: np.ndarray, y: np.ndarray, rng: np.random.Generator) -> np.nda
     return _lad_full(a, y)
 
 
+@dataclass(frozen=True)
+class _LadBlock:
+    """One separable block of an exact LAD fit (:func:`_lad_blocks`): its rows and columns of
+    the design, its data, the subsampling generator's state before and after its solve, and
+    its coefficients."""
+
+    rows: np.ndarray
+    cols: np.ndarray
+    y: np.ndarray
+    state_in: dict
+    state_out: dict
+    coeffs: np.ndarray
+
+
 def _lad(a: np.ndarray, y: np.ndarray, n_xel: int | None = None) -> np.ndarray:
-    """Exact LAD fit of ``y ~ a @ c``.
+    """Exact LAD fit of ``y ~ a @ c`` (:func:`_lad_blocks`)."""
+    return _lad_blocks(a, y, n_xel)[0]
+
+
+def _lad_blocks(a: np.ndarray, y: np.ndarray, n_xel: int | None = None,
+                prior: Sequence[_LadBlock | None] | None = None
+                ) -> tuple[np.ndarray, list[_LadBlock | None]]:
+    """Exact LAD fit of ``y ~ a @ c``, and its blocks.
 
     When the first ``n_xel`` rows (cross-elevation) and the rest (elevation) involve disjoint
     sets of columns, the problem separates and each half is solved alone: Ghigo's ten terms
     split into five azimuth and five elevation terms. Rows whose design is zero add a
-    constant and are dropped.
+    constant and are dropped. ``prior``: the blocks of a fit of the same design ``a`` to
+    other data (diagnose's fit variants before and after removing a finding's signal): a
+    block whose rows, columns, data and generator state are that fit's is its solution, the
+    generator left where its solve left it (the same bytes as solving it again).
     """
     p = a.shape[1]
     nonzero_rows = (a != 0).any(axis=1)
@@ -284,27 +300,22 @@ def _lad(a: np.ndarray, y: np.ndarray, n_xel: int | None = None) -> np.ndarray:
             blocks = [np.flatnonzero(in_xel), np.flatnonzero(in_el)]
     rng = np.random.default_rng(_LAD_SEED)
     coeffs = np.zeros(p)
-    for cols in blocks:
+    solved: list[_LadBlock | None] = []
+    for i, cols in enumerate(blocks):
         if cols.size == 0:
+            solved.append(None)
             continue
         rows = (a[:, cols] != 0).any(axis=1) & nonzero_rows
-        coeffs[cols] = _lad_block(a[np.ix_(rows, cols)], y[rows], rng)
-    return coeffs
-
-
-def _lad_block(a: np.ndarray, y: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """:func:`_lad_dense`, remembered (:data:`_LAD_MEMO`): the same inputs and generator
-    state give the same coefficients and leave the generator where the solve would."""
-    a, y = np.ascontiguousarray(a), np.ascontiguousarray(y)
-    key = (a.shape, a.dtype.str, y.dtype.str, hashlib.sha1(a).digest(),
-           hashlib.sha1(y).digest(), repr(rng.bit_generator.state))
-    hit = _LAD_MEMO.get(key)
-    if hit is None:
-        coeffs = _lad_dense(a, y, rng)
-        _LAD_MEMO[key] = hit = (coeffs.copy(), rng.bit_generator.state)
-        while len(_LAD_MEMO) > _LAD_MEMO_SIZE:
-            _LAD_MEMO.popitem(last=False)
-    else:
-        _LAD_MEMO.move_to_end(key)
-        rng.bit_generator.state = hit[1]
-    return hit[0].copy()
+        y_block = np.ascontiguousarray(y[rows])
+        state_in = rng.bit_generator.state
+        old = prior[i] if prior is not None and i < len(prior) else None
+        if not (old is not None and old.state_in == state_in
+                and np.array_equal(old.cols, cols) and np.array_equal(old.rows, rows)
+                and np.array_equal(old.y, y_block)):
+            block_coeffs = _lad_dense(np.ascontiguousarray(a[np.ix_(rows, cols)]), y_block, rng)
+            old = _LadBlock(rows, cols, y_block, state_in, rng.bit_generator.state,
+                            block_coeffs)
+        rng.bit_generator.state = old.state_out
+        coeffs[cols] = old.coeffs
+        solved.append(old)
+    return coeffs, solved
