@@ -7,6 +7,7 @@ Seeds are fixed; every tolerance says why it is what it is.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
@@ -303,38 +304,97 @@ def test_lad_is_the_exact_optimum(model_name):
     np.testing.assert_allclose(fast, full, rtol=0, atol=1e-4)
 
 
-def test_a_lad_block_solved_again_gives_the_same_bytes(monkeypatch):
-    """The remembered LAD solutions (diagnose's fit variants solve the same cross-elevation
-    block before and after removing an elevation-only finding): a block solved again gives
-    the first solve's bytes without solving, the generator left where the solve left it, so
-    that the next block draws the same subsample; other data or another generator state are
-    solved anew."""
-    monkeypatch.setattr(fitting, "_LAD_MEMO", type(fitting._LAD_MEMO)())
+def test_a_lad_block_of_unchanged_data_is_taken_from_the_fit_before(monkeypatch):
+    """Diagnose's fit variants fit one design before and after removing a finding's signal:
+    given the LAD before (``prior``), a block whose data the signal leaves unchanged (the
+    cross-elevation one for an elevation-only signal) is that fit's solution, not solved
+    again, and the generator is left where its solve left it, so that the next block draws
+    the same subsample: the same bytes as solving both; a block of other data is solved."""
     rng = np.random.default_rng(5)
     data = synthetic(ghigo_truth(), rng, 8000, 20.0, 30.0)  # 8000 rows: the subsampled path
     model = PointingModel("ghigo10")
     b_az, b_el = model.design_matrix(data.az_rad, data.el_rad)
     a = np.vstack([b_az * np.cos(data.el_rad)[:, None], b_el])
     y = -np.concatenate([data.xel_arcsec, data.el_arcsec])
-    first = fitting._lad(a, y, n_xel=8000)
-    solves = []
-    real = fitting._lad_dense
-    monkeypatch.setattr(fitting, "_lad_dense", lambda *args: solves.append(1) or real(*args))
-    assert fitting._lad(a, y, n_xel=8000).tobytes() == first.tobytes()
-    assert solves == []
     y_el = y.copy()
     y_el[8000:] += 30.0 * np.sin(2 * data.az_rad)  # an elevation-only signal removed
-    monkeypatch.setattr(fitting, "_LAD_MEMO", type(fitting._LAD_MEMO)())
-    monkeypatch.setattr(fitting, "_LAD_MEMO_SIZE", 0)  # remembering nothing: the reference
-    reference = fitting._lad(a, y_el, n_xel=8000)
-    monkeypatch.setattr(fitting, "_LAD_MEMO_SIZE", 4)
-    fitting._lad(a, y, n_xel=8000)
-    solves.clear()
-    assert fitting._lad(a, y_el, n_xel=8000).tobytes() == reference.tobytes()
-    # three blocks remembered: y's two, y_el's elevation one (its cross-elevation one is y's)
-    assert solves and len(fitting._LAD_MEMO) == 3
-    xel = (a[:8000] != 0).any(axis=0)
-    np.testing.assert_array_equal(reference[xel], first[xel])
+    reference = fitting._lad(a, y_el, n_xel=8000)  # solved alone
+    _, blocks = fitting._lad_blocks(a, y, n_xel=8000)
+    solved = []
+    real = fitting._lad_dense
+    monkeypatch.setattr(fitting, "_lad_dense", lambda *args: solved.append(args[1]) or real(*args))
+    again, _ = fitting._lad_blocks(a, y_el, n_xel=8000, prior=blocks)
+    assert again.tobytes() == reference.tobytes()
+    top = [y_block for y_block in solved if y_block.size == 8000]  # not its subsamples
+    assert len(top) == 1 and np.array_equal(top[0], y_el[8000:])  # the elevation block
+    solved.clear()
+    y_both = y_el.copy()
+    y_both[:8000] += 1.0  # both blocks' data changed: both solved
+    fitting._lad_blocks(a, y_both, n_xel=8000, prior=blocks)
+    assert len([y_block for y_block in solved if y_block.size == 8000]) == 2
+
+
+@pytest.mark.parametrize("offset", [0.3, 1e4])
+def test_a_lad_started_from_a_given_centre_is_the_exact_optimum(offset):
+    """A centre (diagnose's day and night windows start from the LAD of every scan) gives the
+    optimum of the full LP, as the subsample's start does: near it (0.3" off) in one band;
+    far off (1e4"), after _LAD_CENTRE_TRIES bands, through the subsample. The rows of the
+    last LP differ, so the coefficients only to its rounding (1e-6", far below the 1e-4"
+    that the exact-optimum test allows the two solvers)."""
+    rng = np.random.default_rng(21)
+    data = synthetic(ghigo_truth(), rng, 20000, 20.0, 30.0)
+    model = PointingModel("tpoint8")  # misfits Ghigo's errors: a non-trivial LAD
+    b_az, b_el = model.design_matrix(data.az_rad, data.el_rad)
+    a = np.vstack([b_az * np.cos(data.el_rad)[:, None], b_el])
+    y = -np.concatenate([data.xel_arcsec, data.el_arcsec])
+    y[rng.choice(y.size, 600, replace=False)] += rng.normal(0.0, 500.0, 600)
+    cold = fitting._lad_dense(a, y, np.random.default_rng(1))
+    lps = []
+    real = fitting._lad_lp
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(fitting, "_lad_lp", lambda *args: lps.append(args[0].shape[0]) or real(*args))
+        warm = fitting._lad_dense(a, y, np.random.default_rng(1), cold + offset)
+    full = fitting._lad_full(a, y)
+    objective = np.abs(y - a @ full).sum()
+    assert np.abs(y - a @ warm).sum() == pytest.approx(objective, rel=1e-9)
+    np.testing.assert_allclose(warm, cold, rtol=0, atol=1e-6)
+    if offset < 1:
+        assert len(lps) == 1 and lps[0] < 4000  # one band of ~3000 rows and the globs
+    else:
+        assert len(lps) > fitting._LAD_CENTRE_TRIES  # the centre's bands, then the subsample's
+
+
+@pytest.mark.parametrize("signal_axes", ["el", "both"])
+def test_fits_before_and_after_a_signal_are_two_fits(signal_axes):
+    """``fit_terms_before_after`` (one design, a window's rows taken from the whole's
+    equations, one rank analysis, an unchanged LAD block solved once, the window's LAD
+    started from the whole's) gives what separate ``fit_model`` calls give: the same
+    rejections (a LAD's rounding, ~1e-13, moves no residual across a threshold here), and
+    from them the same least-squares arithmetic on the same numbers (a design row is its
+    observation's alone), to 1e-12 relative (measured: identical)."""
+    from controller.pointing.robust import fit_terms_before_after
+
+    rng = np.random.default_rng(11)
+    data = synthetic(ghigo_truth(), rng, 9000, 20.0, 30.0)
+    bad = rng.choice(9000, 200, replace=False)
+    data = dataclasses.replace(data, el_arcsec=data.el_arcsec + np.where(
+        np.isin(np.arange(9000), bad), 400.0, 0.0))
+    keep = rng.random(9000) < 0.8  # the window: 7,200 of the 9,000 scans (subsampled LAD)
+    sig_el = 25.0 * np.sin(3 * data.az_rad)
+    sig_xel = 5.0 * np.cos(data.el_rad) if signal_axes == "both" else np.zeros(9000)
+    model = PointingModel("ghigo10")
+    fits = fit_terms_before_after(data, model, sig_xel, sig_el, [keep])
+    after = dataclasses.replace(data, xel_arcsec=data.xel_arcsec - sig_xel,
+                                el_arcsec=data.el_arcsec - sig_el)
+    for pair, mask in zip(fits, (np.ones(9000, dtype=bool), keep), strict=True):
+        for got, d in zip(pair, (data, after), strict=True):
+            want = fit_model(d.select(mask), list(model.names), robust=True)
+            np.testing.assert_array_equal(got.used, want.used)
+            np.testing.assert_allclose(got.values_arcsec, want.values_arcsec, rtol=1e-12,
+                                       atol=0)
+            np.testing.assert_allclose(got.sigma_arcsec, want.sigma_arcsec, rtol=1e-12, atol=0)
+            assert got.sky_rms_arcsec == pytest.approx(want.sky_rms_arcsec, rel=1e-12)
+    assert all(p[1].n_rejected != p[0].n_rejected for p in fits)  # the signal changed them
 
 
 @pytest.mark.parametrize(("rows", "cols", "rank"), [(20000, 11, 11), (7, 3, 3), (5000, 6, 4)])

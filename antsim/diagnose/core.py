@@ -502,7 +502,7 @@ def fit_variants_before_after(diag: Diagnosis) -> dict[str, Any]:
     from controller.pointing.data import PointingData
     from controller.pointing.fitting import fit_model
     from controller.pointing.model import PointingModel
-    from controller.pointing.robust import Equations, fit_terms_before_after
+    from controller.pointing.robust import fit_terms_before_after
 
     obs = diag.obs
     if obs.sun_el_deg is None:
@@ -517,34 +517,27 @@ def fit_variants_before_after(diag: Diagnosis) -> dict[str, Any]:
     zero = _el_zero_term(p)
     out = {}
     fit_a: dict[str, Any] = {}  # Fit A (every good scan) by label: the split below reuses it
-    # every good scan's data and design (Fit A's) once: a window's are their rows
     good = obs.good
-    start = PointingModel(obs.terms(p.base_terms))
-    data_all = PointingData(obs.az_rad[good], obs.el_rad[good], obs.xel_arcsec[good],
-                            obs.el_arcsec[good])
-    minus_all = (signal[:n][good], signal[n:][good])
-    try:
-        eq_all = Equations.of(data_all, start, False)
-    except ValueError:  # a term infinite at a scan: each window's fit says whether at its own
-        eq_all = None
-    for name, window, mask in (
-            ("D", "day, Sun above 0 deg", obs.sun_el_deg > DAY_SUN_MIN_DEG),
-            ("E", "night, Sun below -12 deg", obs.sun_el_deg < NIGHT_SUN_MAX_DEG),
-            ("A", "all", np.ones(n, dtype=bool))):
-        m = mask & good
-        if m.sum() < 2 * len(p.base_terms):
-            continue
-        keep = mask[good]
-        whole = bool(keep.all())
-        data = data_all if whole else data_all.select(keep)
-        try:
-            eq = None if eq_all is None else eq_all if whole else eq_all.select(keep, data)
-            fits = fit_terms_before_after(data, start, *(x if whole else x[keep]
-                                                         for x in minus_all), equations=eq)
-        except ValueError:
+    windows = {"D": ("day, Sun above 0 deg", obs.sun_el_deg > DAY_SUN_MIN_DEG),
+               "E": ("night, Sun below -12 deg", obs.sun_el_deg < NIGHT_SUN_MAX_DEG),
+               "A": ("all", np.ones(n, dtype=bool))}
+    fitted = [name for name, (_, mask) in windows.items()
+              if (mask & good).sum() >= 2 * len(p.base_terms)]
+    # the windows are subsets of Fit A's scans: its data and design once (a window's are
+    # their rows), and its LAD where the windows' start
+    fits: dict[str, Any] = {}
+    if "A" in fitted:
+        order = ["A", *(name for name in fitted if name != "A")]
+        fits = dict(zip(order, fit_terms_before_after(
+            PointingData(obs.az_rad[good], obs.el_rad[good], obs.xel_arcsec[good],
+                         obs.el_arcsec[good]),
+            PointingModel(obs.terms(p.base_terms)), signal[:n][good], signal[n:][good],
+            [windows[name][1][good] for name in order[1:]]), strict=True))
+    for name in fitted:
+        if isinstance(fits.get(name, ValueError()), ValueError):
             continue
         res = {}
-        for label, f in zip(("before", "after"), fits, strict=True):
+        for label, f in zip(("before", "after"), fits[name], strict=True):
             if name == "A":
                 fit_a[label] = f
             res[label] = {"xel": f.xel_rms_arcsec, "el": f.el_rms_arcsec,
@@ -553,7 +546,8 @@ def fit_variants_before_after(diag: Diagnosis) -> dict[str, Any]:
                 j = f.names.index(zero)
                 res[label]["el_zero"] = float(f.values_arcsec[j])
                 res[label]["el_zero_sigma"] = float(f.sigma_arcsec[j])
-        out[name] = {"window": window, "n": int(m.sum()), **res}
+        out[name] = {"window": windows[name][0], "n": int((windows[name][1] & good).sum()),
+                     **res}
     # the common fit (Fit A) seen in the day and night windows: a drift the separate fits
     # absorb into their zero points shows here
     m = obs.good

@@ -180,17 +180,20 @@ class _LadFit:
     blocks: list[_LadBlock | None]
 
 
-def _lad_stage(eq: Equations, prior: _LadFit | None = None) -> _LadFit:
+def _lad_stage(eq: Equations, prior: _LadFit | None = None,
+               centre: np.ndarray | None = None) -> _LadFit:
     """:func:`lad_fit`; ``prior``: that of the same design (``eq.a_w``) fitted to other data,
     whose rank analysis is this one's and whose blocks of unchanged data are not solved
-    again."""
+    again; ``centre``: an estimate of the coefficients, one per term (the LAD of a larger
+    set of observations), where the LAD's search starts (:func:`solvers._lad_dense`)."""
     rank = prior.rank if prior is not None else _independent_columns(eq.a_w, eq.names)
     coeffs = np.zeros(len(eq.names))
     blocks: list[_LadBlock | None] = []
     if rank.kept:
         k = list(rank.kept)
         coeffs[k], blocks = _lad_blocks(eq.a_w[:, k], eq.y_w, eq.n,
-                                        None if prior is None else prior.blocks)
+                                        None if prior is None else prior.blocks,
+                                        None if centre is None else centre[k])
     return _LadFit(coeffs, rank, blocks)
 
 
@@ -249,35 +252,59 @@ def fit_terms(data: PointingData, start: LinearModel, *, robust: bool = True,
 
 
 def fit_terms_before_after(data: PointingData, start: LinearModel, minus_xel_arcsec: np.ndarray,
-                           minus_el_arcsec: np.ndarray, equations: Equations | None = None
-                           ) -> tuple[FitResult, FitResult]:
+                           minus_el_arcsec: np.ndarray, windows: Sequence[np.ndarray] = ()
+                           ) -> list[tuple[FitResult, FitResult] | ValueError]:
     """The robust, unweighted :func:`fit_terms` of ``data`` and of ``data`` less a signal
-    (``minus_*_arcsec``, one per observation), as two calls give them: one design for both
-    (``equations``: :meth:`Equations.select` of a larger set's, or made here), one rank
-    analysis, and an axis' LAD block that the signal leaves unchanged solved once."""
+    (``minus_*_arcsec``, one per observation), then the same of each of ``windows`` (boolean
+    masks of the observations): a list of (before, after) pairs, or the ValueError that
+    :func:`fit_terms` raises for one.
+
+    As separate calls give them, but one design (a window's are its rows) and one rank
+    analysis for before and after, an axis' LAD block that the signal leaves unchanged
+    solved once, and a window's LAD started from the whole's (the exact optimum either way;
+    its rounding, ~1e-13 relative, depends on the start)."""
     require_pointing_data(data)
-    _check_options(data, start, False, LAD_FACTOR, RMS_FACTOR, BLOCK_PHASES)
-    after = dataclasses.replace(data, xel_arcsec=data.xel_arcsec - minus_xel_arcsec,
-                                el_arcsec=data.el_arcsec - minus_el_arcsec)
-    eq = Equations.of(data, start, False) if equations is None else equations
     options = {"robust": True, "weighted": False, "lad_factor": LAD_FACTOR,
                "rms_factor": RMS_FACTOR, "block_s": 3600.0, "block_phases": BLOCK_PHASES}
-    first, lad = _fit_equations(data, start, eq, **options)
-    second, _ = _fit_equations(after, start, eq.for_data(after), prior=lad, **options)
-    return first, second
+    try:
+        whole = Equations.of(data, start, False)
+    except ValueError:  # a term infinite at an observation: each window's fit sees its own
+        whole = None
+    out: list[tuple[FitResult, FitResult] | ValueError] = []
+    centres: tuple[np.ndarray | None, ...] = (None, None)
+    for keep in (None, *windows):
+        part = data if keep is None else data.select(keep)
+        minus = (minus_xel_arcsec, minus_el_arcsec) if keep is None else (
+            minus_xel_arcsec[keep], minus_el_arcsec[keep])
+        after = dataclasses.replace(part, xel_arcsec=part.xel_arcsec - minus[0],
+                                    el_arcsec=part.el_arcsec - minus[1])
+        try:
+            _check_options(part, start, False, LAD_FACTOR, RMS_FACTOR, BLOCK_PHASES)
+            eq = Equations.of(part, start, False) if whole is None else (
+                whole if keep is None else whole.select(keep, part))
+            first, lad = _fit_equations(part, start, eq, centre=centres[0], **options)
+            second, lad_after = _fit_equations(after, start, eq.for_data(after), prior=lad,
+                                               centre=centres[1], **options)
+        except ValueError as err:
+            out.append(err)
+            continue
+        out.append((first, second))
+        if keep is None:
+            centres = (lad.coeffs, lad_after.coeffs)
+    return out
 
 
 def _fit_equations(data: PointingData, start: LinearModel, eq: Equations, *, robust: bool,
                    weighted: bool, lad_factor: float, rms_factor: float, block_s: float,
-                   block_phases: int, prior: _LadFit | None = None
-                   ) -> tuple[FitResult, _LadFit | None]:
-    """:func:`fit_terms` of the equations ``eq`` of ``data``, and its LAD stage (``prior``:
-    :func:`_lad_stage`'s)."""
+                   block_phases: int, prior: _LadFit | None = None,
+                   centre: np.ndarray | None = None) -> tuple[FitResult, _LadFit | None]:
+    """:func:`fit_terms` of the equations ``eq`` of ``data``, and its LAD stage (``prior``,
+    ``centre``: :func:`_lad_stage`'s)."""
     used = np.ones(eq.n, dtype=bool)
     rejection = None
     lad = None
     if robust:
-        lad = _lad_stage(eq, prior)
+        lad = _lad_stage(eq, prior, centre)
         used = reject_beyond_mad(eq, lad.coeffs, lad_factor)
         kept_lad = used.copy()
         used = reject_beyond_rms(eq, least_squares_fit(eq, used).coeffs, used, rms_factor)

@@ -37,6 +37,9 @@ RANK_RTOL = 1e-10
 _LAD_DIRECT_ROWS = 3000
 _LAD_BAND_ROWS = 3000
 _LAD_SEED = 19900208  # fixed: the subsample only affects speed, never the optimum
+#: the bands about a given centre (each twice the last, from _LAD_BAND_ROWS) tried before a
+#: subsample's LAD takes over
+_LAD_CENTRE_TRIES = 3
 
 
 # ---------------------------------------------------------------------------------------------
@@ -198,11 +201,27 @@ def _lad_full(a: np.ndarray, y: np.ndarray) -> np.ndarray:
     return _lad_lp(a, y, -ones, ones)[0]
 
 
-def _lad_dense(a: np.ndarray, y: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """Exact LAD coefficients for a full-column-rank ``a`` (rows x p)."""
+def _lad_dense(a: np.ndarray, y: np.ndarray, rng: np.random.Generator,
+               centre: np.ndarray | None = None) -> np.ndarray:
+    """Exact LAD coefficients for a full-column-rank ``a`` (rows x p). ``centre``: an
+    estimate of them (the LAD of a related problem: diagnose's fit variants centre a day or
+    night window's on the fit of every scan), tried first as the band's centre in place of a
+    subsample's LAD; where it proves too far off (:data:`_LAD_CENTRE_TRIES` bands), the
+    subsample's as without it. Either way the exact optimum, the rows kept in the last LP
+    (and so the rounding of the result: ~1e-13 relative) depending on the centre."""
     n, p = a.shape
     if n <= max(2 * _LAD_DIRECT_ROWS, 40 * p):
         return _lad_full(a, y)
+    if centre is not None:
+        try:
+            chol = scipy.linalg.cholesky(np.einsum("ij,ik->jk", a, a), lower=False)
+        except np.linalg.LinAlgError:
+            chol = None
+        band = int(max(_LAD_BAND_ROWS, 40 * p))
+        found = None if chol is None else _lad_band(
+            a, y, centre, chol, band, min(n // 2, band << _LAD_CENTRE_TRIES))
+        if found is not None:
+            return found
     # A subsample of m rows gives coefficients good to ~sqrt(p/m) of the residual scale, so
     # the rows whose residual sign is then uncertain number ~kappa sqrt(p/m) n, with kappa ~4
     # found on correlated, misfitted designs (tpoint8 on Ghigo-type errors). Choose m so that
@@ -219,17 +238,28 @@ def _lad_dense(a: np.ndarray, y: np.ndarray, rng: np.random.Generator) -> np.nda
         chol = scipy.linalg.cholesky(np.einsum("ij,ik->jk", a_sub, a_sub), lower=False)
     except np.linalg.LinAlgError:  # subsample happens to be degenerate: no shortcut
         return _lad_full(a, y)
+    band = int(max(_LAD_BAND_ROWS, 40 * p, 4 * math.sqrt(p / m) * n))
+    found = _lad_band(a, y, coeffs, chol, band, n // 2)
+    return _lad_full(a, y) if found is None else found
+
+
+def _lad_band(a: np.ndarray, y: np.ndarray, coeffs: np.ndarray, chol: np.ndarray, band: int,
+              limit: int) -> np.ndarray | None:
+    """The exact LAD optimum from an LP of the ``band`` rows nearest the fit ``coeffs`` (in
+    residual over prediction scale, ``chol`` the Cholesky factor of a Gram matrix of ``a``'s
+    rows), the others' signs fixed and confirmed; the band widened while its rows number
+    fewer than ``limit``, else None."""
+    n, p = a.shape
     leverage = np.linalg.norm(_matvec(a, scipy.linalg.solve_triangular(chol, np.eye(p))), axis=1)
     resid = y - _matvec(a, coeffs)
     with np.errstate(divide="ignore", invalid="ignore"):
         z = np.where(leverage > 0, np.abs(resid) / leverage, np.inf)
     tol = 1e-9 * max(1.0, float(np.abs(y).max()))
-    band = int(max(_LAD_BAND_ROWS, 40 * p, 4 * math.sqrt(p / m) * n))
     forced = np.zeros(n, dtype=bool)
-    # The band stays centred on the subsample estimate: a failed reduced solution can be far
-    # off (its globs were wrong), so it is never used to re-centre.
+    # The band stays centred on the estimate: a failed reduced solution can be far off (its
+    # globs were wrong), so it is never used to re-centre.
     for _ in range(30):
-        if band + forced.sum() >= n // 2:
+        if band + forced.sum() >= limit:
             break
         kept = forced.copy()
         kept[np.argpartition(z, band - 1)[:band]] = True
@@ -255,21 +285,31 @@ def _lad_dense(a: np.ndarray, y: np.ndarray, rng: np.random.Generator) -> np.nda
             forced |= wrong
         else:
             band *= 2
-    return _lad_full(a, y)
+    return None
 
 
 @dataclass(frozen=True)
 class _LadBlock:
     """One separable block of an exact LAD fit (:func:`_lad_blocks`): its rows and columns of
-    the design, its data, the subsampling generator's state before and after its solve, and
-    its coefficients."""
+    the design, its data, the centre given, the subsampling generator's state before and
+    after its solve, and its coefficients."""
 
     rows: np.ndarray
     cols: np.ndarray
     y: np.ndarray
+    centre: np.ndarray | None
     state_in: dict
     state_out: dict
     coeffs: np.ndarray
+
+    def solves(self, rows: np.ndarray, cols: np.ndarray, y: np.ndarray,
+               centre: np.ndarray | None, state_in: dict) -> bool:
+        """Whether this block's solve is that of these inputs (the same bytes)."""
+        return (self.state_in == state_in and np.array_equal(self.cols, cols)
+                and np.array_equal(self.rows, rows) and np.array_equal(self.y, y)
+                and ((self.centre is None and centre is None) or (
+                    self.centre is not None and centre is not None
+                    and np.array_equal(self.centre, centre))))
 
 
 def _lad(a: np.ndarray, y: np.ndarray, n_xel: int | None = None) -> np.ndarray:
@@ -278,8 +318,8 @@ def _lad(a: np.ndarray, y: np.ndarray, n_xel: int | None = None) -> np.ndarray:
 
 
 def _lad_blocks(a: np.ndarray, y: np.ndarray, n_xel: int | None = None,
-                prior: Sequence[_LadBlock | None] | None = None
-                ) -> tuple[np.ndarray, list[_LadBlock | None]]:
+                prior: Sequence[_LadBlock | None] | None = None,
+                centre: np.ndarray | None = None) -> tuple[np.ndarray, list[_LadBlock | None]]:
     """Exact LAD fit of ``y ~ a @ c``, and its blocks.
 
     When the first ``n_xel`` rows (cross-elevation) and the rest (elevation) involve disjoint
@@ -289,6 +329,7 @@ def _lad_blocks(a: np.ndarray, y: np.ndarray, n_xel: int | None = None,
     other data (diagnose's fit variants before and after removing a finding's signal): a
     block whose rows, columns, data and generator state are that fit's is its solution, the
     generator left where its solve left it (the same bytes as solving it again).
+    ``centre``: an estimate of the coefficients (:func:`_lad_dense`).
     """
     p = a.shape[1]
     nonzero_rows = (a != 0).any(axis=1)
@@ -308,13 +349,13 @@ def _lad_blocks(a: np.ndarray, y: np.ndarray, n_xel: int | None = None,
         rows = (a[:, cols] != 0).any(axis=1) & nonzero_rows
         y_block = np.ascontiguousarray(y[rows])
         state_in = rng.bit_generator.state
+        block_centre = None if centre is None else centre[cols]
         old = prior[i] if prior is not None and i < len(prior) else None
-        if not (old is not None and old.state_in == state_in
-                and np.array_equal(old.cols, cols) and np.array_equal(old.rows, rows)
-                and np.array_equal(old.y, y_block)):
-            block_coeffs = _lad_dense(np.ascontiguousarray(a[np.ix_(rows, cols)]), y_block, rng)
-            old = _LadBlock(rows, cols, y_block, state_in, rng.bit_generator.state,
-                            block_coeffs)
+        if old is None or not old.solves(rows, cols, y_block, block_centre, state_in):
+            block_coeffs = _lad_dense(np.ascontiguousarray(a[np.ix_(rows, cols)]), y_block, rng,
+                                      block_centre)
+            old = _LadBlock(rows, cols, y_block, block_centre, state_in,
+                            rng.bit_generator.state, block_coeffs)
         rng.bit_generator.state = old.state_out
         coeffs[cols] = old.coeffs
         solved.append(old)
