@@ -146,8 +146,10 @@ class Equations:
         rows = np.concatenate([keep, keep])
         if int(keep.sum()) != len(data):
             raise ValueError(f"{int(keep.sum())} observations kept, the data hold {len(data)}")
-        return self._of_design(data, self.names, np.asfortranarray(self.design[rows]),
-                               weighted)
+        design = np.empty((2 * len(data), len(self.names)), order="F")  # as of() makes it
+        for j in range(design.shape[1]):
+            np.compress(rows, self.design[:, j], out=design[:, j])
+        return self._of_design(data, self.names, design, weighted)
 
     def for_data(self, data: PointingData, weighted: bool = False) -> Equations:
         """The equations of other data at the same observations (the same design)."""
