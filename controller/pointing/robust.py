@@ -67,8 +67,7 @@ from .solvers import (
 )
 
 __all__ = ["CORRELATION_WARNING_LEVEL", "Equations", "fit_terms", "fit_terms_before_after",
-           "lad_fit",
-           "least_squares_fit", "reject_beyond_mad", "reject_beyond_rms"]
+           "lad_fit", "least_squares_fit", "reject_beyond_mad", "reject_beyond_rms"]
 
 #: the 1990 report's rejection thresholds (Ghigo 1990, section III): an observation goes when
 #: an axis' residual exceeds LAD_FACTOR times that axis' mean absolute deviation from the LAD
