@@ -199,8 +199,10 @@ class ExactTiltCandidate(Candidate):
     def _fit(self, problem, used: np.ndarray, starts,
              lin: np.ndarray) -> tuple[np.ndarray, float, float, Any]:
         """The best of ``starts`` refined by Levenberg-Marquardt on the scans ``used``:
-        (theta, chi^2 left, chi^2 now, (err, proj, z_perp) of those scans); ``lin`` as
-        :meth:`_shown`'s."""
+        (theta, chi^2 left, chi^2 now, (err, proj, z_perp, jac) of those scans); ``lin`` as
+        :meth:`_shown`'s; ``jac``: the projected error's Jacobian at theta (columns
+        ``proj(row)`` of ``err.jac_rows(theta)``), which least_squares evaluates at its
+        solution, or None where no start improved on theta = 0."""
         rows = np.flatnonzero(used)
         err = self._shown(problem, rows, lin)
         proj, z_perp = _projection(problem, used, rows)
@@ -212,7 +214,7 @@ class ExactTiltCandidate(Candidate):
             return -np.column_stack([proj(row) for row in err.jac_rows(theta)])
 
         base = float(z_perp @ z_perp)
-        best_x, best_c = np.zeros(3), base
+        best_x, best_c, best_jac = np.zeros(3), base, None
         for x0 in starts:
             try:
                 sol = optimize.least_squares(resid, x0, jac=resid_jac, method="lm",
@@ -221,8 +223,9 @@ class ExactTiltCandidate(Candidate):
                 continue
             cost = float(sol.fun @ sol.fun)
             if cost < best_c:
-                best_c, best_x = cost, sol.x
-        return best_x, best_c, base, (err, proj, z_perp)
+                # sol.jac is resid_jac(sol.x): the covariance's Jacobian, not made again
+                best_c, best_x, best_jac = cost, sol.x, sol.jac
+        return best_x, best_c, base, (err, proj, z_perp, best_jac)
 
     def test(self, problem, perp, z_perp, chi2_now):
         obs = problem.obs
@@ -239,10 +242,11 @@ class ExactTiltCandidate(Candidate):
             x, left, now, _ = self._fit(problem, sub, starts, lin)
             if left < now:
                 starts = [x]
-        best_x, best_c, base, (err, proj, z_perp) = self._fit(problem, used, starts, lin)
+        best_x, best_c, base, (err, proj, z_perp, jac) = self._fit(problem, used, starts, lin)
         dchi2 = max(base - best_c, 0.0)
-        # covariance from the Jacobian at the optimum
-        _, cov = _lstsq(np.column_stack([proj(row) for row in err.jac_rows(best_x)]), z_perp)
+        # covariance from the Jacobian at the optimum (least_squares' is resid_jac's: minus)
+        _, cov = _lstsq(np.column_stack([proj(row) for row in err.jac_rows(best_x)])
+                        if jac is None else np.negative(jac, order="C"), z_perp)
         cols = self._shown(problem, None, lin)(best_x)[:, None]
         res = TestResult(self, dchi2, self.REFERENCE_DOF, 1.0, 1.0, tuple(best_x), cols,
                          ("exact",), np.array([1.0]), cov, mask=used.copy(),
