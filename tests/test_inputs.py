@@ -407,6 +407,33 @@ def test_the_fast_ecsv_reader_reads_what_astropys_reads():
         assert _fast_table(blank, len(blank)) is None
 
 
+def test_the_ecsv_header_is_read_as_astropys_yaml_loader_reads_it():
+    """The recordings' YAML header through PyYAML's safe loader (astropy's loader is it with
+    tags added; importing astropy's imports astropy.coordinates): the same objects as
+    astropy's loader for antsim's header, and a header with astropy's own tags (a unit, a
+    tuple) or a malformed one goes to astropy's loader: its objects, its error."""
+    import yaml
+    from astropy.io.misc.yaml import load
+
+    from controller.program.recordings import _yaml_header
+
+    header = [line for line in ECSV.read_text(encoding="utf-8").splitlines()
+              if line.startswith("#")][1:]
+    body = "\n".join(line[2:] if line.startswith("# ") else line[1:] for line in header)
+    assert "!!omap" in body
+    got = _yaml_header(header)
+    assert got == load(body) and dict(got["meta"])["site"] == dict(load(body)["meta"])["site"]
+    tagged = [*header, "# extra: !astropy.units.Unit {unit: arcmin}",
+              "# pair: !!python/tuple [1, 2]"]
+    with pytest.raises(yaml.YAMLError):  # the safe loader alone refuses these tags
+        yaml.load("\n".join(line[2:] for line in tagged), Loader=yaml.SafeLoader)
+    got = _yaml_header(tagged)
+    assert str(got["extra"]) == "arcmin" and got["pair"] == (1, 2)
+    assert got == load("\n".join(line[2:] for line in tagged))
+    with pytest.raises(yaml.YAMLError):  # malformed: astropy's loader says so
+        _yaml_header(["# meta: [1, 2"])
+
+
 def test_a_truncated_diagnose_cache_file_is_a_miss(tmp_path):
     """A cached baseline simulation cut short (a full disk, a killed writer) is simulated
     again, not a BadZipFile traceback: the same products, and the file whole again."""
