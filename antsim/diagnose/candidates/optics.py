@@ -178,13 +178,16 @@ class ExactTiltCandidate(Candidate):
             lin = lin_cols @ self.linear_terms(theta)
             return lin + f2 * (raw - lin)
 
-        # d err / d theta = lin' + f2 (raw' - lin'): the linear part's (constant) share
-        lin_rows = (1.0 - f2) * (lin_cols * self.linear_terms((1.0, 1.0, 1.0))).T
         k = sky.cos_el.size
-        scale_az = sky.cos_el * (ARCSEC_PER_RAD * RAD_PER_ARCMIN)
+        made = []  # the Jacobian's constant share and scale, made at its first use
 
         def jac_rows(theta):
             """d err / d theta, one row (2k,) per parameter, arcsec per arcmin: analytic."""
+            if not made:
+                # d err / d theta = lin' + f2 (raw' - lin'): the linear part's constant share
+                made.extend(((1.0 - f2) * (lin_cols * self.linear_terms((1.0, 1.0, 1.0))).T,
+                             sky.cos_el * (ARCSEC_PER_RAD * RAD_PER_ARCMIN)))
+            lin_rows, scale_az = made
             d_az, d_el = sky.derivatives_rad(*(float(v) * RAD_PER_ARCMIN for v in theta))
             rows = np.empty_like(lin_rows)
             np.multiply(d_az, scale_az, out=rows[:, :k])
