@@ -45,6 +45,16 @@ def repo_root() -> Path:
 
 
 @pytest.fixture(scope="session")
+def diagnose_cache(request, tmp_path_factory) -> Path:
+    """A directory for diagnose's fit cache shared by the tests: pytest's cache (kept between
+    runs) or, under ``-p no:cacheprovider``, a temporary one for this run."""
+    cache = getattr(request.config, "cache", None)
+    if cache is None:
+        return tmp_path_factory.mktemp("antsim-diagnose")
+    return cache.mkdir("antsim-diagnose")
+
+
+@pytest.fixture(scope="session")
 def ghigo_path() -> Path:
     return REPO / "scenarios" / "ghigo1990.toml"
 

@@ -38,8 +38,8 @@ def short_path(tmp_path_factory, ghigo_text):
 
 
 @pytest.fixture(scope="module")
-def harness(short_path, request):
-    cache = request.config.cache.mkdir("antsim-diagnose")
+def harness(short_path, diagnose_cache):
+    cache = diagnose_cache
     return Harness(load_scenario(short_path), n_sims=8, cache_dir=cache)
 
 
@@ -82,8 +82,8 @@ def test_reduced_blind_harness(harness):
     assert set(doc) >= {"rates", "confusion", "excluded", "cases"}
 
 
-def test_blindtest_command(short_path, request, capsys):
-    cache = request.config.cache.mkdir("antsim-diagnose")
+def test_blindtest_command(short_path, diagnose_cache, capsys):
+    cache = diagnose_cache
     code = cli(["blindtest", "--n", "2", "--seed", "3", "--scenario", str(short_path),
                 "--sims", "4", "--cache", str(cache), "--json"])
     assert code == 0

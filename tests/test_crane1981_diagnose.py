@@ -166,9 +166,9 @@ def halves(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def baseline(halves, request):
+def baseline(halves, diagnose_cache):
     plain, _ = halves
-    cache = request.config.cache.mkdir("antsim-diagnose")
+    cache = diagnose_cache
     return SimulatedBaseline(plain, plain.controller.fit_terms, N_SIMS, cache_dir=cache)
 
 

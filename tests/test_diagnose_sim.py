@@ -35,8 +35,8 @@ def short(tmp_path_factory, ghigo_text):
 
 
 @pytest.fixture(scope="module")
-def cache(request):
-    return request.config.cache.mkdir("antsim-diagnose")
+def cache(diagnose_cache):
+    return diagnose_cache
 
 
 @pytest.fixture(scope="module")
