@@ -498,6 +498,17 @@ def test_the_steps_running_sums_are_its_projected_columns(monkeypatch):
     assert fast.trials == pytest.approx(slow.trials, rel=1e-9)
     # the cross-validated stage compares each axis' most likely change time only
     assert fast.theta[:2] in step.cv_thetas(problem)
+    # a run of consecutive columns is read as a view: the same bits as the gathered rows
+    from antsim.diagnose.candidates.changes import _as_slice, _rows_dot
+    run = np.arange(3, m2 // 2 - 1)
+    assert _as_slice(run) == slice(3, m2 // 2 - 1)
+    assert _as_slice(a) is a  # two runs: gathered
+    sq, qc = np.arange(m2, dtype=float) ** 2, np.linspace(-1.0, 1.0, m2 * 3).reshape(m2, 3)
+    gathered = sq[run + 1] - np.einsum("ij,ij->i", qc[run], qc[run + 1])
+    # bit-equal here; rounding's tolerance, should another CPU's einsum sum a view that
+    # starts off its alignment in another order
+    np.testing.assert_allclose(_rows_dot(sq, qc, _as_slice(run), _as_slice(run + 1)),
+                               gathered, rtol=1e-14, atol=1e-14 * np.abs(gathered).max())
     assert fast.delta_chi2 == pytest.approx(slow.delta_chi2, rel=1e-12)
 
 

@@ -55,6 +55,22 @@ def _arc_length(norm2: np.ndarray, dots: np.ndarray) -> float:
     return float(np.arccos(np.clip(cos, 0.0, 1.0)).sum())
 
 
+def _as_slice(index: np.ndarray) -> np.ndarray | slice:
+    """``index`` (ascending integers) as the slice it equals where it is a run of
+    consecutive ones: rows taken as a view, not gathered into a copy (the same numbers)."""
+    if index.size and index[-1] - index[0] == index.size - 1 and bool(
+            np.all(index[1:] > index[:-1])):
+        return slice(int(index[0]), int(index[-1]) + 1)
+    return index
+
+
+def _rows_dot(sq: np.ndarray, qc: np.ndarray, a: np.ndarray | slice,
+              b: np.ndarray | slice) -> np.ndarray:
+    """The inner products of step columns ``a`` and ``b`` (a < b, one axis) from their
+    squared norms ``sq`` and their model parts ``qc`` (:meth:`StepCandidate._all_stats`)."""
+    return sq[b] - np.einsum("ij,ij->i", qc[a], qc[b])
+
+
 def tube_trials(u: float, length: float, ends: int) -> float:
     """The tube formula's bound on P(max of a chi^2_1 process > u) over curves of total
     ``length`` with ``ends`` ends, as a number of trials: bound / P(chi^2_1 > u) (>= 1)."""
@@ -151,7 +167,8 @@ class StepCandidate(Candidate):
 
         def after(x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
             """Sums of ``x`` (n_used, in time order) over the scans after each time."""
-            out = np.take(np.cumsum(x[::-1])[::-1], at, out=out)
+            # mode "clip": every index is in range, and "raise" buffers ``out`` (a copy)
+            out = np.take(np.cumsum(x[::-1])[::-1], at, out=out, mode="clip")
             out[past] = 0.0
             return out
 
@@ -176,7 +193,7 @@ class StepCandidate(Candidate):
         sq_all = np.concatenate(sq)
         norm2 = sq_all - np.einsum("ij,ij->i", qc_all, qc_all)
         return (np.concatenate(cz), norm2,
-                lambda a, b: sq_all[b] - np.einsum("ij,ij->i", qc_all[a], qc_all[b]))
+                lambda a, b: _rows_dot(sq_all, qc_all, _as_slice(a), _as_slice(b)))
 
     def _gains(self, problem: Problem, perp, z_perp):
         """The chi^2 decrease of each step column (0 where the model absorbs it), which
