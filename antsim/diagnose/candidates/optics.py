@@ -147,7 +147,12 @@ class ExactTiltCandidate(Candidate):
         tn, te, c = (float(v) for v in theta)
         d_az, d_el = sky.errors_rad(math.hypot(tn, te) * RAD_PER_ARCMIN, math.atan2(te, tn),
                                     c * RAD_PER_ARCMIN)
-        return np.concatenate([d_az * sky.cos_el * ARCSEC_PER_RAD, d_el * ARCSEC_PER_RAD])
+        k = d_az.size
+        out = np.empty(2 * k)  # [d_az cos E, d_el] arcsec, made in place
+        np.multiply(d_az, sky.cos_el, out=out[:k])
+        out[:k] *= ARCSEC_PER_RAD
+        np.multiply(d_el, ARCSEC_PER_RAD, out=out[k:])
+        return out
 
     def error(self, obs: Observations, theta: Sequence[float]) -> np.ndarray:
         """Error (2n,) arcsec of an exact tilt (north, east components) and collimation,
@@ -174,9 +179,12 @@ class ExactTiltCandidate(Candidate):
             lin_cols, f2 = lin[both], f2[both]
 
         def err(theta):
-            raw = self._sky_error(sky, theta)
+            out = self._sky_error(sky, theta)  # raw, then lin + f2 (raw - lin) in place
             lin = lin_cols @ self.linear_terms(theta)
-            return lin + f2 * (raw - lin)
+            out -= lin
+            out *= f2
+            out += lin
+            return out
 
         k = sky.cos_el.size
         made = []  # the Jacobian's constant share and scale, made at its first use
@@ -214,7 +222,11 @@ class ExactTiltCandidate(Candidate):
             return z_perp - proj(err(theta))
 
         def resid_jac(theta):
-            return -np.column_stack([proj(row) for row in err.jac_rows(theta)])
+            rows = err.jac_rows(theta)
+            out = np.empty((rows.shape[1], rows.shape[0]))
+            for j, row in enumerate(rows):
+                out[:, j] = proj(row)
+            return np.negative(out, out=out)
 
         base = float(z_perp @ z_perp)
         best_x, best_c, best_jac = np.zeros(3), base, None
@@ -324,7 +336,8 @@ def _projection(problem, used: np.ndarray, rows: np.ndarray):
                 # of ~10 was 10-20 times slower than these under load (OpenBLAS threads)
                 return np.column_stack([proj(col) for col in v.T])
             wv = w * v
-            return wv - q @ (q.T @ wv)
+            wv -= q @ (q.T @ wv)
+            return wv
 
         return proj, z_perp
 

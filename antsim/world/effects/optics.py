@@ -210,11 +210,21 @@ class TiltedSky:
         ``tilt_rad`` towards ``tilt_az_rad`` and a collimation error ``collimation_rad``."""
         x, y, z = self._rotated(tilt_rad, tilt_az_rad)
         cos_c = math.cos(collimation_rad)
-        el_enc = np.arcsin(np.clip(z / cos_c, -1.0, 1.0))
-        da = np.arctan2(math.sin(collimation_rad), cos_c * np.cos(el_enc))
-        d_az = np.arctan2(y * self.cos_az - x * self.sin_az,
-                          x * self.cos_az + y * self.sin_az) - da
-        return wrap_pi(d_az), el_enc - self.el_rad
+        # products and sums into their operands' buffers (the same operations on the same
+        # numbers), each trigonometric function into a new array as before
+        s = np.divide(z, cos_c)
+        el_enc = np.arcsin(np.clip(s, -1.0, 1.0, out=s))
+        s = np.cos(el_enc)
+        s *= cos_c
+        da = np.arctan2(math.sin(collimation_rad), s)
+        num, t = np.multiply(y, self.cos_az), np.multiply(x, self.sin_az)
+        num -= t
+        den = np.multiply(x, self.cos_az, out=s)
+        den += np.multiply(y, self.sin_az, out=t)
+        d_az = np.arctan2(num, den)
+        d_az -= da
+        el_enc -= self.el_rad
+        return wrap_pi(d_az), el_enc
 
     def derivatives_rad(self, tilt_north_rad: float, tilt_east_rad: float,
                         collimation_rad: float) -> tuple[np.ndarray, np.ndarray]:
@@ -235,25 +245,60 @@ class TiltedSky:
             c2 = (tilt - math.sin(tilt)) / tilt**3
         j_left = np.eye(3) + c1 * skew + c2 * (skew @ skew)
         cos_c, sin_c = math.cos(collimation_rad), math.sin(collimation_rad)
-        sin_e = np.clip(z / cos_c, -1.0, 1.0)  # the encoder elevation's sine
-        cos_e = np.sqrt(1.0 - sin_e**2)
+        # the arithmetic of _derivatives_rad_reference (tests), each product and sum into
+        # kept buffers (the same operations on the same numbers: ~40 arrays of k a call)
+        k = z.size
+        sin_e = np.divide(z, cos_c)  # the encoder elevation's sine
+        np.clip(sin_e, -1.0, 1.0, out=sin_e)
+        cos_e = np.square(sin_e)
+        np.subtract(1.0, cos_e, out=cos_e)
+        np.sqrt(cos_e, out=cos_e)
+        t, u = np.empty(k), np.empty(k)
+        mask = np.greater(cos_e, 0.0)
         # d(arcsin s) = ds / cos E: zero where errors_rad clips s (a direction past the pole)
-        inv = np.divide(1.0 / cos_c, cos_e, out=np.zeros_like(cos_e), where=cos_e > 0.0)
+        inv = np.divide(1.0 / cos_c, cos_e, out=np.zeros(k), where=mask)
         # the collimation's azimuth term da = arctan2(sin c, q), q = cos c cos E:
         # d(da) = (q d(sin c) - sin c dq) / (sin^2 c + q^2)
-        q = cos_c * cos_e
-        pq = sin_c**2 + q**2
-        inv_pq = np.divide(1.0, pq, out=np.zeros_like(pq), where=pq > 0.0)
-        rho2 = x * x + y * y  # zero only exactly at the pole, where arctan2 is taken as 0
-        z_rho = np.divide(z, rho2, out=np.zeros_like(z), where=rho2 > 0.0)
-        k_da = (sin_c * cos_c) * sin_e * inv_pq  # d(da)/dE for a fixed collimation
-        d_az, d_el = np.empty((3, z.size)), np.empty((3, z.size))
+        q = np.multiply(cos_e, cos_c)
+        np.square(q, out=t)
+        np.add(t, sin_c**2, out=t)
+        np.greater(t, 0.0, out=mask)
+        inv_pq = np.divide(1.0, t, out=np.zeros(k), where=mask)
+        # rho^2 = x^2 + y^2: zero only exactly at the pole, where arctan2 is taken as 0
+        np.multiply(x, x, out=t)
+        np.multiply(y, y, out=u)
+        t += u
+        np.greater(t, 0.0, out=mask)
+        z_rho = np.divide(z, t, out=np.zeros(k), where=mask)
+        k_da = np.multiply(sin_e, sin_c * cos_c)  # d(da)/dE for a fixed collimation
+        k_da *= inv_pq
+        d_az, d_el = np.empty((3, k)), np.empty((3, k))
         # dr/d(north) = (0, -1, 0), dr/d(east) = (1, 0, 0)
         for i, a in enumerate((-j_left[:, 1], j_left[:, 0])):
-            d_el[i] = (a[0] * y - a[1] * x) * inv
-            d_az[i] = a[2] - z_rho * (a[0] * x + a[1] * y) - k_da * d_el[i]
-        d_el[2] = sin_e * sin_c * inv
-        d_az[2] = -(q * cos_c + sin_c * (sin_c * cos_e + cos_c * sin_e * d_el[2])) * inv_pq
+            # d_el = (a_x y - a_y x) / cos E; d_az = a_z - z_rho (a_x x + a_y y) - k_da d_el
+            np.multiply(y, a[0], out=d_el[i])
+            np.multiply(x, a[1], out=t)
+            d_el[i] -= t
+            d_el[i] *= inv
+            np.multiply(x, a[0], out=t)
+            np.multiply(y, a[1], out=u)
+            t += u
+            t *= z_rho
+            np.subtract(a[2], t, out=d_az[i])
+            np.multiply(k_da, d_el[i], out=t)
+            d_az[i] -= t
+        np.multiply(sin_e, sin_c, out=d_el[2])
+        d_el[2] *= inv
+        # d_az = -(q cos c + sin c (sin c cos E + cos c sin E d_el)) / (sin^2 c + q^2)
+        np.multiply(sin_e, cos_c, out=t)
+        t *= d_el[2]
+        np.multiply(cos_e, sin_c, out=u)
+        u += t
+        u *= sin_c
+        np.multiply(q, cos_c, out=t)
+        t += u
+        np.negative(t, out=t)
+        np.multiply(t, inv_pq, out=d_az[2])
         return d_az, d_el
 
 
