@@ -583,10 +583,10 @@ def _errors_rad_reference(sky, tilt: float, tilt_az: float, coll: float):
 
 
 def test_tilted_skys_errors_and_derivatives_in_buffers_are_the_expressions_bit_for_bit():
-    """errors_rad's and derivatives_rad's products and sums into kept buffers are the same IEEE operations
-    (each correctly rounded, commuted at most) on the same numbers as the expressions they
-    replace: the same bytes, the series branch, the pole's clip and a zero collimation
-    included."""
+    """errors_rad's and derivatives_rad's products and sums into kept buffers are the same
+    IEEE operations (each correctly rounded, commuted at most) on the same numbers as the
+    expressions they replace: the same bytes, the series branch, the pole's clip and a zero
+    collimation included."""
     from antsim.world.effects.optics import TiltedSky
 
     rng = np.random.default_rng(17)
