@@ -54,7 +54,13 @@ from functools import partial
 import numpy as np
 
 from .data import LinearModel, PointingData, require_pointing_data
-from .jackknife import BLOCK_PHASES, Rejection, cluster_jackknife, within_rms
+from .jackknife import (
+    BLOCK_PHASES,
+    JackknifeResult,
+    Rejection,
+    cluster_jackknife,
+    within_rms,
+)
 from .result import FitResult, _readonly
 from .solvers import (
     _independent_columns,
@@ -357,7 +363,7 @@ def _result(data: PointingData, start: LinearModel, eq: Equations, sol: _Solutio
         scale = sky
     popn = sky * math.sqrt(n_used / (n_used - n_fitted)) if n_used > n_fitted else float("nan")
     sigma = np.sqrt(np.diag(sol.cov_unscaled)) * scale
-    honest_source = partial(cluster_jackknife, eq.a_w, eq.y_w - _matvec(eq.a_w, coeffs), used,
+    honest_source = partial(_honest, eq.a_w, eq.y_w, coeffs.copy(), used,
                             list(sol.rank.kept), n, data.t_s, block_s, rejection, block_phases)
     with np.errstate(invalid="ignore", divide="ignore"):
         sd = np.sqrt(np.diag(sol.cov_unscaled))
@@ -387,6 +393,16 @@ def _result(data: PointingData, start: LinearModel, eq: Equations, sol: _Solutio
         honest_block_s=block_s if data.t_s is not None else None,
         honest_source=honest_source,
     )
+
+
+def _honest(a_w: np.ndarray, y_w: np.ndarray, coeffs: np.ndarray, used: np.ndarray,
+            kept: list[int], n: int, t_s: np.ndarray | None, block_s: float,
+            rejection: Rejection | None, phases: int) -> JackknifeResult:
+    """:func:`cluster_jackknife` of the fit ``coeffs`` of the weighted equations ``a_w``,
+    ``y_w``: its residuals made when the honest error bars are first asked for (most fits
+    never ask: a matrix-vector product of the whole design saved)."""
+    return cluster_jackknife(a_w, y_w - _matvec(a_w, coeffs), used, kept, n, t_s, block_s,
+                             rejection, phases)
 
 
 def _warnings(names: Sequence[str], sol: _Solution, corr: np.ndarray) -> tuple[str, ...]:
