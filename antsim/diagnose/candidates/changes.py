@@ -167,8 +167,7 @@ class StepCandidate(Candidate):
 
         def after(x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
             """Sums of ``x`` (n_used, in time order) over the scans after each time."""
-            # mode "clip": every index is in range, and "raise" buffers ``out`` (a copy)
-            out = np.take(np.cumsum(x[::-1])[::-1], at, out=out, mode="clip")
+            out = np.take(np.cumsum(x[::-1])[::-1], at, out=out)
             out[past] = 0.0
             return out
 
