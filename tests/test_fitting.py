@@ -409,6 +409,40 @@ def test_blocked_qr_matches_lapack(rows, cols, rank):
     np.testing.assert_allclose(r.T @ r, a.T @ a, rtol=1e-10, atol=1e-9 * np.abs(a.T @ a).max())
 
 
+def _r_factor_reference(a: np.ndarray) -> np.ndarray:
+    """solvers._r_factor as first written: np.triu of each block's geqrf, np.vstack."""
+    import scipy.linalg
+
+    from controller.pointing.solvers import _QR_BLOCK_ELEMENTS
+
+    k = a.shape[1]
+    (geqrf,) = scipy.linalg.get_lapack_funcs(("geqrf",), (a,))
+    block = max(2 * k, _QR_BLOCK_ELEMENTS // max(k, 1))
+
+    def r_of(part):
+        qr, _tau, _work, info = geqrf(part)
+        assert info == 0
+        return np.triu(qr[: min(part.shape), :])
+
+    current = a
+    while current.shape[0] > block:
+        current = np.vstack([r_of(current[i:i + block]) for i in range(0, current.shape[0], block)])
+    r = r_of(current)
+    if r.shape[0] < k:
+        r = np.vstack([r, np.zeros((k - r.shape[0], k))])
+    return r
+
+
+@pytest.mark.parametrize(("rows", "cols"), [(60_001, 13), (20_000, 6), (923, 13), (7, 3),
+                                            (30, 40), (1_000, 1)])
+def test_blocked_qr_written_in_place_is_the_stacked_triangles(rows, cols):
+    """_r_factor's blocks written into one array are the same LAPACK calls on the same
+    numbers as np.triu and np.vstack of each: the same bytes (a last block shorter than the
+    columns, a wide matrix, one column)."""
+    a = np.asfortranarray(np.random.default_rng(rows).normal(size=(rows, cols)))
+    assert fitting._r_factor(a).tobytes() == _r_factor_reference(a).tobytes()
+
+
 def test_lad_coefficients_are_minus_the_marginals():
     """A tiny LAD problem with a known answer: the median. y = c (one column of ones)."""
     y = np.array([1.0, 2.0, 7.0, 100.0, -3.0])
