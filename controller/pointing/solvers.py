@@ -127,7 +127,7 @@ def _r_factor(a: np.ndarray) -> np.ndarray:
         without a new array per block: ~800 blocks of a 400,000-row design)."""
         starts = range(0, max(current.shape[0], 1), block)  # no rows: geqrf's error
         heights = [min(current.shape[0] - i, block, k) for i in starts]
-        out = np.empty((sum(heights), k))
+        out = np.empty((sum(heights), k), dtype=geqrf.dtype)
         at = 0
         for i, h in zip(starts, heights, strict=True):
             qr, _tau, _work, info = geqrf(current[i:i + block])
