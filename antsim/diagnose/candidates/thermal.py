@@ -9,7 +9,6 @@ import math
 from typing import Any, ClassVar
 
 import numpy as np
-from scipy import optimize
 
 from ..data import Observations
 from ..problem import Problem, _lstsq
@@ -41,6 +40,40 @@ OFF_GRID_LEVELS = 2
 XATOL_LOG_THETA = 1e-2
 
 
+#: the golden section's step, a fraction of the bracket's wider side
+_GOLDEN = 0.5 * (3.0 - math.sqrt(5.0))
+
+
+def _next_point(a: float | None, x: float, b: float | None, values: dict[float, float],
+                widths: list[float]) -> float:
+    """The next log theta to test: the vertex of the parabola through the best point ``x``
+    and its tested neighbours ``a`` < x < ``b`` (None: x is a bound) in ``values`` (delta
+    chi^2, maximized), at least XATOL_LOG_THETA from each; a golden-section step into the
+    wider side where there is no such vertex or the bracket (``widths``, its width at each
+    step) has not halved in two steps (Brent's safeguard)."""
+    tol = XATOL_LOG_THETA
+    left = x - a if a is not None else 0.0
+    right = b - x if b is not None else 0.0
+    u = None
+    if a is not None and b is not None and (len(widths) < 3 or widths[-1] <= 0.5 * widths[-3]):
+        fa, fx, fb = -values[a], -values[x], -values[b]
+        r = (x - a) * (fx - fb)
+        q = (x - b) * (fx - fa)
+        den = 2.0 * (q - r)
+        if den != 0.0:
+            v = x - ((x - b) * q - (x - a) * r) / den
+            if a < v < b:
+                u = v
+    if u is None:  # the golden section of the wider side
+        u = x + _GOLDEN * right if right >= left else x - _GOLDEN * left
+    # into a side wider than XATOL_LOG_THETA, at least that far from x and from its end
+    if u < x and left > tol:
+        return max(min(u, x - tol), min(a + tol, x - tol))
+    if u > x and right > tol:
+        return min(max(u, x + tol), max(b - tol, x + tol))
+    return x + tol if right > tol else x - tol
+
+
 class _LaggedCandidate(Candidate):
     """An effect with one time constant ``tau_s`` (a lag or a relaxation): the blind
     harness draws tau log-uniformly between 30 min and 3 h, with either sign."""
@@ -48,40 +81,66 @@ class _LaggedCandidate(Candidate):
     def _refine_log_theta(self, problem: Problem, perp, z_perp, best: TestResult,
                           log_lo: float, log_hi: float,
                           end: float | None = None) -> TestResult:
-        """The time constant between exp(log_lo) and exp(log_hi) that fits best (bounded
-        search in log theta), or ``best`` if that fits better.
+        """The time constant between exp(log_lo) and exp(log_hi) that fits best (a search
+        in log theta to XATOL_LOG_THETA), or ``best`` if that fits better.
 
         ``end`` (log_lo or log_hi, where the grid's best is its first or last point): the
         bound past the grid. Where the fit there is at least as good as at the grid's best
         and XATOL_LOG_THETA inside it, the optimum of a unimodal decrease lies within that
-        tolerance of the bound, and the bound is the answer (two tests; the bounded search
-        takes ten to creep to a bound by its golden-section steps)."""
+        tolerance of the bound, and the bound is the answer (two tests).
+
+        Otherwise the search starts from what the grid found: the best point and its
+        neighbours (their tests this round, :meth:`_linear_xp`'s) bracket the optimum, and
+        each step tests the vertex of the parabola through the best point and the nearest
+        tested ones on either side (kept XATOL_LOG_THETA from each; the bracket's wider side
+        by the golden section where a parabola does not narrow it), until both lie within
+        XATOL_LOG_THETA of the best: a unimodal optimum is then within that tolerance of it,
+        the bounded search's stopping rule. Near a smooth optimum that is 3-4 tests where
+        scipy's bounded search (which ignores the grid's tests) took 6-10."""
         obs = problem.obs
-        kept: list = [None, None]  # the best point so far and its test
+        tested: dict[float, TestResult] = {}  # log theta -> its test here
+        values: dict[float, float] = {}  # log theta -> delta chi^2
+
+        def run(log_theta: float) -> TestResult:
+            theta = math.exp(log_theta)
+            res = self._linear(problem, perp, z_perp, *self.columns(obs, theta), theta)
+            tested[log_theta], values[log_theta] = res, res.delta_chi2
+            if res.delta_chi2 >= max(values.values()):
+                self._pinned = round(theta, 3)
+            return res
+
+        self._pinned = None
         if end is not None:
             inside = end + (XATOL_LOG_THETA if end == log_lo else -XATOL_LOG_THETA)
-            at_end, near = (self._linear(problem, perp, z_perp, *self.columns(obs, theta),
-                                         theta)
-                            for theta in (math.exp(end), math.exp(inside)))
+            at_end, near = run(end), run(inside)
             if at_end.delta_chi2 >= max(near.delta_chi2, best.delta_chi2):
                 return at_end
-
-        def neg(log_theta: float) -> float:
-            theta = math.exp(log_theta)
-            cols, names = self.columns(obs, theta)
-            res = self._linear(problem, perp, z_perp, cols, names, theta)
-            if kept[1] is None or res.delta_chi2 >= kept[1].delta_chi2:
-                kept[:] = [log_theta, res]
-            return -res.delta_chi2
-
-        opt = optimize.minimize_scalar(neg, bounds=(log_lo, log_hi), method="bounded",
-                                       options={"xatol": XATOL_LOG_THETA})
-        theta = float(math.exp(opt.x))
-        # the search's best point was tested in it
-        res = kept[1] if kept[0] == float(opt.x) else None
-        if res is None:
-            cols, names = self.columns(obs, theta)
-            res = self._linear(problem, perp, z_perp, cols, names, theta)
+        # the grid's tests bracketing the search (theta > 0) and its best
+        for theta, dchi2 in self._grid_tests.items():
+            if theta > 0 and log_lo - 1e-12 <= math.log(theta) <= log_hi + 1e-12:
+                values.setdefault(math.log(theta), dchi2)
+        for bound in (log_lo, log_hi):  # a bound the grid did not test: tested
+            if not any(abs(x - bound) <= 1e-12 for x in values):
+                run(bound)
+        widths: list[float] = []
+        for _ in range(64):  # each step narrows the bracket by XATOL_LOG_THETA at least
+            xs = sorted(values)
+            i = max(range(len(xs)), key=lambda j: (values[xs[j]], -j))
+            x = xs[i]
+            a = xs[i - 1] if i > 0 else None
+            b = xs[i + 1] if i + 1 < len(xs) else None
+            if (a is None or x - a <= XATOL_LOG_THETA * (1 + 1e-9)) and \
+                    (b is None or b - x <= XATOL_LOG_THETA * (1 + 1e-9)):
+                break
+            widths.append((b if b is not None else x) - (a if a is not None else x))
+            run(_next_point(a, x, b, values, widths))
+        x = max(values, key=values.get)
+        # its level kept for the covariance and the result's columns (OFF_GRID_LEVELS
+        # others may be made in between)
+        self._pinned = round(math.exp(x), 3)
+        res = tested.get(x)
+        if res is None:  # a grid point: the test passed in
+            return best
         return best if res.delta_chi2 < best.delta_chi2 else res
 
     TAUS: tuple[float, ...] = ()
@@ -90,6 +149,20 @@ class _LaggedCandidate(Candidate):
         self._cache: dict[tuple, Any] = {}
         self._last_obs: tuple[Observations, tuple] | None = None
         self._grids: dict[str, tuple[tuple, np.ndarray]] = {}  # name -> (recordings, grid)
+        self._grid_tests: dict[float, float] = {}  # the last test's grid: tau -> delta chi^2
+        self._pinned: float | None = None  # a search's answer: its level kept (rounded tau)
+
+    def thetas(self, obs):
+        self._grid_tests = {}  # a test (or the cross-validated stage) starts here
+        return list(self.TAUS)
+
+    def _linear_xp(self, problem, cols, names, theta):
+        """:meth:`Candidate._linear_xp`; a grid point's delta chi^2 noted for the search
+        that starts from the grid (:meth:`_refine_log_theta`)."""
+        out = super()._linear_xp(problem, cols, names, theta)
+        if theta in self.TAUS:
+            self._grid_tests[theta] = out[0].delta_chi2
+        return out
 
     def _cached(self, obs: Observations, tau_s: float, make) -> Any:
         """``make()``, the level of time constant ``tau_s`` for ``obs``, kept while it may be
@@ -105,7 +178,7 @@ class _LaggedCandidate(Candidate):
             if any(k[0] != key[0] for k in cache):  # other recordings: not asked for again
                 cache.clear()
             if tau_s not in self.TAUS:
-                off = [k for k in cache if k[1] not in self.TAUS]
+                off = [k for k in cache if k[1] not in self.TAUS and k[1] != self._pinned]
                 for k in off[:max(len(off) - OFF_GRID_LEVELS + 1, 0)]:  # the oldest first
                     del cache[k]
         cache[key] = hit  # the most recently used last
@@ -115,6 +188,8 @@ class _LaggedCandidate(Candidate):
         """Drop the levels and grids kept for the recordings last seen."""
         self._cache.clear()
         self._grids.clear()
+        self._grid_tests = {}
+        self._pinned = None
         self._last_obs = None
 
     def _grid(self, name: str, obs: Observations, make) -> np.ndarray:
@@ -190,9 +265,6 @@ class SunsetCandidate(_LaggedCandidate):
         """Where the Sun is down on the time grid ``t``, the same for every time constant:
         kept for the recordings last seen (a byte a minute)."""
         return self._grid("night", obs, lambda: sun_el_grid_deg(obs, t) < 0.0)
-
-    def thetas(self, obs):
-        return list(self.TAUS)
 
     def columns(self, obs, theta=None):
         return stacked(None, self.level(obs, float(theta)), obs.n)[:, None], ("amplitude",)
@@ -330,9 +402,6 @@ class TemperatureCandidate(_LaggedCandidate):
             return air
 
         return self._grid("air", obs, make)
-
-    def thetas(self, obs):
-        return list(self.TAUS)
 
     def columns(self, obs, theta=None):
         ts, mean = self.structure(obs, float(theta))
