@@ -95,8 +95,10 @@ class _LaggedCandidate(Candidate):
         tested ones on either side (kept XATOL_LOG_THETA from each; the bracket's wider side
         by the golden section where a parabola does not narrow it), until both lie within
         XATOL_LOG_THETA of the best: a unimodal optimum is then within that tolerance of it,
-        the bounded search's stopping rule. Near a smooth optimum that is 3-4 tests where
-        scipy's bounded search (which ignores the grid's tests) took 6-10."""
+        the bounded search's stopping rule. That took 3-7 tests where scipy's bounded search
+        (which ignores the grid's tests) took 6-7 (tests/test_diagnose_memory.py; 1-4 against
+        7-10 at 200,000 scans); the time constants found move by under 1% of tau, 3% of
+        their sigma (docs/results/blind_fomalont.txt, issue 28p)."""
         obs = problem.obs
         tested: dict[float, TestResult] = {}  # log theta -> its test here
         values: dict[float, float] = {}  # log theta -> delta chi^2
@@ -167,9 +169,10 @@ class _LaggedCandidate(Candidate):
     def _cached(self, obs: Observations, tau_s: float, make) -> Any:
         """``make()``, the level of time constant ``tau_s`` for ``obs``, kept while it may be
         asked for again: every level of the grid (:attr:`TAUS`) and the last
-        :data:`OFF_GRID_LEVELS` others (the searches' points), for the recordings last seen
-        (at 200,000 scans every level asked for, kept up to 64 MiB a candidate, was 169 MiB
-        in three; their grids' 35 levels are 53 MiB)."""
+        :data:`OFF_GRID_LEVELS` others (the searches' points; the last search's answer among
+        them: its covariance and columns ask for it after its neighbours), for the recordings
+        last seen (at 200,000 scans every level asked for, kept up to 64 MiB a candidate, was
+        169 MiB in three; their grids' 35 levels are 53 MiB)."""
         key = (self._obs_key(obs), round(tau_s, 3))
         cache = self._cache
         hit = cache.pop(key, None)
@@ -178,8 +181,9 @@ class _LaggedCandidate(Candidate):
             if any(k[0] != key[0] for k in cache):  # other recordings: not asked for again
                 cache.clear()
             if tau_s not in self.TAUS:
-                off = [k for k in cache if k[1] not in self.TAUS and k[1] != self._pinned]
-                for k in off[:max(len(off) - OFF_GRID_LEVELS + 1, 0)]:  # the oldest first
+                off = [k for k in cache if k[1] not in self.TAUS]
+                let_go = [k for k in off if k[1] != self._pinned]  # the oldest first
+                for k in let_go[:max(len(off) - OFF_GRID_LEVELS + 1, 0)]:
                     del cache[k]
         cache[key] = hit  # the most recently used last
         return hit
