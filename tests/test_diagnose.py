@@ -1526,6 +1526,40 @@ def test_rows_gathered_into_fortran_order_a_block_at_a_time_are_the_whole_gather
     assert np.array_equal(into[:, 1:5], gathered) and np.isnan(into[:, [0, 5]]).all()
 
 
+def test_blocked_products_over_the_models_basis_match_the_whole_to_rounding():
+    """:func:`qt_dot` and :func:`shape_products` sum q^T x, x^T x and x^T z over blocks of
+    rows (a faster order for OpenBLAS on thin tall products), compared with the one product
+    over the whole, kept here as the reference: x bit for bit (the same products per
+    element), the sums within 1e-12 relative (each is a sum of ~2e4 products here; in
+    another order it moves by at most ~n eps |a| |b| = 4e-12 |a| |b| in the worst case,
+    ~sqrt(n) eps typically: the bound below, 1e-12 of |a| |b| by Cauchy-Schwarz, is 100
+    times the typical rounding and far below the 6 digits diagnose prints)."""
+    from antsim.diagnose.problem import QT_BLOCK, qt_dot, shape_products
+
+    rng = np.random.default_rng(11)
+    n_rows = 2 * QT_BLOCK + 3001  # two whole blocks and a partial one
+    raw = rng.standard_normal((n_rows + 40, 2))
+    idx = np.sort(rng.choice(n_rows + 40, n_rows, replace=False))
+    wu = rng.random(n_rows) + 0.5
+    f2u = rng.random(n_rows) * 0.3 + 0.7
+    q, _ = np.linalg.qr(rng.standard_normal((n_rows, 6)))
+    zp = rng.standard_normal(n_rows)
+    for f in (f2u, None):
+        x_ref = raw[idx] if f is None else np.column_stack([raw[idx] * f[:, None], raw[idx]])
+        x_ref *= wu[:, None]
+        x, qx, xx, xz = shape_products(raw, idx, wu, f, q, zp)
+        assert x.flags.f_contiguous and np.array_equal(x, x_ref)
+        norms = np.linalg.norm(x_ref, axis=0)
+        for got, ref, scale in ((qx, q.T @ x_ref, np.outer(np.ones(6), norms)),
+                                (qt_dot(q, x_ref), q.T @ x_ref, np.outer(np.ones(6), norms)),
+                                (xx, x_ref.T @ x_ref, np.outer(norms, norms)),
+                                (xz, x_ref.T @ zp, norms * np.linalg.norm(zp))):
+            assert np.all(np.abs(got - ref) <= 1e-12 * scale)
+        assert np.array_equal(xx, xx.T)
+    small = rng.standard_normal((QT_BLOCK, 3))  # up to two blocks: the one product itself
+    assert np.array_equal(qt_dot(q[:QT_BLOCK], small), q[:QT_BLOCK].T @ small)
+
+
 def test_diagnose_runs_with_one_blas_thread(monkeypatch):
     """diagnose limits BLAS to one thread while it runs (its products are thin and bound by
     memory: a second OpenBLAS thread cost up to 3.5 times the time under load) and gives

@@ -38,6 +38,7 @@ from .problem import (
     _qr,
     added_basis,
     heldout_lstsq,
+    qt_dot,
     rows_fortran,
 )
 
@@ -169,7 +170,7 @@ def mimicked(problem: Problem, raw: np.ndarray, rows: np.ndarray | None = None) 
     full2 = np.einsum("ij,ij->j", whitened, whitened)
     # the squared norm of the part in the model's span (q orthonormal): r^2 without
     # forming the projection off it (2 n_used x q floats per option)
-    inside = q.T @ whitened
+    inside = qt_dot(q, whitened)
     with np.errstate(invalid="ignore", divide="ignore"):
         r2 = np.where(full2 > 0, np.einsum("ij,ij->j", inside, inside) / full2, 1.0)
     return bool(np.any(r2 > DISTINGUISH_R**2))

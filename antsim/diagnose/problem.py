@@ -444,20 +444,15 @@ class Problem:
         k = raw.shape[1]
         scaled = not self.unscaled
         idx, wu = self._view(used)
+        f2u = np.concatenate([self.f[uscan]] * 2) if scaled else None
         # whitened over U in Fortran order, the rows gathered once: the scaled columns
-        # (raw times the offset scale, as cand() makes them) then the raw ones
-        x = np.empty((idx.size, 2 * k if scaled else k), order="F")
-        take_rows_fortran(raw, idx, out=x[:, x.shape[1] - k:])
+        # (raw times the offset scale, as cand() makes them) then the raw ones; the one
+        # pass over the model's basis and x's inner products made as it is (shape_products)
+        x, qx, xx, xz = shape_products(raw, idx, wu, f2u, q, zp)
         x_o = raw[idx_o]
         if scaled:
-            fu = self.f[uscan]
-            f2u = np.concatenate([fu, fu])
-            np.multiply(x[:, k:], f2u[:, None], out=x[:, :k])
             x_o = np.column_stack([x_o * self.f[idx_o % self.n][:, None], x_o])
-        x *= wu[:, None]
         x_o = x_o * self.w[idx_o][:, None]
-        qx = q.T @ x  # the one pass over the model's basis
-        xx = x.T @ x
         gram = xx - qx.T @ qx
         d = np.diag(xx)
         if not np.isfinite(xx).all() or not (d > 0).all():
@@ -472,7 +467,6 @@ class Problem:
             fitted = np.flatnonzero(ratio[:k] >= ABSORBED_WHOLE_1MR2)
         # the fitted columns of x and q^T x (a view where they are the first ones)
         cols = fitted if 0 < fitted.size < k else slice(0, fitted.size)
-        xz = x.T @ zp
         p_o = x_o - g_o @ qx
         m = self.current_columns().shape[1] + k
         nu, no = uscan.size, oscan.size
@@ -666,7 +660,7 @@ class Problem:
 
         def perp(v: np.ndarray) -> np.ndarray:
             vr = self.T(v, used)  # a new array: the model's part taken off in place
-            vr -= q @ (q.T @ vr)
+            vr -= q @ qt_dot(q, vr)
             return vr
 
         return perp
@@ -871,6 +865,56 @@ def take_rows_fortran(x: np.ndarray, idx: np.ndarray | None = None,
         else:
             np.multiply(part, scale[a:b, None], out=out[a:b])
     return out
+
+
+#: rows of the model's basis read per product in :func:`qt_dot`: the block of q and x
+#: (8192 rows of 12 + 4 columns: 1 MiB) stays in cache while BLAS packs and multiplies it
+QT_BLOCK = 8192
+
+
+def qt_dot(q: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``q.T @ x`` for tall ``q`` (N, m) and ``x`` (N, k), summed over blocks of
+    :data:`QT_BLOCK` rows: OpenBLAS's one product over 400,000 rows of a thin pair reads
+    memory about twice over (2.4-3.0 ms against 1.5-1.8 ms blocked, one thread, m = 12,
+    k = 2-4). The same sums in another order: equal to rounding (each entry within
+    ~N eps |q_j| |x_l|; tests/test_diagnose_scale.py compares the two)."""
+    n = q.shape[0]
+    if n <= 2 * QT_BLOCK:
+        return q.T @ x
+    out = q[:QT_BLOCK].T @ x[:QT_BLOCK]
+    for a in range(QT_BLOCK, n, QT_BLOCK):
+        out += q[a:a + QT_BLOCK].T @ x[a:a + QT_BLOCK]
+    return out
+
+
+def shape_products(raw: np.ndarray, idx: np.ndarray, wu: np.ndarray, f2u: np.ndarray | None,
+                   q: np.ndarray, zp: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:meth:`Problem.shape_fit`'s whitened columns x over the rows ``idx`` (Fortran order:
+    ``raw``'s rows times the offset scale ``f2u`` then times ``wu``, and the same rows times
+    ``wu``; without ``f2u`` the latter alone) with q^T x, x^T x and x^T zp, made
+    :data:`QT_BLOCK` rows at a time: each block's products while it is in cache (x read
+    once, not thrice). x is the whole array's numbers bit for bit (the same products per
+    element); the sums are in blocks (:func:`qt_dot`)."""
+    k = raw.shape[1]
+    kk = k if f2u is None else 2 * k
+    n = idx.size
+    x = np.empty((n, kk), order="F")
+    qx, xx, xz = np.zeros((q.shape[1], kk)), np.zeros((kk, kk)), np.zeros(kk)
+    for a in range(0, n, QT_BLOCK):
+        b = min(a + QT_BLOCK, n)
+        xb = x[a:b]
+        take_rows_fortran(raw, idx[a:b], out=xb[:, kk - k:])
+        if f2u is not None:
+            np.multiply(xb[:, k:], f2u[a:b, None], out=xb[:, :k])
+        xb *= wu[a:b, None]
+        if a == 0:
+            qx, xx, xz = q[:b].T @ xb, xb.T @ xb, xb.T @ zp[:b]
+        else:
+            qx += q[a:b].T @ xb
+            xx += xb.T @ xb
+            xz += xb.T @ zp[a:b]
+    return x, qx, xx, xz
 
 
 def rows_fortran(x: np.ndarray, rows: np.ndarray) -> np.ndarray:
