@@ -877,7 +877,7 @@ def qt_dot(q: np.ndarray, x: np.ndarray) -> np.ndarray:
     :data:`QT_BLOCK` rows: OpenBLAS's one product over 400,000 rows of a thin pair reads
     memory about twice over (2.4-3.0 ms against 1.5-1.8 ms blocked, one thread, m = 12,
     k = 2-4). The same sums in another order: equal to rounding (each entry within
-    ~N eps |q_j| |x_l|; tests/test_diagnose_scale.py compares the two)."""
+    ~N eps |q_j| |x_l|; tests/test_diagnose.py compares the two)."""
     n = q.shape[0]
     if n <= 2 * QT_BLOCK:
         return q.T @ x

@@ -16,7 +16,7 @@ from controller.units import ARCSEC_PER_RAD
 
 from .. import pvalues
 from ..data import Observations
-from ..problem import Problem, _lstsq
+from ..problem import Problem, _lstsq, qt_dot
 
 __all__ = ["DISTINGUISH_R", "Candidate", "TestResult", "nyholt_gram", "nyholt_trials", "obs_key",
            "p_value", "periodic_interp", "source_rates_arcsec_s", "stacked", "sun_el_grid_deg",
@@ -460,7 +460,7 @@ class Candidate:
             xr = problem.T(raw, mask)
             q = problem.basis(mask)
             full = np.linalg.norm(xr, axis=0)
-            left = np.linalg.norm(xr - q @ (q.T @ xr), axis=0)  # what perp(raw) computes
+            left = np.linalg.norm(xr - q @ qt_dot(q, xr), axis=0)  # what perp(raw) computes
             del xr
         else:
             full = np.linalg.norm(problem.T(raw, mask), axis=0)
