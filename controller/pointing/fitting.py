@@ -17,7 +17,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from .data import PointingData, require_pointing_data
-from .jackknife import BLOCK_PHASES, JackknifeResult
+from .jackknife import BLOCK_PHASES, BLOCK_S, JackknifeResult
 from .model import NAMED_MODELS, PointingModel
 from .result import FitResult, _readonly
 from .robust import LAD_FACTOR, RMS_FACTOR, fit_terms
@@ -46,7 +46,7 @@ def fit_model(
     name: str = "custom",
     lad_factor: float = LAD_FACTOR,
     rms_factor: float = RMS_FACTOR,
-    block_s: float = 3600.0,
+    block_s: float = BLOCK_S,
     block_phases: int = BLOCK_PHASES,
     fixed: Mapping[str, float] | None = None,
 ) -> FitResult:

@@ -56,6 +56,7 @@ import numpy as np
 from .data import LinearModel, PointingData, require_pointing_data
 from .jackknife import (
     BLOCK_PHASES,
+    BLOCK_S,
     JackknifeResult,
     Rejection,
     cluster_jackknife,
@@ -246,7 +247,7 @@ def _check_enough(used: np.ndarray, m: int, stage: str) -> None:
 def fit_terms(data: PointingData, start: LinearModel, *, robust: bool = True,
               weighted: bool = False, lad_factor: float = LAD_FACTOR,
               rms_factor: float = RMS_FACTOR,
-              block_s: float = 3600.0, block_phases: int = BLOCK_PHASES) -> FitResult:
+              block_s: float = BLOCK_S, block_phases: int = BLOCK_PHASES) -> FitResult:
     """Fit the terms of ``start`` (its coefficients are not used) to ``data``: the stages of
     the module docstring, then the statistics; ``result.model`` is ``start`` with the fitted
     coefficients. The options are those of :func:`controller.pointing.fitting.fit_model`."""
@@ -272,7 +273,7 @@ def fit_terms_before_after(data: PointingData, start: LinearModel, minus_xel_arc
     its rounding, ~1e-13 relative, depends on the start)."""
     require_pointing_data(data)
     options = {"robust": True, "weighted": False, "lad_factor": LAD_FACTOR,
-               "rms_factor": RMS_FACTOR, "block_s": 3600.0, "block_phases": BLOCK_PHASES}
+               "rms_factor": RMS_FACTOR, "block_s": BLOCK_S, "block_phases": BLOCK_PHASES}
     try:
         whole = Equations.of(data, start, False)
     except ValueError:  # a term infinite at an observation: each window's fit sees its own

@@ -210,36 +210,11 @@ class TiltedSky:
         ``tilt_rad`` towards ``tilt_az_rad`` and a collimation error ``collimation_rad``."""
         x, y, z = self._rotated(tilt_rad, tilt_az_rad)
         cos_c = math.cos(collimation_rad)
-        # products and sums into their operands' buffers (the same operations on the same
-        # numbers), each trigonometric function into a new array as before
-        s = np.divide(z, cos_c)
-        el_enc = np.arcsin(np.clip(s, -1.0, 1.0, out=s))
-        s = np.cos(el_enc)
-        s *= cos_c
-        da = np.arctan2(math.sin(collimation_rad), s)
-        num, t = np.multiply(y, self.cos_az), np.multiply(x, self.sin_az)
-        num -= t
-        den = np.multiply(x, self.cos_az, out=s)
-        den += np.multiply(y, self.sin_az, out=t)
-        d_az = np.arctan2(num, den)
-        d_az -= da
-        el_enc -= self.el_rad
-        return wrap_pi(d_az), el_enc
-
-    def _rotated_and_jacobian(self, tilt_north_rad: float, tilt_east_rad: float
-                              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`_rotated`'s x, y, z and the rotation group's left Jacobian J_l(r),
-        r = (east, -north, 0) (:meth:`derivatives_rad`)."""
-        tilt = math.hypot(tilt_north_rad, tilt_east_rad)
-        x, y, z = self._rotated(tilt, math.atan2(tilt_east_rad, tilt_north_rad))
-        skew = np.array([[0.0, 0.0, -tilt_north_rad], [0.0, 0.0, -tilt_east_rad],
-                         [tilt_north_rad, tilt_east_rad, 0.0]])  # [r]x
-        if tilt < 1e-4:  # the series: 1/2 - t^2/24, 1/6 - t^2/120 (rounding below 1e-16)
-            c1, c2 = 0.5 - tilt**2 / 24.0, 1.0 / 6.0 - tilt**2 / 120.0
-        else:
-            c1 = 2.0 * math.sin(0.5 * tilt) ** 2 / tilt**2
-            c2 = (tilt - math.sin(tilt)) / tilt**3
-        return x, y, z, np.eye(3) + c1 * skew + c2 * (skew @ skew)
+        el_enc = np.arcsin(np.clip(z / cos_c, -1.0, 1.0))
+        da = np.arctan2(math.sin(collimation_rad), cos_c * np.cos(el_enc))
+        d_az = np.arctan2(y * self.cos_az - x * self.sin_az,
+                          x * self.cos_az + y * self.sin_az) - da
+        return wrap_pi(d_az), el_enc - self.el_rad
 
     def derivatives_rad(self, tilt_north_rad: float, tilt_east_rad: float,
                         collimation_rad: float) -> tuple[np.ndarray, np.ndarray]:
@@ -249,62 +224,36 @@ class TiltedSky:
         u = R v = (x, y, z) by du = a x u, a = J_l(r) dr (J_l the rotation group's left
         Jacobian), so that the azimuth arctan2 moves by a_z - z (a_x x + a_y y) / (x^2 + y^2)
         (the true azimuth's turn drops out) and z by a_x y - a_y x."""
-        x, y, z, j_left = self._rotated_and_jacobian(tilt_north_rad, tilt_east_rad)
+        tilt = math.hypot(tilt_north_rad, tilt_east_rad)
+        x, y, z = self._rotated(tilt, math.atan2(tilt_east_rad, tilt_north_rad))
+        skew = np.array([[0.0, 0.0, -tilt_north_rad], [0.0, 0.0, -tilt_east_rad],
+                         [tilt_north_rad, tilt_east_rad, 0.0]])  # [r]x
+        if tilt < 1e-4:  # the series: 1/2 - t^2/24, 1/6 - t^2/120 (rounding below 1e-16)
+            c1, c2 = 0.5 - tilt**2 / 24.0, 1.0 / 6.0 - tilt**2 / 120.0
+        else:
+            c1 = 2.0 * math.sin(0.5 * tilt) ** 2 / tilt**2
+            c2 = (tilt - math.sin(tilt)) / tilt**3
+        j_left = np.eye(3) + c1 * skew + c2 * (skew @ skew)
         cos_c, sin_c = math.cos(collimation_rad), math.sin(collimation_rad)
-        # the arithmetic of _derivatives_rad_reference (tests), each product and sum into
-        # kept buffers (the same operations on the same numbers: ~40 arrays of k a call)
-        k = z.size
-        sin_e = np.divide(z, cos_c)  # the encoder elevation's sine
-        np.clip(sin_e, -1.0, 1.0, out=sin_e)
-        cos_e = np.square(sin_e)
-        np.subtract(1.0, cos_e, out=cos_e)
-        np.sqrt(cos_e, out=cos_e)
-        t, u = np.empty(k), np.empty(k)
-        mask = np.greater(cos_e, 0.0)
+        sin_e = np.clip(z / cos_c, -1.0, 1.0)  # the encoder elevation's sine
+        cos_e = np.sqrt(1.0 - sin_e**2)
         # d(arcsin s) = ds / cos E: zero where errors_rad clips s (a direction past the pole)
-        inv = np.divide(1.0 / cos_c, cos_e, out=np.zeros(k), where=mask)
+        inv = np.divide(1.0 / cos_c, cos_e, out=np.zeros_like(cos_e), where=cos_e > 0.0)
         # the collimation's azimuth term da = arctan2(sin c, q), q = cos c cos E:
         # d(da) = (q d(sin c) - sin c dq) / (sin^2 c + q^2)
-        q = np.multiply(cos_e, cos_c)
-        np.square(q, out=t)
-        np.add(t, sin_c**2, out=t)
-        np.greater(t, 0.0, out=mask)
-        inv_pq = np.divide(1.0, t, out=np.zeros(k), where=mask)
-        # rho^2 = x^2 + y^2: zero only exactly at the pole, where arctan2 is taken as 0
-        np.multiply(x, x, out=t)
-        np.multiply(y, y, out=u)
-        t += u
-        np.greater(t, 0.0, out=mask)
-        z_rho = np.divide(z, t, out=np.zeros(k), where=mask)
-        k_da = np.multiply(sin_e, sin_c * cos_c)  # d(da)/dE for a fixed collimation
-        k_da *= inv_pq
-        d_az, d_el = np.empty((3, k)), np.empty((3, k))
+        q = cos_c * cos_e
+        pq = sin_c**2 + q**2
+        inv_pq = np.divide(1.0, pq, out=np.zeros_like(pq), where=pq > 0.0)
+        rho2 = x * x + y * y  # zero only exactly at the pole, where arctan2 is taken as 0
+        z_rho = np.divide(z, rho2, out=np.zeros_like(z), where=rho2 > 0.0)
+        k_da = (sin_c * cos_c) * sin_e * inv_pq  # d(da)/dE for a fixed collimation
+        d_az, d_el = np.empty((3, z.size)), np.empty((3, z.size))
         # dr/d(north) = (0, -1, 0), dr/d(east) = (1, 0, 0)
         for i, a in enumerate((-j_left[:, 1], j_left[:, 0])):
-            # d_el = (a_x y - a_y x) / cos E; d_az = a_z - z_rho (a_x x + a_y y) - k_da d_el
-            np.multiply(y, a[0], out=d_el[i])
-            np.multiply(x, a[1], out=t)
-            d_el[i] -= t
-            d_el[i] *= inv
-            np.multiply(x, a[0], out=t)
-            np.multiply(y, a[1], out=u)
-            t += u
-            t *= z_rho
-            np.subtract(a[2], t, out=d_az[i])
-            np.multiply(k_da, d_el[i], out=t)
-            d_az[i] -= t
-        np.multiply(sin_e, sin_c, out=d_el[2])
-        d_el[2] *= inv
-        # d_az = -(q cos c + sin c (sin c cos E + cos c sin E d_el)) / (sin^2 c + q^2)
-        np.multiply(sin_e, cos_c, out=t)
-        t *= d_el[2]
-        np.multiply(cos_e, sin_c, out=u)
-        u += t
-        u *= sin_c
-        np.multiply(q, cos_c, out=t)
-        t += u
-        np.negative(t, out=t)
-        np.multiply(t, inv_pq, out=d_az[2])
+            d_el[i] = (a[0] * y - a[1] * x) * inv
+            d_az[i] = a[2] - z_rho * (a[0] * x + a[1] * y) - k_da * d_el[i]
+        d_el[2] = sin_e * sin_c * inv
+        d_az[2] = -(q * cos_c + sin_c * (sin_c * cos_e + cos_c * sin_e * d_el[2])) * inv_pq
         return d_az, d_el
 
 
