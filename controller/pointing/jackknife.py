@@ -47,7 +47,7 @@ _BATCH_ELEMENTS = 2_000_000
 #: time-block grids averaged, each shifted by a fraction 1/BLOCK_PHASES of a block
 BLOCK_PHASES = 4
 #: the time blocks' length (s) by default: residuals correlated over minutes to an hour
-#: (thermal drifts) fall in one block
+#: (thermal drifts) fall in one block (the project's choice: no source report gives one)
 BLOCK_S = 3600.0
 
 
