@@ -1052,6 +1052,40 @@ def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits(
         rel=1e-9)
 
 
+def test_the_cross_validated_stage_makes_its_options_parameters_before_its_basis(monkeypatch):
+    """Each round of the cross-validated stage asks every option for its parameters (a
+    step's change time: O(n k) sums over every scan) before it factors the model's
+    unweighted basis over the used rows, so that the two are never held together (200,000
+    scans: ~40 MB each at the command's peak, benchmarks/diagnose_scale.py); the data of the
+    test above, where the stage adds a finding and tries again."""
+    import antsim.diagnose.crossval as crossval
+    from antsim.diagnose.candidates.base import Candidate
+
+    calls = []
+    qr = crossval._qr
+
+    def logged_qr(*args, **kwargs):
+        calls.append("basis")
+        return qr(*args, **kwargs)
+
+    def logged(cv_thetas):
+        def logged_thetas(self, problem):
+            calls.append("parameters")
+            return cv_thetas(self, problem)
+        return logged_thetas
+
+    monkeypatch.setattr(crossval, "_qr", logged_qr)
+    for cls in {type(c) for c in CANDIDATES} | {Candidate}:
+        if "cv_thetas" in vars(cls):
+            monkeypatch.setattr(cls, "cv_thetas", logged(vars(cls)["cv_thetas"]))
+    obs = synthetic(extra={"HESA2": 2.0, "HECA2": 1.0, "HASA": 0.6, "HACA": -0.6,
+                           "HESA4": 0.6}, seed=11)
+    diagnose(obs)
+    rounds = "".join("b" if c == "basis" else "p" for c in calls)
+    assert rounds.count("b") >= 2  # a finding added, then another round
+    assert re.fullmatch(r"(p+b)+", rounds), rounds
+
+
 def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do(monkeypatch):
     """Two code paths of the cross-validated stage's choice: the options' summed held-out
     losses from per-fold Gram matrices (:class:`FoldSums`) against the losses computed in

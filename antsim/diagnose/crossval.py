@@ -176,8 +176,15 @@ def mimicked(problem: Problem, raw: np.ndarray, rows: np.ndarray | None = None) 
     return bool(np.any(r2 > DISTINGUISH_R**2))
 
 
-def _options(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
-             model_terms: set[str], idx: np.ndarray | None):
+def _cv_thetas(problem: Problem, candidates: Sequence[Candidate],
+               taken: set[str]) -> list[tuple[Candidate, list]]:
+    """Each linear candidate not yet taken with the parameter values the stage tries."""
+    return [(c, c.cv_thetas(problem)) for c in candidates
+            if c.kind == "offsets" and c.name not in taken]
+
+
+def _options(problem: Problem, thetas: list[tuple[Candidate, list]], model_terms: set[str],
+             idx: np.ndarray | None):
     """(candidate, theta, raw columns, component names, the raw columns' rows ``idx`` or
     None without them) of every linear option not yet in the model and not mimicked by it
     (:func:`mimicked`; ``idx``: the used rows, gathered once for both, white noise only).
@@ -187,10 +194,8 @@ def _options(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
     IE, TF, TX), which predicts held-out stars better (the procedure's leave-one-star-out
     Sky RMS 10.37" with it, benchmarks/blind.py --real --nested) but measures nothing."""
     obs = problem.obs
-    for c in candidates:
-        if c.kind != "offsets" or c.name in taken:
-            continue
-        for theta in c.cv_thetas(problem):
+    for c, values in thetas:
+        for theta in values:
             try:
                 cols, names = c.columns(obs, theta)
             except NotImplementedError:  # a nonlinear signature (exact tilt)
@@ -212,6 +217,9 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
     folds = contiguous_folds(problem.obs.t_s, K_FOLDS)
     out = []
     while len(out) < room:
+        # before the round's basis: a step's change time comes from O(n k) sums over every
+        # scan, not held beside q0 (200,000 scans: ~40 MB each)
+        thetas = _cv_thetas(problem, candidates, taken)
         cur = problem.current_columns()
         # the model's basis over the used rows once; each option adds its columns to it
         rows = problem.rows()
@@ -227,7 +235,7 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
         share = problem.white() and sums.idx is idx
         f2 = None if problem.unscaled else np.concatenate([problem.f, problem.f])[idx, None]
         ranked = []  # (the held-out losses' sum, candidate, theta, component names)
-        for c, theta, raw, names, xg in _options(problem, candidates, taken, model_terms,
+        for c, theta, raw, names, xg in _options(problem, thetas, model_terms,
                                                  idx if share else None):
             if xg is None:
                 total = sums.total(problem.cand(raw))
