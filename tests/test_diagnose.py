@@ -54,10 +54,12 @@ def test_term_columns_scale_by_the_kept_cosine_of_elevation():
     from controller.pointing.model import PointingModel
 
     obs = synthetic(n=50)
-    names = ["IA", "CA", "HESA2", "HECA7"]
+    obs = replace(obs, az_rad=np.concatenate([[0.0], obs.az_rad[1:]]))  # sin(-0.0): -0.0
+    names = ["IA", "IE", "CA", "HESA2", "HECA7", "AN", "HSCA", "TX"]
     ba, be = PointingModel(obs.terms(names)).design_matrix(obs.az_rad, obs.el_rad)
     direct = -np.vstack([ba * np.cos(obs.el_rad)[:, None], be])
-    assert term_columns(names, obs).tobytes() == direct.tobytes()
+    cols = term_columns(names, obs)
+    assert cols.tobytes() == direct.tobytes() and cols.flags.c_contiguous
     assert not obs.cos_el.flags.writeable
     part = obs.select(obs.el_rad > np.median(obs.el_rad))
     assert part.cos_el.tobytes() == np.cos(part.el_rad).tobytes()

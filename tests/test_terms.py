@@ -21,6 +21,7 @@ from controller.pointing.terms import (
     GHIGO_EQUIVALENTS,
     GHIGO_TILT,
     KATPOINT_EQUIVALENTS,
+    Term,
     TermError,
     combine_scalar,
     evaluate_basis,
@@ -134,6 +135,27 @@ def test_feed_harmonics_follow_the_same_result_signs():
     np.testing.assert_allclose(b_el[:, 3], np.sin(feed), atol=1e-12)
     np.testing.assert_array_equal(b_el[:, :2], 0.0)
     np.testing.assert_array_equal(b_az[:, 2:], 0.0)
+
+
+def test_basis_columns_are_the_plain_expressions_bit_for_bit():
+    """A harmonic's sine and cosine share one argument, a column is a column of zeros plus
+    each component in order (a lone -0.0 becomes +0.0), a left-right one is over cos E (the
+    caller's when given): each the bits of the expression it stands for."""
+    az = np.concatenate([[0.0], GRID_AZ])  # sin(-0.0) is -0.0
+    el = np.concatenate([[0.3], GRID_EL])
+    two = Term("TWO", "two components on one axis and one on the sky", (
+        ("A", 1.0, (("sin", "AH", 2),)), ("A", -0.5, (("cos", "AH", 2), ("tan", "E", 1))),
+        ("S", 2.0, (("cos", "E", 3),))))
+    b_az, b_el = evaluate_basis([get_term("HESA2"), get_term("HECA2"), two], az, el)
+    zeros = np.zeros(az.size)
+    assert b_el[:, 0].tobytes() == (zeros + np.sin(2 * -az)).tobytes()
+    assert not np.signbit(b_el[0, 0])
+    assert b_el[:, 1].tobytes() == (zeros + np.cos(2 * -az)).tobytes()
+    plain = (zeros + 1.0 * np.sin(2 * -az) + -0.5 * (np.cos(2 * -az) * np.tan(el))
+             + 2.0 * np.cos(3 * el) * (1.0 / np.cos(el)))
+    assert b_az[:, 2].tobytes() == plain.tobytes()
+    assert b_az[:, :2].tobytes() == np.zeros((az.size, 2)).tobytes()
+    assert b_el[:, 2].tobytes() == zeros.tobytes()
 
 
 SCALAR_TERMS = ("IA", "AN", "AW", "HESA2", "HACA2", "HASA7", "HSCA5CE8", "HSSA6CE6", "HESACE",

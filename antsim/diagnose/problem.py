@@ -18,6 +18,7 @@ import numpy as np
 import scipy.linalg
 
 from controller.pointing.model import PointingModel
+from controller.pointing.terms import basis_columns
 
 from ..heap import trim_heap
 from . import pvalues
@@ -67,10 +68,15 @@ def term_columns(terms: Sequence[str], obs: Observations) -> np.ndarray:
     rows; thermal terms per unit of the observations' structure temperature differences)."""
     if not terms:
         return np.zeros((2 * obs.n, 0))
-    model = PointingModel(obs.terms(terms))
+    n = obs.n
+    out = np.empty((2 * n, len(terms)))  # -[dA cos E; dE], filled a column at a time
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        ba, be = model.design_matrix(obs.az_rad, obs.el_rad, aux=obs.structure)
-    return -np.vstack([ba * obs.cos_el[:, None], be])
+        model = PointingModel(obs.terms(terms))  # the terms by name, each once
+        for j, (col_az, col_el) in enumerate(basis_columns(
+                model.terms, obs.az_rad, obs.el_rad, aux=obs.structure, cos_el=obs.cos_el)):
+            np.multiply(col_az, obs.cos_el, out=out[:n, j])
+            out[n:, j] = col_el
+    return np.negative(out, out=out)
 
 
 @dataclass

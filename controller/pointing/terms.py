@@ -84,7 +84,7 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
@@ -100,6 +100,8 @@ __all__ = [
     "Regressor",
     "Term",
     "TermError",
+    "basis_columns",
+    "basis_parts",
     "combine_arrays",
     "combine_scalar",
     "evaluate_basis",
@@ -195,6 +197,16 @@ def _argument(arg, az: np.ndarray, el: np.ndarray, feed=None) -> np.ndarray:
     return 0.5 * math.pi - el  # "Z"
 
 
+def _factor_argument(arg, mult: int, side: int | None, az: np.ndarray, el: np.ndarray,
+                     feed=None, aux=None) -> np.ndarray:
+    """A factor's argument times its multiplier; ``side``: a Regressor's recording."""
+    if side is not None:
+        x = np.broadcast_to(np.asarray(arg.value(aux, side), float), az.shape)
+    else:
+        x = _argument(arg, az, el, feed)
+    return x if mult == 1 else mult * x
+
+
 _FUNCTIONS = {
     "sin": np.sin,
     "cos": np.cos,
@@ -221,34 +233,65 @@ def evaluate_basis(terms: Sequence[Term], az_rad: np.ndarray,
     n = az_rad.shape[0]
     basis_az = np.zeros((n, len(terms)))
     basis_el = np.zeros((n, len(terms)))
+    for j, (parts_az, parts_el) in enumerate(basis_parts(terms, az_rad, el_rad, feed_rad, aux)):
+        for part in parts_az:
+            basis_az[:, j] += part
+        for part in parts_el:
+            basis_el[:, j] += part
+    return basis_az, basis_el
+
+
+def basis_columns(terms: Sequence[Term], az_rad: np.ndarray, el_rad: np.ndarray, feed_rad=None,
+                  aux=None, cos_el=None) -> Iterator[tuple[np.ndarray | float, np.ndarray | float]]:
+    """:func:`evaluate_basis` a term at a time: its (dA, dE) columns with the basis' bits,
+    each a new (N,) array the caller may write into, or 0.0 for a column of zeros.
+    ``cos_el``: ``np.cos(el_rad)`` where the caller has it (the sky terms divide by it)."""
+    n = az_rad.shape[0]
+    for parts_az, parts_el in basis_parts(terms, az_rad, el_rad, feed_rad, aux, cos_el):
+        yield _column(parts_az, n), _column(parts_el, n)
+
+
+def _column(parts: list, n: int) -> np.ndarray | float:
+    """A column of zeros plus each part in order (0.0 + -0.0 is +0.0), in the first part's
+    own array; 0.0 for no parts."""
+    if not parts:
+        return 0.0
+    first, *rest = parts
+    col = np.add(first, 0.0, out=first) if np.ndim(first) else np.full(n, first + 0.0)
+    for part in rest:
+        col += part
+    return col
+
+
+def basis_parts(terms: Sequence[Term], az_rad: np.ndarray, el_rad: np.ndarray, feed_rad=None,
+                aux=None, cos_el=None) -> Iterator[tuple[list, list]]:
+    """Per term, the parts its dA and dE columns add up, in order: each ``sign * value``
+    (a left-right one over cos E), a new (N,) array or a float. Each distinct factor is
+    evaluated once, its argument once for its sine and cosine."""
     cache: dict = {}
-    sec_el = None
-    for j, term in enumerate(terms):
+    for term in terms:
+        parts_az: list = []
+        parts_el: list = []
         for axis, sign, factors in term.components:
             value = None
             for factor in factors:
                 func, arg, mult = factor
-                key = (factor, _side(axis)) if isinstance(arg, Regressor) else factor
-                arr = cache.get(key)
+                side = _side(axis) if isinstance(arg, Regressor) else None
+                arr = cache.get((factor, side))
                 if arr is None:
-                    if isinstance(arg, Regressor):
-                        x = np.broadcast_to(np.asarray(arg.value(aux, _side(axis)), float), (n,))
-                    else:
-                        x = _argument(arg, az_rad, el_rad, feed_rad)
-                    arr = _FUNCTIONS[func](x if mult == 1 else mult * x)
-                    cache[key] = arr
+                    x = cache.get((arg, mult, side))
+                    if x is None:
+                        x = _factor_argument(arg, mult, side, az_rad, el_rad, feed_rad, aux)
+                        cache[(arg, mult, side)] = x
+                    arr = cache[(factor, side)] = _FUNCTIONS[func](x)
                 value = arr if value is None else value * arr
-            if value is None:
-                value = 1.0
-            if axis == "A":
-                basis_az[:, j] += sign * value
-            elif axis == "E":
-                basis_el[:, j] += sign * value
-            else:  # "S": left-right on the sky, dA = value / cos E
-                if sec_el is None:
-                    sec_el = 1.0 / np.cos(el_rad)
-                basis_az[:, j] += sign * value * sec_el
-    return basis_az, basis_el
+            part = sign * (1.0 if value is None else value)
+            if axis == "S":  # left-right on the sky, dA = value / cos E
+                if "sec_el" not in cache:
+                    cache["sec_el"] = 1.0 / (np.cos(el_rad) if cos_el is None else cos_el)
+                part = part * cache["sec_el"]
+            (parts_el if axis == "E" else parts_az).append(part)
+        yield parts_az, parts_el
 
 
 _MATH = {"sin": math.sin, "cos": math.cos, "tan": math.tan,
