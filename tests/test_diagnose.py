@@ -1541,11 +1541,12 @@ def test_rows_gathered_into_fortran_order_a_block_at_a_time_are_the_whole_gather
     """:func:`take_rows_fortran` gathers (and scales) a block of rows at a time: the same
     numbers, bit for bit, as gathering the whole, scaling it and copying it into Fortran
     order (a copy and one product per element either way), over several blocks, a last
-    partial one, a strided view and into columns of a larger array."""
-    from antsim.diagnose.problem import FORTRAN_BLOCK, take_rows_fortran
+    partial one, a strided view and into columns of a larger array; blocks of
+    FORTRAN_BLOCK_ELEMENTS // 4 rows for these 4 columns, of FORTRAN_BLOCK rows for 7."""
+    from antsim.diagnose.problem import FORTRAN_BLOCK_ELEMENTS, take_rows_fortran
 
     rng = np.random.default_rng(5)
-    n = 3 * FORTRAN_BLOCK + 17
+    n = 3 * FORTRAN_BLOCK_ELEMENTS // 4 + 17
     whole = rng.standard_normal((n, 7))
     x = whole[:, 1:5]  # a strided view, as the model's base columns are
     idx = np.flatnonzero(rng.random(n) < 0.9)
@@ -1560,6 +1561,31 @@ def test_rows_gathered_into_fortran_order_a_block_at_a_time_are_the_whole_gather
     into = np.full((idx.size, 6), np.nan, order="F")
     take_rows_fortran(x, idx, scale, into[:, 1:5])
     assert np.array_equal(into[:, 1:5], gathered) and np.isnan(into[:, [0, 5]]).all()
+    wide = take_rows_fortran(whole, idx, scale)
+    assert wide.flags.f_contiguous and np.array_equal(wide, whole[idx] * scale[:, None])
+
+
+def test_rows_near_the_threshold_found_a_block_at_a_time_are_the_wholes():
+    """:func:`near_rows` (``Problem.shape_fit``'s rows whose residual u = zp - x c lies past
+    a limit) forms u a block of QT_BLOCK rows at a time: the same rows and the same values,
+    bit for bit, as the whole expression it replaced, with one BLAS thread as diagnose runs
+    (OpenBLAS's threads split the whole's rows where they like: rounding then differs), for
+    the leading columns, chosen columns and none, over whole blocks and a partial one."""
+    from antsim.blas import one_blas_thread
+    from antsim.diagnose.problem import QT_BLOCK, near_rows
+
+    rng = np.random.default_rng(12)
+    n_rows = 3 * QT_BLOCK + 4094  # an odd tail of rows beside whole blocks
+    x = np.asfortranarray(rng.standard_normal((n_rows, 4)) * 2)
+    zp = rng.standard_normal(n_rows) * 2
+    with one_blas_thread():
+        for cols in (slice(0, 2), np.array([0, 3]), slice(0, 0)):
+            coef = rng.standard_normal(x[:, cols].shape[1])
+            u = zp - x[:, cols] @ coef
+            want = np.flatnonzero(np.abs(u) > 3.0)
+            near, u_near = near_rows(x, cols, coef, zp, 3.0)
+            assert want.size > 100 and np.array_equal(near, want)
+            assert np.array_equal(u_near, u[want])
 
 
 def test_blocked_products_over_the_models_basis_match_the_whole_to_rounding():

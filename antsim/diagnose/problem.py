@@ -494,10 +494,8 @@ class Problem:
             # 1e-9 of both for rounding): those are computed exactly
             dv = b - qx[:, cols] @ coef
             bound = rn_max * float(np.linalg.norm(dv)) * (1 + 1e-9) + 1e-9
-            u = x[:, cols] @ coef
-            np.subtract(zp, u, out=u)
-            near = np.flatnonzero(np.abs(u) > OUTLIER_Z - bound)
-            out_u = near[np.abs(u[near] - q[near] @ dv) > OUTLIER_Z]
+            near, u_near = near_rows(x, cols, coef, zp, OUTLIER_Z - bound)
+            out_u = near[np.abs(u_near - q[near] @ dv) > OUTLIER_Z]
             out_o = np.flatnonzero(~(np.abs(e_o - g_o @ b - p_o[:, cols] @ coef)
                                      <= OUTLIER_Z))
             keep = self.valid.copy()
@@ -843,8 +841,11 @@ HELDOUT_MIN_EIG = 1e-8
 
 
 #: rows gathered or copied into Fortran order at a time (:func:`take_rows_fortran`): a
-#: block of a few columns stays in cache while it is transposed
+#: block of a few columns stays in cache while it is transposed. Narrow arrays (a shape
+#: test's 1-4 columns, :func:`shape_products`' blocks of QT_BLOCK rows) take
+#: FORTRAN_BLOCK_ELEMENTS at a time: one ``take`` per block, not eight (issue 28t)
 FORTRAN_BLOCK = 1024
+FORTRAN_BLOCK_ELEMENTS = 16384
 
 
 def take_rows_fortran(x: np.ndarray, idx: np.ndarray | None = None,
@@ -862,8 +863,9 @@ def take_rows_fortran(x: np.ndarray, idx: np.ndarray | None = None,
     # ``take`` copies a strided ``x`` (a view of the stacked model) whole on every call:
     # indexing reads its rows in place
     contiguous = x.flags.c_contiguous
-    for a in range(0, n, FORTRAN_BLOCK):
-        b = min(a + FORTRAN_BLOCK, n)
+    block = max(FORTRAN_BLOCK, FORTRAN_BLOCK_ELEMENTS // max(x.shape[1], 1))
+    for a in range(0, n, block):
+        b = min(a + block, n)
         part = x[a:b] if idx is None else (x.take(idx[a:b], axis=0) if contiguous
                                             else x[idx[a:b]])
         if scale is None:
@@ -921,6 +923,23 @@ def shape_products(raw: np.ndarray, idx: np.ndarray, wu: np.ndarray, f2u: np.nda
             xx += xb.T @ xb
             xz += xb.T @ zp[a:b]
     return x, qx, xx, xz
+
+
+def near_rows(x: np.ndarray, cols, coef: np.ndarray, zp: np.ndarray, limit: float
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """The rows i where |u_i| > ``limit``, u = zp - x[:, cols] @ coef, and u there
+    (:meth:`Problem.shape_fit`'s rows near the outlier threshold), made :data:`QT_BLOCK`
+    rows at a time: u's block in cache while it is compared (one pass over x and zp, not
+    four over u). The same numbers as the whole expression (a row's product does not
+    depend on the rows beside it with one BLAS thread, as diagnose runs)."""
+    near, u_near = [np.arange(0)], [np.zeros(0)]
+    for a in range(0, zp.size, QT_BLOCK):
+        u = x[a:a + QT_BLOCK, cols] @ coef
+        np.subtract(zp[a:a + QT_BLOCK], u, out=u)
+        i = np.flatnonzero(np.abs(u) > limit)
+        near.append(i + a)
+        u_near.append(u[i])
+    return np.concatenate(near), np.concatenate(u_near)
 
 
 def rows_fortran(x: np.ndarray, rows: np.ndarray) -> np.ndarray:
