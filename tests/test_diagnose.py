@@ -1542,7 +1542,7 @@ def test_rows_gathered_into_fortran_order_a_block_at_a_time_are_the_whole_gather
     numbers, bit for bit, as gathering the whole, scaling it and copying it into Fortran
     order (a copy and one product per element either way), over several blocks, a last
     partial one, a strided view and into columns of a larger array; blocks of
-    FORTRAN_BLOCK_ELEMENTS // 4 rows for these 4 columns, of FORTRAN_BLOCK rows for 7."""
+    FORTRAN_BLOCK_ELEMENTS // k rows for these k = 4 and 7 columns (at least FORTRAN_BLOCK)."""
     from antsim.diagnose.problem import FORTRAN_BLOCK_ELEMENTS, take_rows_fortran
 
     rng = np.random.default_rng(5)
