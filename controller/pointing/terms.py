@@ -268,7 +268,9 @@ def basis_parts(terms: Sequence[Term], az_rad: np.ndarray, el_rad: np.ndarray, f
     """Per term, the parts its dA and dE columns add up, in order: each ``sign * value``
     (a left-right one over cos E), a new (N,) array or a float. Each distinct factor is
     evaluated once, its argument once for its sine and cosine."""
-    cache: dict = {}
+    values: dict = {}  # (factor, side) -> its function of its argument
+    arguments: dict = {}  # (arg, mult, side) -> the argument, shared by sine and cosine
+    sec_el = None
     for term in terms:
         parts_az: list = []
         parts_el: list = []
@@ -277,19 +279,19 @@ def basis_parts(terms: Sequence[Term], az_rad: np.ndarray, el_rad: np.ndarray, f
             for factor in factors:
                 func, arg, mult = factor
                 side = _side(axis) if isinstance(arg, Regressor) else None
-                arr = cache.get((factor, side))
+                arr = values.get((factor, side))
                 if arr is None:
-                    x = cache.get((arg, mult, side))
+                    x = arguments.get((arg, mult, side))
                     if x is None:
                         x = _factor_argument(arg, mult, side, az_rad, el_rad, feed_rad, aux)
-                        cache[(arg, mult, side)] = x
-                    arr = cache[(factor, side)] = _FUNCTIONS[func](x)
+                        arguments[(arg, mult, side)] = x
+                    arr = values[(factor, side)] = _FUNCTIONS[func](x)
                 value = arr if value is None else value * arr
             part = sign * (1.0 if value is None else value)
             if axis == "S":  # left-right on the sky, dA = value / cos E
-                if "sec_el" not in cache:
-                    cache["sec_el"] = 1.0 / (np.cos(el_rad) if cos_el is None else cos_el)
-                part = part * cache["sec_el"]
+                if sec_el is None:
+                    sec_el = 1.0 / (np.cos(el_rad) if cos_el is None else cos_el)
+                part = part * sec_el
             (parts_el if axis == "E" else parts_az).append(part)
         yield parts_az, parts_el
 
