@@ -12,13 +12,14 @@ simulated world. Each part imports only those listed before it, and :mod:`contro
   receiver, camera) and the protocol's implementation;
 * :mod:`.scenario`: scenario files, read into the world's and the controller's settings
   (the world's parts' settings are below it, the world built from a scenario above it);
-* :mod:`.figures`: figures, by page; they draw values and import nothing else of antsim but
-  the documents' numbers;
-* :mod:`.studies`: the source reports' studies repeated (BIMA memo 23);
-* :mod:`.run`: a campaign run and the files it writes (recordings, fits, report);
-* :mod:`.serve`: the simulated antenna as a KATCP device, for control software outside
-  (it imports the world and scenarios only, and only the command line imports it);
-* :mod:`.plan`: what-if observing plans; :mod:`.diagnose`: what the model leaves out;
+* :mod:`.simulate`: the engines: a campaign run, the quiet run's shared schedule, Monte
+  Carlo members vectorized across seeds, and the executors that spread them over processes;
+* :mod:`.figures`: figures by page, and the self-contained HTML page writer; they draw values
+  and import nothing else of antsim but the documents' numbers;
+* the features, each one command's work, none importing another: :mod:`.run` (a campaign
+  run's files: fits, report), :mod:`.serve` (the simulated antenna as a KATCP device, for
+  control software outside), :mod:`.plan` (what-if observing plans), :mod:`.diagnose` (what
+  the model leaves out) and :mod:`.studies` (the source reports' studies repeated);
 * :mod:`.commands` and :mod:`.cli`: the ``antsim`` command line.
 """
 

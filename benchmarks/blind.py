@@ -44,8 +44,8 @@ from antsim.diagnose import diagnose, load_observations  # noqa: E402
 from antsim.diagnose.baseline import SimulatedBaseline  # noqa: E402
 from antsim.diagnose.crossval import loo_blocks, loo_rms, orthonormal  # noqa: E402
 from antsim.diagnose.data import from_rows  # noqa: E402
-from antsim.run.runner import recording_meta, simulate  # noqa: E402
 from antsim.scenario import EffectSpec, load_scenario  # noqa: E402
+from antsim.simulate.runner import recording_meta, simulate  # noqa: E402
 
 SCENARIO = ROOT / "scenarios" / "ghigo1990.toml"
 REAL = ROOT / "examples"

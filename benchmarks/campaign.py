@@ -25,8 +25,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from antsim.run.runner import simulate  # noqa: E402
 from antsim.scenario import load_scenario  # noqa: E402
+from antsim.simulate.runner import simulate  # noqa: E402
 
 
 def campaign_seconds(scenario, repeats: int) -> tuple[list[float], int]:

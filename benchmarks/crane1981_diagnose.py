@@ -42,8 +42,8 @@ sys.path.insert(0, str(ROOT))
 from antsim.diagnose import diagnose  # noqa: E402
 from antsim.diagnose.baseline import SimulatedBaseline  # noqa: E402
 from antsim.diagnose.data import from_rows  # noqa: E402
-from antsim.run.runner import recording_meta, simulate  # noqa: E402
 from antsim.scenario import EffectSpec, load_scenario  # noqa: E402
+from antsim.simulate.runner import recording_meta, simulate  # noqa: E402
 from antsim.studies.crane1981 import BANDS, TABLE4, absorbed_by_crane  # noqa: E402
 from controller.pointing.crane import CRANE_NAMES  # noqa: E402
 

@@ -24,10 +24,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from antsim.plan.ensemble import Job, make_executor, task_block, task_record  # noqa: E402
 from antsim.plan.planfile import load_plan  # noqa: E402
 from antsim.plan.study import block_size, run_plan  # noqa: E402
-from antsim.plan.vectorized import quiet_scenario  # noqa: E402
+from antsim.simulate.ensemble import Job, make_executor, task_block, task_record  # noqa: E402
+from antsim.simulate.vectorized import quiet_scenario  # noqa: E402
 
 PLAN = """name = "throughput"
 scenario = "{scenario}"

@@ -35,9 +35,9 @@ sys.path.insert(0, str(ROOT))
 
 from antsim.documents import GHIGO1990  # noqa: E402
 from antsim.run.outputs import run_fits  # noqa: E402
-from antsim.run.runner import simulate  # noqa: E402
 from antsim.run.sources import points_per_source, visible_hours  # noqa: E402
 from antsim.scenario import load_scenario  # noqa: E402
+from antsim.simulate.runner import simulate  # noqa: E402
 
 SCENARIO = ROOT / "scenarios" / "ghigo1990.toml"
 

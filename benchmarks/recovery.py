@@ -60,8 +60,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from antsim.run.outputs import run_fits  # noqa: E402
-from antsim.run.runner import simulate  # noqa: E402
 from antsim.scenario import Scenario, load_scenario  # noqa: E402
+from antsim.simulate.runner import simulate  # noqa: E402
 from controller.pointing.fitting import fit_model  # noqa: E402
 from controller.pointing.model import named_model_terms  # noqa: E402
 from controller.pointing.selection import ALPHA  # noqa: E402

@@ -34,10 +34,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from antsim.run.runner import run_campaign  # noqa: E402
 from antsim.scenario import load_scenario  # noqa: E402
 from antsim.serve.process import ServerProcess  # noqa: E402
 from antsim.serve.remote import connect  # noqa: E402
+from antsim.simulate.runner import run_campaign  # noqa: E402
 
 
 def _env() -> dict:

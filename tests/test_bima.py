@@ -128,8 +128,8 @@ def test_axis_offset_delay_is_d_cos_el():
 
 # --------------------------------------------------------------------------- the camera
 def test_camera_reads_the_pointing_offset_exactly_without_noise():
-    from antsim.run.runner import simulate
     from antsim.scenario import load_scenario
+    from antsim.simulate.runner import simulate
     from controller.protocol import CameraAntenna
 
     sc = load_scenario(SCENARIO)

@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from antsim.run.runner import run_campaign, simulate
 from antsim.scenario import load_scenario
+from antsim.simulate.runner import run_campaign, simulate
 from antsim.world.atmosphere import AtmosphereConfig
 from controller.pointing.model import PointingModel
 from controller.program.recordings import COLUMN_NAMES, read_pointing_data, read_recordings

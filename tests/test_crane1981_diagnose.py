@@ -24,8 +24,8 @@ from antsim.diagnose.baseline import SimulatedBaseline
 from antsim.diagnose.candidates.library import CANDIDATES
 from antsim.diagnose.data import from_rows
 from antsim.diagnose.problem import term_columns
-from antsim.run.runner import recording_meta, simulate
 from antsim.scenario import load_scenario
+from antsim.simulate.runner import recording_meta, simulate
 from antsim.studies.crane1981 import TABLE4, absorbed_by_crane, table4_arcmin
 from antsim.world.effects import EFFECTS
 from controller.astro.frames import MountFrame

@@ -723,8 +723,8 @@ def test_a_failed_quiet_run_process_falls_back_to_this_one(tmp_path, monkeypatch
     def broken(stream, scenario, seeds):
         raise RuntimeError("the quiet run's process failed: test")
 
-    monkeypatch.setattr("antsim.plan.streaming.stream_members", broken)
-    monkeypatch.setattr("antsim.plan.streaming.stream_available", lambda jobs: True)
+    monkeypatch.setattr("antsim.simulate.streaming.stream_members", broken)
+    monkeypatch.setattr("antsim.simulate.streaming.stream_available", lambda jobs: True)
     with pytest.warns(RuntimeWarning, match="baseline's members in this process"):
         fallback = shared_schedule_columns(scenario, [11], jobs=2)
     assert set(fallback) == {11} and len(here[11]["t_s"]) > 10
@@ -742,8 +742,8 @@ def test_shared_schedule_baseline_is_the_full_simulation(tmp_path):
     few ms, offsets within 0.2" rms (measured 0.03": the weather's wander moves a full run's
     refraction and timing slightly) against a scatter of ~50"."""
     from antsim.diagnose.fastsim import shared_schedule_columns
-    from antsim.run.runner import simulate
     from antsim.scenario import load_scenario
+    from antsim.simulate.runner import simulate
 
     root = Path(__file__).resolve().parents[1]
     path = tmp_path / "four_hours.toml"

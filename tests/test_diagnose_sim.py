@@ -19,8 +19,8 @@ from antsim.cli import main as cli
 from antsim.diagnose import diagnose
 from antsim.diagnose.baseline import SimulatedBaseline
 from antsim.diagnose.data import from_rows
-from antsim.run.runner import recording_meta, run_campaign, simulate
 from antsim.scenario import EffectSpec, load_scenario
+from antsim.simulate.runner import recording_meta, run_campaign, simulate
 from tests.conftest import edit_text
 
 ELEVEN_HOURS = (("duration_h = 24.0", "duration_h = 11.0"),)

@@ -24,8 +24,8 @@ import numpy as np
 import pytest
 import simpy
 
-from antsim.run.runner import simulate
 from antsim.scenario import EffectSpec, load_scenario
+from antsim.simulate.runner import simulate
 from antsim.world.effects import EFFECTS, PointingState
 from antsim.world.effects.optics import ExactTiltCollimation
 from antsim.world.effects.thermal import GRID_STEP_S

@@ -170,8 +170,8 @@ def test_noise_free_equatorial_campaign_recovers_the_model(tmp_path):
     # error changes with hour angle and elevation: up to ~1% of the offsets the model in use
     # leaves, most at low elevation. The model in use is the 3245 MHz one (off by 3.7' in C1
     # and C6) with the truth's C1 and C6, so that the offsets left are tens of arcsec
-    from antsim.run.runner import simulate
     from antsim.scenario import load_scenario
+    from antsim.simulate.runner import simulate
     from antsim.world.atmosphere import AtmosphereConfig
     from controller.pointing.variants import VARIANTS, columns, pointing_data, variant_mask
 

@@ -20,8 +20,8 @@ from antsim.figures import run as figures
 from antsim.figures.charts import comparison_figure
 from antsim.figures.diagnose import before_after_figures
 from antsim.run.outputs import run_fits
-from antsim.run.runner import simulate
 from antsim.scenario import load_scenario
+from antsim.simulate.runner import simulate
 from controller.pointing.fitting import fit_model
 from controller.pointing.variants import VARIANTS, columns, pointing_data, variant_mask
 

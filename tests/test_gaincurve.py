@@ -106,8 +106,8 @@ def test_opacity_fit_finds_the_right_basin():
 # --------------------------------------------------------------------------- the 1990 report
 @pytest.fixture(scope="module")
 def ghigo_calibration():
-    from antsim.run.runner import simulate
     from antsim.scenario import load_scenario
+    from antsim.simulate.runner import simulate
 
     scenario = load_scenario(REPO / "scenarios" / "ghigo1990.toml")
     result = simulate(scenario)

@@ -271,7 +271,7 @@ def test_resume_removes_the_products_it_cannot_make_again(no_fit_scenario, tmp_p
 def test_a_run_failing_before_its_first_scan_leaves_no_recordings(tmp_path, monkeypatch,
                                                                   capsys):
     """Whatever stops a run before it records a scan, the same --out takes a plain re-run."""
-    from antsim.run import runner
+    from antsim.simulate import runner
 
     def broken(*args, **kwargs):
         raise RuntimeError("the simulation broke before its first scan (test)")

@@ -17,6 +17,12 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 
+#: the features: what a user asks for, each one command's work. They share the engines
+#: (:mod:`antsim.simulate`), the figures and pages (:mod:`antsim.figures`) and everything below.
+FEATURES = ("antsim.run", "antsim.serve", "antsim.plan", "antsim.diagnose", "antsim.studies")
+#: everything that sits above the figures: the features and the command line
+FEATURES_UP = ("antsim.figures", *FEATURES, "antsim.commands", "antsim.cli")
+
 #: (importer prefix, forbidden prefixes, why): no module under the importer imports a module
 #: under a forbidden prefix. Prefixes are dotted module names; "a.b" covers a.b and a.b.*.
 RULES: tuple[tuple[str, tuple[str, ...], str], ...] = (
@@ -38,55 +44,38 @@ RULES: tuple[tuple[str, tuple[str, ...], str], ...] = (
      "the scan engine never imports the control program that runs it"),
     ("controller.program", ("controller.wire",),
      "the control program drives any antenna through the protocol, never the wire's"),
-    ("antsim.tomlcheck", ("antsim.world", "antsim.scenario", "antsim.figures", "antsim.studies",
-                          "antsim.run", "antsim.serve", "antsim.plan", "antsim.diagnose",
-                          "antsim.commands", "antsim.cli"),
+    ("antsim.tomlcheck", ("antsim.world", "antsim.simulate", "antsim.scenario", *FEATURES_UP),
      "TOML checking is the base of antsim"),
-    ("antsim.documents", ("antsim.tomlcheck", "antsim.world", "antsim.scenario",
-                          "antsim.figures", "antsim.studies", "antsim.run", "antsim.serve",
-                          "antsim.plan", "antsim.diagnose", "antsim.commands", "antsim.cli"),
+    ("antsim.documents", ("antsim.tomlcheck", "antsim.world", "antsim.simulate",
+                          "antsim.scenario", *FEATURES_UP),
      "the documents' numbers are a base of antsim: they import nothing of it"),
     ("antsim.progress", ("antsim.tomlcheck", "antsim.documents", "antsim.bundled",
-                         "antsim.world", "antsim.scenario", "antsim.figures", "antsim.studies",
-                         "antsim.run", "antsim.serve", "antsim.plan", "antsim.diagnose",
-                         "antsim.commands", "antsim.cli", "controller"),
+                         "antsim.world", "antsim.simulate", "antsim.scenario", *FEATURES_UP,
+                         "controller"),
      "progress display is a base of antsim: it knows nothing of the work it shows"),
     ("antsim.bundled", ("antsim.tomlcheck", "antsim.documents", "antsim.world",
-                        "antsim.scenario", "antsim.figures", "antsim.studies", "antsim.run",
-                        "antsim.serve", "antsim.plan", "antsim.diagnose", "antsim.commands",
-                        "antsim.cli"),
+                        "antsim.simulate", "antsim.scenario", *FEATURES_UP),
      "finding the scenarios that come with antsim by name is a base of antsim: it reads no "
      "scenario"),
-    ("antsim.outdir", ("antsim.world", "antsim.scenario", "antsim.figures", "antsim.studies",
-                       "antsim.run", "antsim.serve", "antsim.plan", "antsim.diagnose",
-                       "antsim.commands", "antsim.cli", "controller.astro", "controller.pointing",
-                       "controller.scans", "controller.program"),
+    ("antsim.outdir", ("antsim.world", "antsim.simulate", "antsim.scenario", *FEATURES_UP,
+                       "controller.astro", "controller.pointing", "controller.scans",
+                       "controller.program"),
      "output directories and their lock are a base of every command that writes"),
-    ("antsim.world", ("antsim.figures", "antsim.studies", "antsim.run", "antsim.serve",
-                      "antsim.plan", "antsim.diagnose", "antsim.commands", "antsim.cli"),
+    ("antsim.world", ("antsim.simulate", *FEATURES_UP),
      "the simulated world knows nothing of what is done with it"),
-    ("antsim.scenario", ("antsim.world.world", "antsim.figures", "antsim.studies", "antsim.run",
-                         "antsim.serve", "antsim.plan", "antsim.diagnose", "antsim.commands",
-                         "antsim.cli"),
+    ("antsim.scenario", ("antsim.world.world", "antsim.simulate", *FEATURES_UP),
      "a scenario reads the world's parts' settings; the world is built from it, above it"),
-    ("antsim.figures", ("antsim.world", "antsim.scenario", "antsim.studies", "antsim.run",
-                        "antsim.serve", "antsim.plan", "antsim.diagnose", "antsim.commands",
-                        "antsim.cli"),
-     "figures draw values, never a simulation"),
-    ("antsim.studies", ("antsim.run", "antsim.serve", "antsim.plan", "antsim.diagnose",
+    ("antsim.figures", ("antsim.world", "antsim.scenario", "antsim.simulate", *FEATURES,
                         "antsim.commands", "antsim.cli"),
-     "the studies use the world's parts and the fitter only"),
-    ("antsim.run", ("antsim.studies", "antsim.serve", "antsim.plan", "antsim.diagnose",
-                    "antsim.commands", "antsim.cli"),
-     "a run knows nothing of the analyses made of it, nor of a server (it takes any antenna)"),
-    ("antsim.serve", ("antsim.figures", "antsim.studies", "antsim.run", "antsim.plan",
-                      "antsim.diagnose", "antsim.commands", "antsim.cli"),
+     "figures and pages draw values, never a simulation"),
+    ("antsim.simulate", FEATURES_UP,
+     "the simulation engines run scenarios; the features that use them sit above them"),
+    ("antsim.serve", ("antsim.figures",),
      "the server serves the world: it imports the world, scenarios and the controller only"),
-    ("antsim.plan", ("antsim.studies", "antsim.serve", "antsim.diagnose", "antsim.commands",
-                     "antsim.cli"),
-     "plans never import diagnosis or the command line"),
-    ("antsim.diagnose", ("antsim.studies", "antsim.serve", "antsim.commands", "antsim.cli"),
-     "diagnosis never imports the command line"),
+    *((feature, (*(f for f in FEATURES if f != feature), "antsim.commands", "antsim.cli"),
+       "a feature imports the engines and the parts below them, never another feature nor "
+       "the command line: what two features share belongs below both")
+      for feature in FEATURES),
 )
 #: no module outside ``antsim.commands`` imports a command (antsim.cli finds them by name)
 COMMANDS = "antsim.commands"

@@ -20,15 +20,15 @@ from test_report import _embedded, assert_renders_in_a_browser, needs_chromium, 
 from antsim.cli import main as cli_main
 from antsim.plan.planfile import load_plan
 from antsim.plan.study import run_plan
-from antsim.plan.vectorized import (
+from antsim.scenario import load_scenario
+from antsim.simulate.runner import simulate
+from antsim.simulate.vectorized import (
     MemberEngine,
     _MemberDraws,
     member_seed,
     quiet_scenario,
     record_schedule,
 )
-from antsim.run.runner import simulate
-from antsim.scenario import load_scenario
 from antsim.world.effects import PointingState
 from antsim.world.effects.thermal import OUProcess
 from controller.errors import InputError
@@ -215,7 +215,7 @@ def test_member_blocks_equal_members_one_integration_at_a_time(short_engine, mon
     carry across block boundaries. Blocks of one integration each give the same powers.
     Tolerance: only the fixed point's start differs (it converges to 5e-11 rad from either),
     which moves a power by < 1e-7 K; a draw out of order would move it by ~0.01-1 K."""
-    from antsim.plan import vectorized
+    from antsim.simulate import vectorized
 
     _, engine = short_engine
     seeds = [member_seed(7, m) for m in range(3)]
@@ -294,7 +294,7 @@ def test_streamed_members_equal_the_members_on_the_finished_schedule(short_engin
     """The quiet run in a second process, the members integrated here as its integrations
     arrive: the same schedule as the quiet run in this process, and the powers of
     MemberEngine.simulate on it, bit for bit."""
-    from antsim.plan.streaming import ScheduleStream, stream_members
+    from antsim.simulate.streaming import ScheduleStream, stream_members
 
     scenario, engine = short_engine
     seeds = [member_seed(7, m) for m in range(3)]
@@ -317,7 +317,7 @@ def test_streamed_members_equal_the_members_on_the_finished_schedule(short_engin
 def test_a_failing_quiet_run_process_is_an_error_not_a_hang(short_engine):
     """A quiet run that fails reports its failure, and a killed process sends nothing:
     either way the parent raises instead of waiting forever."""
-    from antsim.plan.streaming import ScheduleStream
+    from antsim.simulate.streaming import ScheduleStream
 
     scenario, _ = short_engine
     with ScheduleStream(None, 0) as stream, \
@@ -333,8 +333,8 @@ def test_a_failing_quiet_run_process_is_an_error_not_a_hang(short_engine):
 def test_members_that_cannot_follow_the_quiet_run_are_an_error(short_engine, monkeypatch):
     """Whatever stops the members mid-stream becomes the RuntimeError on which the baseline
     falls back to running both in this process (tests/test_diagnose.py)."""
-    from antsim.plan import vectorized
-    from antsim.plan.streaming import ScheduleStream, stream_members
+    from antsim.simulate import vectorized
+    from antsim.simulate.streaming import ScheduleStream, stream_members
 
     def broken(self, *args):
         raise ValueError("test")
@@ -419,7 +419,7 @@ def test_predicted_sigma_agrees_with_monte_carlo(short_engine):
     truncated-normal model of the rejections that the simulation replaced predicted 0.30
     and W5's sigma 1.41 times too small."""
     from antsim.plan.fisher import noise_model, predict
-    from antsim.plan.vectorized import MemberResults
+    from antsim.simulate.vectorized import MemberResults
 
     scenario, engine = short_engine
     n = 96

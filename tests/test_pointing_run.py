@@ -13,8 +13,8 @@ import pytest
 from antsim.documents import GHIGO1990
 from antsim.run.inuse import pointing_in_use
 from antsim.run.outputs import run_fits, write_outputs
-from antsim.run.runner import run_campaign, simulate
 from antsim.scenario import load_scenario
+from antsim.simulate.runner import run_campaign, simulate
 from controller.pointing.model import PointingModel
 from controller.pointing.modelio import load_model
 from controller.pointing.terms import GHIGO_EQUIVALENTS

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from antsim.run.outputs import run_fits
-from antsim.run.runner import simulate
 from antsim.scenario import load_scenario
+from antsim.simulate.runner import simulate
 
 GHIGO = Path(__file__).resolve().parents[1] / "scenarios" / "ghigo1990.toml"
 SEEDS = range(1, 13)

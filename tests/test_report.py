@@ -21,7 +21,7 @@ import pytest
 from test_figures import assert_sane_png, png_stats
 
 from antsim.cli import main
-from antsim.run.html import (
+from antsim.figures.html import (
     CONTENT_SECURITY_POLICY,
     Figure,
     Paragraph,

@@ -17,8 +17,8 @@ import pytest
 
 from antsim.cli import main
 from antsim.documents import GHIGO1990_TABLE1_POSITIONS
-from antsim.run.runner import simulate
 from antsim.scenario import load_scenario
+from antsim.simulate.runner import simulate
 from controller.astro.sources import dec_dms_to_deg, ra_hms_to_deg
 
 

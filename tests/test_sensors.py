@@ -15,9 +15,9 @@ from conftest import SHORT_EDITS, edit_text
 
 from antsim.cli import main as cli_main
 from antsim.run.outputs import run_fits
-from antsim.run.runner import run_campaign, simulate
 from antsim.scenario import load_scenario
 from antsim.serve.process import ServerProcess
+from antsim.simulate.runner import run_campaign, simulate
 from antsim.world.sensors import _lagged_step
 from antsim.world.world import World
 from controller.errors import InputError
@@ -245,7 +245,7 @@ def test_diagnose_names_the_thermal_effect_in_the_sensors_terms(sunny_day, tmp_p
     from antsim.diagnose.core import diagnose
     from antsim.diagnose.data import from_rows
     from antsim.diagnose.modelit import write_outputs
-    from antsim.run.runner import recording_meta
+    from antsim.simulate.runner import recording_meta
 
     scenario = sunny_day.scenario
     obs = from_rows(sunny_day.rows, recording_meta(scenario, 1, scenario.controller.model))

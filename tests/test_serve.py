@@ -23,12 +23,12 @@ import pytest
 import simpy
 
 from antsim.cli import main as cli_main
-from antsim.run.runner import run_campaign
 from antsim.scenario import load_scenario
 from antsim.serve.clock import parse_clock
 from antsim.serve.process import ServerProcess
 from antsim.serve.programtrack import ProgramTrack, TableError
 from antsim.serve.remote import connect
+from antsim.simulate.runner import run_campaign
 from controller.protocol import AntennaError
 from controller.wire import KatcpAntenna
 

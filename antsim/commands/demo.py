@@ -112,21 +112,21 @@ class _Story:
         return self.chapters[-1]
 
     def say(self, chapter: Chapter, text: str) -> None:
-        from antsim.run.html import Paragraph
+        from antsim.figures.html import Paragraph
 
         chapter.blocks.append(Paragraph(text))
         self.echo(textwrap.fill(text, width=92))
         self.echo("")
 
     def command(self, chapter: Chapter, text: str) -> None:
-        from antsim.run.html import Preformatted
+        from antsim.figures.html import Preformatted
 
         chapter.blocks.append(Preformatted(text, caption="Try it yourself"))
         self.echo("  $ " + text.replace("\n", "\n  $ "))
         self.echo("")
 
     def figure(self, chapter: Chapter, figure) -> None:
-        from antsim.run.html import Figure
+        from antsim.figures.html import Figure
 
         chapter.blocks.append(Figure.of(figure))
         self.echo(f"  [figure: {figure.path}]")
@@ -149,7 +149,7 @@ def run_demo(out: Path, scenario_path: Path,
              on_chapter: Callable[[str], None] | None = None) -> dict[str, Any]:
     """Tell the story into ``out``; returns the numbers a test or a teacher may want.
     ``on_chapter`` is told each chapter's title as it starts (the command's progress)."""
-    from antsim.run.html import Section, write_report
+    from antsim.figures.html import Section, write_report
     from antsim.scenario import load_scenario
 
     t0 = time.perf_counter()
@@ -375,7 +375,7 @@ def _cold_start(story: _Story, scenario, figdir: Path) -> dict[str, Any]:
 # ---------------------------------------------------------------------------------------------
 def _campaign(scenario, out: Path, seed: int, model, report: bool):
     from antsim.run.outputs import run_fits, write_outputs
-    from antsim.run.runner import run_campaign
+    from antsim.simulate.runner import run_campaign
 
     result = run_campaign(scenario, out, seed=seed, model=model, show_progress=False)
     write_outputs(result, report=report)
@@ -385,7 +385,7 @@ def _campaign(scenario, out: Path, seed: int, model, report: bool):
 def _first_campaign(story: _Story, scenario, scenario_path: Path, out: Path):
     import numpy as np
 
-    from antsim.run.html import Figure
+    from antsim.figures.html import Figure
     from controller.pointing.model import PointingModel
 
     ch = story.chapter("2. The first campaign: 24 hours of cross scans")
@@ -450,7 +450,7 @@ def _pulls(fit, truth: dict[str, float]) -> dict[str, float]:
 
 
 def _the_fit(story: _Story, result, fits, out: Path) -> dict[str, Any]:
-    from antsim.run.html import Figure
+    from antsim.figures.html import Figure
     from antsim.run.report import fit_summary_table, truth_pull_table, truth_terms_arcsec
 
     ch = story.chapter("3. The fit: ten numbers that describe the mount")

@@ -128,8 +128,8 @@ def _diagnose(args: argparse.Namespace, out: Path | None) -> int:
                              "diagnose them with a scenario of their own telescope")
         if Path(args.recordings).is_file():
             # a cold baseline's quiet campaign starts now, on the second core, while this
-            # process imports the analysis and reads the recordings (antsim.plan.streaming)
-            from antsim.plan.streaming import prestart
+            # process imports the analysis and reads the recordings (antsim.simulate.streaming)
+            from antsim.simulate.streaming import prestart
 
             prestart(args.jobs, scenario)
     from antsim.progress import Progress

@@ -35,8 +35,8 @@ def main(args: argparse.Namespace) -> int:
     from antsim.outdir import DirectoryLock, output_dir
     from antsim.progress import Progress
     from antsim.run.outputs import PRODUCTS, clear_products, write_outputs
-    from antsim.run.runner import run_campaign
     from antsim.scenario import load_scenario, thermal_terms_of
+    from antsim.simulate.runner import run_campaign
 
     if args.seed is not None and args.seed < 0:
         raise InputError("command line", "--seed", args.seed, "must be >= 0")

@@ -7,9 +7,9 @@ honest forward selection (:mod:`.select`), and reports findings best first
 pointing model and re-simulates; :mod:`.blind` proves the whole chain on recordings with a
 hidden effect.
 
-May import: :mod:`antsim.plan` (its shared-schedule simulations predict the noise),
-:mod:`antsim.run`, :mod:`antsim.world`, :mod:`antsim.scenario`, :mod:`antsim.figures` and
-:mod:`controller`; never the command line.
+May import: :mod:`antsim.simulate` (its shared-schedule simulations predict the noise),
+:mod:`antsim.world`, :mod:`antsim.scenario`, :mod:`antsim.figures` and :mod:`controller`;
+never another feature (runs, plans, the server, the studies) or the command line.
 """
 
 from __future__ import annotations

@@ -235,7 +235,7 @@ def _products(obs: Observations, terms: Sequence) -> SimProducts:
 def _simulate_rows(args):
     """Worker: one baseline simulation (top level so that a process pool can run it)."""
     scenario, seed = args
-    from antsim.run.runner import recording_meta, simulate
+    from antsim.simulate.runner import recording_meta, simulate
 
     result = simulate(scenario, seed)
     return result.rows, recording_meta(scenario, seed, result.model)
@@ -334,7 +334,7 @@ class SimulatedBaseline:
                     pass  # a truncated or damaged cache is a miss: simulated again
             todo.append(seed)
         if not todo or self.scenario.controller.method != "five_point":
-            from ..plan.streaming import release_prestarted
+            from ..simulate.streaming import release_prestarted
 
             release_prestarted()  # no members to stream (antsim diagnose started one)
         else:

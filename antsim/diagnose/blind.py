@@ -208,7 +208,7 @@ class Harness:
     def _reference(self) -> None:
         """A null recording of the scenario: its scans, predicted noise and the tests'
         degrees of freedom and trials set the thresholds."""
-        from antsim.run.runner import recording_meta, simulate
+        from antsim.simulate.runner import recording_meta, simulate
 
         seed = CASE_SEED_BASE - 1
         res = simulate(self.scenario, seed)
@@ -340,7 +340,7 @@ class Harness:
         return c, params, factor, thr
 
     def run_case(self, index: int, seed: int) -> BlindCase:
-        from antsim.run.runner import recording_meta, simulate
+        from antsim.simulate.runner import recording_meta, simulate
 
         from ..scenario import EffectSpec
 

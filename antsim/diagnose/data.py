@@ -238,7 +238,7 @@ def from_columns(cols: Mapping[str, np.ndarray], meta: Mapping[str, Any] | None 
 
 def from_rows(rows: Sequence[Mapping[str, Any]], meta: Mapping[str, Any] | None = None,
               path: str = "<memory>") -> Observations:
-    """Observations from the row dicts :func:`antsim.run.runner.simulate` returns."""
+    """Observations from the row dicts :func:`antsim.simulate.runner.simulate` returns."""
     if not rows:
         raise InputError(path, "rows", 0, "there are no recorded scans")
     names = rows[0].keys()

@@ -2,7 +2,7 @@
 
 The scheduler is deterministic, so every baseline simulation of a well-pointed scenario
 observes the same sources at the same times; only the noise differs. :mod:`antsim.plan`'s
-:class:`~antsim.plan.vectorized.MemberEngine` re-simulates just the random parts for all seeds
+:class:`~antsim.simulate.vectorized.MemberEngine` re-simulates just the random parts for all seeds
 at once through the world's own physics (see that module for what is shared and what is
 drawn per seed). Here its reduced scans become recording columns, one block of rows per
 polarization, for :func:`antsim.diagnose.data.from_columns`. A seed whose scan the controller
@@ -28,14 +28,14 @@ def shared_schedule_columns(scenario, seeds: Sequence[int], jobs: int = 1
     """Recording columns (XR, XL and AVG rows of every scan) of each seed that keeps the
     shared schedule; seeds missing from the result need a full simulation. With ``jobs`` >= 2
     (and two cores) the quiet run is a second process and the members follow it here
-    (:mod:`antsim.plan.streaming`; same numbers)."""
+    (:mod:`antsim.simulate.streaming`; same numbers)."""
     import simpy
 
     from antsim.world.world import World
 
-    from ..plan.schedule import REFERENCE_SEED, quiet_scenario, record_schedule
-    from ..plan.streaming import stream_available, stream_members, take
-    from ..plan.vectorized import MemberEngine
+    from ..simulate.schedule import REFERENCE_SEED, quiet_scenario, record_schedule
+    from ..simulate.streaming import stream_available, stream_members, take
+    from ..simulate.vectorized import MemberEngine
 
     if not seeds:
         return {}

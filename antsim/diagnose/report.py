@@ -1,5 +1,5 @@
 """``DIR/report.html`` of ``antsim diagnose --out DIR``: one self-contained page like
-``antsim run``'s report (:mod:`antsim.run.html`: the same style, figures embedded the same
+``antsim run``'s report (:mod:`antsim.figures.html`: the same style, figures embedded the same
 way).
 
 One source for every number: the page is built from the document written as
@@ -14,7 +14,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from antsim.run.html import Block, Figure, Paragraph, Preformatted, Section, Table, write_report
+from antsim.figures.html import Block, Figure, Paragraph, Preformatted, Section, Table, write_report
 
 if TYPE_CHECKING:
     from antsim.figures.style import FigureFile

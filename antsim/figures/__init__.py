@@ -7,7 +7,8 @@
 * :mod:`.run`: the run report's Figs. 1-10 (``antsim run``);
 * :mod:`.diagnose`: residuals before and after a finding (``antsim diagnose --out``);
 * :mod:`.plan`: the plan's comparisons (``antsim plan --out``);
-* :mod:`.demo`: the teaching walk-through's cross scans (``antsim demo``).
+* :mod:`.demo`: the teaching walk-through's cross scans (``antsim demo``);
+* :mod:`.html`: the self-contained HTML page every report is written with.
 
 Conventions on every page: errors and residuals are "indicated minus true" (the sign of the
 recordings' corrections and of :class:`controller.pointing.data.PointingData`),

@@ -26,15 +26,15 @@ from typing import Any
 
 import numpy as np
 
+from antsim.simulate.ensemble import Executor, Job, task_record
+from antsim.simulate.vectorized import quiet_scenario
 from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 from controller.errors import InputError
 from controller.pointing.model import PointingModel
 
 from ..progress import Progress
-from .ensemble import Executor, Job, task_noise, task_record
-from .fisher import predict, truth_vector
+from .fisher import predict, task_noise, truth_vector
 from .planfile import CoverageQuestion, DurationQuestion, Plan, SourcesQuestion
-from .vectorized import quiet_scenario
 
 __all__ = ["answer_duration", "answer_questions", "answer_sources", "answers_text",
            "coverage_answer", "reachable_cells"]
@@ -391,7 +391,7 @@ def sources_shortlist(q: SourcesQuestion, vr) -> dict[str, Any]:
     planned = tuple(catalogue)
     if planned not in shortlist:
         shortlist.append(planned)
-    from antsim.run.runner import check_scenario
+    from antsim.simulate.runner import check_scenario
 
     items = []
     for subset in shortlist:

@@ -1,7 +1,7 @@
 """Predicted error of every fitted term, from the design and a noise model of the physics.
 
 The design is the schedule the controller produces (the deterministic run of
-:func:`antsim.plan.vectorized.record_schedule`): one row per scan its reduction accepts, at the
+:func:`antsim.simulate.vectorized.record_schedule`): one row per scan its reduction accepts, at the
 scan's position. The fitter's final estimate is least squares, so the predicted covariance of
 the terms is the sandwich ``B A^T C A B`` with ``B = (A^T A)^-1`` and ``C`` the covariance of
 the measured offsets (arcsec^2); for independent offsets of equal variance s^2 it is the
@@ -46,13 +46,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from antsim.simulate.ensemble import Job, engine_for
+from antsim.simulate.vectorized import MemberEngine, SharedSchedule
 from antsim.world.effects.tracking import TrackingJitter
 from controller.pointing.model import PointingModel
 from controller.pointing.thermal import sensor_aux, structure_sensor_names
 
-from .vectorized import MemberEngine, SharedSchedule
-
-__all__ = ["NoiseModel", "Prediction", "noise_model", "predict", "truth_vector"]
+__all__ = ["NoiseModel", "Prediction", "noise_model", "predict", "task_noise", "truth_vector"]
 
 #: nudge of the pointing for the linear response of the powers (arcsec)
 NUDGE_ARCSEC = 1.0
@@ -240,6 +240,13 @@ class _Statistics:
     tau_j: float
     gust: tuple | None
     exp_std: np.ndarray
+
+
+def task_noise(job: Job, n_thermal: int) -> tuple[NoiseModel, list[str]]:
+    """The noise model of a variant and why its schedule cannot be shared (if so): a task for
+    :mod:`antsim.simulate.ensemble`'s executors (module level, picklable by reference)."""
+    engine = engine_for(job)
+    return noise_model(engine, job.plan_seed, n_thermal=n_thermal), list(engine.unshareable)
 
 
 def _integration_statistics(engine: MemberEngine) -> _Statistics:

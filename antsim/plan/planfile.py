@@ -447,7 +447,7 @@ def make_variant(base: Scenario, spec: VariantSpec, where: str = "plan") -> Scen
                              fit_model_name=spec.fit_model if spec.fit_model in NAMED_MODELS
                              else "custom")
     scenario = replace(scenario, controller=controller)
-    from antsim.run.runner import check_scenario
+    from antsim.simulate.runner import check_scenario
 
     try:
         check_scenario(scenario)

@@ -17,23 +17,29 @@ from typing import Any
 
 import numpy as np
 
-from controller.errors import InputError
-from controller.pointing.signs import UNITS, sign_convention
-
-from ..progress import Progress, progress_for
-from ..scenario import Scenario
-from .ensemble import (
+from antsim.simulate.ensemble import (
     Executor,
     Job,
     make_executor,
     task_block,
     task_full,
-    task_noise,
     task_record,
 )
-from .fisher import NoiseModel, Prediction, predict, terms_without_lever_arm, truth_vector
+from antsim.simulate.vectorized import MemberResults, SharedSchedule, quiet_scenario
+from controller.errors import InputError
+from controller.pointing.signs import UNITS, sign_convention
+
+from ..progress import Progress, progress_for
+from ..scenario import Scenario
+from .fisher import (
+    NoiseModel,
+    Prediction,
+    predict,
+    task_noise,
+    terms_without_lever_arm,
+    truth_vector,
+)
 from .planfile import Plan, VariantSpec
-from .vectorized import MemberResults, SharedSchedule, quiet_scenario
 
 __all__ = ["PlanResult", "VariantResult", "block_size", "run_plan"]
 

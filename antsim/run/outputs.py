@@ -16,6 +16,7 @@ from pathlib import Path
 
 from antsim.documents import Reference, reference_for
 from antsim.progress import Progress
+from antsim.simulate.runner import RunResult
 from controller.astro.sun import NIGHT_SUN_MAX_DEG
 from controller.pointing.modelio import write_model_file
 from controller.pointing.result import FitResult
@@ -24,7 +25,6 @@ from controller.pointing.tpoint import TPointModel
 from controller.pointing.variants import VARIANTS, fit_variants
 
 from .inuse import Pointing, pointing_in_use
-from .runner import RunResult
 from .sources import points_per_source
 
 __all__ = ["PRODUCTS", "clear_products", "fit_tables", "run_fits", "write_outputs"]

@@ -1,6 +1,6 @@
 """The report of a run (``antsim run``): ``DIR/report.html`` and the figures in it.
 
-:func:`write_run_report` builds it with :mod:`antsim.run.html`: the fits A-F in the style of
+:func:`write_run_report` builds it with :mod:`antsim.figures.html`: the fits A-F in the style of
 the 1990 report's Table 2, the coefficients (Table 3), the coefficients against the injected
 truth with pulls, fit A's warnings and correlations, the figures of
 :mod:`antsim.figures.run`, the scenario text and the software versions.
@@ -14,18 +14,17 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from antsim.documents import Reference, reference_for
+from antsim.figures.html import Block, Figure, Paragraph, Preformatted, Section, Table, write_report
 from controller.astro.sun import NIGHT_SUN_MAX_DEG
 from controller.pointing.result import FitResult
 from controller.pointing.signs import sign_convention
 from controller.pointing.variants import VARIANTS
 
-from .html import Block, Figure, Paragraph, Preformatted, Section, Table, write_report
-
 if TYPE_CHECKING:
     from antsim.figures.style import FigureFile
+    from antsim.simulate.runner import RunResult
 
     from .inuse import Pointing
-    from .runner import RunResult
 
 __all__ = ["coefficient_table", "fit_summary_table", "source_points_table", "truth_pull_table",
            "truth_terms_arcsec", "write_run_report"]

@@ -1,8 +1,8 @@
 """The quiet run in a second process, its schedule streamed to the members as it is recorded.
 
 The baseline of ``antsim diagnose`` is the quiet (noise-free) campaign of the scenario, whose
-schedule its members share (:mod:`antsim.plan.schedule`), and the members integrated on that
-schedule (:class:`~antsim.plan.vectorized.MemberEngine`). The members integrate the schedule
+schedule its members share (:mod:`antsim.simulate.schedule`), and the members integrated on that
+schedule (:class:`~antsim.simulate.vectorized.MemberEngine`). The members integrate the schedule
 in time order, a scan's integrations at a time, and every random number they use comes from
 their own generators whatever the schedule's length, so they need not wait for the quiet run
 to end.
@@ -12,7 +12,7 @@ scenario is read, and sends each recorded integration back. The command meanwhil
 analysis and reads the recordings; :class:`ScheduleStream` then integrates the members behind
 the quiet run as the integrations arrive, and takes the finished schedule at its end. On two
 cores the command's own start-up and the members' cost both hide under the quiet run. The
-powers are bit-identical to :meth:`~antsim.plan.vectorized.MemberEngine.simulate` on the
+powers are bit-identical to :meth:`~antsim.simulate.vectorized.MemberEngine.simulate` on the
 finished schedule.
 
 The process is forked, not spawned: it starts with this process's imports done (a spawned one
@@ -107,7 +107,7 @@ class ScheduleStream:
                 raise RuntimeError(f"the quiet run's process failed: {payload}")
 
     def schedule(self):
-        """The finished :class:`~antsim.plan.schedule.SharedSchedule` (after :meth:`items`
+        """The finished :class:`~antsim.simulate.schedule.SharedSchedule` (after :meth:`items`
         is exhausted; it drains the stream first if not)."""
         for _ in self.items():
             pass

@@ -24,8 +24,8 @@ a scan's integrations at a time):
   each member is then fitted with :func:`controller.pointing.fitting.fit_model` as fit A.
 
 Where the physics does not allow a shared schedule the member is simulated in full
-(:func:`antsim.run.runner.simulate`) instead: a member one of whose scans the controller would not
-detect (a gust, a low S/N: with searching enabled it searches, which changes every later time
+(:func:`antsim.simulate.runner.simulate`) instead: a member one of whose scans the controller
+would not detect (a gust, a low S/N: with searching enabled it searches, which changes every later time
 and adopts a correction); whole variants when the deterministic run itself searched (a cold
 start: where the controller points then depends on the noise), when the running correction
 follows each scan (``search.update_gain`` > 0), or when an effect's random realisation has no
@@ -45,7 +45,7 @@ from typing import Any
 
 import numpy as np
 
-from antsim.run.runner import simulate
+from antsim.simulate.runner import simulate
 from antsim.world.effects import EFFECTS, PointingState
 from antsim.world.effects.base import BLOCK_FIELDS
 from antsim.world.effects.thermal import OUProcess

@@ -1,12 +1,12 @@
 """The deterministic ("quiet") campaign and the schedule every Monte Carlo member shares.
 
 When the pointing is good the controller's schedule does not depend on the noise (see
-:mod:`antsim.plan.vectorized`). :func:`record_schedule` runs the campaign of
+:mod:`antsim.simulate.vectorized`). :func:`record_schedule` runs the campaign of
 :func:`quiet_scenario` once with the antenna's recorder attached and keeps, per integration,
 the sample times, the encoder command per sample, the antenna's state at the middle and the
 true paths of the sources near the beam: a :class:`SharedSchedule`. This module needs only
 the simulation (no fitting), so a process that only records schedules starts quickly
-(:mod:`antsim.plan.streaming`).
+(:mod:`antsim.simulate.streaming`).
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from antsim.run.runner import RunResult, simulate
+from antsim.simulate.runner import RunResult, simulate
 from antsim.world.effects import PointingState
 from antsim.world.receiver import ChannelConfig
 from antsim.world.world import World
@@ -106,7 +106,7 @@ class SharedSchedule:
 
     @classmethod
     def arriving(cls, duration_s: float, channels: tuple[str, ...]) -> SharedSchedule:
-        """A schedule whose integrations are still to come (:mod:`antsim.plan.streaming`):
+        """A schedule whose integrations are still to come (:mod:`antsim.simulate.streaming`):
         what the members' effects need to start, nothing recorded yet."""
         return cls(t=[], enc_az=[], enc_el=[], state=[], paths=[],
                    scan_int=np.zeros((0, 2, 5), dtype=np.int64), scan_times=np.zeros((0, 2, 5)),
@@ -131,7 +131,7 @@ def record_schedule(quiet: Scenario, seed: int = 0,
     """Run the deterministic simulation of ``quiet`` (see :func:`quiet_scenario`) with the
     antenna's recorder attached; returns the shared schedule and the run. ``on_integration``
     is also called with each integration's recorder keywords as it is recorded (e.g. by
-    :mod:`antsim.plan.streaming`'s quiet-run process, to send them on)."""
+    :mod:`antsim.simulate.streaming`'s quiet-run process, to send them on)."""
     recorder = _Recorder(on_integration)
 
     def attach(world: World) -> None:

@@ -1,9 +1,9 @@
 """Ensembles that scale out: a local process pool by default, or a Dask cluster.
 
 Work is cut into tasks that depend only on their inputs: the deterministic run of a variant
-(:func:`task_record`), its noise model (:func:`task_noise`), blocks of members on the shared
+(:func:`task_record`), blocks of members on the shared
 schedule (:func:`task_block`) and members simulated in full (:func:`task_full`). Member ``i``
-always has the seed :func:`~antsim.plan.vectorized.member_seed` (plan seed, i) and always
+always has the seed :func:`~antsim.simulate.vectorized.member_seed` (plan seed, i) and always
 belongs to block ``i // block`` (the block size is a property of the plan, not of the
 machine), so the results are the same whatever the number of workers or the engine.
 
@@ -11,7 +11,8 @@ Engines (:func:`make_executor`): ``workers >= 1`` use a
 :class:`concurrent.futures.ProcessPoolExecutor` (spawned processes, one BLAS thread each),
 ``workers == 0`` runs the tasks in this process; ``scheduler="tcp://host:port"`` submits them
 to a Dask distributed scheduler (``pip install antsim[dask]``), sending each variant's shared
-schedule once. Workers cache one engine (reference world, classified effects) per variant.
+schedule once. Workers cache one engine (reference world, classified effects) per variant
+(:func:`engine_for`); a feature's own tasks (the plan's noise model) use it too.
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ from .vectorized import (
     record_schedule,
 )
 
-__all__ = ["Job", "make_executor", "task_block", "task_full", "task_noise", "task_record"]
+__all__ = ["Job", "engine_for", "make_executor", "task_block", "task_full", "task_record"]
 
 #: environment of spawned workers: one BLAS/OpenMP thread each (the pool is the parallelism)
 SINGLE_THREAD_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
@@ -101,14 +102,6 @@ def task_record(quiet: Scenario) -> SharedSchedule:
     return record_schedule(quiet, seed=REFERENCE_SEED)[0]
 
 
-def task_noise(job: Job, n_thermal: int):
-    """The noise model of a variant and why its schedule cannot be shared (if so)."""
-    from .fisher import noise_model
-
-    engine = engine_for(job)
-    return noise_model(engine, job.plan_seed, n_thermal=n_thermal), list(engine.unshareable)
-
-
 def task_block(job: Job, members: tuple[int, ...]) -> tuple[MemberResults, list[int]]:
     """Members on the shared schedule; returns their fits and the members to simulate in
     full (all of them when the variant's schedule cannot be shared)."""
@@ -161,7 +154,7 @@ class Executor:
 
 def _warm_up(_: int) -> int:
     """Import the simulation in a new worker (so that the first tasks do not pay for it)."""
-    from . import fisher, vectorized  # noqa: F401
+    from . import vectorized  # noqa: F401
 
     return os.getpid()
 
