@@ -16,10 +16,10 @@ import time
 from pathlib import Path
 
 import pytest
-from test_figures import assert_sane_png
-from test_report import _embedded
 
 from antsim.cli import main
+from tests.test_figures import assert_sane_png
+from tests.test_report import _embedded
 
 CHAPTERS = ("1. A cold start", "2. The first campaign", "3. The fit", "4. Closing the loop",
             "5. A hidden effect")

@@ -20,8 +20,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_figures import assert_sane_png
-from test_report import _embedded, assert_renders_in_a_browser, needs_chromium, read_page
 
 from antsim.cli import main
 from antsim.diagnose import diagnose, load_observations
@@ -29,6 +27,8 @@ from antsim.diagnose.modelit import residuals_before_after, write_outputs
 from antsim.diagnose.report import FINDINGS_HEADER, RMS_HEADER
 from antsim.figures.charts import histogram_edges, spread_arcsec
 from controller.pointing.modelio import load_model
+from tests.test_figures import assert_sane_png
+from tests.test_report import _embedded, assert_renders_in_a_browser, needs_chromium, read_page
 
 REPO = Path(__file__).resolve().parents[1]
 MMT = REPO / "examples" / "mmt_20210821_k_and_e.dat"

@@ -15,7 +15,6 @@ from html import escape
 
 import numpy as np
 import pytest
-from test_report import _embedded, assert_renders_in_a_browser, needs_chromium, read_page
 
 from antsim.cli import main as cli_main
 from antsim.plan.planfile import load_plan
@@ -32,6 +31,7 @@ from antsim.simulate.vectorized import (
 from antsim.world.effects import PointingState
 from antsim.world.effects.thermal import OUProcess
 from controller.errors import InputError
+from tests.test_report import _embedded, assert_renders_in_a_browser, needs_chromium, read_page
 
 PLAN = """name = "short"
 scenario = "{scenario}"
@@ -570,7 +570,7 @@ def test_a_plan_with_sensors_fits_thermal_terms(write_plan, repo_root, write_sce
     are fitted with them; the heating's bias of W1, large without them (the sunny
     afternoon's +50" and more), shrinks with them (scenarios/plans/ghigo1990_sensors_whatif
     .toml asks it of 20 days). A source-list question cannot be asked of such a variant."""
-    from conftest import SHORT_EDITS, edit_text
+    from tests.conftest import SHORT_EDITS, edit_text
 
     text = (repo_root / "scenarios" / "ghigo1990_sensors.toml").read_text(encoding="utf-8")
     sensors = write_scenario(edit_text(text, SHORT_EDITS), name="sensors.toml")

@@ -18,7 +18,6 @@ from html.parser import HTMLParser
 from pathlib import Path
 
 import pytest
-from test_figures import assert_sane_png, png_stats
 
 from antsim.cli import main
 from antsim.figures.html import (
@@ -32,6 +31,7 @@ from antsim.figures.html import (
     software_versions,
     write_report,
 )
+from tests.test_figures import assert_sane_png, png_stats
 
 REPO = Path(__file__).resolve().parents[1]
 GHIGO = REPO / "scenarios" / "ghigo1990.toml"

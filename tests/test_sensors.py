@@ -11,7 +11,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 import simpy
-from conftest import SHORT_EDITS, edit_text
 
 from antsim.cli import main as cli_main
 from antsim.run.outputs import run_fits
@@ -25,6 +24,7 @@ from controller.pointing.model import PointingModel
 from controller.pointing.modelio import model_to_json
 from controller.pointing.thermal import SENSOR_FAMILY, STRUCTURE_SENSORS, structure_column
 from controller.program.recordings import COLUMNS, read_recordings, recording_columns
+from tests.conftest import SHORT_EDITS, edit_text
 
 #: the sensors without imperfections: what they read is the structure's temperature
 IDEAL = (("noise_k = 0.05", "noise_k = 0.0"), ("resolution_k = 0.1", "resolution_k = 0.0"),
@@ -219,7 +219,7 @@ def test_a_model_with_thermal_terms_is_refused_as_the_controller_model(
 def test_the_server_serves_the_structure_temperatures(short_sensors):
     """?antenna counts the sensors, ?structure-temperatures reads them (one inform each),
     and the structure.NAME sensors hold that reading."""
-    from test_serve import LineClient
+    from tests.test_serve import LineClient
 
     with ServerProcess(short_sensors) as srv:
         client = LineClient(srv.port)
