@@ -66,7 +66,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from antsim.outdir import LOCK_NAME, DirectoryLock, output_dir
+    from antsim.outdir import LOCK_NAME, held_output_dir
     from antsim.progress import Progress
 
     scenario_path = find(args.scenario, field="--scenario")
@@ -76,8 +76,8 @@ def main(args: argparse.Namespace) -> int:
             p.name != LOCK_NAME for p in Path(args.out).iterdir()):
         raise InputError("command line", "--out", args.out,
                          "is not empty and holds no earlier demo", "choose a new directory")
-    out = output_dir(args.out)
-    with DirectoryLock(out, "--out", "antsim demo"), Progress("demo", args.progress) as progress:
+    with held_output_dir(args.out, "--out", "antsim demo") as out, \
+            Progress("demo", args.progress) as progress:
         run_demo(out, scenario_path, echo=progress.write, on_chapter=progress.stage)
     return 0
 
