@@ -204,7 +204,8 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
     figures = run_figures(result.rows, fits, out / "figures", truth_arcsec=truth or None,
                           name=scenario.name, start_label=f"UTC {scenario.epoch_utc}",
                           el_limit_deg=scenario.controller.scheduler.elevation_min_deg,
-                          reference_rms=reference, gain_fit=_elevation_gain_fit(result))
+                          reference_rms=reference, gain_fit=_elevation_gain_fit(result),
+                          model_in_use=result.model.name if len(result.model) else None)
     good = sum(1 for r in result.rows if r["polarization"] == "AVG" and r["good"])
     fit_a = fits.get("A")
     summary = (f"{scenario.description or scenario.name}. Campaign of "
