@@ -7,7 +7,9 @@ read-only file system, no permission). :class:`DirectoryLock` holds an exclusive
 wants the same directory is refused with one line naming the first one's process id. The
 lock is the operating system's (``fcntl.flock``): the kernel releases it when its holder
 exits, however it exits, so a run killed with ``kill -9`` leaves no stale lock behind (the
-file stays, unlocked; it holds only the last holder's process id and command).
+file stays, unlocked, holding only the last holder's process id and command). A command that
+ends (normally, with an error, or with Ctrl-C) removes the file; :func:`held_output_dir`
+also removes the directories it created when the command left them empty.
 
 May import: :mod:`controller.errors` only.
 """
@@ -15,11 +17,13 @@ May import: :mod:`controller.errors` only.
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
+from contextlib import contextmanager, suppress
 from pathlib import Path
 
 from controller.errors import InputError
 
-__all__ = ["LOCK_NAME", "DirectoryLock", "output_dir"]
+__all__ = ["LOCK_NAME", "DirectoryLock", "held_output_dir", "output_dir"]
 
 #: the lock file each locked output directory holds
 LOCK_NAME = ".antsim.lock"
@@ -31,6 +35,11 @@ def _why(err: OSError) -> str:
 
 def output_dir(text: str | os.PathLike, option: str = "--out") -> Path:
     """The directory named by ``option``, created with its parents when missing."""
+    return _make_output_dir(text, option)[0]
+
+
+def _make_output_dir(text: str | os.PathLike, option: str) -> tuple[Path, list[Path]]:
+    """:func:`output_dir`, and the directories it created (the deepest first)."""
     name = os.fspath(text)
     if not name.strip():
         raise InputError("command line", option, name, "is empty",
@@ -38,6 +47,11 @@ def output_dir(text: str | os.PathLike, option: str = "--out") -> Path:
     path = Path(name)
     if path.exists() and not path.is_dir():
         raise InputError("command line", option, name, "exists and is not a directory")
+    missing = []
+    for part in (path, *path.parents):
+        if part.exists() or part.is_symlink():
+            break
+        missing.append(part)
     try:
         path.mkdir(parents=True, exist_ok=True)
     except FileExistsError:  # a parent is a file
@@ -46,7 +60,26 @@ def output_dir(text: str | os.PathLike, option: str = "--out") -> Path:
     except OSError as err:
         raise InputError("command line", option, name,
                          f"cannot be created ({_why(err)})") from None
-    return path
+    return path, missing
+
+
+@contextmanager
+def held_output_dir(text: str | os.PathLike, option: str = "--out",
+                    command: str = "antsim") -> Iterator[Path]:
+    """``with held_output_dir(args.out, "--out", "antsim run") as out:``: the directory of
+    :func:`output_dir`, held by a :class:`DirectoryLock` for the body. On leaving, however
+    the command ends, the lock file is removed, and so are the directories this call created
+    that the command left empty (a refused or failed command leaves no trace)."""
+    path, created = _make_output_dir(text, option)
+    try:
+        with DirectoryLock(path, option, command):
+            yield path
+    finally:
+        for folder in created:  # the deepest first; one still holding anything stops it
+            try:
+                folder.rmdir()
+            except OSError:
+                break
 
 
 class DirectoryLock:
@@ -67,31 +100,55 @@ class DirectoryLock:
     def __enter__(self) -> DirectoryLock:
         lock = self.path / LOCK_NAME
         try:
-            fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
-        except OSError as err:
-            raise InputError("command line", self.option, str(self.path),
-                             f"cannot be written ({_why(err)})") from None
-        try:
             import fcntl
         except ImportError:  # no advisory locks here: the check for writing is all we do
-            self._fd = fd
-            return self
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            pid, _, command = os.pread(fd, 200, 0).decode("utf-8", "replace").strip() \
-                .partition("\t")
+            fcntl = None
+        while True:
+            try:
+                fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+            except OSError as err:
+                raise InputError("command line", self.option, str(self.path),
+                                 f"cannot be written ({_why(err)})") from None
+            if fcntl is None:
+                self._fd = fd
+                return self
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                pid, _, command = os.pread(fd, 200, 0).decode("utf-8", "replace").strip() \
+                    .partition("\t")
+                os.close(fd)
+                raise InputError("command line", self.option, str(self.path),
+                                 "is in use by another antsim process"
+                                 + (f" (pid {pid}: {command})" if pid else ""),
+                                 "wait for it to finish, or write into another "
+                                 "directory") from None
+            if _same_file(fd, lock):
+                break
+            # the holder before us removed the file between our open and our lock: ours is
+            # on a file nobody else can find, and a third process may hold the new one
             os.close(fd)
-            raise InputError("command line", self.option, str(self.path),
-                             "is in use by another antsim process"
-                             + (f" (pid {pid}: {command})" if pid else ""),
-                             "wait for it to finish, or write into another directory") from None
         os.ftruncate(fd, 0)
         os.pwrite(fd, f"{os.getpid()}\t{self.command}\n".encode(), 0)
         self._fd = fd
         return self
 
     def __exit__(self, *exc) -> None:
-        if self._fd is not None:
-            os.close(self._fd)  # closing the last descriptor releases the flock
-            self._fd = None
+        if self._fd is None:
+            return
+        # removed while still locked: a process that opened the file before this sees, once
+        # it holds the lock, that the file is gone, and starts again on a new one
+        with suppress(OSError):  # already gone, or a system that cannot remove an open file
+            os.unlink(self.path / LOCK_NAME)
+        os.close(self._fd)  # closing the last descriptor releases the flock
+        self._fd = None
+
+
+def _same_file(fd: int, path: Path) -> bool:
+    """Whether the open file ``fd`` is still the one ``path`` names."""
+    try:
+        named = os.stat(path)
+    except OSError:
+        return False
+    held = os.fstat(fd)
+    return (named.st_dev, named.st_ino) == (held.st_dev, held.st_ino)

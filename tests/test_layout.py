@@ -22,6 +22,12 @@ ROOT = Path(__file__).resolve().parents[1]
 FEATURES = ("antsim.run", "antsim.serve", "antsim.plan", "antsim.diagnose", "antsim.studies")
 #: everything that sits above the figures: the features and the command line
 FEATURES_UP = ("antsim.figures", *FEATURES, "antsim.commands", "antsim.cli")
+#: the teaching walk-through (``antsim demo``), a command: its chapters, one module each, and
+#: the modules they share (how a chapter is told; a campaign as antsim run writes one)
+DEMO = "antsim.commands.demo"
+DEMO_CHAPTERS = tuple(f"{DEMO}.{name}" for name in (
+    "cold_start", "first_campaign", "the_fit", "closed_loop", "hidden_effect"))
+DEMO_SHARED = (f"{DEMO}.story", f"{DEMO}.campaign")
 
 #: (importer prefix, forbidden prefixes, why): no module under the importer imports a module
 #: under a forbidden prefix. Prefixes are dotted module names; "a.b" covers a.b and a.b.*.
@@ -76,6 +82,13 @@ RULES: tuple[tuple[str, tuple[str, ...], str], ...] = (
        "a feature imports the engines and the parts below them, never another feature nor "
        "the command line: what two features share belongs below both")
       for feature in FEATURES),
+    *((chapter, (*(c for c in DEMO_CHAPTERS if c != chapter), f"{DEMO}.walkthrough"),
+       "a chapter of the walk-through never imports another: what it needs of an earlier "
+       "one the walk-through hands it, and what two share is in the demo's shared modules")
+      for chapter in DEMO_CHAPTERS),
+    *((shared, (*DEMO_CHAPTERS, f"{DEMO}.walkthrough"),
+       "the demo's shared modules sit below its chapters")
+      for shared in DEMO_SHARED),
 )
 #: no module outside ``antsim.commands`` imports a command (antsim.cli finds them by name)
 COMMANDS = "antsim.commands"
@@ -199,6 +212,34 @@ def test_the_graph_sees_the_imports_it_must(graph):
 
 def test_imports_follow_the_layers(graph):
     assert rule_breaches(graph) == []
+
+
+def test_the_demos_rules_name_its_modules(graph):
+    """A rule on a module that is not there (renamed, moved) would hold nothing: the demo's
+    chapters and shared modules exist, and the walk-through imports every chapter."""
+    for module in (*DEMO_CHAPTERS, *DEMO_SHARED, f"{DEMO}.walkthrough"):
+        assert module in graph, module
+    assert set(DEMO_CHAPTERS) <= set(graph[f"{DEMO}.walkthrough"])
+    assert {m for m in graph if m.startswith(f"{DEMO}.")} == \
+        {*DEMO_CHAPTERS, *DEMO_SHARED, f"{DEMO}.walkthrough"}, "a new demo module: rule it"
+
+
+def test_a_chapter_importing_another_is_caught(tmp_path):
+    root = _fake_tree(tmp_path, {
+        "antsim/__init__.py": "",
+        "antsim/commands/__init__.py": "",
+        "antsim/commands/demo/__init__.py": "",
+        "antsim/commands/demo/story.py": "",
+        "antsim/commands/demo/first_campaign.py": "from .story import Story\n",
+        "antsim/commands/demo/the_fit.py": "from .first_campaign import tell\n",
+        "antsim/commands/demo/campaign.py": "from . import the_fit\n",
+    })
+    assert rule_breaches(import_graph(root, ("antsim",))) == [
+        f"{DEMO}.campaign (line 1) imports {DEMO}.the_fit: the demo's shared modules sit "
+        "below its chapters",
+        f"{DEMO}.the_fit (line 1) imports {DEMO}.first_campaign: a chapter of the "
+        "walk-through never imports another: what it needs of an earlier one the walk-through "
+        "hands it, and what two share is in the demo's shared modules"]
 
 
 def test_no_import_circles(graph):

@@ -104,10 +104,10 @@ def main(args: argparse.Namespace) -> int:
         raise InputError("command line", "--resimulate", args.resimulate, "must be >= 0")
     if args.out is None:
         return _diagnose(args, None)
-    from antsim.outdir import DirectoryLock, output_dir
+    from antsim.outdir import held_output_dir
 
-    out = output_dir(args.out)
-    with DirectoryLock(out, "--out", "antsim diagnose"):  # held from the start: refused early
+    # held from the start: refused early
+    with held_output_dir(args.out, "--out", "antsim diagnose") as out:
         return _diagnose(args, out)
 
 

@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 from controller.errors import InputError
+from controller.pointing.jackknife import BLOCK_S
 from controller.pointing.model import NAMED_MODELS
 
 #: default model per input format: TPOINT users (and a CSV of one's own measurements) start
@@ -58,7 +59,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
     parser.epilog = (
         "Robust by default: least-absolute-deviation fit, reject beyond 4x the mean absolute "
         "deviation, least squares, reject beyond 3x the rms, final least squares (Ghigo 1990). "
-        "Statistics as TPOINT's: Sky RMS, Popn SD, sigmas scaled by the Sky RMS."
+        "Statistics as TPOINT's: Sky RMS, Popn SD, sigmas scaled by the Sky RMS. The honest "
+        "sigma is a cluster jackknife of the same coefficients: where the file has times "
+        "(recordings, a CSV with a time column) the clusters are the observations within "
+        f"{BLOCK_S:g} s time blocks, as in a run's fit.json and report; where it has none (a "
+        "TPOINT file) they are single observations. The output names the one it used "
+        "(docs/outputs.md, 'The honest sigma')."
     )
 
 
@@ -149,6 +155,7 @@ def _read_data(path: Path, fmt: str, include_masked: bool, mount: str | None, sa
         from controller.program.recordings import table_pointing_data
 
         data = table_pointing_data(table, str(path), proxies=bool(needed & set(PROXY_NAMES)))
+    data = _with_times(data, fmt, table)
     missing = sorted(needed - set(data.aux or {}))
     if missing:
         raise InputError(str(path), "--terms", ",".join(terms),
@@ -156,6 +163,33 @@ def _read_data(path: Path, fmt: str, include_masked: bool, mount: str | None, sa
                          "not have", "fit them to recordings of an antenna with structure "
                          "temperature sensors (columns temp_*)")
     return data
+
+
+def _with_times(data, fmt: str, table):
+    """``data`` with each observation's time (s) where the file has times, so that the honest
+    sigma clusters the observations in time blocks, as a run's fit.json does: recordings
+    (the rows read: the averaged polarization, good scans) and a CSV with a time column."""
+    import dataclasses
+
+    import numpy as np
+
+    if fmt == "csv":
+        times = table.columns.get("t_s")
+    elif "t_s" in table.colnames:
+        rows = np.asarray(table["polarization"]) == "AVG"
+        if "good" in table.colnames:
+            rows &= np.asarray(table["good"], dtype=bool)
+        else:
+            rows &= np.isfinite(np.asarray(table["xel_arcmin"], dtype=float))
+            rows &= np.isfinite(np.asarray(table["el_arcmin"], dtype=float))
+        times = np.asarray(table["t_s"], dtype=float)[rows]
+    else:
+        times = None
+    if times is None:
+        return data
+    if len(times) != len(data):  # the reader's selection of rows changed: keep them in step
+        raise RuntimeError(f"{len(times)} times for {len(data)} observations")
+    return dataclasses.replace(data, t_s=np.asarray(times, dtype=float))
 
 
 def _note(line: str) -> None:

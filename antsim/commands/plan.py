@@ -45,7 +45,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def main(args: argparse.Namespace) -> int:
     from antsim.bundled import find
-    from antsim.outdir import DirectoryLock, output_dir
+    from antsim.outdir import held_output_dir
     from antsim.plan.planfile import MAX_MEMBERS, load_plan
     from antsim.plan.study import run_plan
     from antsim.progress import Progress
@@ -59,9 +59,9 @@ def main(args: argparse.Namespace) -> int:
         raise InputError("command line", "--workers", args.workers,
                          "give --workers or --scheduler, not both",
                          "the Dask cluster sets its own workers")
-    out = output_dir(args.out) if args.out is not None else None
-    held = DirectoryLock(out, "--out", "antsim plan") if out is not None else nullcontext()
-    with held, Progress("plan", args.progress) as progress:
+    held = (held_output_dir(args.out, "--out", "antsim plan") if args.out is not None
+            else nullcontext())
+    with held as out, Progress("plan", args.progress) as progress:
         progress.stage("reading the plan")
         plan = load_plan(find(args.plan, "plan"))
 

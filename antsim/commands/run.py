@@ -32,7 +32,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 def main(args: argparse.Namespace) -> int:
     from antsim.bundled import find
-    from antsim.outdir import DirectoryLock, output_dir
+    from antsim.outdir import held_output_dir
     from antsim.progress import Progress
     from antsim.run.outputs import PRODUCTS, clear_products, write_outputs
     from antsim.scenario import load_scenario, thermal_terms_of
@@ -60,8 +60,7 @@ def main(args: argparse.Namespace) -> int:
         if given and args.connect is not None:
             raise InputError("command line", option, True, "not with --connect",
                              "the simulation is the server's (antsim serve --seed)")
-    out = output_dir(args.out)
-    with DirectoryLock(out, "--out", "antsim run"):
+    with held_output_dir(args.out, "--out", "antsim run") as out:
         present = [name for name in PRODUCTS if (out / name).exists()]
         if present and not args.resume:
             raise InputError("command line", "--out", str(out),

@@ -28,7 +28,7 @@ def main(args: argparse.Namespace) -> int:
     import asyncio
 
     from antsim.bundled import find
-    from antsim.outdir import DirectoryLock, output_dir
+    from antsim.outdir import held_output_dir
     from antsim.scenario import load_scenario
     from antsim.serve.app import serve
     from antsim.serve.clock import parse_clock
@@ -45,7 +45,6 @@ def main(args: argparse.Namespace) -> int:
     if args.out is None:
         return asyncio.run(serve(scenario, clock, host=args.host, port=args.port,
                                  seed=args.seed))
-    out = output_dir(args.out)
-    with DirectoryLock(out, "--out", "antsim serve"):
+    with held_output_dir(args.out, "--out", "antsim serve") as out:
         return asyncio.run(serve(scenario, clock, host=args.host, port=args.port,
                                  seed=args.seed, out=out))

@@ -108,7 +108,8 @@ h1 { font-size: 1.6em; border-bottom: 2px solid #1f4e9c; padding-bottom: 0.2em; 
 h2 { font-size: 1.25em; margin-top: 1.8em; color: #1f4e9c; }
 p.subtitle { color: #555; margin-top: -0.5em; }
 nav ol { columns: 2; font-size: 0.92em; }
-table { border-collapse: collapse; margin: 0.6em 0 1.2em; font-size: 0.9em; }
+div.table { overflow-x: auto; max-width: 100%; margin: 0.6em 0 1.2em; }
+table { border-collapse: collapse; font-size: 0.9em; }
 caption { caption-side: top; text-align: left; font-weight: bold; padding-bottom: 0.3em; }
 th, td { border: 1px solid #c8c8c8; padding: 0.2em 0.55em; }
 th { background: #eef2f8; }
@@ -147,7 +148,9 @@ def _cell(value: Any, number_format: str) -> tuple[str, bool]:
 
 
 def _render_table(table: Table) -> str:
-    out = ["<table>"]
+    """The table in a box that scrolls sideways when the page is narrower than the table (a
+    coefficient table of six fits is ~900 px wide): the page itself never does."""
+    out = ['<div class="table"><table>']
     if table.caption:
         out.append(f"<caption>{_esc(table.caption)}</caption>")
     out.append("<thead><tr>" + "".join(f"<th>{_esc(h)}</th>" for h in table.header)
@@ -164,7 +167,7 @@ def _render_table(table: Table) -> str:
             cls = f' class="{" ".join(classes)}"' if classes else ""
             cells.append(f"<td{cls}>{text}</td>")
         out.append("<tr>" + "".join(cells) + "</tr>")
-    out.append("</tbody></table>")
+    out.append("</tbody></table></div>")
     return "\n".join(out)
 
 

@@ -102,9 +102,11 @@ def _coefficient_lines(fits, present: list[str], reference: Reference | None) ->
     fit_a = fits.get("A")
     fixed = fit_a.fixed if fit_a is not None else ()
     honest = fit_a.sigma_honest_arcsec if fit_a is not None else None
+    jackknife = (f"jackknife over {fit_a.honest_clusters_words}" if honest is not None
+                 else "jackknife")
     lines = ["", "Table 3. Coefficients (arcsec); fit A's sigma, TPOINT's and the honest one "
-             "(jackknife)" + (f"; {reference.citation} beside them, its arcmin times 60"
-                              if terms else ""), "",
+             f"({jackknife})" + (f"; {reference.citation} beside them, its arcmin times 60"
+                                 if terms else ""), "",
              f"{'term':<8}" + "".join(f"{'fit ' + p:>10}" for p in present)
              + f"{'sigma A':>10}{'honest A':>10}"
              + (f"{reference.column:>10}{'s.e.':>7}" if terms else "")]
