@@ -25,13 +25,14 @@ a scan's integrations at a time):
 
 Where the physics does not allow a shared schedule the member is simulated in full
 (:func:`antsim.simulate.runner.simulate`) instead: a member one of whose scans the controller
-would not detect (a gust, a low S/N: with searching enabled it searches, which changes every later time
-and adopts a correction); whole variants when the deterministic run itself searched (a cold
-start: where the controller points then depends on the noise), when the running correction
-follows each scan (``search.update_gain`` > 0), or when an effect's random realisation has no
-member axis (see :attr:`MemberEngine.unshareable`). The weather's wander shifts a real
-member's refraction correction and its true refraction by the same arcseconds and its timing by
-milliseconds; the shared schedule keeps the quiet run's, which changes no pointing error.
+would not detect (a gust, a low S/N: with searching enabled it searches, which changes every
+later time and adopts a correction); whole variants when the deterministic run itself searched
+(a cold start: where the controller points then depends on the noise), when the running
+correction follows each scan (``search.update_gain`` > 0), or when an effect's random
+realisation has no member axis (see :attr:`MemberEngine.unshareable`). The weather's wander
+shifts a real member's refraction correction and its true refraction by the same arcseconds and
+its timing by milliseconds; the shared schedule keeps the quiet run's, which changes no
+pointing error.
 """
 
 from __future__ import annotations
