@@ -375,7 +375,7 @@ def test_heldout_losses_are_refits_without_each_star():
     rows together) equal plain refits without the star, and the fold version equals its own
     refits (rounding only)."""
     from antsim.diagnose.crossval import heldout_losses
-    from antsim.diagnose.problem import _lstsq
+    from antsim.diagnose.linalg import lstsq
 
     obs = synthetic(n=30, extra={"HASA2": 3.0}, seed=9)
     x = term_columns(["IA", "IE", "NPAE", "CA", "AN", "AW", "TF", "TX", "HASA2"], obs)
@@ -388,7 +388,7 @@ def test_heldout_losses_are_refits_without_each_star():
         want = []
         for i in np.flatnonzero(used):
             train = used & ((np.arange(30) != i) if f is None else (folds != folds[i]))
-            coef, _ = _lstsq(x[np.concatenate([train, train])], y[np.concatenate([train, train])])
+            coef, _ = lstsq(x[np.concatenate([train, train])], y[np.concatenate([train, train])])
             r = (y - x @ coef).reshape(2, 30)[:, i]
             want.append(float(r @ r))
         np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)
@@ -631,7 +631,7 @@ def test_auxtel_procedure_predicts_held_out_stars():
     for an automatic 22-term search and 20.16" for the eight terms): at most 4 findings in
     every fold, and the held-out Sky RMS well below the eight terms' (measured 12.7" against
     20.1", a ratio of 0.63; 0.75 would still be 3.7" better, the first finding's worth)."""
-    from antsim.diagnose.problem import _lstsq
+    from antsim.diagnose.linalg import lstsq
 
     obs = load_observations(REAL / "auxtel_20200315.dat")
     y = np.concatenate([obs.xel_arcsec, obs.el_arcsec])
@@ -644,7 +644,7 @@ def test_auxtel_procedure_predicts_held_out_stars():
         for key, names in (("diagnose", d.updated_model().names), ("eight", d.baseline.terms)):
             x = term_columns(list(names), obs)
             rows = np.concatenate([train, train])
-            coef, _ = _lstsq(x[rows], y[rows])
+            coef, _ = lstsq(x[rows], y[rows])
             r = (y - x @ coef).reshape(2, -1)[:, ~train]
             sq[key] += float(np.sum(r**2))
     held = {key: math.sqrt(v / obs.n) for key, v in sq.items()}
@@ -830,7 +830,7 @@ def test_a_candidates_test_is_the_projection_it_states(scaled):
     is 60, rounding is ~1e-14); the masks and the columns identical. A result's columns made
     from another shape than the tested one are refused when read, not returned."""
     from antsim.diagnose.candidates.base import ABSORBED_1MR2, nyholt_trials
-    from antsim.diagnose.problem import _lstsq
+    from antsim.diagnose.linalg import lstsq
 
     problem = _scans_with_unused_and_scaled()
     if not scaled:
@@ -849,7 +849,7 @@ def test_a_candidates_test_is_the_projection_it_states(scaled):
         if not keep.any():  # refraction: TX, in the model already
             assert res.dof == 0 and res.absorbed == names and np.array_equal(res.columns, cols)
             continue
-        coef, cov = _lstsq(perp(cols)[:, keep], z_perp)
+        coef, cov = lstsq(perp(cols)[:, keep], z_perp)
         fitted = perp(cols)[:, keep] @ coef
         assert np.array_equal(res.mask, mask) and res.comp_names == tuple(
             n for n, k in zip(names, keep, strict=True) if k)
@@ -993,7 +993,7 @@ def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits(
     1e-14 at most; the whitened design's condition number is 60, so rounding stays far below
     1e-9 on any machine's BLAS), and the outlier masks the two fits give are identical."""
     from antsim.diagnose.crossval import heldout_losses
-    from antsim.diagnose.problem import _lstsq, _qr, added_basis, heldout_lstsq
+    from antsim.diagnose.linalg import added_basis, economic_qr, heldout_lstsq, lstsq
 
     n = 150
     problem = _scans_with_unused_and_scaled(n)
@@ -1024,7 +1024,7 @@ def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits(
         closed = heldout_lstsq(x, z, labels)
         refit = np.empty(300)
         for k in np.unique(labels):
-            coef, _ = _lstsq(x[labels != k], z[labels != k])
+            coef, _ = lstsq(x[labels != k], z[labels != k])
             refit[labels == k] = (z - x @ coef)[labels == k]
         np.testing.assert_allclose(closed, refit, rtol=1e-9, atol=1e-12)
     assert heldout_lstsq(x, z, np.zeros(300, int)) is None  # nothing left to fit on
@@ -1034,13 +1034,13 @@ def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits(
     ref = []
     for k in range(5):
         train, test = problem.used & (folds != k), problem.used & (folds == k)
-        coef, _ = _lstsq(whole[np.concatenate([train, train])],
+        coef, _ = lstsq(whole[np.concatenate([train, train])],
                          problem.y_raw[np.concatenate([train, train])])
         ref.append(((problem.y_raw - whole @ coef).reshape(2, n) ** 2).sum(axis=0)[test])
     np.testing.assert_allclose(losses, np.concatenate(ref), rtol=1e-9)
     assert rows.sum() == 2 * losses.size
     # the cross-validated stage's path: the model's basis plus the option's columns
-    q0, r0 = _qr(problem.current_columns()[rows])
+    q0, r0 = economic_qr(problem.current_columns()[rows])
     blocks, d1 = added_basis(q0, extra[rows])
     q = np.hstack(blocks)
     np.testing.assert_allclose(q.T @ q, np.eye(q.shape[1]), atol=1e-12)
@@ -1064,7 +1064,7 @@ def test_the_cross_validated_stage_makes_its_options_parameters_before_its_basis
     from antsim.diagnose.candidates.base import Candidate
 
     calls = []
-    qr = crossval._qr
+    qr = crossval.economic_qr
 
     def logged_qr(*args, **kwargs):
         calls.append("basis")
@@ -1076,7 +1076,7 @@ def test_the_cross_validated_stage_makes_its_options_parameters_before_its_basis
             return cv_thetas(self, problem)
         return logged_thetas
 
-    monkeypatch.setattr(crossval, "_qr", logged_qr)
+    monkeypatch.setattr(crossval, "economic_qr", logged_qr)
     for cls in {type(c) for c in CANDIDATES} | {Candidate}:
         if "cv_thetas" in vars(cls):
             monkeypatch.setattr(cls, "cv_thetas", logged(vars(cls)["cv_thetas"]))
@@ -1097,13 +1097,13 @@ def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do(m
     model's span (r^2 = 1 - 1e-8) is left to the full losses (None), and of two options with
     the same columns the first is chosen, as the full losses choose it."""
     from antsim.diagnose.crossval import FoldSums, _best, _losses, contiguous_folds, mimicked
-    from antsim.diagnose.problem import _qr, rows_fortran
+    from antsim.diagnose.linalg import economic_qr, rows_fortran
 
     problem = _scans_with_unused_and_scaled()
     obs, n = problem.obs, problem.n
     folds = contiguous_folds(obs.t_s, 5)
     cur, rows = problem.current_columns(), problem.rows()
-    q0, r0 = _qr(rows_fortran(cur, rows))
+    q0, r0 = economic_qr(rows_fortran(cur, rows))
     d0 = np.abs(np.diag(r0))
     labels = np.concatenate([folds[problem.used]] * 2)
     sums = FoldSums(q0, d0, problem.y_raw[rows], labels, np.flatnonzero(rows))
@@ -1152,7 +1152,7 @@ def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do(m
     assert sums.total(1e-9 * problem.cand(options[0][0].columns(obs, 1)[0])) is None  # tiny
     # a model with dependent columns: the full losses refit fold by fold, no sums
     twice = np.column_stack([cur, cur[:, :1]])
-    q2, r2 = _qr(rows_fortran(twice, rows))
+    q2, r2 = economic_qr(rows_fortran(twice, rows))
     assert FoldSums(q2, np.abs(np.diag(r2)), problem.y_raw[rows], labels,
                     np.flatnonzero(rows)).total(problem.cand(ranked[4][1].columns(
                         obs, None)[0])) is None
@@ -1344,7 +1344,8 @@ def test_the_exact_tilts_analytic_jacobian_ends_where_finite_differences_did(mon
     from scipy import optimize
 
     from antsim.diagnose.candidates import optics
-    from antsim.diagnose.problem import _lstsq, term_columns
+    from antsim.diagnose.linalg import lstsq
+    from antsim.diagnose.problem import term_columns
 
     n = 3000
     rng = np.random.default_rng(30)
@@ -1371,7 +1372,7 @@ def test_the_exact_tilts_analytic_jacobian_ends_where_finite_differences_did(mon
     proj, z_used = optics._projection(problem, problem.used, rows)
     x = np.array(new.theta)
     fd = np.column_stack([proj((err(x + 0.5 * e) - err(x - 0.5 * e)) / 1.0) for e in np.eye(3)])
-    _, cov = _lstsq(fd, z_used)
+    _, cov = lstsq(fd, z_used)
     np.testing.assert_allclose(sig, np.sqrt(np.diag(cov)), rtol=1e-3)
 
 
@@ -1381,7 +1382,8 @@ def test_the_exact_tilts_covariance_is_that_of_the_jacobian_made_again(monkeypat
     the test's theta (3,000 scans, a 30' tilt hidden; the whole search and the subsample's),
     and the best start's cost below theta = 0's so that it is that path."""
     from antsim.diagnose.candidates import optics
-    from antsim.diagnose.problem import _lstsq, term_columns
+    from antsim.diagnose.linalg import lstsq
+    from antsim.diagnose.problem import term_columns
 
     n = 3000
     problem, perp, z_perp, tilt = _tilted(n, np.random.default_rng(30))
@@ -1393,11 +1395,11 @@ def test_the_exact_tilts_covariance_is_that_of_the_jacobian_made_again(monkeypat
         res = tilt.test(problem, perp, z_perp, float(z_perp @ z_perp))
         assert res.delta_chi2 > 100.0
         again = np.column_stack([proj(row) for row in err.jac_rows(np.array(res.theta))])
-        np.testing.assert_array_equal(res.cov, _lstsq(again, z_used)[1])
+        np.testing.assert_array_equal(res.cov, lstsq(again, z_used)[1])
 
 def _svd_reference_lstsq(a: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The pseudo-inverse least squares by the SVD of the whole ``a`` (what
-    :func:`antsim.diagnose.problem._lstsq` computed before its tall-matrix paths)."""
+    :func:`antsim.diagnose.problem.lstsq` computed before its tall-matrix paths)."""
     u, s, vt = np.linalg.svd(a, full_matrices=False)
     keep = s > 1e-10 * s[0]
     inv = np.where(keep, 1.0 / np.where(keep, s, 1.0), 0.0)
@@ -1409,31 +1411,31 @@ def _svd_reference_lstsq(a: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.n
                                               (2000, 3, 10.1), (2000, 6, 1e6),
                                               (2000, 10, 1e12), (6, 4, 30.0)])
 def test_least_squares_paths_are_the_svds_solution(rows, cols, cond):
-    """Two code paths: :func:`_lstsq` on a tall matrix (the normal equations when its
+    """Two code paths: :func:`lstsq` on a tall matrix (the normal equations when its
     condition number is at most 10, else a QR without Q and the SVD of R) against the SVD of
     the whole. Tolerance: the normal equations' rounding grows as cond^2 eps (100 x 2.2e-16
     here), the QR's like the SVD's own (both backward stable); 1e-12 of the largest
     coefficient (and covariance entry) is a factor 40 over the first bound (measured at
     most 7e-14, at cond 9.9; 3e-15 at cond 1e12). A rank-deficient matrix gets the SVD's
     minimum-norm solution, and a NaN the SVD's ValueError."""
-    from antsim.diagnose.problem import _lstsq
+    from antsim.diagnose.linalg import lstsq
 
     rng = np.random.default_rng(rows + cols)
     u, _ = np.linalg.qr(rng.normal(size=(rows, cols)))
     v, _ = np.linalg.qr(rng.normal(size=(cols, cols)))
     a = (u * np.geomspace(1.0, 1.0 / cond, cols)) @ v.T * 7.0
     for z in (rng.normal(size=rows), rng.normal(size=(rows, 3))):
-        coef, cov = _lstsq(a, z)
+        coef, cov = lstsq(a, z)
         ref_coef, ref_cov = _svd_reference_lstsq(a, z)
         np.testing.assert_allclose(coef, ref_coef, rtol=0, atol=1e-12 * np.abs(ref_coef).max())
         np.testing.assert_allclose(cov, ref_cov, rtol=0, atol=1e-12 * np.abs(ref_cov).max())
     twice = np.column_stack([a[:, 0], 2.0 * a[:, 0]])  # rank 1: the same minimum-norm answer
     z = rng.normal(size=rows)
-    np.testing.assert_allclose(_lstsq(twice, z)[0], _svd_reference_lstsq(twice, z)[0],
+    np.testing.assert_allclose(lstsq(twice, z)[0], _svd_reference_lstsq(twice, z)[0],
                                rtol=1e-12)
     a[rows // 2, 0] = np.nan
     with pytest.raises(ValueError, match="infs or NaNs"):
-        _lstsq(a, z)
+        lstsq(a, z)
 
 
 def test_cached_factors_let_the_least_recently_used_go_first(monkeypatch):
@@ -1543,7 +1545,7 @@ def test_rows_gathered_into_fortran_order_a_block_at_a_time_are_the_whole_gather
     order (a copy and one product per element either way), over several blocks, a last
     partial one, a strided view and into columns of a larger array; blocks of
     FORTRAN_BLOCK_ELEMENTS // k rows for these k = 4 and 7 columns (at least FORTRAN_BLOCK)."""
-    from antsim.diagnose.problem import FORTRAN_BLOCK_ELEMENTS, take_rows_fortran
+    from antsim.diagnose.linalg import FORTRAN_BLOCK_ELEMENTS, take_rows_fortran
 
     rng = np.random.default_rng(5)
     n = 3 * FORTRAN_BLOCK_ELEMENTS // 4 + 17
@@ -1572,7 +1574,7 @@ def test_rows_near_the_threshold_found_a_block_at_a_time_are_the_wholes():
     (OpenBLAS's threads split the whole's rows where they like: rounding then differs), for
     the leading columns, chosen columns and none, over whole blocks and a partial one."""
     from antsim.blas import one_blas_thread
-    from antsim.diagnose.problem import QT_BLOCK, near_rows
+    from antsim.diagnose.linalg import QT_BLOCK, near_rows
 
     rng = np.random.default_rng(12)
     n_rows = 3 * QT_BLOCK + 4094  # an odd tail of rows beside whole blocks
@@ -1596,7 +1598,7 @@ def test_blocked_products_over_the_models_basis_match_the_whole_to_rounding():
     another order it moves by at most ~n eps |a| |b| = 4e-12 |a| |b| in the worst case,
     ~sqrt(n) eps typically: the bound below, 1e-12 of |a| |b| by Cauchy-Schwarz, is 100
     times the typical rounding and far below the 6 digits diagnose prints)."""
-    from antsim.diagnose.problem import QT_BLOCK, qt_dot, shape_products
+    from antsim.diagnose.linalg import QT_BLOCK, qt_dot, shape_products
 
     rng = np.random.default_rng(11)
     n_rows = 2 * QT_BLOCK + 3001  # two whole blocks and a partial one

@@ -311,11 +311,11 @@ class Harness:
 
     def absorbed_terms(self, error: np.ndarray) -> np.ndarray:
         """The baseline terms' coefficients (arcsec) of :meth:`absorbed`."""
-        from .problem import _lstsq
+        from .linalg import lstsq
 
         prob = self.ref.problem
         rows = np.concatenate([prob.valid, prob.valid])
-        coef, _ = _lstsq(prob.base[rows], error[rows])
+        coef, _ = lstsq(prob.base[rows], error[rows])
         return coef
 
     # ------------------------------------------------------------------ cases
@@ -389,7 +389,8 @@ def _absorb_linear(scenario, params: dict[str, Any]):
     from antsim.world.effects.optics import ExactTiltCollimation
     from controller.pointing.model import PointingModel
 
-    from .problem import _lstsq, term_columns
+    from .linalg import lstsq
+    from .problem import term_columns
 
     model = scenario.controller.model
     az, el = np.meshgrid(np.radians(np.arange(0.0, 360.0, 10.0)),
@@ -404,7 +405,7 @@ def _absorb_linear(scenario, params: dict[str, Any]):
                        el_arcsec=az * 0, good=np.ones(az.size, bool))
     err = np.concatenate([d_az * np.cos(el), e_enc - el]) * 206264.80624709636
     cols = term_columns(model.names, geo)
-    coef, _ = _lstsq(cols, err)
+    coef, _ = lstsq(cols, err)
     return PointingModel(model.terms, model.values_arcsec + coef, model.name)
 
 

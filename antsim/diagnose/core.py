@@ -22,11 +22,11 @@ from .baseline import (
 )
 from .candidates.terms import TermsCandidate
 from .data import Observations
+from .linalg import lstsq
 from .locate import Location, locate, where_signal
 from .problem import (
     Prediction,
     Problem,
-    _lstsq,
     folds_for,
     folds_words,
     heldout_sky_rms,
@@ -150,7 +150,7 @@ class Diagnosis:
                 term_names.append(None)
         x = np.column_stack(cols)
         rows = p.rows()
-        coef, _ = _lstsq(x[rows], p.y_raw[rows])
+        coef, _ = lstsq(x[rows], p.y_raw[rows])
         names = list(p.base_terms)
         values = list(coef[: len(names)])
         k = len(names)
@@ -510,7 +510,7 @@ def fit_variants_before_after(diag: Diagnosis) -> dict[str, Any]:
     p = diag.problem
     cols = p.current_columns()
     rows = p.rows()
-    coef, _ = _lstsq(cols[rows], p.y_raw[rows])
+    coef, _ = lstsq(cols[rows], p.y_raw[rows])
     k = len(p.base_terms)
     signal = cols[:, k:] @ coef[k:] if cols.shape[1] > k else np.zeros(2 * obs.n)
     n = obs.n

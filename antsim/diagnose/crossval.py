@@ -31,16 +31,16 @@ import numpy as np
 import scipy.linalg
 
 from .candidates.base import DISTINGUISH_R, Candidate, TestResult, p_value, with_trials
-from .problem import (
+from .linalg import (
     HELDOUT_MIN_EIG,
-    Problem,
-    _lstsq,
-    _qr,
     added_basis,
+    economic_qr,
     heldout_lstsq,
+    lstsq,
     qt_dot,
     rows_fortran,
 )
+from .problem import Problem
 
 __all__ = ["MAX_FINDINGS_CV", "contiguous_folds", "heldout_losses", "heldout_sky_rms",
            "loo_blocks", "loo_residuals", "loo_rms", "mimicked", "orthonormal"]
@@ -124,7 +124,7 @@ def heldout_losses(x: np.ndarray | tuple[np.ndarray, ...], y: np.ndarray, used: 
     for k in np.unique(folds[used]):
         test = used & (folds == k)
         train = used & (folds != k)
-        coef, _ = _lstsq(x[np.concatenate([train, train])], y[np.concatenate([train, train])])
+        coef, _ = lstsq(x[np.concatenate([train, train])], y[np.concatenate([train, train])])
         r = (y - x @ coef).reshape(2, n)
         out[test] = r[0, test] ** 2 + r[1, test] ** 2
     return out[used]
@@ -223,7 +223,7 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
         cur = problem.current_columns()
         # the model's basis over the used rows once; each option adds its columns to it
         rows = problem.rows()
-        q0, r0 = _qr(rows_fortran(cur, rows), overwrite=True)
+        q0, r0 = economic_qr(rows_fortran(cur, rows), overwrite=True)
         d0 = np.abs(np.diag(r0))
         now = heldout_losses(cur, problem.y_raw, problem.used, folds, (q0, d0))
         idx = np.flatnonzero(rows)

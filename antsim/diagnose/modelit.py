@@ -29,7 +29,8 @@ from controller.pointing.fitting import fit_model
 
 from .candidates.terms import TermsCandidate
 from .core import Diagnosis, Finding, _plain
-from .problem import Problem, _lstsq
+from .linalg import lstsq
+from .problem import Problem
 
 __all__ = ["effect_specs", "resimulate", "updated_scenario_text", "write_outputs"]
 
@@ -193,7 +194,7 @@ def residuals_before_after(diag: Diagnosis):
     out = []
     for names, cols, key in ((list(p.base_terms), p.base, "before"),
                              (after_names, p.current_columns(), "after")):
-        coef, _ = _lstsq(cols[rows], p.y_raw[rows])
+        coef, _ = lstsq(cols[rows], p.y_raw[rows])
         r = (p.y_raw - cols @ coef).reshape(2, -1)[:, good]
         out.append(Residuals(names, r[0], r[1], used, diag.summary[f"sky_rms_{key}_arcsec"]))
     return data, out[0], out[1]

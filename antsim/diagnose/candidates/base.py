@@ -16,7 +16,8 @@ from controller.units import ARCSEC_PER_RAD
 
 from .. import pvalues
 from ..data import Observations
-from ..problem import Problem, _lstsq, qt_dot
+from ..linalg import lstsq, qt_dot
+from ..problem import Problem
 
 __all__ = ["DISTINGUISH_R", "Candidate", "TestResult", "nyholt_gram", "nyholt_trials", "obs_key",
            "p_value", "periodic_interp", "source_rates_arcsec_s", "stacked", "sun_el_grid_deg",
@@ -410,7 +411,8 @@ class Candidate:
         over the same scans (the same least-squares problem); None where a column kept is
         within GRAM_1MR2_MIN of the model's span or the kept ones' Gram is ill-conditioned
         (the explicit path then serves)."""
-        from ..problem import GRAM_1MR2_MIN, gram_solve
+        from ..linalg import gram_solve
+        from ..problem import GRAM_1MR2_MIN
 
         k = raw.shape[1]
         j = slice(0, k) if problem.unscaled else slice(k, 2 * k)  # the raw signature's
@@ -476,7 +478,7 @@ class Candidate:
             xk, coef, cov = xp, last[0].coef[-xp.shape[1]:], last[0].cov
         else:
             xk = xp[:, keep]
-            coef, cov = _lstsq(xk, z_perp)
+            coef, cov = lstsq(xk, z_perp)
         fitted = xk @ coef
         r = np.sqrt(np.clip(1.0 - one_minus_r2[keep], 0.0, 1.0))
         return TestResult(self, float(fitted @ fitted), int(keep.sum()), 1.0, 1.0, theta,
@@ -531,7 +533,7 @@ class Candidate:
             beta = problem.coef_on_current(x, res.mask)
             if beta is None:
                 a = problem.T(problem.current_columns(), res.mask)
-                beta, _ = _lstsq(a, x)
+                beta, _ = lstsq(a, x)
                 norms = np.linalg.norm(a, axis=0)
             else:  # the whitened model's column norms are its R's (Q is orthonormal)
                 norms = problem.current_norms(res.mask)

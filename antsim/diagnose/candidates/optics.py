@@ -15,7 +15,8 @@ from controller.units import ARCSEC_PER_RAD, RAD_PER_ARCMIN
 
 from .. import pvalues
 from ..data import Observations
-from ..problem import _lstsq, term_columns
+from ..linalg import lstsq
+from ..problem import term_columns
 from .base import (
     Candidate,
     TestResult,
@@ -260,7 +261,7 @@ class ExactTiltCandidate(Candidate):
         best_x, best_c, base, (err, proj, z_perp, jac) = self._fit(problem, used, starts, lin)
         dchi2 = max(base - best_c, 0.0)
         # covariance from the Jacobian at the optimum (least_squares' is resid_jac's: minus)
-        _, cov = _lstsq(np.column_stack([proj(row) for row in err.jac_rows(best_x)])
+        _, cov = lstsq(np.column_stack([proj(row) for row in err.jac_rows(best_x)])
                         if jac is None else np.negative(jac, order="C"), z_perp)
         cols = self._shown(problem, None, lin)(best_x)[:, None]
         res = TestResult(self, dchi2, self.REFERENCE_DOF, 1.0, 1.0, tuple(best_x), cols,
@@ -268,7 +269,7 @@ class ExactTiltCandidate(Candidate):
                          chi2_now=base)
         res.p = p_value(problem, dchi2, self.REFERENCE_DOF, base)
         # correlation of the nonlinear part (the error minus its best linear AN/AW/CA fit)
-        beta, _ = _lstsq(lin, cols[:, 0])
+        beta, _ = lstsq(lin, cols[:, 0])
         quad = (cols[:, 0] - lin @ beta)[:, None]
         xp = perp(quad)
         full = np.linalg.norm(problem.T(quad))
@@ -305,7 +306,7 @@ class ExactTiltCandidate(Candidate):
 
     def nonlinear_part(self, obs, signal):
         lin = term_columns(("AN", "AW", "CA"), obs)
-        beta, _ = _lstsq(lin, signal)
+        beta, _ = lstsq(lin, signal)
         return signal - lin @ beta
 
     def effect_params(self, shape, amplitude):

@@ -11,7 +11,8 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ..data import Observations
-from ..problem import Problem, _lstsq
+from ..linalg import lstsq
+from ..problem import Problem
 from .base import (
     GRID_STEP_S,
     Candidate,
@@ -292,7 +293,7 @@ class SunsetCandidate(_LaggedCandidate):
             / (2 * h) * float(res.coef[0])
         perp, z_perp = problem.perp_for(res.mask)
         jac = perp(np.column_stack([res.columns, problem.cand(d)]))
-        _, cov2 = _lstsq(jac, z_perp)
+        _, cov2 = lstsq(jac, z_perp)
         res.cov = cov2
         res.refit = self._refit_factory(problem)
         return res
@@ -432,7 +433,7 @@ class TemperatureCandidate(_LaggedCandidate):
                  - self.columns(obs, tau * math.exp(-h))[0]) / (2 * h) * float(res.coef[0])
             perp, z_perp = problem.perp_for(res.mask)
             jac = perp(np.column_stack([res.columns, problem.cand(d)]))
-            _, res.cov = _lstsq(jac, z_perp)
+            _, res.cov = lstsq(jac, z_perp)
 
         def refit(train: np.ndarray) -> np.ndarray:
             best_d, best_tau = -1.0, taus[0]
