@@ -12,7 +12,6 @@ import numpy as np
 from controller.pointing.model import PointingModel
 
 from ..blas import one_blas_thread
-from ..heap import trim_heap
 from .baseline import (
     BaselineSpec,
     SimulatedBaseline,
@@ -396,10 +395,6 @@ def _diagnose(obs: Observations, scenario, model: str | None, n_sims: int, cache
     }
     diag = Diagnosis(obs, spec, prediction, problem, location, selection, findings, summary,
                      sim_baseline=sim_baseline)
-    # the robust fits' solver allocates on the C heap: not beside the summary's residuals
-    # and the selection's freed, still resident pages (200,000 scans: 60-170 MiB)
-    del held, raw
-    trim_heap()
     diag.variants = fit_variants_before_after(diag)
     diag.runtime_s = time.perf_counter() - t0
     return diag

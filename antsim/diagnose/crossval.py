@@ -255,9 +255,6 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
         new, c, theta, raw, names = best
         perp, z_perp = problem.perp_for(problem.used)
         res = _tested(problem, c, theta, raw, names, perp, z_perp, tried)
-        # the model's factor and projector: not asked for by the fits below
-        del perp, z_perp
-        problem.release()
         if not res.testable:
             break
         sky_before = problem.sky_rms()

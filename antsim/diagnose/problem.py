@@ -20,7 +20,6 @@ import scipy.linalg
 from controller.pointing.model import PointingModel
 from controller.pointing.terms import basis_columns
 
-from ..heap import trim_heap
 from . import pvalues
 from .data import Observations
 from .linalg import (
@@ -312,6 +311,9 @@ class Problem:
         ``name:component``; returns the model's columns before it (kept: the finding's
         fitted signal is taken off them)."""
         before = self.current_columns()
+        # the factors and projectors cached are of the model without it: never asked again
+        self._perps.clear()
+        self._perp_bytes.clear()
         self.extra.append(extra)
         self.extra_names.extend(f"{name}:{n}" for n in comp_names)
         return before
@@ -550,16 +552,6 @@ class Problem:
             self._cache(key, hit, 8 * zp.size)
         return hit
 
-    def release(self, keep: np.ndarray | None = None) -> None:
-        """Drop the cached projectors and factors (selection calls it when it is done: what
-        follows fits whole designs), but those of the current model over the scans ``keep``
-        when given (what is asked for next)."""
-        held = set() if keep is None else {
-            p + keep.tobytes() + bytes([len(self.extra)]) for p in (b"", b"qr", b"sb")}
-        for k in [k for k in self._perps if k not in held]:
-            del self._perps[k]
-            self._perp_bytes.pop(k, None)
-
     def _cache(self, key: bytes, value, size: int) -> None:
         """Keep ``value`` among the cached projectors and factors: at most 64 of them and
         PERP_CACHE_BYTES together (each holds a basis, 2 n_used x k floats: 200,000 scans
@@ -617,7 +609,6 @@ class Problem:
     def update_outliers(self, iterations: int = 2) -> None:
         """Reject scans whose standardized residual exceeds OUTLIER_Z on either axis (and,
         with unknown noise, re-estimate each axis' noise scale from the kept scans)."""
-        trim_heap()  # fits of the whole design follow: not beside freed, resident heap
         for _ in range(iterations):
             f = self.fit_current()
             if not self.pred.known_noise:
@@ -747,7 +738,6 @@ class Problem:
             columns = self.current_columns()
             if extra is not None:
                 columns = np.column_stack([columns, extra])
-        trim_heap()  # a copy of the design's used rows follows
         rows = self.rows(used)
         coef, _ = lstsq(columns[rows], self.y_raw[rows])
         r = (self.y_raw - columns @ coef).reshape(2, -1)[:, used]
@@ -762,7 +752,6 @@ class Problem:
         white or ``refit`` is given). ``refit(train_mask) -> columns`` re-derives nonlinear
         shapes on the training data."""
         used = self.used if used is None else used
-        trim_heap()  # a whitened copy of the design follows
         blocks = columns if isinstance(columns, tuple) else (columns,)
         if refit is None and self.white(used):
             lab = folds[used]

@@ -40,7 +40,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..heap import trim_heap
 from . import pvalues
 from .candidates.base import DISTINGUISH_R, Candidate, TestResult, p_value
 from .candidates.library import CANDIDATES
@@ -210,7 +209,6 @@ def _fitted_signal(problem: Problem, cols: np.ndarray, extra: np.ndarray) -> np.
     model's own terms can take (what the finding adds). The joint fit is the current
     model's (:meth:`Problem.fit_current`): the outlier update after the finding starts
     from it, not from a fit of the same design again."""
-    trim_heap()  # the joint design follows: not beside freed, resident heap
     f = problem.fit_current()
     signal = extra @ f.coef[cols.shape[1]:]
     beta, *_ = np.linalg.lstsq(problem.T(cols), problem.T(signal), rcond=None)
@@ -247,7 +245,7 @@ class _Correlations:
     """:func:`_signal_corr` over one round's projector ``perp``, each candidate's projected
     fitted signature and each pair's correlation made once: the simpler-equivalent check
     and the alternatives ask for the same pairs (each a projection of 2 n_used rows and a
-    least-squares fit). Holds the projector (the model's basis): let it go with the round's."""
+    least-squares fit)."""
 
     def __init__(self, problem: Problem, perp):
         self.problem, self.perp = problem, perp
@@ -288,14 +286,12 @@ def _single_terms(candidates: tuple[Candidate, ...]) -> list[str]:
 def _simplest_form(problem: Problem, res: TestResult, vocabulary: list[str]
                    ) -> SimplestForm | None:
     """One TPOINT term that explains as much as the finding's terms (None if none does, or
-    the finding is one term already). Selection calls it as it accepts ``res``: the model's
-    cached factors are let go once its projection is done."""
+    the finding is one term already)."""
     if not isinstance(res.candidate, TermsCandidate) or len(res.comp_names) < 2:
         return None
     names = [t for t in vocabulary if t not in _model_terms(problem)]
     if not names:
         return None
-    trim_heap()  # a factor over the finding's scans and the chunks' columns follow
     perp, z_perp = problem.perp_for(res.mask)
     # a few terms at a time: the whole vocabulary's columns over 200,000 scans are 0.5 GB
     # per copy, and each column's numbers are its own
@@ -304,9 +300,6 @@ def _simplest_form(problem: Problem, res: TestResult, vocabulary: list[str]
         part = slice(start, start + SIMPLEST_CHUNK)
         xp = perp(problem.cand(term_columns(names[part], problem.obs)))
         norm2[part], xz[part] = np.einsum("ij,ij->j", xp, xp), xp.T @ z_perp
-    del xp, perp, z_perp  # not alive beside the fits below (2 n x chunk, 2 n x m floats)
-    # the finding is being accepted: the model's cached factors are not asked for again
-    problem.release()
     with np.errstate(invalid="ignore", divide="ignore"):
         gain = np.where(norm2 > 1e-9 * max(float(norm2.max()), 1e-300), xz ** 2 / norm2, 0.0)
     best = int(np.argmax(gain))
@@ -331,7 +324,6 @@ def _alternatives(problem: Problem, corr_of: _Correlations, r: TestResult,
     """The significant candidates the data cannot distinguish from ``r`` or that fit almost
     as well, and the other orders of a harmonic family (``TestResult.siblings``, of ``r``'s
     own or of another candidate's) that the data cannot distinguish from it."""
-    trim_heap()  # the alternatives' projections follow: not beside freed, resident heap
     out = []
     n_obs = 2 * int(problem.used.sum())
     siblings = [s for o in ranked for s in o.siblings]
@@ -433,9 +425,6 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
                 continue
             if any(r.result.name == c.name for r in refused):
                 continue
-            # a factor over other scans than the model's (a shape's mask on the explicit
-            # path, 2 n x m floats) served its own test: not kept beside the next ones
-            problem.release(keep=problem.used)
             res = c.test(problem, perp, z_perp, chi2_now)
             if not res.testable:
                 if round_no == 0:
@@ -473,16 +462,7 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
         alternatives = _alternatives(problem, corr_of, r, ranked, n_family, alpha)
         separation = Separation(r.r_model, r.partners, local_sigma(problem, r),
                                 correlation_words(r.name, r.r_model, r.partners))
-        # every cached factor and projector is of the model without ``r`` (keyed by the
-        # number of accepted columns): none is asked for again after the simplest form's
-        # projection; let them go (and this round's projector) before the fits of the
-        # whole design below
-        perp = z_perp = corr_of = None
-        # the simplest form projects over the finding's scans: the factors over others (the
-        # model's used scans' among them, 2 n x m floats) are not beside its own
-        problem.release(keep=r.mask)
         simplest = _simplest_form(problem, r, vocabulary)
-        problem.release()
         before = problem.sky_rms()
         extra = r.columns  # read once (a result may make its columns again when read)
         after = problem.sky_rms_added(extra)
@@ -501,7 +481,6 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
             break
     if stop == "no further candidate is significant":
         refused += _below_detection(problem, offsets, n_family, alpha)
-    del perp, z_perp  # the last round's projector (2 n x m floats): not used below
     if not known and steps and len(steps) < MAX_FINDINGS_CV:
         added = _cross_validated(problem, usable, accepted, n_family,
                                  MAX_FINDINGS_CV - len(steps))
@@ -511,7 +490,6 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
         if added:
             stop = (f"the limit of {MAX_FINDINGS_CV} findings" if len(steps) >= MAX_FINDINGS_CV
                     else "no further candidate lowers the held-out Sky RMS")
-    problem.release()  # no factor is asked for below: not beside the whole design's fit
     # channel candidates (other recorded quantities): decided once, in the same family
     sky = problem.sky_rms()
     for r in channel_results:
@@ -521,8 +499,6 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
     # best first; the cross-validated findings after the significant ones, in the order
     # they were added (each one's held-out figures continue the previous one's)
     steps.sort(key=lambda s: (s.heldout is not None, s.log_p if s.heldout is None else 0.0))
-    for c in usable:  # what they kept for these recordings: not asked for again
-        c.release()
     return Selection(steps, refused, absorbed, first_round, not_applicable, n_family,
                      gof_before, problem.gof(), stop)
 
@@ -531,7 +507,6 @@ def _cross_validated(problem: Problem, usable: list[Candidate], accepted: set[st
                      n_family: int, room: int) -> list[Step]:
     """The cross-validated stage (:mod:`.crossval`) as findings, with their statistics (the
     family-corrected p-value of each, every option tried counted as a trial)."""
-    trim_heap()  # the stage's bases follow: not beside the rounds' freed, resident heap
     out = []
     for res, heldout, (before, after), signal in cv_stage(
             problem, usable, accepted, _model_terms(problem), room, _fitted_signal):

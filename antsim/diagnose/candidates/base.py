@@ -19,7 +19,7 @@ from ..data import Observations
 from ..linalg import lstsq, qt_dot
 from ..problem import Problem
 
-__all__ = ["DISTINGUISH_R", "Candidate", "TestResult", "nyholt_gram", "nyholt_trials", "obs_key",
+__all__ = ["DISTINGUISH_R", "Candidate", "TestResult", "nyholt_gram", "nyholt_trials",
            "p_value", "periodic_interp", "source_rates_arcsec_s", "stacked", "sun_el_grid_deg",
            "time_grid", "with_trials"]
 
@@ -130,18 +130,6 @@ def source_rates_arcsec_s(obs: Observations) -> tuple[np.ndarray, np.ndarray]:
     d_e = SIDEREAL_RATE_RAD_S * math.cos(phi) * np.sin(a)
     d_a = SIDEREAL_RATE_RAD_S * (math.sin(phi) - math.cos(phi) * np.cos(a) * np.tan(e))
     return d_a * np.cos(e) * ARCSEC_PER_RAD, d_e * ARCSEC_PER_RAD
-
-
-def obs_key(obs: Observations) -> tuple:
-    """A content key for per-observation caches (never ``id``, which Python reuses)."""
-    import hashlib
-
-    h = hashlib.blake2b(digest_size=12)
-    for arr in (obs.t_s, obs.air_temp_c, obs.sun_el_deg, obs.good):
-        if arr is not None:
-            h.update(np.ascontiguousarray(arr).tobytes())
-    h.update(str(sorted(obs.meta.items())).encode())
-    return (obs.n, h.hexdigest(), obs.air_daily_c is not None)
 
 
 def time_grid(obs: Observations) -> np.ndarray:
@@ -330,10 +318,6 @@ class Candidate:
     def thetas(self, obs: Observations) -> list[Any]:
         return [None]
 
-    def release(self) -> None:
-        """Drop what the candidate keeps between its tests of the recordings last seen
-        (:func:`..select.select` calls it once it is done with them)."""
-
     def cv_thetas(self, problem) -> list[Any]:
         """The shapes the cross-validated stage (:mod:`..crossval`) compares: all of them
         unless there is one per scan (a step's change time)."""
@@ -358,9 +342,11 @@ class Candidate:
         # with q^T x (q the model's basis there; zero for a column projected off it already)
         grid = np.empty((z_perp.size, len(thetas))) if len(thetas) > 1 else None
         qgrid: list[np.ndarray | None] = []
+        tested: dict[Any, float] = {}  # each theta -> its delta chi^2 (refine starts there)
         for theta in thetas:
             cols, names = self.columns(obs, theta)
             res, xu, qxu = self._linear_xp(problem, cols, names, theta)
+            tested[theta] = res.delta_chi2
             if cols.shape[1] == 1 and grid is not None:
                 grid[:, len(qgrid)] = xu[:, 0] if xu is not None \
                     else perp(problem.cand(cols))[:, 0]
@@ -369,7 +355,7 @@ class Candidate:
                 best = res
             del cols, xu
         assert best is not None
-        best = self.refine(problem, perp, z_perp, best)
+        best = self.refine(problem, perp, z_perp, best, tested)
         best.trials = _grid_trials(problem, grid[:, :len(qgrid)], qgrid) \
             if len(qgrid) > 1 else 1.0
         del grid
@@ -379,7 +365,10 @@ class Candidate:
             self._finish(problem, best)
         return best
 
-    def refine(self, problem: Problem, perp, z_perp, best: TestResult) -> TestResult:
+    def refine(self, problem: Problem, perp, z_perp, best: TestResult,
+               grid: dict[Any, float]) -> TestResult:
+        """The best result refined beyond the grid of :meth:`thetas` (``grid``: each theta
+        tested -> its delta chi^2); the grid's best as it is by default."""
         return best
 
     def _linear(self, problem: Problem, perp, z_perp, cols: np.ndarray,
