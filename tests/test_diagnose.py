@@ -22,6 +22,7 @@ from antsim.diagnose.candidates.base import source_rates_arcsec_s
 from antsim.diagnose.candidates.library import CANDIDATES, candidate
 from antsim.diagnose.data import Observations
 from antsim.diagnose.problem import term_columns
+from antsim.diagnose.shapefit import shape_fit
 from antsim.world.effects import EFFECTS
 from antsim.world.effects.harmonics import HARMONIC_EFFECTS, AzimuthTrack2A
 from controller.units import RAD_PER_ARCSEC
@@ -871,7 +872,7 @@ def test_a_candidates_test_is_the_projection_it_states(scaled):
 @pytest.mark.parametrize("scaled", [True, False])
 def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
     """Two code paths: a shape's test from inner products with the model's cached basis over
-    its used scans (:meth:`Problem.shape_fit`: one pass over it, the other scan sets the
+    its used scans (:func:`shape_fit`: one pass over it, the other scan sets the
     outlier mask tries by row corrections, the mask from a bound on what the rest of the
     fit changes) against the explicit projections it replaces (:meth:`_linear_explicit`,
     today's reference). 150 scans, some unused, noise and offset scale per scan, a 30"
@@ -897,7 +898,7 @@ def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
         raw, names = c.columns(obs, theta)
         fast = c._linear_xp(problem, raw, names, theta)[0]
         ref = c._linear_explicit(problem, raw, problem.cand(raw), names, theta)[0]
-        served.append(problem.shape_fit(raw) is not None)
+        served.append(shape_fit(problem, raw) is not None)
         assert fast.dof == 0 or np.array_equal(fast.columns, ref.columns)
         checked.append((fast, ref))
     # columns that take back the scans the model rejects (each one's error, plus a shape
@@ -911,7 +912,7 @@ def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
     fast = c._linear_xp(problem, raw, names, None)[0]
     ref = c._linear_explicit(problem, raw, problem.cand(raw), names, None)[0]
     assert out.size == 2 and fast.mask[out].all()
-    served.append(problem.shape_fit(raw) is not None)
+    served.append(shape_fit(problem, raw) is not None)
     checked.append((fast, ref))
     for fast, ref in checked:
         assert np.array_equal(fast.mask, ref.mask) and fast.dof == ref.dof
@@ -926,7 +927,7 @@ def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
     # the partners' inputs: the columns' coefficients on the model over the mask (here
     # not the model's scans) and the model's whitened column norms there, against its
     # factor over those scans
-    r = problem._current_qr(problem.used)[1]
+    r = problem.factors.qr(problem.used).r
     on_model, gram = fast._on_model
     x = problem.T(problem.cand(raw), fast.mask)
     np.testing.assert_allclose(scipy.linalg.solve_triangular(r, on_model),
@@ -956,7 +957,7 @@ def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
 def test_a_partly_absorbed_signature_is_fitted_on_the_columns_the_model_leaves():
     """A signature one of whose columns is in the model's span (TX beside az_track_2a's sin
     2A and cos 2A, offset scale 1: what an accepted term leaves of a signature) is tested
-    from inner products (:meth:`Problem.shape_fit`; the explicit path served it before), its
+    from inner products (:func:`shape_fit`; the explicit path served it before), its
     outlier mask fitted on the columns the model leaves a part of (the explicit path fitted
     the in-span column's rounding-level remainder too). Against the explicit path on those
     columns and on all of them: the same mask, kept and absorbed columns, and numbers to
@@ -969,7 +970,7 @@ def test_a_partly_absorbed_signature_is_fitted_on_the_columns_the_model_leaves()
     two_a, names2 = c.columns(obs, None)
     raw = np.column_stack([term_columns(("TX",), obs), two_a])
     names = ("TX", *names2)
-    assert problem.shape_fit(raw) is not None
+    assert shape_fit(problem, raw) is not None
     fast = c._linear_xp(problem, raw, names, None)[0]
     assert fast.absorbed == ("TX",) and fast.comp_names == names2 and fast.dof == len(names2)
     for ref in (c._linear_explicit(problem, two_a, two_a, names2, None)[0],
@@ -1159,11 +1160,12 @@ def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do(m
     assert _best(problem, cur, q0, d0, folds, []) is None
 
 
-def test_the_current_models_fits_are_kept_while_what_they_depend_on_stays():
-    """The current model's last fit (:meth:`Problem.fit_current`) and raw residuals
-    (:meth:`Problem.raw_residuals`, alone or with a finding's columns) are reused while the
-    scans, the noise scale and the model stay, and made again (the same numbers as a fresh
-    fit, bit for bit: one code path) when any of them changes."""
+def test_the_current_models_fit_is_kept_while_what_it_depends_on_stays():
+    """The current model's last fit (:meth:`Problem.fit_current`) is reused while the scans,
+    the noise scale and the model stay, and made again (the same numbers as a fresh fit,
+    bit for bit: one code path) when any of them changes; its raw residuals
+    (:meth:`Problem.raw_residuals`, alone or with a finding's columns) are those of the
+    stacked design."""
     problem = _scans_with_unused_and_scaled()
     n = problem.n
     az = problem.obs.az_rad
@@ -1185,18 +1187,11 @@ def test_the_current_models_fits_are_kept_while_what_they_depend_on_stays():
     less[np.flatnonzero(less)[:5]] = False
     assert same(problem.fit_current(less), problem.fit(problem.current_columns(), less))
     r = problem.raw_residuals()
-    assert problem.raw_residuals() is r and problem.raw_residuals(
-        problem.current_columns()) is r
+    np.testing.assert_array_equal(problem.raw_residuals(problem.current_columns()), r)
     whole = np.column_stack([problem.current_columns(), extra])
     added = problem.sky_rms_added(extra)
     assert added == problem.sky_rms(whole) and problem.sky_rms_added(extra) == added
-    kept = problem._raw_memo[-1][1]
-    assert problem.sky_rms_added(extra.copy()) == added and problem._raw_memo[-1][1] is kept
-    assert problem.raw_residuals() is r  # the last two kept
     assert problem.sky_rms_added(extra[:, :1]) != added  # other columns: fitted again
-    problem.sky_rms_added(extra[:, 1:])
-    assert problem.raw_residuals() is not r
-    np.testing.assert_array_equal(problem.raw_residuals(), r)
     problem.extra.append(extra)
     problem.extra_names += ["x:HESA2", "x:HECA2"]
     assert same(problem.fit_current(), problem.fit(whole))
@@ -1439,49 +1434,48 @@ def test_least_squares_paths_are_the_svds_solution(rows, cols, cond):
 
 
 def test_cached_factors_let_the_least_recently_used_go_first(monkeypatch):
-    """The model's cached QR factors and projectors stay within PERP_CACHE_BYTES, and the
+    """The model's cached QR factors and projectors stay within FACTOR_CACHE_BYTES, and the
     one asked for last stays when another set of scans needs room (the cache cleared itself
     whole before, and factored them again). A factor's projector (which holds its basis)
     goes with it. Those over the model's used scans stay whatever their age: every shape
     test reads them. Measured in the entries' own byte counts."""
-    import antsim.diagnose.problem as problem_module
-
     problem = _scans_with_unused_and_scaled()
     sets = [problem.used.copy() for _ in range(4)]
     for k, used in enumerate(sets, start=1):
         used[np.flatnonzero(used)[:k]] = False  # four sets of scans, not the model's
-    one = 8 * (problem._current_qr(problem.used)[0].size + 2 * 2 * int(problem.used.sum()))
-    problem._perps.clear()
-    problem._perp_bytes.clear()
-    monkeypatch.setattr(problem_module, "PERP_CACHE_BYTES", int(2.5 * one))
-    key = [used.tobytes() + bytes([0]) for used in sets]  # a projector's; b"qr" + a factor's
-    qr0 = problem._current_qr(sets[0])
+    one = 8 * (problem.factors.qr(problem.used).q.size + 2 * 2 * int(problem.used.sum()))
+    problem.factors.clear()
+    monkeypatch.setattr(problem.factors.cache, "max_bytes", int(2.5 * one))
+    key = [(used.tobytes(), 0) for used in sets]  # ("projection", *key): a projector's
+    qr0 = problem.factors.qr(sets[0])
     problem.perp_for(sets[0])  # its projector (a tenth of the factor's bytes here)
-    problem._current_qr(sets[1])
-    assert problem._current_qr(sets[0]) is qr0  # a hit, now the most recent
-    problem._current_qr(sets[2])  # no room for three factors: the oldest go, sets[0]'s stays
-    assert list(problem._perps) == [b"qr" + key[0], b"qr" + key[2]]
-    assert problem._current_qr(sets[0]) is qr0
+    problem.factors.qr(sets[1])
+    assert problem.factors.qr(sets[0]) is qr0  # a hit, now the most recent
+    problem.factors.qr(sets[2])  # no room for three factors: the oldest go, sets[0]'s stays
+    assert problem.factors.cache.keys() == [("qr", *key[0]), ("qr", *key[2])]
+    assert problem.factors.qr(sets[0]) is qr0
     problem.perp_for(sets[0])
-    problem._current_qr(sets[2])
+    problem.factors.qr(sets[2])
     problem.perp_for(sets[0])  # a hit: its projector newer than every factor
-    assert list(problem._perps) == [b"qr" + key[0], b"qr" + key[2], key[0]]
-    problem._current_qr(sets[3])  # sets[0]'s factor is the oldest: it goes, its projector too
-    assert list(problem._perps) == [b"qr" + key[2], b"qr" + key[3]]
-    assert sum(problem._perp_bytes.values()) <= problem_module.PERP_CACHE_BYTES
-    own = b"qr" + problem.used.tobytes() + bytes([0])
-    mine = problem._current_qr(problem.used)
-    problem._current_qr(sets[0])
-    problem._current_qr(sets[1])  # the model's is the oldest, but stays
-    assert list(problem._perps) == [own, b"qr" + key[1]]
-    assert problem._current_qr(problem.used) is mine
+    assert problem.factors.cache.keys() == [("qr", *key[0]), ("qr", *key[2]),
+                                            ("projection", *key[0])]
+    problem.factors.qr(sets[3])  # sets[0]'s factor is the oldest: it goes, its projector too
+    assert problem.factors.cache.keys() == [("qr", *key[2]), ("qr", *key[3])]
+    assert problem.factors.cache.nbytes <= problem.factors.cache.max_bytes
+    own = ("qr", problem.used.tobytes(), 0)
+    mine = problem.factors.qr(problem.used)
+    problem.factors.qr(sets[0])
+    problem.factors.qr(sets[1])  # the model's is the oldest, but stays
+    assert problem.factors.cache.keys() == [own, ("qr", *key[1])]
+    assert problem.factors.qr(problem.used) is mine
 
 
 def test_selection_lets_the_models_factors_go_when_it_accepts_a_finding(monkeypatch):
     """Every cached factor and projector is keyed by the number of accepted columns: once a
-    finding is accepted none is asked for again, and selection lets them go before it fits
-    the whole design for the finding's figures (at 200,000 scans up to 128 MiB beside
-    those fits' copies of the design). On a 30" sin 2A elevation error, found."""
+    finding is accepted none is asked for again, and the problem lets them go as it adds the
+    finding, before the whole design is fitted for the finding's figures (at 200,000 scans
+    up to 128 MiB beside those fits' copies of the design). On a 30" sin 2A elevation
+    error, found."""
     import antsim.diagnose.select as select_module
 
     problem = _scans_with_unused_and_scaled()
@@ -1489,7 +1483,7 @@ def test_selection_lets_the_models_factors_go_when_it_accepts_a_finding(monkeypa
     fitted_signal = select_module._fitted_signal
 
     def watched(problem_, cols, extra):
-        held.append(sum(problem_._perp_bytes.values()))
+        held.append(problem_.factors.cache.nbytes)
         return fitted_signal(problem_, cols, extra)
 
     monkeypatch.setattr(select_module, "_fitted_signal", watched)
@@ -1516,11 +1510,10 @@ def test_the_held_out_check_whitens_column_blocks_as_their_stack():
     assert problem.cv_chi2((cur, extra), folds) == problem.cv_chi2(whole, folds)
 
 
-def test_the_current_models_held_out_chi2_is_kept_and_from_its_cached_factor():
+def test_the_current_models_held_out_chi2_is_from_its_cached_factor():
     """The current model's held-out chi^2 comes from its cached factor over the scans asked
     for (the same factorization of the same whitened design: the same bits as whitening and
-    factoring a copy of its columns) and is kept while the scans, the noise scale, the model
-    and the folds stay."""
+    factoring a copy of its columns)."""
     problem = _scans_with_unused_and_scaled()
     cur = problem.current_columns()
     folds = np.arange(problem.n) % 5
@@ -1529,11 +1522,8 @@ def test_the_current_models_held_out_chi2_is_kept_and_from_its_cached_factor():
     for used in (problem.used, some):
         want = problem.cv_chi2(cur.copy(), folds, used=used)
         got = problem.cv_chi2(cur, folds, used=used)
-        assert got == want and problem._cv_memo[1] == got
-        assert b"qr" + used.tobytes() + bytes([0]) in problem._perps
-        problem._cv_memo = (problem._cv_memo[0], -1.0)  # a kept figure is what is returned
-        assert problem.cv_chi2(cur, folds, used=used) == -1.0
-        assert problem.cv_chi2(cur, folds.copy(), used=used) == want  # other folds: made
+        assert got == want
+        assert ("qr", used.tobytes(), 0) in problem.factors.cache
     problem.scale[1] *= 2.0
     problem._rescale(problem.fit_current())  # a new noise scale (the cached factors go)
     assert problem.cv_chi2(cur, folds) == problem.cv_chi2(cur.copy(), folds) != want
@@ -1568,7 +1558,7 @@ def test_rows_gathered_into_fortran_order_a_block_at_a_time_are_the_whole_gather
 
 
 def test_rows_near_the_threshold_found_a_block_at_a_time_are_the_wholes():
-    """:func:`near_rows` (``Problem.shape_fit``'s rows whose residual u = zp - x c lies past
+    """:func:`near_rows` (``shape_fit``'s rows whose residual u = zp - x c lies past
     a limit) forms u a block of QT_BLOCK rows at a time: the same rows and the same values,
     bit for bit, as the whole expression it replaced, with one BLAS thread as diagnose runs
     (OpenBLAS's threads split the whole's rows where they like: rounding then differs), for

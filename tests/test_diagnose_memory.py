@@ -44,9 +44,9 @@ def test_the_models_columns_are_held_once_and_released_factors_are_made_again():
     assert np.shares_memory(problem.base, whole) and np.shares_memory(problem.extra[0], whole)
     np.testing.assert_array_equal(problem.base, base)
     np.testing.assert_array_equal(problem.extra[0], extra)
-    before = problem._current_qr(problem.used)
-    problem._perps.clear()
-    again = problem._current_qr(problem.used)
+    before = problem.factors.qr(problem.used)
+    problem.factors.clear()
+    again = problem.factors.qr(problem.used)
     assert again is not before
     for a, b in zip(before, again, strict=True):
         np.testing.assert_array_equal(a, b)

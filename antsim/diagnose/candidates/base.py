@@ -16,8 +16,10 @@ from controller.units import ARCSEC_PER_RAD
 
 from .. import pvalues
 from ..data import Observations
-from ..linalg import lstsq, qt_dot
+from ..factors import kept_sun_grid
+from ..linalg import gram_solve, lstsq, qt_dot
 from ..problem import Problem
+from ..shapefit import ABSORBED_WHOLE_1MR2, GRAM_1MR2_MIN, shape_fit
 
 __all__ = ["DISTINGUISH_R", "Candidate", "TestResult", "nyholt_gram", "nyholt_trials",
            "p_value", "periodic_interp", "source_rates_arcsec_s", "stacked", "sun_el_grid_deg",
@@ -151,19 +153,19 @@ def periodic_interp(t_grid: np.ndarray, t: np.ndarray, v: np.ndarray) -> np.ndar
     return out
 
 
-_SUN_CACHE: dict[tuple, np.ndarray] = {}
-
-
 def sun_el_grid_deg(obs: Observations, t_grid: np.ndarray) -> np.ndarray:
     """Sun elevation (deg) on the grid: from the site and epoch when the recordings name them
-    (ephemeris), else from the recorded Sun elevations (a day repeats)."""
+    (ephemeris), else from the recorded Sun elevations (a day repeats); kept by site, epoch
+    and grid (:func:`.factors.kept_sun_grid`)."""
     meta = obs.meta
     key = (meta.get("epoch_utc"), meta.get("latitude_deg"), meta.get("longitude_deg"),
            float(t_grid[0]), float(t_grid[-1]), t_grid.size)
-    if key in _SUN_CACHE:
-        return _SUN_CACHE[key]
-    if len(_SUN_CACHE) > 64:
-        _SUN_CACHE.clear()
+    return kept_sun_grid(key, lambda: _sun_el_grid_deg(obs, t_grid))
+
+
+def _sun_el_grid_deg(obs: Observations, t_grid: np.ndarray) -> np.ndarray:
+    """:func:`sun_el_grid_deg`, made."""
+    meta = obs.meta
     out = None
     if all(k in meta for k in ("epoch_utc", "latitude_deg", "longitude_deg")):
         try:
@@ -185,7 +187,6 @@ def sun_el_grid_deg(obs: Observations, t_grid: np.ndarray) -> np.ndarray:
             raise ValueError("no Sun elevations")
         ok = np.isfinite(obs.sun_el_deg)
         out = periodic_interp(t_grid, obs.t_s[ok], obs.sun_el_deg[ok])
-    _SUN_CACHE[key] = out
     return out
 
 
@@ -227,8 +228,6 @@ def _grid_trials(problem: Problem, grid: np.ndarray, qgrid: list[np.ndarray | No
     (ABSORBED_WHOLE_1MR2: its projection is rounding) is no trial, as a zero column is not;
     where a shape is within GRAM_1MR2_MIN of the model (the difference would lose digits),
     the grid is projected explicitly instead."""
-    from ..problem import ABSORBED_WHOLE_1MR2, GRAM_1MR2_MIN
-
     if all(g is None for g in qgrid):
         return nyholt_trials(grid, overwrite=True)
     m = next(g.size for g in qgrid if g is not None)
@@ -383,10 +382,10 @@ class Candidate:
         """:meth:`_linear`, the candidate's columns whitened over the model's used scans and
         q^T of them (q the model's basis there; None: the columns are projected off it
         already), or (None, None) where they were not formed there. From the model's cached
-        basis by inner products (:meth:`Problem.shape_fit`) where it serves, else by
+        basis by inner products (:func:`.shapefit.shape_fit`) where it serves, else by
         explicit projections (:meth:`_linear_explicit`)."""
         raw = cols
-        sf = problem.shape_fit(raw)
+        sf = shape_fit(problem, raw)
         res = None if sf is None else self._from_shape_fit(problem, sf, raw, names, theta)
         if res is not None:
             k = raw.shape[1]
@@ -396,13 +395,10 @@ class Candidate:
 
     def _from_shape_fit(self, problem: Problem, sf, raw: np.ndarray, names: tuple[str, ...],
                         theta: Any) -> TestResult | None:
-        """:meth:`_linear_explicit`'s result from :meth:`Problem.shape_fit`'s inner products
+        """:meth:`_linear_explicit`'s result from :func:`.shapefit.shape_fit`'s inner products
         over the same scans (the same least-squares problem); None where a column kept is
         within GRAM_1MR2_MIN of the model's span or the kept ones' Gram is ill-conditioned
         (the explicit path then serves)."""
-        from ..linalg import gram_solve
-        from ..problem import GRAM_1MR2_MIN
-
         k = raw.shape[1]
         j = slice(0, k) if problem.unscaled else slice(k, 2 * k)  # the raw signature's
         full_sq, left_sq = sf.full_sq[j], np.diag(sf.gram)[j]
@@ -438,14 +434,15 @@ class Candidate:
         """:meth:`_linear` by explicit projections (the reference :meth:`_from_shape_fit`
         is tested against, and the path where it does not serve), and the candidate's
         columns whitened and projected off the model over the scans it kept (2 n_kept, q)."""
-        mask, last = problem.mask_fit(cols)
+        fitted_mask = problem.mask_fit(cols)
+        mask, last = fitted_mask.mask, fitted_mask.last
         perp, z_perp = problem.perp_for(mask)
         # the mask's last fit projected the columns already (the same projection)
-        xp = perp(cols) if last is None else last[1][1]
+        xp = perp(cols) if last is None else last.x_perp
         # degeneracy with the model is a property of the signature itself (before the
         # per-source offset scale): judge absorption and correlation on the raw columns
         if problem.unscaled:
-            full = np.linalg.norm(problem.T(raw, mask) if last is None else last[1][0], axis=0)
+            full = np.linalg.norm(problem.T(raw, mask) if last is None else last.x, axis=0)
             left = np.linalg.norm(xp, axis=0)
         elif last is not None:  # the model's cached factor over the mask: whiten raw once
             xr = problem.T(raw, mask)
@@ -464,7 +461,7 @@ class Candidate:
             return TestResult(self, 0.0, 0, 1.0, 1.0, theta, None, names, absorbed=absorbed,
                               mask=mask, _remake=self._remaker(problem, theta, cols)), xp
         if last is not None and keep.all():  # the mask's last fit solved this problem
-            xk, coef, cov = xp, last[0].coef[-xp.shape[1]:], last[0].cov
+            xk, coef, cov = xp, last.fit.coef[-xp.shape[1]:], last.fit.cov
         else:
             xk = xp[:, keep]
             coef, cov = lstsq(xk, z_perp)
