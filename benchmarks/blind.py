@@ -405,7 +405,7 @@ def _finding_pool(base: list[str]) -> dict[str, tuple[str, ...]]:
     for c in CANDIDATES:
         if isinstance(c, HarmonicFamilyCandidate):
             for n in c.orders:
-                add(c.label(n), c._pair(n))
+                add(c.label(n), c.order_terms(n))
         elif isinstance(c, TermsCandidate) and c.kind == "offsets":
             add(c.name, c.terms)
     add("az_runout_1a_2a", ("HASA", "HACA", "HASA2", "HACA2"))

@@ -823,7 +823,7 @@ def _scans_with_unused_and_scaled(n: int = 150):
 
 @pytest.mark.parametrize("scaled", [True, False])
 def test_a_candidates_test_is_the_projection_it_states(scaled):
-    """Two code paths: a candidate's test (:meth:`Candidate._linear`: it reuses its outlier
+    """Two code paths: a candidate's test (:meth:`Candidate.linear_test`: it reuses its outlier
     mask's last added-columns fit, whitens the raw columns once where the offset scale is 1,
     and keeps no columns but makes them again when read) against the computation in its
     definition (the mask, the cached projector over it, the columns projected and fitted by
@@ -840,7 +840,7 @@ def test_a_candidates_test_is_the_projection_it_states(scaled):
     for c, theta in ((candidate("az_track_2a"), None), (candidate("el_periodic_az"), 3),
                      (candidate("refraction"), None)):
         raw, names = c.columns(problem.obs, theta)
-        res = c._linear(problem, None, None, raw, names, theta)
+        res = c.linear_test(problem, None, None, raw, names, theta)
         cols = problem.cand(raw)
         mask = problem.mask_for(cols)
         perp, z_perp = problem.perp_for(mask)
@@ -860,7 +860,7 @@ def test_a_candidates_test_is_the_projection_it_states(scaled):
         assert res.chi2_now == pytest.approx(float(z_perp @ z_perp), rel=1e-9)
         assert res._columns is None and np.array_equal(res.columns, cols[:, keep])
     other, names = candidate("el_periodic_az").columns(problem.obs, 4)
-    res = candidate("el_periodic_az")._linear(problem, None, None, other, names, 3)
+    res = candidate("el_periodic_az").linear_test(problem, None, None, other, names, 3)
     with pytest.raises(RuntimeError, match="not the tested ones"):
         _ = res.columns
     res.columns = other  # set: held as given

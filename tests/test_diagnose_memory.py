@@ -87,7 +87,7 @@ def _lagged_problem(cand, tau_s: float, n: int = 3000):
     problem = Problem(obs, Prediction("white", np.zeros(n), np.zeros(n), np.full(n, 5.0),
                                       np.full(n, 5.0)), ["IA", "IE", "CA", "AN", "AW"])
     perp, z_perp = problem.perp_for(problem.used)
-    tests = [cand._linear(problem, perp, z_perp, *cand.columns(obs, tau), tau)
+    tests = [cand.linear_test(problem, perp, z_perp, *cand.columns(obs, tau), tau)
              for tau in cand.TAUS]
     grid = {tau: res.delta_chi2 for tau, res in zip(cand.TAUS, tests, strict=True)}
     return problem, perp, z_perp, max(tests, key=lambda res: res.delta_chi2), grid
@@ -108,7 +108,7 @@ def _bounded_search(cand, problem, perp, z_perp, best, log_lo: float, log_hi: fl
 
     def neg(log_theta: float) -> float:
         theta = math.exp(log_theta)
-        tests[log_theta] = cand._linear(problem, perp, z_perp, *cand.columns(obs, theta), theta)
+        tests[log_theta] = cand.linear_test(problem, perp, z_perp, *cand.columns(obs, theta), theta)
         return -tests[log_theta].delta_chi2
 
     opt = optimize.minimize_scalar(neg, bounds=(log_lo, log_hi), method="bounded",
@@ -120,13 +120,13 @@ def _bounded_search(cand, problem, perp, z_perp, best, log_lo: float, log_hi: fl
 def _counted(cand, monkeypatch) -> list:
     """The time constants ``cand`` tests off its grid from now on."""
     seen: list = []
-    linear = type(cand)._linear
+    linear = type(cand).linear_test
 
     def count(self, problem, perp, z_perp, cols, names, theta):
         seen.append(theta)
         return linear(self, problem, perp, z_perp, cols, names, theta)
 
-    monkeypatch.setattr(type(cand), "_linear", count)
+    monkeypatch.setattr(type(cand), "linear_test", count)
     return seen
 
 

@@ -180,7 +180,7 @@ def _cv_thetas(problem: Problem, candidates: Sequence[Candidate],
                taken: set[str]) -> list[tuple[Candidate, list]]:
     """Each linear candidate not yet taken with the parameter values the stage tries."""
     return [(c, c.cv_thetas(problem)) for c in candidates
-            if c.kind == "offsets" and c.name not in taken]
+            if c.kind == "offsets" and c.linear_signature and c.name not in taken]
 
 
 def _options(problem: Problem, thetas: list[tuple[Candidate, list]], model_terms: set[str],
@@ -196,10 +196,7 @@ def _options(problem: Problem, thetas: list[tuple[Candidate, list]], model_terms
     obs = problem.obs
     for c, values in thetas:
         for theta in values:
-            try:
-                cols, names = c.columns(obs, theta)
-            except NotImplementedError:  # a nonlinear signature (exact tilt)
-                break
+            cols, names = c.columns(obs, theta)
             if set(names) <= model_terms:
                 continue
             rows = None if idx is None else cols.take(idx, axis=0)
@@ -420,11 +417,11 @@ def _tested(problem: Problem, c: Candidate, theta, raw: np.ndarray, names: tuple
             perp, z_perp: np.ndarray, tried: int) -> TestResult:
     """The option's added-variable test, its parameters and its p-value with the
     look-elsewhere effect of every option tried."""
-    res = c._linear(problem, perp, z_perp, raw, tuple(names), theta)
+    res = c.linear_test(problem, perp, z_perp, raw, tuple(names), theta)
     if res.testable:
         res.trials = float(tried)
         res.p = with_trials(p_value(problem, res.delta_chi2, res.dof, res.chi2_now, res.mask),
                             res.trials)
-        c._finish(problem, res)
+        c.finish(problem, res)
     return res
 

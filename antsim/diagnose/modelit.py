@@ -53,21 +53,13 @@ def _effect_params(finding: Finding, scenario=None) -> tuple[str, dict[str, Any]
             amp, phase = cls.amplitude_phase(s, co)
             return c.effect, {"amplitude_arcsec": amp, "phase_deg": phase}
         return "terms", {"terms_arcsec": terms}
+    out = c.effect_from_params(p)
+    if out is None:
+        return None
     if c.name == "source_structure" and scenario is not None:
-        out = c.effect_from_params(p)
         sizes = {s.name: s.size_arcmin for s in scenario.sources}
         out["size_arcmin"] = float(sizes.get(p["source"], p.get("size_arcmin", 0.0)))
-        return c.effect, out
-    if hasattr(c, "effect_from_params"):
-        return c.effect, c.effect_from_params(p)
-    if c.name == "feed_offset":
-        return c.effect, {"offset_arcsec": p["offset_arcsec"], "angle_deg": p["angle_deg"]}
-    if c.name == "servo_lag":
-        return c.effect, {"lag_s": p["lag_s"]}
-    if c.name == "backlash":
-        return c.effect, {"az_arcsec": abs(p.get("az_arcsec", 0.0)),
-                          "el_arcsec": abs(p.get("el_arcsec", 0.0))}
-    return None
+    return c.effect, out
 
 
 def effect_specs(diag: Diagnosis, scenario=None):

@@ -274,7 +274,7 @@ def _single_terms(candidates: tuple[Candidate, ...]) -> list[str]:
     out: list[str] = []
     for c in candidates:
         if isinstance(c, HarmonicFamilyCandidate):
-            names = [t for n in c.orders for t in c._pair(n)]
+            names = [t for n in c.orders for t in c.order_terms(n)]
         elif isinstance(c, TermsCandidate):
             names = list(c.terms)
         else:

@@ -5,6 +5,7 @@ correction). The package docstring says what a candidate knows."""
 from __future__ import annotations
 
 import math
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -272,8 +273,32 @@ def p_value(problem: Problem, dchi2: float, q: int, current_chi2: float | None =
 # ---------------------------------------------------------------------------------------------
 # The base class
 # ---------------------------------------------------------------------------------------------
-class Candidate:
-    """Base class; see the module docstring."""
+class Candidate(ABC):
+    """The candidate interface, whole: every attribute and method the selection, the
+    cross-validated stage, the model update and the blind harness read of a candidate is
+    declared here, with the default a family overrides (or NotImplementedError where a
+    family must say it). A candidate is a description and its functions: it keeps nothing
+    between calls (what is worth keeping for speed, :mod:`..factors` keeps).
+
+    Description: ``name``, ``effect`` (the simulator effect, ``"terms"`` for pointing terms,
+    None), ``title``, ``terms``, ``signature``, ``explanation``, ``params_doc``, ``kind``
+    (``"offsets"``: a signature in the pointing errors; ``"channel"``: a test on other
+    recorded quantities), ``linear_signature``, ``needs``, ``needs_simulation``,
+    ``mounts``, ``static``, ``amplitude_param``, ``blind_exclusion``; :meth:`describe`.
+
+    Selection: :meth:`applicable`; :meth:`test` (the added-variable test against the current
+    model, its nonlinear parameters searched over :meth:`thetas` and :meth:`refine`d,
+    :meth:`linear_test` per shape, :meth:`finish` for the parameters and the model terms it
+    is confused with); :meth:`columns` (an offsets candidate's signature as regressors);
+    :meth:`params_from`; :meth:`label`; :meth:`cv_thetas` (the cross-validated stage's
+    shapes).
+
+    Model update: :meth:`effect_from_params` (the simulator effect's parameters).
+
+    Blind harness: :meth:`draw_shape`, :meth:`unit_signal`, :meth:`effect_params`,
+    :meth:`nonlinear_part`, :meth:`signal_power`, :meth:`hidden_amplitude`,
+    :meth:`hidden_label`, :meth:`threshold_sigma` (channel candidates).
+    """
 
     name: str = ""
     effect: str | None = None  # simulator effect (antsim.world.effects.EFFECTS) or None
@@ -293,6 +318,9 @@ class Candidate:
     needs_simulation: bool = False
     #: the mounts whose recordings it is tried on (its signature is written on their axes)
     mounts: tuple[str, ...] = ("altaz",)
+    #: its signature is linear in its parameters at each shape: :meth:`columns` gives it
+    #: (False: a nonlinear signature, fitted by its own :meth:`test`)
+    linear_signature: bool = True
 
     def applicable(self, obs: Observations, known_noise: bool) -> bool:
         if obs.mount not in self.mounts:
@@ -311,10 +339,15 @@ class Candidate:
         return True
 
     # -- offsets candidates -------------------------------------------------------------------
+    @abstractmethod
     def columns(self, obs: Observations, theta: Any = None) -> tuple[np.ndarray, tuple[str, ...]]:
-        raise NotImplementedError
+        """The signature at shape ``theta`` as raw columns (2n, q): the error (indicated
+        minus true, arcsec) per unit of each linear parameter, xel rows then el rows; and
+        the parameters' names (NotImplementedError where the signature is not linear in
+        the parameters or not in the offsets: ``linear_signature``, ``kind``)."""
 
     def thetas(self, obs: Observations) -> list[Any]:
+        """The shapes (values of the nonlinear parameters) :meth:`test` tries."""
         return [None]
 
     def cv_thetas(self, problem) -> list[Any]:
@@ -361,7 +394,7 @@ class Candidate:
         best.p = with_trials(p_value(problem, best.delta_chi2, best.dof, best.chi2_now,
                                      best.mask), best.trials)
         if best.dof > 0:
-            self._finish(problem, best)
+            self.finish(problem, best)
         return best
 
     def refine(self, problem: Problem, perp, z_perp, best: TestResult,
@@ -370,7 +403,7 @@ class Candidate:
         tested -> its delta chi^2); the grid's best as it is by default."""
         return best
 
-    def _linear(self, problem: Problem, perp, z_perp, cols: np.ndarray,
+    def linear_test(self, problem: Problem, perp, z_perp, cols: np.ndarray,
                 names: tuple[str, ...], theta: Any) -> TestResult:
         """chi^2 decrease from adding raw ``cols`` (scaled here by the offset scale), on the
         scans a model with the candidate keeps (``perp``, ``z_perp``: unused, the test
@@ -379,7 +412,7 @@ class Candidate:
 
     def _linear_xp(self, problem: Problem, cols: np.ndarray, names: tuple[str, ...],
                    theta: Any) -> tuple[TestResult, np.ndarray | None, np.ndarray | None]:
-        """:meth:`_linear`, the candidate's columns whitened over the model's used scans and
+        """:meth:`linear_test`, the candidate's columns whitened over the model's used scans and
         q^T of them (q the model's basis there; None: the columns are projected off it
         already), or (None, None) where they were not formed there. From the model's cached
         basis by inner products (:func:`.shapefit.shape_fit`) where it serves, else by
@@ -431,7 +464,7 @@ class Candidate:
 
     def _linear_explicit(self, problem: Problem, raw: np.ndarray, cols: np.ndarray,
                          names: tuple[str, ...], theta: Any) -> tuple[TestResult, np.ndarray]:
-        """:meth:`_linear` by explicit projections (the reference :meth:`_from_shape_fit`
+        """:meth:`linear_test` by explicit projections (the reference :meth:`_from_shape_fit`
         is tested against, and the path where it does not serve), and the candidate's
         columns whitened and projected off the model over the scans it kept (2 n_kept, q)."""
         fitted_mask = problem.mask_fit(cols)
@@ -496,7 +529,7 @@ class Candidate:
 
         return remake
 
-    def _finish(self, problem: Problem, res: TestResult) -> None:
+    def finish(self, problem: Problem, res: TestResult) -> None:
         """Parameters, and the model terms the candidate is most correlated with."""
         if problem.pred.known_noise:
             cov = res.cov
@@ -540,6 +573,17 @@ class Candidate:
         raise NotImplementedError
 
     def effect_params(self, shape: dict[str, Any], amplitude: float) -> dict[str, Any]:
+        """The simulator effect's parameters of a drawn shape at ``amplitude``."""
+        raise NotImplementedError
+
+    def effect_from_params(self, params: dict[str, Any]) -> dict[str, Any] | None:
+        """The simulator effect's parameters from a finding's ``params`` (None: the
+        candidate names no simulator effect, or its terms say it)."""
+        return None
+
+    def threshold_sigma(self, pred, used: np.ndarray) -> float:
+        """A channel candidate's standard error at the predicted noise, for the blind
+        harness's detection threshold."""
         raise NotImplementedError
 
     def nonlinear_part(self, obs: Observations, signal: np.ndarray) -> np.ndarray:

@@ -219,7 +219,7 @@ class StepCandidate(Candidate):
         best = int(np.argmax(gain))
         theta = self._theta(times, best)
         cols, names = self.columns(obs, theta)
-        res = self._linear(problem, perp, z_perp, cols, names, theta)
+        res = self.linear_test(problem, perp, z_perp, cols, names, theta)
         if not res.testable:
             return res
         m = times.size
@@ -235,7 +235,7 @@ class StepCandidate(Candidate):
         axis_gain = gain[:m] if best < m else gain[m:]
         inside = times[axis_gain >= axis_gain.max() - PROFILE_95]
         res.theta = (*theta, float(inside.min()), float(inside.max()))
-        self._finish(problem, res)
+        self.finish(problem, res)
         return res
 
     def params_from(self, obs, theta, coef, cov, names):

@@ -93,6 +93,9 @@ class ServoLagCandidate(Candidate):
     def params_from(self, obs, theta, coef, cov, names):
         return {"lag_s": float(coef[0])}, float(coef[0]), math.sqrt(max(cov[0, 0], 0.0))
 
+    def effect_from_params(self, params):
+        return {"lag_s": params["lag_s"]}
+
 
 class BacklashCandidate(Candidate):
     name = "backlash"
@@ -125,3 +128,7 @@ class BacklashCandidate(Candidate):
         cols = np.column_stack([stacked(0.5 * sa * np.cos(obs.el_rad), None, obs.n),
                                 stacked(None, 0.5 * se, obs.n)])
         return cols, ("az_arcsec", "el_arcsec")
+
+    def effect_from_params(self, params):
+        return {"az_arcsec": abs(params.get("az_arcsec", 0.0)),
+                "el_arcsec": abs(params.get("el_arcsec", 0.0))}

@@ -121,6 +121,7 @@ class ExactTiltCandidate(Candidate):
                        "errors reach 4-12' near the zenith, beyond what a five-point scan "
                        "with 7' steps measures; it is proven separately at 25-40' "
                        "(tests/test_diagnose_sim.py, benchmarks/blind.py --tilt)")
+    linear_signature = False
     #: the chi^2 decrease of this 3-parameter even (quadratic) family is referred to chi^2_6,
     #: the dimension of the space of quadratic forms its signature spans (conservative)
     REFERENCE_DOF = 6
@@ -154,6 +155,10 @@ class ExactTiltCandidate(Candidate):
         out[:k] *= ARCSEC_PER_RAD
         np.multiply(d_el, ARCSEC_PER_RAD, out=out[k:])
         return out
+
+    def columns(self, obs, theta=None):
+        raise NotImplementedError(f"{self.name}: its signature is not linear in its "
+                                  "parameters (its own test fits it)")
 
     def error(self, obs: Observations, theta: Sequence[float]) -> np.ndarray:
         """Error (2n,) arcsec of an exact tilt (north, east components) and collimation,
@@ -369,6 +374,10 @@ class SquintCandidate(Candidate):
 
         self.explanation = PolarizationSquint.explanation
 
+    def columns(self, obs, theta=None):
+        raise NotImplementedError(f"{self.name}: tested on the XR - XL offsets, not the "
+                                  "pointing errors")
+
     def test(self, problem, perp=None, z_perp=None, chi2_now=None):
         obs, pred = problem.obs, problem.pred
         d = np.column_stack([obs.pol_xel_arcsec, obs.pol_el_arcsec]) - pred.pol_mean
@@ -443,6 +452,10 @@ class BeamWidthCandidate(Candidate):
 
     def applicable(self, obs, known_noise):
         return super().applicable(obs, known_noise) and "beam_hpbw_arcmin" in obs.meta
+
+    def columns(self, obs, theta=None):
+        raise NotImplementedError(f"{self.name}: tested on the measured beam widths, not the "
+                                  "pointing errors")
 
     def _stats(self, problem):
         obs, pred = problem.obs, problem.pred

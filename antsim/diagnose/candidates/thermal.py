@@ -100,7 +100,7 @@ class _LaggedCandidate(Candidate):
 
         def run(log_theta: float) -> TestResult:
             theta = math.exp(log_theta)
-            res = self._linear(problem, perp, z_perp, *self.columns(obs, theta), theta)
+            res = self.linear_test(problem, perp, z_perp, *self.columns(obs, theta), theta)
             tested[log_theta], values[log_theta] = res, res.delta_chi2
             return res
 
