@@ -1097,7 +1097,14 @@ def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do(m
     the design's condition number is 60), the choice the same; an option nearly inside the
     model's span (r^2 = 1 - 1e-8) is left to the full losses (None), and of two options with
     the same columns the first is chosen, as the full losses choose it."""
-    from antsim.diagnose.crossval import FoldSums, _best, _losses, contiguous_folds, mimicked
+    from antsim.diagnose.crossval import (
+        FoldSums,
+        Ranked,
+        _best,
+        _losses,
+        contiguous_folds,
+        mimicked,
+    )
     from antsim.diagnose.linalg import economic_qr, rows_fortran
 
     problem = _scans_with_unused_and_scaled()
@@ -1130,7 +1137,7 @@ def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do(m
         grouped = FoldSums(q0, d0, problem.y_raw[rows], labels, np.flatnonzero(rows))
         monkeypatch.undo()
         assert grouped.total(problem.cand(raw)) == pytest.approx(total, rel=1e-12)
-        ranked.append((total, c, theta, names))
+        ranked.append(Ranked(total, c, theta, names))
     def best_of(ranked):  # the reference: the least full sum, the first of equals
         i = min(range(len(ranked)), key=lambda i: (float(_losses(
             problem, cur, q0, d0, folds, ranked[i][1].columns(obs, ranked[i][2])[0]).sum()), i))

@@ -185,6 +185,35 @@ class Step:
 
 
 @dataclass
+class Chosen:
+    """The candidate a round chooses, with its family-corrected log p-value and the
+    held-out chi^2 of the model without and with it (it predicts held-out data better)."""
+
+    result: TestResult
+    log_p: float
+    cv_chi2_before: float
+    cv_chi2_after: float
+
+
+def _held_out(problem: Problem, r: TestResult, folds: np.ndarray, log_p: float
+              ) -> Chosen | None:
+    """``r`` chosen if the model with it predicts held-out data (``folds``, over ``r``'s
+    scans) better than the model without it, its nonlinear parameters re-derived on each
+    training set; None if not. Notes the figures in ``r.note``."""
+    cur = problem.current_columns()
+    cv_without = problem.cv_chi2(cur, folds, used=r.mask)
+    refit = None
+    if r.refit is not None:
+        def refit(train, _r=r, _cur=cur):
+            return np.column_stack([_cur, _r.refit(train)])
+    cv_with = problem.cv_chi2((cur, r.columns), folds, refit, used=r.mask)
+    r.note = f"held-out chi2 {cv_without:.1f} -> {cv_with:.1f}"
+    if not cv_with < cv_without:
+        return None
+    return Chosen(r, log_p, cv_without, cv_with)
+
+
+@dataclass
 class Refusal:
     result: TestResult
     reason: str
@@ -400,21 +429,13 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
     channel_results: list[TestResult] = []
     offsets: list[TestResult] = []
 
-    def confirmed(r: TestResult) -> tuple[float, float] | None:
-        """Held-out chi^2 without and with ``r`` if it predicts held-out data better."""
-        cur = problem.current_columns()
-        cv_without = problem.cv_chi2(cur, folds, used=r.mask)
-        refit = None
-        if r.refit is not None:
-            def refit(train, _r=r, _cur=cur):
-                return np.column_stack([_cur, _r.refit(train)])
-        cv_with = problem.cv_chi2((cur, r.columns), folds, refit, used=r.mask)
-        r.note = f"held-out chi2 {cv_without:.1f} -> {cv_with:.1f}"
-        if not cv_with < cv_without:
+    def confirmed(r: TestResult) -> Chosen | None:
+        """``r`` with its held-out chi^2 if it predicts held-out data better (else refused)."""
+        chosen = _held_out(problem, r, folds, log_p_family(problem, r, n_family))
+        if chosen is None:
             refused.append(Refusal(r, f"{r.name} is significant in-sample but does not "
                                       f"predict held-out data ({r.note})"))
-            return None
-        return cv_without, cv_with
+        return chosen
 
     for round_no in range(max_findings + 1):
         perp, z_perp = problem.perp_for(problem.used)
@@ -442,23 +463,19 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
                                                 -r.delta_chi2))
         chosen = None
         for r in ranked:
-            lp = log_p_family(problem, r, n_family)
-            if lp >= math.log(alpha):
+            if log_p_family(problem, r, n_family) >= math.log(alpha):
                 break
-            cv = confirmed(r)
-            if cv is None:
-                continue
-            chosen = (r, lp, *cv)
-            break
+            chosen = confirmed(r)
+            if chosen is not None:
+                break
         if chosen is None:
             break
         corr_of = _Correlations(problem, perp)
-        simpler = _simpler_equivalent(problem, corr_of, chosen[0], ranked, n_family, alpha)
+        simpler = _simpler_equivalent(problem, corr_of, chosen.result, ranked, n_family,
+                                      alpha)
         if simpler is not None:
-            cv = confirmed(simpler)
-            if cv is not None:
-                chosen = (simpler, log_p_family(problem, simpler, n_family), *cv)
-        r, lp, cv0, cv1 = chosen
+            chosen = confirmed(simpler) or chosen
+        r, lp = chosen.result, chosen.log_p
         alternatives = _alternatives(problem, corr_of, r, ranked, n_family, alpha)
         separation = Separation(r.r_model, r.partners, local_sigma(problem, r),
                                 correlation_words(r.name, r.r_model, r.partners))
@@ -470,8 +487,9 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
         del extra
         accepted.add(r.name)
         problem.update_outliers()
-        step = Step(r, min(1.0, math.exp(lp)), lp, before, after, cv0, cv1, alternatives,
-                    problem.gof(), signal, separation, simplest)
+        step = Step(r, min(1.0, math.exp(lp)), lp, before, after, chosen.cv_chi2_before,
+                    chosen.cv_chi2_after, alternatives, problem.gof(), signal, separation,
+                    simplest)
         steps.append(step)
         if len(steps) >= max_findings:
             stop = f"the limit of {max_findings} findings"
@@ -508,13 +526,16 @@ def _cross_validated(problem: Problem, usable: list[Candidate], accepted: set[st
     """The cross-validated stage (:mod:`.crossval`) as findings, with their statistics (the
     family-corrected p-value of each, every option tried counted as a trial)."""
     out = []
-    for res, heldout, (before, after), signal in cv_stage(
-            problem, usable, accepted, _model_terms(problem), room, _fitted_signal):
+    for added in cv_stage(problem, usable, accepted, _model_terms(problem), room,
+                          _fitted_signal):
+        res = added.result
         lp = math.log(max(min(1.0, res.p * n_family), 1e-300))
         separation = Separation(res.r_model, res.partners, local_sigma(problem, res),
                                 correlation_words(res.name, res.r_model, res.partners))
-        out.append(Step(res, math.exp(lp), lp, before, after, gof_after=problem.gof(),
-                        signal=signal, separation=separation, heldout=heldout))
+        out.append(Step(res, math.exp(lp), lp, added.sky_rms_before, added.sky_rms_after,
+                        gof_after=problem.gof(), signal=added.signal,
+                        separation=separation,
+                        heldout=(added.heldout_sky_rms_before, added.heldout_sky_rms_after)))
     return out
 
 
