@@ -2,14 +2,21 @@
 
 from __future__ import annotations
 
+import datetime
 import math
 import time
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
+from astropy.time import Time
 
+from antsim.world.weather import WeatherModel
+from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
+from controller.pointing.data import PointingData
+from controller.pointing.fitting import fit_model
 from controller.pointing.model import PointingModel
+from controller.pointing.robust import fit_terms_before_after
 
 from ..blas import one_blas_thread
 from .baseline import (
@@ -402,10 +409,6 @@ def _diagnose(obs: Observations, scenario, model: str | None, n_sims: int, cache
 
 def daily_air_curve(scenario):
     """The scenario's deterministic daily air-temperature curve (C) at campaign times (s)."""
-    from astropy.time import Time
-
-    from antsim.world.weather import WeatherModel
-
     hours = (Time(scenario.epoch_utc, scale="utc").mjd % 1.0) * 24.0
     model = WeatherModel(scenario.weather, hours, scenario.site.longitude_deg,
                          scenario.duration_s, np.random.default_rng(0))
@@ -468,8 +471,6 @@ def _clock(obs: Observations, t_s: float) -> str:
     hours = f"{t_s / 3600.0:.2f} h after the start"
     if not epoch:
         return hours
-    import datetime
-
     try:
         start = datetime.datetime.fromisoformat(str(epoch))
     except ValueError:
@@ -493,12 +494,6 @@ def _channel_where(step: Step) -> str:
 def fit_variants_before_after(diag: Diagnosis) -> dict[str, Any]:
     """Fit D (day, Sun above 0 deg) and E (night, Sun below -12 deg) of the 1990 report on
     the baseline terms, before and after removing the findings' fitted signatures."""
-    from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
-    from controller.pointing.data import PointingData
-    from controller.pointing.fitting import fit_model
-    from controller.pointing.model import PointingModel
-    from controller.pointing.robust import fit_terms_before_after
-
     obs = diag.obs
     if obs.sun_el_deg is None:
         return {}

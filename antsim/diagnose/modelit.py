@@ -23,14 +23,23 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.stats import ks_2samp
 
+from antsim.figures.diagnose import Residuals, before_after_figures, before_figures
+from antsim.figures.style import Canvas, figure_file
+from antsim.scenario import EffectSpec, load_scenario
+from antsim.world.effects import EFFECTS
 from controller.pointing.data import PointingData
 from controller.pointing.fitting import fit_model
+from controller.pointing.modelio import model_to_json, write_model_file
+from controller.pointing.tpoint import TPointModel
 
+from .baseline import SimulatedBaseline
 from .candidates.terms import TermsCandidate
 from .core import Diagnosis, Finding, _plain
 from .linalg import lstsq
 from .problem import Problem
+from .report import write_diagnose_report
 
 __all__ = ["effect_specs", "resimulate", "updated_scenario_text", "write_outputs"]
 
@@ -45,8 +54,6 @@ def _effect_params(finding: Finding, scenario=None) -> tuple[str, dict[str, Any]
     if isinstance(c, TermsCandidate):
         terms = dict(p.get("terms_arcsec", {}))
         if c.effect != "terms" and c.pair:
-            from antsim.world.effects import EFFECTS
-
             cls = EFFECTS[c.effect]
             s = terms.get(cls.sin_term, 0.0)
             co = terms.get(cls.cos_term, 0.0)
@@ -64,9 +71,6 @@ def _effect_params(finding: Finding, scenario=None) -> tuple[str, dict[str, Any]
 
 def effect_specs(diag: Diagnosis, scenario=None):
     """EffectSpec of every finding that has a simulator effect."""
-    from antsim.scenario import EffectSpec
-    from antsim.world.effects import EFFECTS
-
     specs = []
     for f in diag.findings:
         got = _effect_params(f, scenario)
@@ -134,8 +138,6 @@ def _ks(diag: Diagnosis, baseline) -> dict[str, Any]:
     for axis, name in ((0, "xel"), (1, "el")):
         sims = np.concatenate([p.res[:, axis] for p in baseline.products])
         sims = sims[np.isfinite(sims)]
-        from scipy.stats import ks_2samp  # only here: importing scipy.stats costs ~0.7 s
-
         ks = ks_2samp(rec[axis], sims)
         out[name] = {"statistic": float(ks.statistic), "p": float(ks.pvalue)}
     return out
@@ -145,8 +147,6 @@ def resimulate(diag: Diagnosis, scenario, n_sims: int = 4, cache_dir=None,
                use_cache: bool = True, jobs: int = 1) -> dict[str, Any]:
     """Simulate the updated scenario and test recorded against simulated residuals, before
     (the scenario as given) and after (with the findings)."""
-    from .baseline import SimulatedBaseline
-
     specs = effect_specs(diag, scenario)
     updated = scenario.with_effects(tuple(scenario.effects) + tuple(specs))
     model = diag.obs.model_in_use if diag.obs.model_in_use is not None else None
@@ -171,8 +171,6 @@ def residuals_before_after(diag: Diagnosis):
     least-squares fit over the diagnosis's used scans, the residuals its Sky RMS
     (``summary``) is the rms of: the figures print the diagnosis's own numbers. Returns
     (data, before, after) as :class:`antsim.figures.diagnose.Residuals`."""
-    from antsim.figures.diagnose import Residuals
-
     p = diag.problem
     obs = diag.obs
     good = obs.good
@@ -195,8 +193,6 @@ def residuals_before_after(diag: Diagnosis):
 def _equatorial_plot(before, after, data, path: Path, caption: str):
     """Residuals against the equatorial mount's axes and time (the shared figures draw an
     alt-az sky); ``after`` None: before only."""
-    from antsim.figures.style import Canvas, figure_file
-
     offsets = ("cross-declination", "declination")
     positions = (("hour angle (h, West +)", np.degrees(data.az_rad) / 15.0),
                  ("declination (deg)", np.degrees(data.el_rad)))
@@ -226,8 +222,6 @@ def plots(diag: Diagnosis, out_dir: Path) -> list:
     """Residual plots into ``out_dir``: before and after the findings, or before only (with
     a caption saying nothing was found and what was tested); returns their
     :class:`antsim.figures.style.FigureFile` s."""
-    from antsim.figures.diagnose import before_after_figures, before_figures
-
     data, before, after = residuals_before_after(diag)
     nothing = diag.nothing_found_words() if not diag.findings else ""
     if diag.obs.mount == "equatorial":  # the shared figures draw an alt-az sky
@@ -246,9 +240,6 @@ def write_outputs(diag: Diagnosis, out_dir: str | Path, scenario=None, resim: in
                   cache_dir=None, use_cache: bool = True, jobs: int = 1) -> dict[str, Any]:
     """Write the report (diagnose.json, diagnose.txt, report.html), the updated model and
     scenario, plots; optionally re-simulate."""
-    from controller.pointing.modelio import model_to_json, write_model_file
-    from controller.pointing.tpoint import TPointModel
-
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written: dict[str, Any] = {}
@@ -274,8 +265,6 @@ def write_outputs(diag: Diagnosis, out_dir: str | Path, scenario=None, resim: in
         text = updated_scenario_text(scenario, diag)
         path = out / "scenario_updated.toml"
         path.write_text(text, encoding="utf-8")
-        from antsim.scenario import load_scenario
-
         load_scenario(path)  # it must load like any scenario
         written["scenario"] = path.name
         if resim > 0 and diag.findings:
@@ -292,8 +281,6 @@ def write_outputs(diag: Diagnosis, out_dir: str | Path, scenario=None, resim: in
     if "resimulation" in written:
         text += "\n" + resimulation_words(written["resimulation"])
     (out / "diagnose.txt").write_text(text + "\n", encoding="utf-8")
-    from .report import write_diagnose_report
-
     write_diagnose_report(doc, text, figures, out, recordings=str(diag.obs.path),
                           axes=diag.axes_label(),
                           nothing_found="" if diag.findings else diag.nothing_found_words())

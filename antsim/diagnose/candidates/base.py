@@ -12,7 +12,10 @@ from typing import Any, ClassVar
 
 import numpy as np
 import scipy.linalg
+from astropy.time import Time, TimeDelta
 
+from controller.astro.ephemeris import Ephemeris
+from controller.astro.site import Site
 from controller.units import ARCSEC_PER_RAD
 
 from .. import pvalues
@@ -170,11 +173,6 @@ def _sun_el_grid_deg(obs: Observations, t_grid: np.ndarray) -> np.ndarray:
     out = None
     if all(k in meta for k in ("epoch_utc", "latitude_deg", "longitude_deg")):
         try:
-            from astropy.time import Time, TimeDelta
-
-            from controller.astro.ephemeris import Ephemeris
-            from controller.astro.site import Site
-
             site = Site(float(meta["latitude_deg"]), float(meta["longitude_deg"]),
                         float(meta.get("height_m", 0.0)))
             epoch = Time(str(meta["epoch_utc"]), scale="utc") + TimeDelta(t_grid[0],

@@ -28,6 +28,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from antsim.world.effects.steps import Step
+
 from .. import pvalues
 from ..problem import Problem
 from .base import Candidate, TestResult, p_value, stacked, with_trials
@@ -99,8 +101,6 @@ class StepCandidate(Candidate):
     MIN_SIDE = 3
 
     def __init__(self):
-        from antsim.world.effects.steps import Step
-
         self.explanation = Step.explanation
 
     def change_times(self, obs) -> np.ndarray:

@@ -8,6 +8,8 @@ from typing import ClassVar
 
 import numpy as np
 
+from antsim.world.effects.dynamics import Backlash, ClockError, ServoLag
+
 from .base import (
     Candidate,
     source_rates_arcsec_s,
@@ -31,8 +33,6 @@ class ClockCandidate(Candidate):
     mounts = ("altaz", "equatorial")
 
     def __init__(self):
-        from antsim.world.effects.dynamics import ClockError
-
         self.explanation = ClockError.explanation
 
     def columns(self, obs, theta=None):
@@ -81,8 +81,6 @@ class ServoLagCandidate(Candidate):
                        "offset")
 
     def __init__(self):
-        from antsim.world.effects.dynamics import ServoLag
-
         self.explanation = ServoLag.explanation
 
     def columns(self, obs, theta=None):
@@ -112,8 +110,6 @@ class BacklashCandidate(Candidate):
                        "that IA and IE absorb; the slew direction does not reach the offsets")
 
     def __init__(self):
-        from antsim.world.effects.dynamics import Backlash
-
         self.explanation = Backlash.explanation
 
     def applicable(self, obs, known_noise):

@@ -11,6 +11,13 @@ from typing import Any, ClassVar
 import numpy as np
 from scipy import optimize
 
+from antsim.world.effects.optics import (
+    BeamWidthError,
+    ExactTiltCollimation,
+    PolarizationSquint,
+    SourceStructure,
+    TiltedSky,
+)
 from controller.units import ARCSEC_PER_RAD, RAD_PER_ARCMIN
 
 from .. import pvalues
@@ -44,8 +51,6 @@ class SourceCandidate(Candidate):
     mounts = ("altaz", "equatorial")
 
     def __init__(self):
-        from antsim.world.effects.optics import SourceStructure
-
         self.explanation = SourceStructure.explanation
 
     def thetas(self, obs):
@@ -132,8 +137,6 @@ class ExactTiltCandidate(Candidate):
     SEARCH_SCANS = 10_000
 
     def __init__(self):
-        from antsim.world.effects.optics import ExactTiltCollimation
-
         self.explanation = ExactTiltCollimation.explanation
 
     @staticmethod
@@ -163,8 +166,6 @@ class ExactTiltCandidate(Candidate):
     def error(self, obs: Observations, theta: Sequence[float]) -> np.ndarray:
         """Error (2n,) arcsec of an exact tilt (north, east components) and collimation,
         arcmin."""
-        from antsim.world.effects.optics import TiltedSky
-
         return self._sky_error(TiltedSky(obs.az_rad, obs.el_rad), theta)
 
     def _shown(self, problem, rows: np.ndarray | None, lin: np.ndarray):
@@ -173,8 +174,6 @@ class ExactTiltCandidate(Candidate):
         scans would miss the source), so the recordings show the linear part whole and the
         rest scaled by each source's offset scale. ``lin``: the AN, AW, CA columns of every
         scan (:func:`term_columns`, made once a test)."""
-        from antsim.world.effects.optics import TiltedSky
-
         obs = problem.obs
         f2 = np.concatenate([problem.f, problem.f])
         if rows is None:
@@ -370,8 +369,6 @@ class SquintCandidate(Candidate):
     mounts = ("altaz", "equatorial")
 
     def __init__(self):
-        from antsim.world.effects.optics import PolarizationSquint
-
         self.explanation = PolarizationSquint.explanation
 
     def columns(self, obs, theta=None):
@@ -446,8 +443,6 @@ class BeamWidthCandidate(Candidate):
     mounts = ("altaz", "equatorial")
 
     def __init__(self):
-        from antsim.world.effects.optics import BeamWidthError
-
         self.explanation = BeamWidthError.explanation
 
     def applicable(self, obs, known_noise):

@@ -10,6 +10,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from antsim.world.effects.harmonics import FeedOffset
+
 from ..problem import term_columns
 from .base import (
     Candidate,
@@ -184,8 +186,6 @@ class FeedOffsetCandidate(Candidate):
     amplitude_param = "offset_arcsec"
 
     def __init__(self):
-        from antsim.world.effects.harmonics import FeedOffset
-
         self.explanation = FeedOffset.explanation
         self.blind_exclusion = ("with the 45-ft's fixed feed the feed offset is a constant "
                                 "collimation pair that CA (W10) and IE (W1) absorb")

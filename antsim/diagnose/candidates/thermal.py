@@ -10,6 +10,17 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from antsim.world.effects.drifts import TemperatureDrift, structure_temperature_c
+from antsim.world.effects.thermal import (
+    SunsetDrift,
+    ThermalEffect,
+    since_sunset,
+    sunset_level,
+    transient_level,
+)
+from controller.pointing.model import PointingModel
+from controller.pointing.thermal import SENSOR_FAMILY
+
 from ..data import Observations
 from ..linalg import lstsq
 from ..problem import Problem
@@ -165,8 +176,6 @@ class SunsetCandidate(_LaggedCandidate):
     shape = "relaxation"
 
     def __init__(self):
-        from antsim.world.effects.thermal import SunsetDrift
-
         super().__init__()
         self.explanation = SunsetDrift.explanation + " (Fomalont 1973: 1' in the 4 h after " \
                                                       "sunset)"
@@ -176,8 +185,6 @@ class SunsetCandidate(_LaggedCandidate):
             obs.sun_el_deg is not None or "epoch_utc" in obs.meta) and np.ptp(obs.t_s) > 4 * 3600
 
     def level(self, obs: Observations, tau_s: float) -> np.ndarray:
-        from antsim.world.effects.thermal import since_sunset, sunset_level, transient_level
-
         t = time_grid(obs)
         night = (sun_el_grid_deg(obs, t) < 0.0).astype(float)
         if self.shape == "transient":
@@ -284,8 +291,6 @@ class TemperatureCandidate(_LaggedCandidate):
             21600.0)
 
     def __init__(self):
-        from antsim.world.effects.drifts import TemperatureDrift
-
         super().__init__()
         self.explanation = TemperatureDrift.explanation
 
@@ -294,8 +299,6 @@ class TemperatureCandidate(_LaggedCandidate):
             float(np.nanstd(obs.air_temp_c)) > 0.3
 
     def structure(self, obs: Observations, tau_s: float) -> tuple[np.ndarray, float]:
-        from antsim.world.effects.drifts import structure_temperature_c
-
         t = time_grid(obs)
         ts = np.interp(obs.t_s, t, structure_temperature_c(t, self._air(obs, t), tau_s))
         return ts, float(np.mean(ts[obs.good]) if obs.good.any() else 0.0)
@@ -383,9 +386,6 @@ class SensorTermsCandidate(TermsCandidate):
     ``antsim.diagnose.modelit``)."""
 
     def __init__(self):
-        from antsim.world.effects.thermal import ThermalEffect
-        from controller.pointing.thermal import SENSOR_FAMILY
-
         terms = SENSOR_FAMILY
         super().__init__(
             "thermal_sensors", terms, "thermal deformation seen by the structure sensors",
@@ -398,8 +398,6 @@ class SensorTermsCandidate(TermsCandidate):
             blind_exclusion="it needs recordings with structure temperatures")
 
     def applicable(self, obs, known_noise):
-        from controller.pointing.model import PointingModel
-
         need = PointingModel(list(self.terms)).regressors
         return super().applicable(obs, known_noise) and obs.structure is not None \
             and need <= set(obs.structure)
