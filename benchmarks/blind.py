@@ -252,7 +252,7 @@ def _orthogonal_norm(d, s: np.ndarray) -> float:
     """Norm of a signal's part the baseline terms cannot absorb, whitened (sigma units)."""
     from antsim.diagnose.problem import Problem
 
-    q = Problem(d.obs, d.prediction, d.problem.base_terms, offset_scale=d.problem.f)
+    q = Problem(d.obs, d.prediction, d.problem.base_terms, offset_scale=d.problem.offset_scale)
     q.update_outliers()
     return float(np.linalg.norm(q.projector()(s[:, None])))
 

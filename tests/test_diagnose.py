@@ -835,7 +835,7 @@ def test_a_candidates_test_is_the_projection_it_states(scaled):
 
     problem = _scans_with_unused_and_scaled()
     if not scaled:
-        problem.f = np.ones(problem.n)
+        problem.offset_scale = np.ones(problem.n)
     assert problem.unscaled is not scaled
     for c, theta in ((candidate("az_track_2a"), None), (candidate("el_periodic_az"), 3),
                      (candidate("refraction"), None)):
@@ -844,7 +844,7 @@ def test_a_candidates_test_is_the_projection_it_states(scaled):
         cols = problem.cand(raw)
         mask = problem.mask_for(cols)
         perp, z_perp = problem.perp_for(mask)
-        full = np.linalg.norm(problem.T(raw, mask), axis=0)
+        full = np.linalg.norm(problem.whiten(raw, mask), axis=0)
         left = np.linalg.norm(perp(raw), axis=0)
         keep = (left / full) ** 2 > ABSORBED_1MR2
         if not keep.any():  # refraction: TX, in the model already
@@ -889,7 +889,7 @@ def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
 
     problem = _scans_with_unused_and_scaled()
     if not scaled:
-        problem.f = np.ones(problem.n)
+        problem.offset_scale = np.ones(problem.n)
     obs = problem.obs
     served, checked = [], []
     shapes = [(candidate("az_track_2a"), None), (candidate("el_periodic_az"), 3),
@@ -929,7 +929,7 @@ def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
     # factor over those scans
     r = problem.factors.qr(problem.used).r
     on_model, gram = fast._on_model
-    x = problem.T(problem.cand(raw), fast.mask)
+    x = problem.whiten(problem.cand(raw), fast.mask)
     np.testing.assert_allclose(scipy.linalg.solve_triangular(r, on_model),
                                problem.coef_on_current(x, fast.mask), rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(np.sqrt(np.diag(r.T @ gram @ r)),
@@ -940,11 +940,11 @@ def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
     q = problem.basis()
     perp, _ = problem.perp_for(problem.used)
     near = cols[5] + 1e-3 * np.std(cols[5]) / np.std(cols[0]) * cols[0]  # 1 - R^2 ~ 1e-6
-    xn = problem.T(near[:, None])
+    xn = problem.whiten(near[:, None])
     assert 1e-8 < float(np.sum(perp(near[:, None]) ** 2) / np.sum(xn**2)) < 1e-5
     ref = nyholt_trials(perp(np.column_stack(cols[:5])))
     for shapes_now in (cols[:5], cols, [*cols[:5], near]):
-        x = problem.T(np.column_stack(shapes_now))
+        x = problem.whiten(np.column_stack(shapes_now))
         grid, qgrid = x.copy(), [q.T @ x[:, i] for i in range(x.shape[1])]
         grid[:, 1], qgrid[1] = perp(shapes_now[1][:, None])[:, 0], None  # came projected
         # the shape in the model's span (rounding off it) is no trial
@@ -964,7 +964,7 @@ def test_a_partly_absorbed_signature_is_fitted_on_the_columns_the_model_leaves()
     1e-9 relative (as the test above: the design's condition number is 60, the kept columns
     far from the span, 1 - R^2 > 1e-3)."""
     problem = _scans_with_unused_and_scaled()
-    problem.f = np.ones(problem.n)
+    problem.offset_scale = np.ones(problem.n)
     obs = problem.obs
     c = candidate("az_track_2a")
     two_a, names2 = c.columns(obs, None)
@@ -1050,7 +1050,7 @@ def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits(
         via = heldout_losses(whole, problem.y_raw, problem.used, folds, (basis, d))
         np.testing.assert_allclose(via, losses, rtol=1e-9)
     assert problem.cv_chi2(whole, folds) == pytest.approx(
-        sum(float(np.sum(problem.T(problem.y - whole @ problem.fit(whole, problem.used
+        sum(float(np.sum(problem.whiten(problem.y - whole @ problem.fit(whole, problem.used
             & (folds != k)).coef, problem.used & (folds == k)) ** 2)) for k in range(5)),
         rel=1e-9)
 
@@ -1119,7 +1119,7 @@ def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do(m
         (candidate("az_track_2a"), None), (candidate("az_runout_1a"), None)]
     ranked = []
     idx = np.flatnonzero(rows)
-    f2 = np.concatenate([problem.f, problem.f])
+    f2 = np.concatenate([problem.offset_scale, problem.offset_scale])
     for c, theta in options:
         raw, names = c.columns(obs, theta)
         total = sums.total(problem.cand(raw))
@@ -1128,7 +1128,7 @@ def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do(m
         xg = raw.take(idx, axis=0)
         assert sums.total_rows(xg * f2[idx, None]) == total
         assert mimicked(problem, raw, xg) == mimicked(problem, raw)
-        assert np.array_equal(xg * problem.weights()[:, None], problem.T(raw))
+        assert np.array_equal(xg * problem.weights()[:, None], problem.whiten(raw))
         losses = _losses(problem, cur, q0, d0, folds, raw)
         assert total == pytest.approx(float(losses.sum()), rel=1e-9)
         # the basis grouped by fold in a copy (scans out of time order) instead of read in
@@ -1223,7 +1223,7 @@ def test_a_findings_fitted_signal_comes_from_the_fit_the_outlier_update_starts_f
     cols = problem.current_columns()
     joint = problem.fit(np.column_stack([cols, extra]))
     signal = extra @ joint.coef[cols.shape[1]:]
-    beta, *_ = np.linalg.lstsq(problem.T(cols), problem.T(signal), rcond=None)
+    beta, *_ = np.linalg.lstsq(problem.whiten(cols), problem.whiten(signal), rcond=None)
     want = signal - cols @ beta
     before = problem.add("sin2a", extra, ("HESA2", "HECA2"))
     assert before is cols and problem.current_names[-2:] == ["sin2a:HESA2", "sin2a:HECA2"]
@@ -1512,7 +1512,7 @@ def test_the_held_out_check_whitens_column_blocks_as_their_stack():
     used = problem.used
     design = problem._whitened_fortran((cur, extra), used)
     assert design.flags.f_contiguous
-    assert np.array_equal(design, problem.T(whole, used, fortran=True))
+    assert np.array_equal(design, problem.whiten(whole, used, fortran=True))
     folds = np.arange(problem.n) % 5
     assert problem.cv_chi2((cur, extra), folds) == problem.cv_chi2(whole, folds)
 

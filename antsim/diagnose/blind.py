@@ -279,7 +279,7 @@ class Harness:
             sig = c.threshold_sigma(prob.pred, prob.used)
             return math.sqrt(crit) * sig, 1.0
         s = prob.cand(c.nonlinear_part(prob.obs, c.unit_signal(prob.obs, shape)))
-        full = float(np.linalg.norm(prob.T(s)))
+        full = float(np.linalg.norm(prob.whiten(s)))
         left = float(np.linalg.norm(self._perp(s[:, None])))
         if left <= 0:
             return float("inf"), 0.0

@@ -166,8 +166,8 @@ def mimicked(problem: Problem, raw: np.ndarray, rows: np.ndarray | None = None) 
     """Whether the current model mimics any of the raw columns (2n, q) above
     ``DISTINGUISH_R`` over the used scans (its correlation with the model's span).
     ``rows``: the columns' used rows [xel; el] when the caller has them (white noise: the
-    whitened columns are those rows times their weights, as :meth:`Problem.T` makes them)."""
-    whitened = problem.T(raw) if rows is None else rows * problem.weights()[:, None]
+    whitened columns are those rows times their weights, as :meth:`Problem.whiten` makes them)."""
+    whitened = problem.whiten(raw) if rows is None else rows * problem.weights()[:, None]
     q = problem.basis()
     full2 = np.einsum("ij,ij->j", whitened, whitened)
     # the squared norm of the part in the model's span (q orthonormal): r^2 without
@@ -273,7 +273,8 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
         # the mimicry check and, times the offset scale where it is not 1 (as cand() makes
         # the columns), for the sums
         share = problem.white() and sums.idx is idx
-        f2 = None if problem.unscaled else np.concatenate([problem.f, problem.f])[idx, None]
+        f2 = None if problem.unscaled else np.concatenate(
+            [problem.offset_scale, problem.offset_scale])[idx, None]
         ranked = []
         for option in _options(problem, thetas, model_terms, idx if share else None):
             if option.rows is None:

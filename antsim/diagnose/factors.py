@@ -163,10 +163,10 @@ class Problem(Protocol):
     valid: np.ndarray
     scale: np.ndarray
     y: np.ndarray
-    w: np.ndarray
+    row_weights: np.ndarray
 
-    def T(self, v: np.ndarray, used: np.ndarray | None = None,
-          fortran: bool = False) -> np.ndarray: ...
+    def whiten(self, v: np.ndarray, used: np.ndarray | None = None,
+               fortran: bool = False) -> np.ndarray: ...
 
     def current_columns(self) -> np.ndarray: ...
 
@@ -243,7 +243,7 @@ class ModelFactors:
         hit = self._views.get(key)
         if hit is None:
             idx = np.flatnonzero(p.rows(used))
-            hit = (idx, p.w[idx])
+            hit = (idx, p.row_weights[idx])
             if len(self._views) >= ROW_VIEW_SETS:
                 self._views.pop(next(iter(self._views)))
             self._views[key] = hit
@@ -264,11 +264,11 @@ class ModelFactors:
         columns are not independent there: the callers then fit the whole design)."""
         def make():
             p = self.problem
-            q, r = economic_qr(p.T(p.current_columns(), used, fortran=True), overwrite=True)
+            q, r = economic_qr(p.whiten(p.current_columns(), used, fortran=True), overwrite=True)
             d = np.abs(np.diag(r))
             if not (d.size and d.min() > 1e-10 * max(float(d.max()), 1e-300)):
                 return (), 0
-            z = p.T(p.y, used)
+            z = p.whiten(p.y, used)
             qz = q.T @ z
             return ModelQR(q, r, qz, z, z - q @ qz), 8 * (q.size + 2 * q.shape[0])
 
@@ -281,7 +281,7 @@ class ModelFactors:
         if qr is not None:
             return qr.q
         p = self.problem
-        q, r = economic_qr(p.T(p.current_columns(), used))
+        q, r = economic_qr(p.whiten(p.current_columns(), used))
         d = np.abs(np.diag(r))
         return q[:, d > 1e-10 * max(float(d.max()) if d.size else 0.0, 1e-300)]
 
@@ -292,7 +292,7 @@ class ModelFactors:
         q = self.basis(used)
 
         def perp(v: np.ndarray) -> np.ndarray:
-            vr = p.T(v, used)  # a new array: the model's part taken off in place
+            vr = p.whiten(v, used)  # a new array: the model's part taken off in place
             vr -= q @ qt_dot(q, vr)
             return vr
 
@@ -319,9 +319,9 @@ class ModelFactors:
             rn_max = float(np.sqrt(np.einsum("ij,ij->i", q, q).max())) if q.size else 0.0
             other = p.valid & ~used
             idx = np.flatnonzero(p.rows(other))
-            a = p.current_columns()[idx] * p.w[idx][:, None]
+            a = p.current_columns()[idx] * p.row_weights[idx][:, None]
             coords = scipy.linalg.solve_triangular(r, a.T, trans="T").T
-            resid = p.y[idx] * p.w[idx] - coords @ qz
+            resid = p.y[idx] * p.row_weights[idx] - coords @ qz
             return OtherRows(rn_max, idx, coords, resid, float(zp @ zp), np.flatnonzero(used),
                              np.flatnonzero(other)), 8 * zp.size
 

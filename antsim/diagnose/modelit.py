@@ -117,7 +117,7 @@ def _paired_test(diag: Diagnosis, pred) -> dict[str, Any]:
     """Recorded baseline-fit residuals against a prediction, scan by scan (chi^2 per axis of
     the GLS-whitened differences) — the two samples are the recordings and the simulations."""
     obs = diag.obs
-    prob = Problem(obs, pred, diag.problem.base_terms, offset_scale=diag.problem.f)
+    prob = Problem(obs, pred, diag.problem.base_terms, offset_scale=diag.problem.offset_scale)
     prob.update_outliers()
     gof = prob.gof()
     return {axis: {"chi2": v["chi2"], "dof": v["dof"], "ratio": v["ratio"], "p": v["p"]}

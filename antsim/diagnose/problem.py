@@ -117,7 +117,7 @@ class Problem:
 
     Whitening is generalized least squares: per axis, the residuals of the used scans divided
     by their predicted noise have the correlation :func:`.factors.correlation_matrix` of the
-    prediction's model (identity when the noise is white), and ``T(v)`` maps raw (2n, k)
+    prediction's model (identity when the noise is white), and ``whiten(v)`` maps raw (2n, k)
     columns to ``L^-1 (v / sigma)`` over the used scans (L the Cholesky factor), so that
     every chi^2 below is a sum of independent unit-variance terms.
     """
@@ -127,7 +127,8 @@ class Problem:
         self.obs = obs
         #: how much of a pointing error each scan's measured offset shows (a partly
         #: resolved source shows theta_b^2 / (theta_b^2 + theta_s^2) of it, Clark 1968)
-        self.f = np.ones(obs.n) if offset_scale is None else np.asarray(offset_scale, float)
+        self.offset_scale = np.ones(obs.n) if offset_scale is None \
+            else np.asarray(offset_scale, float)
         #: the factorizations of the current model, made on request and kept
         self.factors = ModelFactors(self)
         self._w: tuple[bytes, np.ndarray] | None = None
@@ -154,16 +155,16 @@ class Problem:
     def unscaled(self) -> bool:
         """Whether every scan shows all of a pointing error (offset scale 1): candidate
         columns are then the raw columns."""
-        return bool(np.all(self.f == 1.0))
+        return bool(np.all(self.offset_scale == 1.0))
 
     def cand(self, columns: np.ndarray) -> np.ndarray:
         """Candidate columns as the recordings show them (scaled by the offset scale)."""
-        f2 = np.concatenate([self.f, self.f])
+        f2 = np.concatenate([self.offset_scale, self.offset_scale])
         return columns * f2[:, None] if columns.ndim == 2 else columns * f2
 
     # ------------------------------------------------------------------ whitening
     @property
-    def w(self) -> np.ndarray:
+    def row_weights(self) -> np.ndarray:
         """1 / (predicted noise) per row (2n), arcsec^-1 (read-only; formed once per noise
         scale, not per call: whitening asks for it thousands of times)."""
         key = self.scale.tobytes()
@@ -179,8 +180,8 @@ class Problem:
         used = self.used if used is None else used
         return np.concatenate([used, used])
 
-    def T(self, v: np.ndarray, used: np.ndarray | None = None,
-          fortran: bool = False) -> np.ndarray:
+    def whiten(self, v: np.ndarray, used: np.ndarray | None = None,
+               fortran: bool = False) -> np.ndarray:
         """Whiten raw rows ``v`` (2n,) or (2n, k) over the used scans: (2 n_used[, k]);
         ``fortran``: a (2 n_used, k) result in Fortran order where the noise is white (what
         LAPACK factors without a copy)."""
@@ -198,7 +199,7 @@ class Problem:
             return out
         flat = v.ndim == 1
         vv = v[:, None] if flat else v
-        w = self.w
+        w = self.row_weights
         n = self.n
         parts = []
         for axis, factor in enumerate(factors):
@@ -258,11 +259,11 @@ class Problem:
 
     def _fit(self, columns: np.ndarray, used: np.ndarray) -> LinearFit:
         """:meth:`fit`, made."""
-        a = self.T(columns, used)
-        z = self.T(self.y, used)
+        a = self.whiten(columns, used)
+        z = self.whiten(self.y, used)
         coef, cov = lstsq(a, z)
         wres = z - a @ coef
-        resid = (self.y - columns @ coef) * self.w
+        resid = (self.y - columns @ coef) * self.row_weights
         return LinearFit(coef=coef, chi2=float(wres @ wres), resid=resid, cov=cov, wres=wres,
                          n_used=int(used.sum()))
 
@@ -314,7 +315,7 @@ class Problem:
             f.cov = f.cov[m:, m:]
             return AddedFit(f)
         q, r, qz, zp = qr.q, qr.r, qr.qz, qr.z_perp
-        x = self.T(extra, used)
+        x = self.whiten(extra, used)
         qx = q.T @ x
         xp = x - q @ qx
         coef_x, cov = lstsq(xp, zp)
@@ -326,9 +327,9 @@ class Problem:
             resid[self.factors.rows_and_weights(used)[0]] = wres
             rest = np.flatnonzero(self.rows(self.valid & ~used))
             resid[rest] = (self.y[rest] - self.current_columns()[rest] @ coef_a
-                           - extra[rest] @ coef_x) * self.w[rest]
+                           - extra[rest] @ coef_x) * self.row_weights[rest]
         else:
-            resid = (self.y - self.current_columns() @ coef_a - extra @ coef_x) * self.w
+            resid = (self.y - self.current_columns() @ coef_a - extra @ coef_x) * self.row_weights
         return AddedFit(LinearFit(coef=np.concatenate([coef_a, coef_x]),
                                   chi2=float(wres @ wres), resid=resid, cov=cov, wres=wres,
                                   n_used=int(used.sum())), x, xp, zp)
@@ -390,7 +391,7 @@ class Problem:
     # ------------------------------------------------------------------ tests
     def white(self, used: np.ndarray | None = None) -> bool:
         """Whether whitening over the used scans is a weight per row (no correlated noise):
-        a whitened column is then the raw column times :attr:`w` on the used rows."""
+        a whitened column is then the raw column times :attr:`row_weights` on the used rows."""
         return all(f is None for f in
                    self.factors.noise_factors(self.used if used is None else used))
 
@@ -400,7 +401,7 @@ class Problem:
         return self.factors.basis(self.used if used is None else used)
 
     def projector(self, used: np.ndarray | None = None) -> Callable[[np.ndarray], np.ndarray]:
-        """A function raw v (2n, k) -> P_perp T(v): whitened over the used scans, with the
+        """A function raw v (2n, k) -> P_perp whiten(v): whitened over the used scans, with the
         current model projected out."""
         return self.factors.projector(self.used if used is None else used)
 
@@ -475,7 +476,7 @@ class Problem:
             else:
                 # whitened in Fortran order and factored in place: one copy of the design
                 # (and none of the blocks stacked)
-                r = heldout_lstsq(self._whitened_fortran(blocks, used), self.T(self.y, used),
+                r = heldout_lstsq(self._whitened_fortran(blocks, used), self.whiten(self.y, used),
                                   np.concatenate([lab, lab]), overwrite=True)
                 if r is not None:
                     return float(r @ r)
@@ -486,16 +487,16 @@ class Problem:
             train = used & (folds != k)
             cols = columns if refit is None else refit(train)
             f = self.fit(cols, train)
-            r = self.T(self.y - cols @ f.coef, test)
+            r = self.whiten(self.y - cols @ f.coef, test)
             total += float(r @ r)
         return total
 
     def _whitened_fortran(self, blocks: tuple[np.ndarray, ...], used: np.ndarray
                           ) -> np.ndarray:
-        """:meth:`T` of the column blocks side by side (white noise), in Fortran order, each
+        """:meth:`whiten` of the column blocks side by side (white noise), in Fortran order, each
         block gathered into the one array (the same numbers as whitening them stacked)."""
         if len(blocks) == 1:
-            return self.T(blocks[0], used, fortran=True)
+            return self.whiten(blocks[0], used, fortran=True)
         idx, wu = self.factors.rows_and_weights(used)
         out = np.empty((idx.size, sum(b.shape[1] for b in blocks)), order="F")
         j = 0

@@ -240,7 +240,7 @@ def _fitted_signal(problem: Problem, cols: np.ndarray, extra: np.ndarray) -> np.
     from it, not from a fit of the same design again."""
     f = problem.fit_current()
     signal = extra @ f.coef[cols.shape[1]:]
-    beta, *_ = np.linalg.lstsq(problem.T(cols), problem.T(signal), rcond=None)
+    beta, *_ = np.linalg.lstsq(problem.whiten(cols), problem.whiten(signal), rcond=None)
     return signal - cols @ beta
 
 

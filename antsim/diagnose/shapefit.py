@@ -175,15 +175,15 @@ def shape_fit(problem: Problem, raw: np.ndarray) -> ShapeFit | None:
     k = raw.shape[1]
     scaled = not problem.unscaled
     idx, wu = problem.factors.rows_and_weights(used)
-    f2u = np.concatenate([problem.f[uscan]] * 2) if scaled else None
+    f2u = np.concatenate([problem.offset_scale[uscan]] * 2) if scaled else None
     # whitened over U in Fortran order, the rows gathered once: the scaled columns (raw
     # times the offset scale, as cand() makes them) then the raw ones; the one pass over
     # the model's basis and x's inner products made as it is (shape_products)
     x, qx, xx, xz = shape_products(raw, idx, wu, f2u, q, zp)
     x_o = raw[idx_o]
     if scaled:
-        x_o = np.column_stack([x_o * problem.f[idx_o % problem.n][:, None], x_o])
-    x_o = x_o * problem.w[idx_o][:, None]
+        x_o = np.column_stack([x_o * problem.offset_scale[idx_o % problem.n][:, None], x_o])
+    x_o = x_o * problem.row_weights[idx_o][:, None]
     gram = xx - qx.T @ qx
     d = np.diag(xx)
     if not np.isfinite(xx).all() or not (d > 0).all():

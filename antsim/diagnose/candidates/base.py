@@ -473,16 +473,16 @@ class Candidate(ABC):
         # degeneracy with the model is a property of the signature itself (before the
         # per-source offset scale): judge absorption and correlation on the raw columns
         if problem.unscaled:
-            full = np.linalg.norm(problem.T(raw, mask) if last is None else last.x, axis=0)
+            full = np.linalg.norm(problem.whiten(raw, mask) if last is None else last.x, axis=0)
             left = np.linalg.norm(xp, axis=0)
         elif last is not None:  # the model's cached factor over the mask: whiten raw once
-            xr = problem.T(raw, mask)
+            xr = problem.whiten(raw, mask)
             q = problem.basis(mask)
             full = np.linalg.norm(xr, axis=0)
             left = np.linalg.norm(xr - q @ qt_dot(q, xr), axis=0)  # what perp(raw) computes
             del xr
         else:
-            full = np.linalg.norm(problem.T(raw, mask), axis=0)
+            full = np.linalg.norm(problem.whiten(raw, mask), axis=0)
             left = np.linalg.norm(perp(raw), axis=0)
         with np.errstate(invalid="ignore", divide="ignore"):
             one_minus_r2 = np.where(full > 0, (left / full) ** 2, 0.0)
@@ -514,8 +514,8 @@ class Candidate(ABC):
         :meth:`Problem.cand` does)."""
         rows = slice(None, None, max(1, cols.shape[0] // 64))
         # not ``cols``: the point is to free it
-        mark = cols[rows] * np.concatenate([problem.f, problem.f])[rows][:, None] if raw \
-            else cols[rows].copy()
+        scale2 = np.concatenate([problem.offset_scale, problem.offset_scale])
+        mark = cols[rows] * scale2[rows][:, None] if raw else cols[rows].copy()
         shape = cols.shape
 
         def remake() -> np.ndarray:
@@ -546,10 +546,10 @@ class Candidate(ABC):
             cols = res.columns  # read once (may be made again)
             if cols is None or not cols.size:
                 return
-            x = problem.T(cols, res.mask)
+            x = problem.whiten(cols, res.mask)
             beta = problem.coef_on_current(x, res.mask)
             if beta is None:
-                a = problem.T(problem.current_columns(), res.mask)
+                a = problem.whiten(problem.current_columns(), res.mask)
                 beta, _ = lstsq(a, x)
                 norms = np.linalg.norm(a, axis=0)
             else:  # the whitened model's column norms are its R's (Q is orthonormal)

@@ -177,7 +177,7 @@ class StepCandidate(Candidate):
         qz = q.T @ z_perp
         for axis in range(2):
             rows = slice(axis * n_used, (axis + 1) * n_used)
-            g = problem.f[used] * problem.w[axis * n:(axis + 1) * n][used]
+            g = problem.offset_scale[used] * problem.row_weights[axis * n:(axis + 1) * n][used]
             if axis == 0:  # an azimuth step shows as dA cos E in cross-elevation
                 g = g * np.cos(obs.el_rad[used])
             g = g[order]

@@ -175,7 +175,7 @@ class ExactTiltCandidate(Candidate):
         rest scaled by each source's offset scale. ``lin``: the AN, AW, CA columns of every
         scan (:func:`term_columns`, made once a test)."""
         obs = problem.obs
-        f2 = np.concatenate([problem.f, problem.f])
+        f2 = np.concatenate([problem.offset_scale, problem.offset_scale])
         if rows is None:
             sky, lin_cols = TiltedSky(obs.az_rad, obs.el_rad), lin
         else:
@@ -276,7 +276,7 @@ class ExactTiltCandidate(Candidate):
         beta, _ = lstsq(lin, cols[:, 0])
         quad = (cols[:, 0] - lin @ beta)[:, None]
         xp = perp(quad)
-        full = np.linalg.norm(problem.T(quad))
+        full = np.linalg.norm(problem.whiten(quad))
         res.r_model = float(math.sqrt(max(0.0, 1 - (np.linalg.norm(xp) / full) ** 2))) \
             if full > 0 else 1.0
         res.params, res.amplitude, res.amplitude_sigma = self.params_from(
@@ -333,7 +333,7 @@ def _projection(problem, used: np.ndarray, rows: np.ndarray):
     perp, z_perp = problem.perp_for(used)
     both = np.concatenate([rows, rows + problem.n])
     if problem.white(used):  # whitening is a weight per row: only the used rows
-        w = problem.w[both]
+        w = problem.row_weights[both]
         q = problem.basis(used)
 
         def proj(v):
@@ -382,7 +382,7 @@ class SquintCandidate(Candidate):
         if ok.sum() < 3:
             return TestResult(self, 0.0, 0, 1.0, 1.0)
         d = d[ok]
-        f = problem.f[ok][:, None]
+        f = problem.offset_scale[ok][:, None]
         if pred.pol_sig is not None and pred.known_noise:
             sig = pred.pol_sig[ok]
         else:

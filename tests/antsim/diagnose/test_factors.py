@@ -44,7 +44,7 @@ def test_the_kept_factor_is_the_whitened_models_qr_and_goes_when_the_model_chang
     (they were the model's without it) and the next one includes the finding's columns."""
     problem = _problem()
     qr = problem.factors.qr(problem.used)
-    a = problem.T(problem.current_columns())
+    a = problem.whiten(problem.current_columns())
     r = scipy.linalg.qr(a, mode="economic")[1]
     np.testing.assert_allclose(np.abs(qr.r), np.abs(r), rtol=1e-10, atol=1e-9)
     np.testing.assert_allclose(qr.q @ qr.r, a, rtol=1e-10, atol=1e-9)
