@@ -21,8 +21,9 @@ first but never those over the model's own used scans (every shape test reads th
 whole cache is dropped when the model, its used scans or the noise scale change (the
 problem says so: :meth:`ModelFactors.clear`). The Sun's elevations on a time grid (an
 ephemeris over the campaign: the thermal candidates and the location ask for the same grid
-many times) are kept by content in :data:`SUN_GRIDS`. Nothing else in diagnose caches
-between calls.
+many times) are kept by content in :data:`SUN_GRIDS`. A candidate's test result does not hold
+its columns but makes them again when they are read (:func:`remade_when_read`). Nothing else
+in diagnose caches between calls.
 """
 
 from __future__ import annotations
@@ -39,7 +40,8 @@ from .data import Observations
 from .linalg import economic_qr, qt_dot
 
 __all__ = ["FACTOR_CACHE_BYTES", "FACTOR_CACHE_ENTRIES", "SUN_GRIDS", "BoundedCache",
-           "ModelFactors", "ModelQR", "OtherRows", "Projection", "correlation_matrix"]
+           "ModelFactors", "ModelQR", "OtherRows", "Projection", "correlation_matrix",
+           "kept_sun_grid", "remade_when_read"]
 
 #: the bound on the memory the cached factors and projectors hold (their bases): one factor
 #: of the model over its used scans and its projector at 200,000 scans (49 MiB), what the
@@ -326,6 +328,28 @@ class ModelFactors:
                              np.flatnonzero(other)), 8 * zp.size
 
         return self._kept(self._key("other_rows", used), make)
+
+
+def remade_when_read(make: Callable[[], np.ndarray], cols: np.ndarray,
+                     keep: np.ndarray | None, scale: np.ndarray | None, refusal: str
+                     ) -> Callable[[], np.ndarray]:
+    """A function that makes columns ``cols`` (2n, q) again with ``make()`` (the ``keep``
+    ones), in place of holding them: every candidate's test result has columns (at 200,000
+    scans all of a round's were 0.5 GB) and few are read. The columns made again are checked
+    against a fingerprint of ``cols`` (a row in 64; ``scale``: their rows scaled by it, as
+    ``make`` scales them), RuntimeError(``refusal``) where they differ."""
+    rows = slice(None, None, max(1, cols.shape[0] // 64))
+    # not ``cols``: the point is to free it
+    mark = cols[rows] * scale[rows][:, None] if scale is not None else cols[rows].copy()
+    shape = cols.shape
+
+    def remake() -> np.ndarray:
+        again = make()
+        if again.shape != shape or not np.array_equal(again[rows], mark, equal_nan=True):
+            raise RuntimeError(refusal)
+        return again if keep is None or keep.all() else again[:, keep]
+
+    return remake
 
 
 def kept_sun_grid(key: Hashable, make: Callable[[], np.ndarray]) -> np.ndarray:

@@ -20,7 +20,7 @@ from controller.units import ARCSEC_PER_RAD
 
 from .. import pvalues
 from ..data import Observations
-from ..factors import kept_sun_grid
+from ..factors import kept_sun_grid, remade_when_read
 from ..linalg import gram_solve, lstsq, qt_dot
 from ..problem import Problem
 from ..shapefit import ABSORBED_WHOLE_1MR2, GRAM_1MR2_MIN, shape_fit
@@ -507,25 +507,14 @@ class Candidate(ABC):
     def _remaker(self, problem: Problem, theta: Any, cols: np.ndarray,
                  keep: np.ndarray | None = None, raw: bool = False
                  ) -> Callable[[], np.ndarray]:
-        """A function that makes the candidate columns ``cols`` (scaled, 2n x q; the
-        ``keep`` ones) again from :meth:`columns` at ``theta``; it checks them against a
-        fingerprint of ``cols`` (a test of columns made otherwise must not be remade).
-        ``raw``: ``cols`` are the raw columns (the fingerprint scales their rows as
-        :meth:`Problem.cand` does)."""
-        rows = slice(None, None, max(1, cols.shape[0] // 64))
-        # not ``cols``: the point is to free it
-        scale2 = np.concatenate([problem.offset_scale, problem.offset_scale])
-        mark = cols[rows] * scale2[rows][:, None] if raw else cols[rows].copy()
-        shape = cols.shape
-
-        def remake() -> np.ndarray:
-            again = problem.cand(self.columns(problem.obs, theta)[0])
-            if again.shape != shape or not np.array_equal(again[rows], mark,
-                                                               equal_nan=True):
-                raise RuntimeError(f"{self.name}: columns at {theta!r} are not the tested ones")
-            return again if keep is None or keep.all() else again[:, keep]
-
-        return remake
+        """The candidate columns ``cols`` (scaled, 2n x q; the ``keep`` ones) made again from
+        :meth:`columns` at ``theta`` when a result's columns are read
+        (:func:`..factors.remade_when_read`). ``raw``: ``cols`` are the raw columns (their
+        fingerprint scales their rows as :meth:`Problem.cand` does)."""
+        scale = np.concatenate([problem.offset_scale, problem.offset_scale]) if raw else None
+        return remade_when_read(
+            lambda: problem.cand(self.columns(problem.obs, theta)[0]), cols, keep, scale,
+            f"{self.name}: columns at {theta!r} are not the tested ones")
 
     def finish(self, problem: Problem, res: TestResult) -> None:
         """Parameters, and the model terms the candidate is most correlated with."""
