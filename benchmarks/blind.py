@@ -259,7 +259,7 @@ def _orthogonal_norm(d, s: np.ndarray) -> float:
 
 def tilt(args) -> None:
     """Large exact tilts (not drawn by the harness): named and recovered?"""
-    from antsim.diagnose.blind import _absorb_linear
+    from antsim.diagnose.blind import absorb_linear
 
     scenario = load_scenario(SCENARIO)
     base = SimulatedBaseline(scenario, scenario.controller.fit_terms, 8)
@@ -272,7 +272,7 @@ def tilt(args) -> None:
                   "collimation_arcmin": float(rng.uniform(-10.0, 10.0))}
         spec = EffectSpec("exact_tilt_collimation", params)
         s2 = scenario.with_effects((*scenario.effects, spec))
-        model = _absorb_linear(s2, params)
+        model = absorb_linear(s2, params)
         obs = _hidden_run(scenario, "exact_tilt_collimation", params, 900 + i, model)
         d = diagnose(obs, scenario, sim_baseline=base)
         first = d.findings[0].result if d.findings else None

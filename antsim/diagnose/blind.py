@@ -64,7 +64,7 @@ from .linalg import lstsq
 from .problem import term_columns
 from .select import ALPHA
 
-__all__ = ["BlindCase", "BlindReport", "Harness", "run_blindtest"]
+__all__ = ["BlindCase", "BlindReport", "Harness", "absorb_linear", "run_blindtest"]
 
 NULL = "none"
 #: shapes of which less survives the baseline's projection (r > 0.99995) are not drawn
@@ -352,7 +352,7 @@ class Harness:
         if c is not None:
             scenario = scenario.with_effects((*scenario.effects, EffectSpec(c.effect, params)))
             if c.name == "exact_tilt_collimation":
-                scenario = scenario.with_controller_model(_absorb_linear(scenario, params))
+                scenario = scenario.with_controller_model(absorb_linear(scenario, params))
             elif c.static:
                 scenario = scenario.with_controller_model(self.model_with(c, params))
         case_seed = CASE_SEED_BASE + seed * 10_000 + index
@@ -380,7 +380,7 @@ class Harness:
                              model.name)
 
 
-def _absorb_linear(scenario, params: dict[str, Any]):
+def absorb_linear(scenario, params: dict[str, Any]):
     """The controller's model in use with the linear part of a large exact tilt added (an
     observatory would already have fitted it; without it the scans miss the source)."""
     model = scenario.controller.model

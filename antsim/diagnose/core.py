@@ -41,7 +41,7 @@ from .problem import (
 )
 from .select import Selection, Step, select
 
-__all__ = ["Diagnosis", "Finding", "diagnose"]
+__all__ = ["Diagnosis", "Finding", "diagnose", "plain"]
 
 #: the simulations predict the systematic residual and the noise scan by scan, from their
 #: scans of the same source at the same time; a recorded scan without one gets a noise level
@@ -79,7 +79,7 @@ class Finding:
 
     @property
     def params(self) -> dict[str, Any]:
-        return _plain(self.result.params)
+        return plain(self.result.params)
 
     def explanation(self) -> str:
         c = self.result.candidate
@@ -103,11 +103,13 @@ class Finding:
         }
 
 
-def _plain(value: Any) -> Any:
+def plain(value: Any) -> Any:
+    """``value`` as JSON writes it: numpy scalars as Python numbers, floats rounded to 6
+    digits (None where not finite), tuples as lists, keys as strings."""
     if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
+        return {str(k): plain(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
-        return [_plain(v) for v in value]
+        return [plain(v) for v in value]
     if isinstance(value, np.generic):
         value = value.item()
     if isinstance(value, float):
@@ -228,8 +230,8 @@ class Diagnosis:
             "baseline": {"terms": list(self.baseline.terms), "origin": self.baseline.origin,
                          "noise": self.prediction.description},
             "located": {"words": self.location.words,
-                        "ratio_to_noise": _plain(self.location.ratio),
-                        "p": _plain(self.location.p)},
+                        "ratio_to_noise": plain(self.location.ratio),
+                        "p": plain(self.location.p)},
             "alternatives": [{"finding": f.effect,
                               "alternative": a.result.candidate.label(a.result.theta),
                               "correlation": round(a.correlation, 3), "words": a.reason}
@@ -247,8 +249,8 @@ class Diagnosis:
             "degeneracies": self.degeneracies(),
             "absorbed": [{"effect": r.name, "components": list(r.absorbed)}
                          for r in sel.absorbed],
-            "summary": _plain(self.summary),
-            "variants": _plain(self.variants),
+            "summary": plain(self.summary),
+            "variants": plain(self.variants),
             "stop": sel.stop_reason,
         }
 

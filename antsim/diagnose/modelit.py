@@ -36,7 +36,7 @@ from controller.pointing.tpoint import TPointModel
 
 from .baseline import SimulatedBaseline
 from .candidates.terms import TermsCandidate
-from .core import Diagnosis, Finding, _plain
+from .core import Diagnosis, Finding, plain
 from .linalg import lstsq
 from .problem import Problem
 from .report import write_diagnose_report
@@ -270,12 +270,12 @@ def write_outputs(diag: Diagnosis, out_dir: str | Path, scenario=None, resim: in
         if resim > 0 and diag.findings:
             res = resimulate(diag, scenario, resim, cache_dir, use_cache, jobs)
             res.pop("_baseline", None)
-            written["resimulation"] = _plain(res)
+            written["resimulation"] = plain(res)
     figures = plots(diag, out)
     written["plots"] = [f.path.name for f in figures]
     written["report"] = "report.html"
     doc = diag.to_json()
-    doc["outputs"] = _plain(written)
+    doc["outputs"] = plain(written)
     (out / "diagnose.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
     text = diag.text()
     if "resimulation" in written:
