@@ -410,7 +410,9 @@ def _simpler_equivalent(problem: Problem, corr_of: _Correlations, r: TestResult,
 
 def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
            alpha: float = ALPHA, max_findings: int = MAX_FINDINGS) -> Selection:
-    """Forward selection on ``problem`` (modified in place: accepted columns are added)."""
+    """Forward selection on ``problem`` (modified in place: accepted columns are added), in
+    rounds (the module docstring): each tests the candidates against the current model
+    (:func:`_test_round`), chooses one (:func:`_choose`) and adds it (:func:`_accept`)."""
     obs = problem.obs
     known = problem.pred.known_noise
     problem.update_outliers()
@@ -428,30 +430,12 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
     stop = "no further candidate is significant"
     channel_results: list[TestResult] = []
     offsets: list[TestResult] = []
-
-    def confirmed(r: TestResult) -> Chosen | None:
-        """``r`` with its held-out chi^2 if it predicts held-out data better (else refused)."""
-        chosen = _held_out(problem, r, folds, log_p_family(problem, r, n_family))
-        if chosen is None:
-            refused.append(Refusal(r, f"{r.name} is significant in-sample but does not "
-                                      f"predict held-out data ({r.note})"))
-        return chosen
-
     for round_no in range(max_findings + 1):
         perp, z_perp = problem.perp_for(problem.used)
-        chi2_now = float(z_perp @ z_perp)
-        results = []
-        for c in usable:
-            if c.name in accepted or (c.kind == "channel" and round_no > 0):
-                continue
-            if any(r.result.name == c.name for r in refused):
-                continue
-            res = c.test(problem, perp, z_perp, chi2_now)
-            if not res.testable:
-                if round_no == 0:
-                    absorbed.append(res)
-                continue
-            results.append(res)
+        results = _test_round(problem, usable, accepted, refused, round_no, perp, z_perp)
+        if round_no == 0:
+            absorbed = [r for r in results if not r.testable]
+        results = [r for r in results if r.testable]
         if round_no == 0:
             n_family = max(len(results), 1)
             first_round = list(results)
@@ -461,36 +445,12 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
             r.note = ""
         ranked = sorted(offsets, key=lambda r: (log_p_family(problem, r, n_family),
                                                 -r.delta_chi2))
-        chosen = None
-        for r in ranked:
-            if log_p_family(problem, r, n_family) >= math.log(alpha):
-                break
-            chosen = confirmed(r)
-            if chosen is not None:
-                break
+        corr_of = _Correlations(problem, perp)
+        chosen = _choose(problem, corr_of, ranked, n_family, alpha, folds, refused)
         if chosen is None:
             break
-        corr_of = _Correlations(problem, perp)
-        simpler = _simpler_equivalent(problem, corr_of, chosen.result, ranked, n_family,
-                                      alpha)
-        if simpler is not None:
-            chosen = confirmed(simpler) or chosen
-        r, lp = chosen.result, chosen.log_p
-        alternatives = _alternatives(problem, corr_of, r, ranked, n_family, alpha)
-        separation = Separation(r.r_model, r.partners, local_sigma(problem, r),
-                                correlation_words(r.name, r.r_model, r.partners))
-        simplest = _simplest_form(problem, r, vocabulary)
-        before = problem.sky_rms()
-        extra = r.columns  # read once (a result may make its columns again when read)
-        after = problem.sky_rms_added(extra)
-        signal = _fitted_signal(problem, problem.add(r.name, extra, r.comp_names), extra)
-        del extra
-        accepted.add(r.name)
-        problem.update_outliers()
-        step = Step(r, min(1.0, math.exp(lp)), lp, before, after, chosen.cv_chi2_before,
-                    chosen.cv_chi2_after, alternatives, problem.gof(), signal, separation,
-                    simplest)
-        steps.append(step)
+        steps.append(_accept(problem, corr_of, chosen, ranked, n_family, alpha, vocabulary))
+        accepted.add(chosen.result.name)
         if len(steps) >= max_findings:
             stop = f"the limit of {max_findings} findings"
             break
@@ -519,6 +479,72 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
     steps.sort(key=lambda s: (s.heldout is not None, s.log_p if s.heldout is None else 0.0))
     return Selection(steps, refused, absorbed, first_round, not_applicable, n_family,
                      gof_before, problem.gof(), stop)
+
+
+def _test_round(problem: Problem, usable: list[Candidate], accepted: set[str],
+                refused: list[Refusal], round_no: int, perp, z_perp: np.ndarray
+                ) -> list[TestResult]:
+    """Each candidate's test against the current model (``perp``, ``z_perp``: its projector
+    over the used scans), but those accepted or refused already, and the channel candidates
+    after the first round (decided once)."""
+    chi2_now = float(z_perp @ z_perp)
+    results = []
+    for c in usable:
+        if c.name in accepted or (c.kind == "channel" and round_no > 0):
+            continue
+        if any(r.result.name == c.name for r in refused):
+            continue
+        results.append(c.test(problem, perp, z_perp, chi2_now))
+    return results
+
+
+def _choose(problem: Problem, corr_of: _Correlations, ranked: list[TestResult],
+            n_family: int, alpha: float, folds: np.ndarray, refused: list[Refusal]
+            ) -> Chosen | None:
+    """The round's finding: the first of ``ranked`` (by family p-value) below ``alpha`` that
+    predicts held-out data better (those that do not are added to ``refused``), or its
+    simpler equivalent where that one does too; None where none passes."""
+    def confirmed(r: TestResult) -> Chosen | None:
+        chosen = _held_out(problem, r, folds, log_p_family(problem, r, n_family))
+        if chosen is None:
+            refused.append(Refusal(r, f"{r.name} is significant in-sample but does not "
+                                      f"predict held-out data ({r.note})"))
+        return chosen
+
+    chosen = None
+    for r in ranked:
+        if log_p_family(problem, r, n_family) >= math.log(alpha):
+            break
+        chosen = confirmed(r)
+        if chosen is not None:
+            break
+    if chosen is None:
+        return None
+    simpler = _simpler_equivalent(problem, corr_of, chosen.result, ranked, n_family, alpha)
+    if simpler is not None:
+        chosen = confirmed(simpler) or chosen
+    return chosen
+
+
+def _accept(problem: Problem, corr_of: _Correlations, chosen: Chosen,
+            ranked: list[TestResult], n_family: int, alpha: float, vocabulary: list[str]
+            ) -> Step:
+    """Add the chosen finding to the model (outliers rejected again) and say it: its
+    alternatives, its separation from the model, its simplest form, the Sky RMS before and
+    after, its fitted signal."""
+    r, lp = chosen.result, chosen.log_p
+    alternatives = _alternatives(problem, corr_of, r, ranked, n_family, alpha)
+    separation = Separation(r.r_model, r.partners, local_sigma(problem, r),
+                            correlation_words(r.name, r.r_model, r.partners))
+    simplest = _simplest_form(problem, r, vocabulary)
+    before = problem.sky_rms()
+    extra = r.columns  # read once (a result may make its columns again when read)
+    after = problem.sky_rms_added(extra)
+    signal = _fitted_signal(problem, problem.add(r.name, extra, r.comp_names), extra)
+    problem.update_outliers()
+    return Step(r, min(1.0, math.exp(lp)), lp, before, after, chosen.cv_chi2_before,
+                chosen.cv_chi2_after, alternatives, problem.gof(), signal, separation,
+                simplest)
 
 
 def _cross_validated(problem: Problem, usable: list[Candidate], accepted: set[str],
