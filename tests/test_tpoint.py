@@ -180,10 +180,11 @@ def test_fit_and_diagnose_print_the_note_in_one_line(tmp_path, capsys):
     body = [f"{a:.5f} {e:.5f} {a + rng.normal(0, 0.003):.5f} {e + rng.normal(0, 0.003):.5f}"
             for a, e in zip(rng.uniform(0, 360, 30), rng.uniform(15, 85, 30), strict=True)]
     path.write_text("\n".join([*lines[:3], *body, "END"]) + "\n", encoding="utf-8")
-    for argv in (["fit", str(path), "--json"], ["diagnose", str(path), "--json"]):
+    for argv, head in ((["fit", str(path), "--json"], "antsim fit: note:"),
+                       (["diagnose", str(path), "--json"], "note:")):
         assert cli(argv) == 0
         err = capsys.readouterr().err.strip().splitlines()
-        assert len(err) == 1 and err[0].startswith(f"note: {path}: no mount option"), err
+        assert len(err) == 1 and err[0].startswith(f"{head} {path}: no mount option"), err
         assert cli([*argv, "--mount", "altaz"]) == 0
         assert capsys.readouterr().err == ""
     assert cli(["fit", str(DATA / "equat_decimal.dat")]) == 2

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from controller.errors import InputError, read_text_file
+from controller.filekind import KIND_NAMES, file_kind
 
 from .legacy import W_TERMS_KEY, names_w_terms, relabel_reconstructed, w_terms_marker
 from .model import NAMED_MODELS, PointingModel
@@ -101,27 +102,60 @@ def _number_or_nan(entry) -> float:
 
 def read_model_file(path: str | Path) -> tuple[str, object]:
     """What a model file holds: ``("json", data)`` for JSON (a ``fit.json``), or
-    ``("mod", text)`` for a TPOINT ``.mod`` file judged by content; anything else (TPOINT
-    pointing data, ECSV recordings, free text, a JSON list) is one InputError line."""
-    from .tpoint import sniff_format
-
+    ``("mod", text)`` for a TPOINT ``.mod`` file, the kind decided by
+    :func:`controller.filekind.file_kind`; anything else (TPOINT pointing data, ECSV
+    recordings, CSV measurements, free text, a JSON list) is one InputError line."""
     where = str(path)
-    text = read_text_file(path)
-    if text.lstrip()[:1] in ("{", "["):
-        try:
-            return "json", json.loads(text)
-        except json.JSONDecodeError as err:
-            raise InputError(f"{where}:{err.lineno}", "JSON", err.msg, "invalid JSON") from None
+    text = read_text_file(path, limit=MAX_MODEL_BYTES)
     try:
-        kind = sniff_format(path)
+        kind = file_kind(path, text)
     except InputError as err:  # free text: say what it is not, as a model
         raise InputError(where, "model", where, "is not a pointing model (a TPOINT .mod file "
                          f"or a fit.json): {err.problem}") from None
+    if kind == "json":
+        return "json", _json(text, where)
     if kind != "mod":
-        what = {"ecsv": "ECSV recordings", "tpoint": "TPOINT pointing data"}[kind]
+        what = KIND_NAMES[kind]
         raise InputError(where, "model", where, f"is {what}, not a pointing model",
                          "give a TPOINT .mod file, a fit.json or a named model")
     return "mod", text
+
+
+#: the largest model file (bytes): a model of 10,000 terms is below 1 MB
+MAX_MODEL_BYTES = 16 << 20
+
+#: how deep a model's JSON may nest: a fit.json is three levels deep
+_MAX_JSON_DEPTH = 32
+
+
+def _json(text: str, where: str):
+    """The JSON document of a model file, or one InputError line (its syntax, or nesting
+    so deep that it is no model: Python's parser would overflow its stack)."""
+    depth = deepest = 0
+    in_string = escaped = False
+    for ch in text:  # the nesting, counted before parsing (strings skipped)
+        if in_string:
+            if escaped:
+                escaped = False
+            elif ch == "\\":
+                escaped = True
+            elif ch == '"':
+                in_string = False
+        elif ch == '"':
+            in_string = True
+        elif ch in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+            if deepest > _MAX_JSON_DEPTH:
+                raise InputError(where, "JSON", f"nested {deepest} levels deep",
+                                 f"is no model: a model's JSON nests at most "
+                                 f"{_MAX_JSON_DEPTH} levels")
+        elif ch in "]}":
+            depth -= 1
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as err:
+        raise InputError(f"{where}:{err.lineno}", "JSON", err.msg, "invalid JSON") from None
 
 
 def refuse_empty(model: PointingModel, where: str) -> PointingModel:
@@ -138,6 +172,10 @@ def load_model(spec: str | Path) -> PointingModel:
     text_spec = str(spec)
     if text_spec in NAMED_MODELS:
         return PointingModel(text_spec)
+    if not text_spec.strip():
+        raise InputError("command line", "--model", text_spec, "is empty",
+                         f"give a named model ({', '.join(sorted(NAMED_MODELS))}), a TPOINT "
+                         ".mod file or a fit.json")
     path = Path(spec)
     if not path.exists():
         raise InputError("command line", "--model", text_spec,

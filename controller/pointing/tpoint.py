@@ -53,11 +53,12 @@ from typing import Literal
 import numpy as np
 
 from controller.errors import InputError, read_text_file, write_text_file
+from controller.filekind import tpoint_or_mod
 from controller.units import RAD_PER_DEG
 
 from .legacy import W_TERMS, W_TERMS_COMMENT, names_w_terms, relabel_reconstructed
 from .model import PointingModel
-from .terms import TermError, get_term
+from .terms import TermError, get_term, term_refusal
 
 __all__ = [
     "RunParameters",
@@ -890,9 +891,8 @@ def parse_mod(text: str, source: str = "<string>") -> TPointModel:
         try:
             get_term(name)
         except TermError:
-            raise InputError(where, "term", name, "unknown pointing term",
-                             "use TPOINT names (IA IE CA NPAE AN AW TF TX ...), harmonics "
-                             "such as HESA2, W1..W10 or P1..P22") from None
+            problem, hint = term_refusal(name)
+            raise InputError(where, "term", name, problem, hint) from None
         if name in seen:
             raise InputError(where, "term", name, f"already given on line {seen[name]}")
         if not 1 <= len(rest) <= 2:
@@ -962,37 +962,12 @@ def write_mod(model: PointingModel, path: str | Path) -> None:
 
 
 # ---------------------------------------------------------------------------------------------
-# Format detection
+# Format detection (controller.filekind decides; this is its answer for one file on disk)
 # ---------------------------------------------------------------------------------------------
 def sniff_format(path: str | Path) -> Format:
-    """``"ecsv"``, ``"tpoint"`` (pointing data) or ``"mod"`` (model), judged by content.
-
-    ECSV files start with ``# %ECSV``. Otherwise the record after the caption decides: an
-    option (``:``) or a run-parameters record of numbers means pointing data; a word followed
-    by numbers (the model parameters record) or a term line means a model file.
-    """
+    """``"ecsv"``, ``"tpoint"`` (pointing data) or ``"mod"`` (model), judged by content
+    (:func:`controller.filekind.file_kind` without the CSV and JSON kinds)."""
     text = _read_text(path)
     if text.startswith("# %ECSV"):
         return "ecsv"
-    caption_seen = False
-    second: str | None = None
-    for line in text.splitlines():
-        stripped = line.strip()
-        if not stripped or stripped.startswith("!"):
-            continue
-        if not caption_seen:
-            caption_seen = True
-            continue
-        second = _strip_comment(stripped)
-        if second:
-            break
-    if not second:
-        raise InputError(str(path), "file", str(path),
-                         "is too short to be TPOINT data, a .mod model or ECSV recordings")
-    tokens = second.split()
-    if second.startswith(":") or all(_NUMBER.match(t) for t in tokens):
-        return "tpoint"
-    if re.fullmatch(r"[A-Za-z&=]\S*", tokens[0]):
-        return "mod"
-    raise InputError(str(path), "file", str(path),
-                     "is neither TPOINT pointing data, a TPOINT .mod model nor ECSV recordings")
+    return tpoint_or_mod(path, text)

@@ -88,7 +88,7 @@ COLUMNS: tuple[Column, ...] = (
     Column("scan", "int64", None, "scan number in the campaign"),
     Column("time", "str", None, "UTC at the middle of the scan (ISO)"),
     Column("t_s", "float64", "s", "seconds since the campaign epoch (antenna clock)",
-           finite=True),
+           -1e9, 1e9, finite=True),
     Column("source", "str", None, "source name"),
     Column("polarization", "str", None, "XR, XL or AVG (mean of XR and XL powers)"),
     Column("az_deg", "float64", "deg", "observed azimuth of the source (N=0, E=90)",
@@ -373,12 +373,58 @@ def _yaml_header(lines: Iterable[str]) -> dict:
     import yaml
 
     text = "\n".join(line[2:] if line.startswith("# ") else line[1:] for line in lines)
+    _refuse_aliases(text, None)
     try:
         return yaml.load(text, Loader=yaml.SafeLoader)
     except yaml.YAMLError:
         from astropy.io.misc.yaml import load
 
         return load(text)
+
+
+#: the largest header the readers take (bytes): antsim writes about 10 kB
+MAX_HEADER_BYTES = 4 << 20
+
+
+def _refuse_aliases(header: str, where: str | None) -> None:
+    """InputError for a YAML anchor or alias (``&a``, ``*a``) in a header: a recordings
+    header holds plain data, and an alias makes a small file a structure of gigabytes (an
+    "alias bomb") once expanded. ``where``: the file (its line is named), or None."""
+    if "&" not in header and "*" not in header:
+        return
+    import yaml
+
+    try:
+        for event in yaml.parse(header, Loader=yaml.SafeLoader):
+            if isinstance(event, yaml.AliasEvent):
+                token = f"*{event.anchor}"
+            elif getattr(event, "anchor", None):
+                token = f"&{event.anchor}"
+            else:
+                continue
+            line = event.start_mark.line + 2  # the header's first line is the file's second
+            raise InputError(f"{where}:{line}" if where else "ECSV header", "header", token,
+                             "is a YAML anchor or alias: a recordings header holds plain "
+                             "data, never a reference expanded on reading")
+    except yaml.YAMLError:
+        return  # malformed: the reader says what is wrong
+
+
+def _header_text(text: str, where: str) -> str:
+    """The YAML of an ECSV file's header (its ``#`` lines after ``# %ECSV``), bounded and
+    without anchors or aliases; one InputError line otherwise."""
+    end = 0
+    while text.startswith("#", end):
+        nl = text.find("\n", end)
+        end = len(text) if nl < 0 else nl + 1
+        if end > MAX_HEADER_BYTES:
+            raise InputError(where, "header", f"{end} bytes so far",
+                             f"is larger than {MAX_HEADER_BYTES >> 20} MiB: not a recordings "
+                             "header")
+    lines = text[:end].splitlines()[1:]
+    header = "\n".join(line[2:] if line.startswith("# ") else line[1:] for line in lines)
+    _refuse_aliases(header, where)
+    return header
 
 
 def _fast_table(text: str, end: int):
@@ -476,6 +522,7 @@ def read_recordings(path: str | Path, purpose: str = "fit", text: str | None = N
         text = read_text_file(path)
     if not text.startswith("# %ECSV"):
         raise InputError(where, "format", text[:20], "not an ECSV file (no '# %ECSV' line)")
+    _header_text(text, where)  # bounded, no YAML references: before any parser expands one
     end = text.rfind("\n") + 1  # a torn last line is left out
     parsed = _fast_table(text, end)
     if parsed is not None:
@@ -516,9 +563,17 @@ def read_recordings(path: str | Path, purpose: str = "fit", text: str | None = N
             check_range(np.asarray(table[name], dtype=float),
                         ColumnRule(name, rule.unit, rule.lo, rule.hi, finite=True), where,
                         lines, rows=good)
+    polarization = np.asarray(table["polarization"]).astype(str)
+    average = np.char.upper(polarization) == "AVG"
+    variant = np.flatnonzero(average & (polarization != "AVG"))
+    if variant.size:  # read as another channel, these rows would silently drop out
+        i = int(variant[0])
+        raise InputError(f"{where}:{lines[i]}", "polarization", polarization[i],
+                         f"is the polarization average written otherwise ({variant.size} "
+                         f"of {int(average.sum())} average rows): the readers take the "
+                         "rows written 'AVG'", "write it AVG (case matters)")
     keys = [np.asarray(table["scan"] if "scan" in table.colnames else table["t_s"]
-                       if "t_s" in table.colnames else table["az_deg"]),
-            np.asarray(table["polarization"]).astype(str)]
+                       if "t_s" in table.colnames else table["az_deg"]), polarization]
     repeat = first_repeat(keys)
     if repeat is not None:
         first, row = repeat
@@ -527,6 +582,15 @@ def read_recordings(path: str | Path, purpose: str = "fit", text: str | None = N
         raise InputError(f"{where}:{lines[row]}", f"{key}, polarization",
                          f"{table[key][row]} {table['polarization'][row]}",
                          f"repeats line {lines[first]}", "record each scan and polarization once")
+    if "scan" in table.colnames and "t_s" in table.colnames:  # a scan copied under another
+        repeat = first_repeat([np.asarray(table["t_s"], dtype=float), polarization])
+        if repeat is not None:
+            first, row = repeat
+            raise InputError(f"{where}:{lines[row]}", "t_s, polarization",
+                             f"{table['t_s'][row]} {table['polarization'][row]}",
+                             f"repeats line {lines[first]} (scan {table['scan'][first]}) "
+                             f"under scan {table['scan'][row]}: one measurement twice",
+                             "record each scan once")
     model = table.meta.get("model")
     if isinstance(model, dict) and isinstance(model.get("terms_arcsec"), dict) \
             and names_w_terms(model["terms_arcsec"]) and W_TERMS_KEY not in model:
@@ -601,12 +665,18 @@ def _check_meta(meta, where: str) -> None:
             raise InputError(where, f"meta.{key}", value, "must be a positive number")
     epoch = meta.get("epoch_utc")
     if epoch is not None:
+        import warnings
+
         from astropy.time import Time
 
         try:
-            Time(str(epoch), scale="utc")
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # ERFA's "dubious year": refused below
+                year = Time(str(epoch), scale="utc").ymdhms["year"]
         except ValueError:
             raise InputError(where, "meta.epoch_utc", epoch, "not an ISO UTC time") from None
+        if not 1900 <= year <= 2200:
+            raise InputError(where, "meta.epoch_utc", epoch, "year outside 1900..2200")
 
 
 def total_errors_arcsec(table) -> tuple[np.ndarray, np.ndarray]:
