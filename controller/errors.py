@@ -98,7 +98,18 @@ def _read_bounded(fh, name: str, what: str, limit: int) -> bytes:
         chunks.append(chunk)
 
 
+#: byte-order marks of the encodings a text editor may save in instead of UTF-8
+_OTHER_ENCODINGS = ((b"\xff\xfe\x00\x00", "UTF-32"), (b"\x00\x00\xfe\xff", "UTF-32"),
+                    (b"\xff\xfe", "UTF-16"), (b"\xfe\xff", "UTF-16"))
+
+
 def _decoded(data: bytes, name: str, what: str) -> str:
+    for mark, encoding in _OTHER_ENCODINGS:
+        head = data[:64]
+        if data.startswith(mark) or (encoding == "UTF-16" and len(head) >= 8
+                                     and head[1::2].count(0) == len(head) // 2):
+            raise InputError(name, what, data[:8], f"is {encoding} text: antsim reads UTF-8",
+                             f"convert it, e.g. iconv -f {encoding} -t UTF-8")
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as err:
@@ -117,7 +128,16 @@ def write_text_file(path: str | PathLike[str], text: str, what: str = "file") ->
     is one InputError line naming ``path``, and leaves no partial file and any earlier
     ``path`` as it was."""
     name = fspath(path)
-    folder = os.path.dirname(name) or "."
+    real = os.path.realpath(name)  # a symbolic link's target is written, as open() would
+    if os.path.exists(real) and not os.path.isfile(real):  # a device, a pipe: written to
+        try:
+            with open(real, "wb") as fh:
+                fh.write(text.encode("utf-8"))
+        except OSError as err:
+            raise InputError(name, what, name, f"cannot be written ({err.strerror or err})")\
+                from None
+        return
+    folder = os.path.dirname(real) or "."
     tmp = None
     try:
         fd, tmp = tempfile.mkstemp(prefix=".", suffix=".tmp", dir=folder)
@@ -126,7 +146,7 @@ def write_text_file(path: str | PathLike[str], text: str, what: str = "file") ->
             fh.flush()
             os.fsync(fh.fileno())
         os.chmod(tmp, 0o666 & ~_umask())  # as open() would have made it
-        os.replace(tmp, name)
+        os.replace(tmp, real)
         tmp = None
     except OSError as err:
         raise InputError(name, what, name, f"cannot be written ({err.strerror or err})",

@@ -105,6 +105,9 @@ def _fixed_from_option(text: str | None, terms) -> dict[str, float]:
         if name not in names:
             raise InputError("command line", "--fixed", name, "is not a term of the fit",
                              f"its terms are {' '.join(names)}")
+        if name in fixed:
+            raise InputError("command line", "--fixed", item.strip(),
+                             f"gives {name} a second value (first {fixed[name]:g})")
         fixed[name] = number
     return fixed
 
@@ -166,10 +169,16 @@ def main(args: argparse.Namespace) -> int:
     else:
         terms, model_name = _terms_from_model(args.model or DEFAULT_MODEL[file.kind])
     fixed = _fixed_from_option(args.fixed, terms)
-    target = Path(args.write_model) if args.write_model else None
-    if target is not None and (target.is_dir() or not target.parent.is_dir()):
+    target = Path(args.write_model) if args.write_model is not None else None
+    if target is not None and (not args.write_model.strip() or target.is_dir()
+                               or not target.parent.is_dir()):
+        raise InputError("command line", "--write-model", str(args.write_model),
+                         "is empty" if not args.write_model.strip() else "is a directory"
+                         if target.is_dir() else "its folder does not exist")
+    if target is not None and target.exists() and target.resolve() == path.resolve():
         raise InputError("command line", "--write-model", str(target),
-                         "is a directory" if target.is_dir() else "its folder does not exist")
+                         "is the pointing data being fitted: writing the model there would "
+                         "replace them", "give the model a file of its own")
     from antsim.blas import one_blas_thread
     from antsim.progress import Progress
 

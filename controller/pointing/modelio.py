@@ -70,19 +70,44 @@ def model_from_json(data: dict, where: str) -> PointingModel:
     if not isinstance(terms, dict):
         raise InputError(where, "terms", terms, "must be an object of term -> {value_arcsec}")
     values_of: dict[str, float] = {}
+    upper: dict[str, str] = {}
     for name, entry in terms.items():
+        if str(name).strip().upper() in upper:
+            raise InputError(where, "terms", name, f"repeats {upper[str(name).strip().upper()]}"
+                             " (term names are not case-sensitive)")
+        upper[str(name).strip().upper()] = name
         value = entry.get("value_arcsec") if isinstance(entry, dict) else entry
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise InputError(where, f"terms.{name}.value_arcsec", value, "must be a number")
-        values_of[name] = check_value(float(value), where, f"terms.{name}.value_arcsec")
+        try:
+            number = float(value)
+        except OverflowError:  # an integer of hundreds of digits
+            raise InputError(where, f"terms.{name}.value_arcsec", value,
+                             f"must be finite and within +-{MAX_VALUE_ARCSEC:g} arcsec") \
+                from None
+        values_of[name] = check_value(number, where, f"terms.{name}.value_arcsec")
     if names_w_terms(values_of) and W_TERMS_KEY not in data:
         values_of = relabel_reconstructed(values_of, where)
     names, values = list(values_of), list(values_of.values())
+    name = str(data.get("model", "custom"))
+    if not name.isprintable():  # written into recordings' headers and model files' captions
+        raise InputError(where, "model", name, "holds a control character (a line break, "
+                         "a tab, ...): a model's name is one line of text")
     try:
-        model = PointingModel(names, values, name=str(data.get("model", "custom")))
+        model = PointingModel(names, values, name=name)
     except TermError as err:
         raise InputError(where, "terms", names, str(err)) from None
     rms = data.get("sky_rms_arcsec")
+    if rms is not None and (not _is_number(rms) or not 0.0 <= rms <= MAX_VALUE_ARCSEC):
+        raise InputError(where, "sky_rms_arcsec", rms,
+                         f"must be a number within 0..{MAX_VALUE_ARCSEC:g} arcsec")
+    for name in names:
+        entry = terms.get(name)
+        sigma = entry.get("sigma_arcsec") if isinstance(entry, dict) else None
+        if sigma is not None and (not _is_number(sigma) or sigma < 0
+                                  or math.isinf(sigma)):
+            raise InputError(where, f"terms.{name}.sigma_arcsec", sigma,
+                             "must be a finite number >= 0 (NaN or null: none)")
     if isinstance(rms, int | float) and not isinstance(rms, bool):
         from .tpoint import TPointModel
 
@@ -92,6 +117,10 @@ def model_from_json(data: dict, where: str) -> PointingModel:
         return TPointModel.from_model(model, sigmas, n_obs=n_used if isinstance(n_used, int)
                                       else 0, sky_rms_arcsec=float(rms))
     return model
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
 
 
 def _number_or_nan(entry) -> float:
@@ -152,10 +181,23 @@ def _json(text: str, where: str):
                                  f"{_MAX_JSON_DEPTH} levels")
         elif ch in "]}":
             depth -= 1
+    def pairs(items):  # an object's keys once each: JSON readers keep the last silently
+        keys: dict[str, None] = {}
+        for key, _ in items:
+            if key in keys:
+                raise InputError(where, "JSON", key, "is a key given twice in one object")
+            keys[key] = None
+        return dict(items)
+
     try:
-        return json.loads(text)
+        return json.loads(text, object_pairs_hook=pairs)
     except json.JSONDecodeError as err:
         raise InputError(f"{where}:{err.lineno}", "JSON", err.msg, "invalid JSON") from None
+    except ValueError as err:  # an integer beyond Python's digit limit
+        if isinstance(err, InputError):
+            raise
+        raise InputError(where, "JSON", str(err).split(";")[0], "is no number a model "
+                         "holds") from None
 
 
 def refuse_empty(model: PointingModel, where: str) -> PointingModel:

@@ -368,6 +368,10 @@ class TPointData:
                 "only decimal Az/El records (': ALTAZ', or --mount altaz) can be fitted",
             )
         keep = np.ones(len(self), dtype=bool) if include_masked else ~self.masked
+        if len(self) and not keep.any():
+            raise InputError(self.source, "observations", 0,
+                             f"every one of the {len(self)} observations is masked (';')",
+                             "--include-masked fits them too")
         unread = np.flatnonzero(keep & ~np.isfinite(self.lat_obs_deg))
         if unread.size:
             i = int(unread[0])
@@ -415,6 +419,9 @@ def _decimal_record(tokens: list[str], where: str
         if not -360.0 <= value <= 720.0:
             raise InputError(where, name, value, "azimuth must lie within -360..720 deg")
     rotator = values[4] if len(values) == 5 else math.nan
+    if not -360.0 <= rotator <= 720.0 and len(values) == 5:
+        raise InputError(where, "rotator", rotator, "a rotator angle must lie within "
+                         "-360..720 deg")
     return (values[0], values[1], values[2], values[3], rotator, math.nan), ()
 
 

@@ -159,7 +159,10 @@ def _units_setting(text: str, where: str) -> dict[str, str]:
         name, _, unit = item.partition("=")
         if not unit:
             raise InputError(where, "units", item, "expected name=unit, e.g. d_el=arcsec")
-        out[name.strip().lower()] = UNIT_SUFFIXES.get(unit.strip().lower(), unit.strip())
+        key = name.strip().lower()
+        if key in out:
+            raise InputError(where, "units", item, f"gives the unit of {key} twice")
+        out[key] = UNIT_SUFFIXES.get(unit.strip().lower(), unit.strip())
     return out
 
 

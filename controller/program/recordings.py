@@ -424,7 +424,41 @@ def _header_text(text: str, where: str) -> str:
     lines = text[:end].splitlines()[1:]
     header = "\n".join(line[2:] if line.startswith("# ") else line[1:] for line in lines)
     _refuse_aliases(header, where)
+    _refuse_repeated_keys(header, where)
     return header
+
+
+def _refuse_repeated_keys(header: str, where: str) -> None:
+    """InputError for a key given twice in one mapping of the header (``site`` twice in
+    ``meta``, ``unit`` twice in a column): YAML readers keep one of the two silently."""
+    import yaml
+
+    try:
+        root = yaml.compose(header, Loader=yaml.SafeLoader)
+    except yaml.YAMLError:
+        return  # malformed: the reader says what is wrong
+    stack = [root] if root is not None else []
+    while stack:
+        node = stack.pop()
+        if isinstance(node, yaml.MappingNode):
+            pairs = node.value
+        elif isinstance(node, yaml.SequenceNode) and node.tag.endswith(":omap"):
+            pairs = [p for item in node.value if isinstance(item, yaml.MappingNode)
+                     for p in item.value]  # an ordered map: one pair a list item
+        else:
+            if isinstance(node, yaml.SequenceNode):
+                stack.extend(node.value)
+            continue
+        seen: dict[str, int] = {}
+        for key, value in pairs:
+            if isinstance(key, yaml.ScalarNode):
+                line = key.start_mark.line + 2  # the header's first line is the file's second
+                if key.value in seen:
+                    raise InputError(f"{where}:{line}", "header", key.value,
+                                     f"is a key given twice (first on line {seen[key.value]}):"
+                                     " readers would keep one of them silently")
+                seen[key.value] = line
+            stack.append(value)
 
 
 def _fast_table(text: str, end: int):
@@ -564,7 +598,7 @@ def read_recordings(path: str | Path, purpose: str = "fit", text: str | None = N
                         ColumnRule(name, rule.unit, rule.lo, rule.hi, finite=True), where,
                         lines, rows=good)
     polarization = np.asarray(table["polarization"]).astype(str)
-    average = np.char.upper(polarization) == "AVG"
+    average = np.char.upper(np.char.strip(polarization)) == "AVG"
     variant = np.flatnonzero(average & (polarization != "AVG"))
     if variant.size:  # read as another channel, these rows would silently drop out
         i = int(variant[0])
@@ -636,8 +670,36 @@ def _check_column(table, column: Column, where: str, lines: list[int]) -> None:
         table[column.name].unit = column.unit
 
 
+def _number(value) -> bool:
+    return not isinstance(value, bool) and isinstance(value, int | float)
+
+
+def _check_model_meta(model, mount: str, where: str) -> None:
+    """``meta.model``: the model in use, a mapping whose ``terms_arcsec`` maps known term
+    names to finite coefficients (arcsec); a term the readers do not know or a value that is
+    no number would be left out of the model in use silently."""
+    from controller.pointing.equatorial import is_equatorial_term
+    from controller.pointing.terms import is_term_name
+
+    if not isinstance(model, dict):
+        raise InputError(where, "meta.model", model, "must be a mapping (name, terms_arcsec)")
+    terms = model.get("terms_arcsec", {})
+    if not isinstance(terms, dict):
+        raise InputError(where, "meta.model.terms_arcsec", terms,
+                         "must be a mapping of term names to arcsec")
+    known = is_equatorial_term if mount == "equatorial" else is_term_name
+    for name, value in terms.items():
+        if not known(str(name)):
+            raise InputError(where, f"meta.model.terms_arcsec.{name}", value,
+                             "is not a pointing term antsim knows")
+        if not _number(value) or not math.isfinite(value) or abs(value) > 648000.0:
+            raise InputError(where, f"meta.model.terms_arcsec.{name}", value,
+                             "must be a finite number within +-648000 arcsec")
+
+
 def _check_meta(meta, where: str) -> None:
-    """The metadata readers use: the site (numbers within range), mount and epoch."""
+    """The metadata readers use: the site (numbers within range), mount, epoch, the model in
+    use and the structure sensors' response time."""
     site = meta.get("site")
     if site is not None:
         if not isinstance(site, dict):
@@ -658,6 +720,17 @@ def _check_meta(meta, where: str) -> None:
     if mount == "equatorial" and not isinstance((site or {}).get("latitude_deg"), int | float):
         raise InputError(where, "meta.site.latitude_deg", "<missing>",
                          "an equatorial mount's recordings need the site latitude")
+    if meta.get("model") is not None:
+        _check_model_meta(meta["model"], mount, where)
+    sensors = meta.get("structure_sensors")
+    if sensors is not None:
+        if not isinstance(sensors, dict):
+            raise InputError(where, "meta.structure_sensors", sensors,
+                             "must be a mapping (lag_s, ...)")
+        lag = sensors.get("lag_s", 0.0)
+        if not _number(lag) or not 0.0 <= lag <= 1e6:
+            raise InputError(where, "meta.structure_sensors.lag_s", lag,
+                             "must be a number of seconds within 0..1e+06")
     for key in ("duration_s", "beam_hpbw_arcmin"):
         value = meta.get(key)
         if value is not None and (isinstance(value, bool) or not isinstance(value, int | float)
