@@ -90,6 +90,7 @@ def _read_bounded(fh, name: str, what: str, limit: int) -> bytes:
             return b"".join(chunks)
         nul = chunk.find(b"\x00")
         if nul >= 0:  # binary: said at once (or what is wrong before it), with its line
+            _other_encoding((b"".join(chunks) + chunk)[:64], name, what)
             _decoded(b"".join(chunks) + chunk[: nul + 1], name, what)
         size += len(chunk)
         if size > limit:
@@ -103,13 +104,19 @@ _OTHER_ENCODINGS = ((b"\xff\xfe\x00\x00", "UTF-32"), (b"\x00\x00\xfe\xff", "UTF-
                     (b"\xff\xfe", "UTF-16"), (b"\xfe\xff", "UTF-16"))
 
 
-def _decoded(data: bytes, name: str, what: str) -> str:
+def _other_encoding(head: bytes, name: str, what: str) -> None:
+    """InputError for text in UTF-16 or UTF-32 (a byte-order mark, or a NUL byte after
+    every character of the first line): text, but not UTF-8, not binary."""
     for mark, encoding in _OTHER_ENCODINGS:
-        head = data[:64]
-        if data.startswith(mark) or (encoding == "UTF-16" and len(head) >= 8
-                                     and head[1::2].count(0) == len(head) // 2):
-            raise InputError(name, what, data[:8], f"is {encoding} text: antsim reads UTF-8",
+        if head.startswith(mark) or (encoding == "UTF-16" and len(head) >= 8
+                                     and head[1::2].count(0) == len(head) // 2
+                                     and 0 not in head[0::2]):
+            raise InputError(name, what, head[:8], f"is {encoding} text: antsim reads UTF-8",
                              f"convert it, e.g. iconv -f {encoding} -t UTF-8")
+
+
+def _decoded(data: bytes, name: str, what: str) -> str:
+    _other_encoding(data[:64], name, what)
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as err:

@@ -122,7 +122,7 @@ def _terms_from_model(spec: str) -> tuple[tuple[str, ...], str]:
                          f"named models: {', '.join(sorted(NAMED_MODELS))}")
     from controller.pointing.modelio import load_model
 
-    return load_model(path).names, path.stem
+    return load_model(spec).names, path.stem
 
 
 def _pointing_data(file, include_masked: bool, terms=()):
@@ -167,7 +167,8 @@ def main(args: argparse.Namespace) -> int:
     elif args.terms is not None:
         terms, model_name = _terms_from_option(args.terms), "custom"
     else:
-        terms, model_name = _terms_from_model(args.model or DEFAULT_MODEL[file.kind])
+        terms, model_name = _terms_from_model(
+            DEFAULT_MODEL[file.kind] if args.model is None else args.model)
     fixed = _fixed_from_option(args.fixed, terms)
     target = Path(args.write_model) if args.write_model is not None else None
     if target is not None and (not args.write_model.strip() or target.is_dir()
@@ -223,7 +224,7 @@ def _equatorial_terms(args: argparse.Namespace, latitude_deg: float):
             return equatorial_terms(names, latitude_deg), "custom"
         except TermError as err:
             raise InputError("command line", "--terms", args.terms, str(err)) from None
-    spec = args.model or "crane11"
+    spec = "crane11" if args.model is None else args.model
     if spec not in EQUATORIAL_MODELS:
         raise InputError("command line", "--model", spec,
                          "these recordings are from an equatorial mount",
