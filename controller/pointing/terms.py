@@ -10,10 +10,15 @@ position. Azimuth arguments are North-based (N = 0, E = 90 deg) everywhere in th
 
 Two facts fix the signs (both are tested):
 
-* TPOINT evaluates its basic terms with its own South-based azimuth ``A_S = A_N - 180 deg``.
-  Only then does a fit of ``examples/mmt_20210821_k_and_e.dat`` reproduce
-  TPOINT's published AN = +2.495" and AW = -10.335" (with North-based azimuth both flip).
-  The harmonic generator has its own azimuth and result signs (below).
+* TPOINT's basic terms are evaluated here at ``A_S = A_N - 180 deg``, where ``A_N`` is
+  antsim's azimuth of TPOINT data (a file's azimuth + 180 deg, :mod:`.tpoint`): a fit of
+  ``examples/mmt_20210821_k_and_e.dat`` then reproduces TPOINT's published AN = +2.495" and
+  AW = -10.335". TPOINT itself writes its terms in ``A_T = 180 deg - (the file's
+  azimuth)``, South = 0, East = 90, its azimuth corrections growing with ``A_T``: the
+  formulas below are TPOINT's, turned to ``A_S = 180 deg - A_T`` (TPOINT routine tptPterms,
+  note 8 and terms 31-35). The harmonic generator's azimuth below is ``A_T`` itself. On
+  North-based data (CSV, recordings) AN, AW, ACEC, ACES and the harmonics odd in A
+  therefore carry the sign opposite to TPOINT's (docs/assumptions.md, "TPOINT's azimuth").
 * Ghigo (1990) and katpoint write the opposite quantity, "indicated minus true", which is
   minus the TPOINT correction. Their basis functions are therefore negated here, so that a
   fitted coefficient equals the number those sources print.
@@ -39,7 +44,8 @@ S: left-right on the sky = dA cos E, Z: zenith distance) + one or two factors, e
 are TPOINT's own, fixed by TPOINT's FAUTO fit of ``examples/auxtel_20200315.dat``
 (22 terms, ten of them harmonics with results A, E and S and arguments up to 7A; tested):
 
-* the azimuth of a harmonic is ``A_H = 180 deg - A_S = -A_N`` (mod 360 deg), not ``A_S``;
+* the azimuth of a harmonic is ``A_H = 180 deg - A_S = -A_N`` (mod 360 deg), not ``A_S``:
+  TPOINT's own ``A_T``;
 * an ``A`` or ``S`` result is minus the harmonic, as TPOINT's IA and CA are: ``HACA2`` is
   dA = -c cos 2A_H, ``HSCA5CE8`` is dA cos E = -c cos 5A_H cos 8E;
 * an ``E`` result is plus it (``HESA2`` is dE = +c sin 2A_H = -c sin 2A_N) and a ``Z`` result

@@ -15,10 +15,17 @@ Pointing data (TPOINT's ``INDAT`` input), as in ``examples/*.dat``::
     ; 357.56 17.95 357.49 18.04 masked observation: read, flagged, not fitted by default
     END
 
-Azimuth in these files counts from SOUTH (S = 0, E = 90) as TPOINT does; the reader converts
-it to this package's North-based azimuth (N = 0, E = 90) and the writer converts back. That is
-the only place the conversion happens. "obs" is the true (catalogue, observed) position and
-"raw" the indicated (encoder) one, so the pointing error "indicated minus true" is raw - obs.
+The azimuth: TPOINT writes its terms in its own azimuth, South = 0, East = 90, the mirror
+image of the North-based one (A_T = 180 deg - A_N), and reads a file's azimuth North-based
+(N = 0, E = 90). The reader adds 180 deg to a file's azimuth (and the writer takes it off):
+that sum is antsim's azimuth of TPOINT data, the azimuth in which the terms of
+:mod:`.terms` reproduce TPOINT's own fits (docs/assumptions.md, "TPOINT's azimuth"). For a
+file in TPOINT's convention it is the true azimuth + 180 deg: a direction read from it as a
+North-based azimuth (diagnose's exact tilt, its "towards the north" groups) is half a turn
+off (docs/inputs.md, "The azimuth of a TPOINT file"; tested end to end in
+tests/end_to_end/test_tpoint_azimuth.py). This is the only place the conversion happens.
+"obs" is the true (catalogue, observed) position and "raw" the indicated (encoder) one, so
+the pointing error "indicated minus true" is raw - obs.
 
 Sexagesimal records: TPOINT's original record format (the JCMT's ``.pnt`` files, "TPOINT input
 version 1") gives catalogue and telescope RA/Dec as ``h m s  +d m s  h m s  +d m s`` followed
@@ -227,9 +234,9 @@ class TPointData:
 
     ``coordinates`` says what the four position columns hold:
 
-    * ``"azel"`` (decimal records in an ``: ALTAZ`` file): azimuth North-based (converted
-      from the file's South-based azimuth) and elevation, degrees; ``rotator_deg`` holds the
-      fifth column when present (NaN where absent);
+    * ``"azel"`` (decimal records in an ``: ALTAZ`` file): antsim's azimuth of TPOINT data
+      (the file's + 180 deg: the module docstring says what it is) and elevation, degrees;
+      ``rotator_deg`` holds the fifth column when present (NaN where absent);
     * ``"radec"`` (sexagesimal records): right ascension (hours converted to degrees) and
       declination, with ``lst_hours`` the sidereal time (NaN if absent);
     * ``"decimal"`` (decimal records in a file whose options name another mount, such as
