@@ -395,7 +395,7 @@ def _refuse_aliases(header: str, where: str | None) -> None:
     import yaml
 
     try:
-        for event in yaml.parse(header, Loader=yaml.SafeLoader):
+        for event in yaml.parse(header, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
             if isinstance(event, yaml.AliasEvent):
                 token = f"*{event.anchor}"
             elif getattr(event, "anchor", None):
@@ -434,7 +434,7 @@ def _refuse_repeated_keys(header: str, where: str) -> None:
     import yaml
 
     try:
-        root = yaml.compose(header, Loader=yaml.SafeLoader)
+        root = yaml.compose(header, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
     except yaml.YAMLError:
         return  # malformed: the reader says what is wrong
     stack = [root] if root is not None else []
