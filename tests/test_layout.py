@@ -36,6 +36,10 @@ RULES: tuple[tuple[str, tuple[str, ...], str], ...] = (
     ("controller.errors", ("controller",), "a base module imports nothing of the program"),
     ("controller.units", ("controller",), "a base module imports nothing of the program"),
     ("controller.protocol", ("controller",), "a base module imports nothing of the program"),
+    ("controller.filekind", ("controller.units", "controller.protocol", "controller.wire",
+                             "controller.astro", "controller.pointing", "controller.scans",
+                             "controller.program"),
+     "deciding a file's kind reads text: it imports nothing of the program but its errors"),
     ("controller.wire", ("antsim", "controller.astro", "controller.pointing", "controller.scans",
                          "controller.program"),
      "the wire client is the protocol over a network: part of the controller, it imports "

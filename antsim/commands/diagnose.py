@@ -102,6 +102,9 @@ def main(args: argparse.Namespace) -> int:
         raise InputError("command line", "--sims", args.sims, "must be at least 2")
     if args.resimulate is not None and args.resimulate < 0:
         raise InputError("command line", "--resimulate", args.resimulate, "must be >= 0")
+    if args.model is not None and not args.model.strip():  # not "no model": said so
+        raise InputError("command line", "--model", args.model, "is empty",
+                         "give a named model, a model file or T1,T2,...")
     if args.out is None:
         return _diagnose(args, None)
     from antsim.outdir import held_output_dir
