@@ -12,7 +12,7 @@ import importlib
 import sys
 import warnings
 
-from controller.errors import InputError
+from controller.errors import InputError, Note
 from controller.pointing.legacy import RelabelledTermsWarning
 
 from ._version import __version__
@@ -82,6 +82,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("always", RelabelledTermsWarning)
+            warnings.simplefilter("always", Note)
             warnings.showwarning = _notes_in_one_line(args.command, warnings.showwarning)
             code = int(module.main(args) or 0)
             sys.stdout.flush()  # here, where a reader that left is caught, not at exit
@@ -116,12 +117,13 @@ def _silence_stdout() -> None:
 
 def _notes_in_one_line(command: str, show):
     """A ``warnings.showwarning`` printing notes to the user (a file's W terms renamed, see
-    :mod:`controller.pointing.legacy`) as one line, ``antsim COMMAND: note: ...``; other
-    warnings go to ``show``. A note is printed once, however often the file is read."""
+    :mod:`controller.pointing.legacy`; a :class:`~controller.errors.Note`, such as a damaged
+    cache rebuilt) as one line, ``antsim COMMAND: note: ...``; other warnings go to
+    ``show``. A note is printed once, however often the file is read."""
     printed: set[str] = set()
 
     def showwarning(message, category, filename, lineno, file=None, line=None):
-        if issubclass(category, RelabelledTermsWarning):
+        if issubclass(category, RelabelledTermsWarning | Note):
             if str(message) not in printed:
                 printed.add(str(message))
                 print(f"antsim {command}: note: {message}", file=sys.stderr)

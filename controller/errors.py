@@ -5,7 +5,7 @@ from __future__ import annotations
 from os import PathLike, fspath
 from typing import Any
 
-__all__ = ["InputError", "read_text_file"]
+__all__ = ["InputError", "Note", "read_text_file"]
 
 
 def _short(value: Any, limit: int = 60) -> str:
@@ -14,6 +14,11 @@ def _short(value: Any, limit: int = 60) -> str:
     text = repr(value)
     text = " ".join(text.split())
     return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+class Note(UserWarning):
+    """Something the user should know that is not an error (a damaged cache rebuilt, ...):
+    a warning the command line prints as one line, ``antsim COMMAND: note: ...``."""
 
 
 class InputError(ValueError):
