@@ -175,6 +175,7 @@ def use_cached_eop_table() -> None:
     if _EOP_READY:
         return
     _EOP_READY = True
+    import contextlib
     import warnings
 
     from controller.errors import Note
@@ -193,8 +194,7 @@ def use_cached_eop_table() -> None:
                                "tables"), stacklevel=2)
     if table is None:
         table = iers.IERS_Auto.open()
-        try:
+        # a read-only or full cache only costs time
+        with contextlib.suppress(OSError, TypeError, ValueError):
             write_eop_cache(table, versions, path)
-        except (OSError, TypeError, ValueError):
-            pass  # a read-only or full cache only costs time
     iers.earth_orientation_table.set(table)

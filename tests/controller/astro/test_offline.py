@@ -58,7 +58,7 @@ def first(tmp_path_factory):
 
 
 def _again(first, tmp_path, write) -> tuple[str, list[str], bytes]:
-    cache_src, path_src, numbers = first
+    _, path_src, _ = first
     cache = tmp_path / "cache"
     cache.mkdir()
     path = cache / path_src.name
