@@ -16,8 +16,8 @@ scatter, shrunk towards a running mean in time so that a few simulations suffice
 simulations are cached on disk, keyed by the scenario's text, the seeds, the terms and the
 software version; each file holds that key and a digest of its content, recomputed when it is
 read, so that a file antsim did not write (damaged, edited, renamed) is simulated again with a
-note rather than used (docs/caches.md). Without a scenario the noise is white with one level per axis, estimated
-from the data.
+note rather than used (docs/caches.md). Without a scenario the noise is white with one level
+per axis, estimated from the data.
 """
 
 from __future__ import annotations
@@ -151,7 +151,7 @@ def resolve_baseline(obs: Observations, scenario=None, model: str | None = None)
         origin = "TPOINT's eight terms IA IE NPAE CA AN AW TF TX"
     feed_terms = [t for t in terms if _needs_feed_angle(t)]
     if feed_terms:
-        from controller.errors import InputError, Note
+        from controller.errors import InputError
 
         raise InputError(obs.path, "baseline terms", " ".join(feed_terms),
                          "diagnose does not use feed-angle terms in its baseline yet",
