@@ -61,13 +61,36 @@ def os_error_line(err: OSError) -> str:
     """One line for a file-system error: the file, what the system said, and its code."""
     import errno
 
-    where = (err.filename if err.filename is not None
+    filename = err.filename if err.filename is not None else _file_of(err)
+    where = (filename if filename is not None
              else "network" if isinstance(err, ConnectionError | TimeoutError) else "system")
     code = errno.errorcode.get(err.errno or 0, "")
     text = f"{where}: {err.strerror or type(err).__name__}" + (f" [{code}]" if code else "")
     if err.filename2 is not None:
         text += f" (with {err.filename2})"
     return " ".join(text.split()) + "; files written before it are kept"
+
+
+def _file_of(err: OSError) -> str | None:
+    """The file a failed write was writing, where the error does not name it (ENOSPC from
+    ``write`` knows only a descriptor): the path or open file of the innermost frame that
+    holds one (``Path.write_text``'s own path, a writer's file object). antsim's own
+    outputs name their file (:func:`antsim.outdir.write_file`); this names the others'."""
+    import io
+    from pathlib import PurePath
+
+    frames = []
+    tb = err.__traceback__
+    while tb is not None:
+        frames.append(tb.tb_frame)
+        tb = tb.tb_next
+    for frame in reversed(frames):
+        for value in frame.f_locals.values():
+            if isinstance(value, PurePath):
+                return str(value)
+            if isinstance(value, io.IOBase) and isinstance(getattr(value, "name", None), str):
+                return value.name
+    return None
 
 
 def main(argv: list[str] | None = None) -> int:

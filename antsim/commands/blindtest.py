@@ -10,7 +10,6 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 
 from antsim.commands import check_processes
 from controller.errors import InputError
@@ -70,7 +69,9 @@ def main(args: argparse.Namespace) -> int:
                                jobs=args.jobs, progress=progress)
     doc = report.to_json()
     if args.out:
-        Path(args.out).write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+        from antsim.outdir import write_file
+
+        write_file(args.out, json.dumps(doc, indent=2) + "\n")
     if args.json:
         json.dump(doc, sys.stdout, indent=2)
         sys.stdout.write("\n")

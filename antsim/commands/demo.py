@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from antsim.bundled import find, shown
+from antsim.outdir import write_file
 from controller.errors import InputError
 from controller.units import ARCMIN_PER_RAD
 
@@ -178,8 +179,7 @@ def run_demo(out: Path, scenario_path: Path,
     numbers["wall_s"] = time.perf_counter() - t0
     numbers["html"] = str(path)
     numbers["chapters"] = [c.title for c in story.chapters]
-    (out / "demo.json").write_text(json.dumps(numbers, indent=2, default=str) + "\n",
-                                   encoding="utf-8")
+    write_file(out / "demo.json", json.dumps(numbers, indent=2, default=str) + "\n")
     echo(f"\nwrote {path} ({len(story.chapters)} chapters) and demo.json in "
          f"{numbers['wall_s']:.1f} s")
     return numbers
@@ -523,7 +523,7 @@ def _closed_loop(story: _Story, base_text: str, scenario_path: Path, out: Path, 
     text = _edit(base_text, "duration_h = 24.0", f"duration_h = {CLOSED_LOOP_HOURS:g}",
                  str(scenario_path))
     scen_path = out / "2-closed-loop.toml"
-    scen_path.write_text(text, encoding="utf-8")
+    write_file(scen_path, text)
     story.say(ch, (
         "A model is only worth something if it points the telescope. The controller now adds "
         "the fitted model to every command, and we observe again: a new night's noise "
@@ -641,7 +641,7 @@ def _hidden_effect(story: _Story, base_text: str, scenario_path: Path, out: Path
     block = (f"\n# demo chapter 5: the hidden effect, an uneven azimuth track\n"
              f"[[truth.effects]]\neffect = \"terms\"\n{HIDDEN_TERM} = {HIDDEN_ARCSEC:g}\n")
     scen_path = out / "3-hidden-effect.toml"
-    scen_path.write_text(base_text.rstrip("\n") + "\n" + block, encoding="utf-8")
+    write_file(scen_path, base_text.rstrip("\n") + "\n" + block)
     run_dir = out / "3-hidden-effect"
     story.say(ch, (
         "Real antennas have more faults than any model lists. We now observe a third time "
