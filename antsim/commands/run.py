@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from controller.errors import InputError
@@ -62,11 +63,17 @@ def main(args: argparse.Namespace) -> int:
                              "the simulation is the server's (antsim serve --seed)")
     out = output_dir(args.out)
     with DirectoryLock(out, "--out", "antsim run"):
-        present = [name for name in PRODUCTS if (out / name).exists()]
+        # a link counts (a dangling one too): antsim never writes through one
+        present = [name for name in PRODUCTS if os.path.lexists(out / name)]
         if present and not args.resume:
             raise InputError("command line", "--out", str(out),
                              f"already holds {' '.join(present)} of an earlier run",
                              "use --resume to continue that run, or an empty or new directory")
+        if args.resume and (out / "recordings.ecsv").is_symlink():
+            raise InputError("command line", "--out", str(out),
+                             "holds recordings.ecsv as a symbolic link: a resumed run appends "
+                             "to its recordings and does not write through a link",
+                             "copy the file there, or run into a new directory")
         antenna, seed = None, args.seed
         if args.connect is not None:
             from antsim.serve.remote import connect
