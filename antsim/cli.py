@@ -102,7 +102,10 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return EXIT_INPUT
     module = importlib.import_module(args._module)
+    _replace_unencodable(sys.stdout)
     try:
+        if args.command in DRAWS:
+            check_figure_backend()
         with warnings.catch_warnings():
             warnings.simplefilter("always", RelabelledTermsWarning)
             warnings.simplefilter("always", Note)
@@ -123,6 +126,38 @@ def main(argv: list[str] | None = None) -> int:
         print(f"antsim {args.command}: interrupted; recordings written so far are kept",
               file=sys.stderr)
         return 130
+
+
+#: the commands that draw figures (with matplotlib, which reads MPLBACKEND when imported)
+DRAWS = frozenset({"run", "diagnose", "plan", "demo"})
+
+
+def check_figure_backend() -> None:
+    """A matplotlib backend named by ``MPLBACKEND`` that matplotlib refuses is one line,
+    before anything runs (matplotlib's import raises on it, after the campaign; antsim
+    draws on its own Agg canvases whatever the variable names)."""
+    import os
+
+    name = os.environ.get("MPLBACKEND")
+    if not name:
+        return
+    try:
+        from matplotlib import rcsetup
+
+        rcsetup.validate_backend(name)
+    except ValueError:
+        raise InputError("environment", "MPLBACKEND", name, "is not a matplotlib backend",
+                         "unset it (antsim draws with Agg whatever it names) or name one, "
+                         "e.g. agg") from None
+
+
+def _replace_unencodable(stream) -> None:
+    """Text the stream's encoding cannot hold (a scenario named in Greek on an ASCII
+    terminal, PYTHONIOENCODING=ascii) is written as backslash escapes, not a
+    UnicodeEncodeError after every file was written (stderr does so already)."""
+    reconfigure = getattr(stream, "reconfigure", None)
+    if reconfigure is not None and getattr(stream, "errors", None) == "strict":
+        reconfigure(errors="backslashreplace")
 
 
 EXIT_BROKEN_PIPE = 141

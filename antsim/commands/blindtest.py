@@ -11,7 +11,7 @@ import argparse
 import json
 import sys
 
-from antsim.commands import check_processes
+from antsim.commands import MAX_CASES, MAX_SIMULATIONS, check_count, check_processes
 from controller.errors import InputError
 
 #: the scenario the effects are hidden in unless --scenario says otherwise
@@ -50,8 +50,10 @@ def main(args: argparse.Namespace) -> int:
     from antsim.progress import Progress
     from antsim.scenario import load_scenario
 
-    if args.n < 1:
-        raise InputError("command line", "--n", args.n, "must be at least 1")
+    check_count(args.n, "--n", 1, MAX_CASES, "each is a campaign simulated and diagnosed")
+    check_count(args.sims, "--sims", 2, MAX_SIMULATIONS, "each is a campaign simulated")
+    if args.seed < 0:
+        raise InputError("command line", "--seed", args.seed, "must be >= 0")
     check_processes(args.jobs, "--jobs")
     scenario = load_scenario(find(args.scenario, field="--scenario"))
     with Progress("blindtest", args.progress) as shown:

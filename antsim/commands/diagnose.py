@@ -16,7 +16,7 @@ import os
 import sys
 from pathlib import Path
 
-from antsim.commands import check_processes
+from antsim.commands import MAX_SIMULATIONS, check_count, check_processes
 from controller.errors import InputError
 
 
@@ -98,10 +98,10 @@ def main(args: argparse.Namespace) -> int:
                          "is required (a recordings.ecsv or a TPOINT data file)",
                          "antsim diagnose --list alone prints the candidate library")
     check_processes(args.jobs, "--jobs")
-    if args.sims < 2:
-        raise InputError("command line", "--sims", args.sims, "must be at least 2")
-    if args.resimulate is not None and args.resimulate < 0:
-        raise InputError("command line", "--resimulate", args.resimulate, "must be >= 0")
+    check_count(args.sims, "--sims", 2, MAX_SIMULATIONS, "each is a campaign simulated")
+    if args.resimulate is not None:
+        check_count(args.resimulate, "--resimulate", 0, MAX_SIMULATIONS,
+                    "each is a campaign simulated")
     if args.out is None:
         return _diagnose(args, None)
     from antsim.outdir import DirectoryLock, output_dir
