@@ -68,11 +68,14 @@ class _Clock:
         """Bring simulated time up to the clock's present (real-time clocks)."""
 
     def check_room(self, seconds: float, what: str) -> None:
-        """Refuse a command that would run past the end of the simulation."""
-        if self.env.now + seconds > self.end_s:
-            raise OutOfTimeError(f"{what} would end at {self.env.now + seconds:.1f} s, after "
-                                 f"the end of the simulation ({self.end_s:.1f} s: the "
-                                 "scenario's duration plus an hour's margin)")
+        """Refuse a command that would run past the end of the simulation; ``what`` names
+        the command (and the argument that sets its time)."""
+        end = self.env.now + seconds
+        if end > self.end_s:
+            shown = f"{end:.1f}" if abs(end) < 1e9 else f"{end:.6g}"
+            raise OutOfTimeError(f"{what} would end at {shown} s, after the end of the "
+                                 f"simulation ({self.end_s:.1f} s: the scenario's duration "
+                                 "plus an hour's margin)")
 
 
 class OutOfTimeError(RuntimeError):

@@ -327,7 +327,8 @@ class AntennaDevice(aiokatcp.DeviceServer):
         self.clock.check_room(0.0, "?track")
         track = ProgramTrack.from_numbers(numbers(args), times_s=self._track_times())
         slew_s, _, _ = self.world.mount.plan_slew(track)  # what the antenna will take
-        self.clock.check_room(slew_s + self.world.mount.config.settle_s, "?track")
+        self.clock.check_room(slew_s + self.world.mount.config.settle_s,
+                              "the slew and settle of ?track")
         duration = await self._complete(self.antenna.track(track))
         self._track = track
         return self._clock(), float(duration)
@@ -356,7 +357,8 @@ class AntennaDevice(aiokatcp.DeviceServer):
             raise ArgumentError("no program track is being followed: send ?track first")
         move_s = mount.offset_move_s(d_az, d_el)
         self._check_offset(args, d_az, d_el, move_s)
-        self.clock.check_room(move_s, "?offset")
+        self.clock.check_room(move_s, f"arguments 1 and 2 (DAZ DEL) {quoted(args[0])} "
+                                      f"{quoted(args[1])}: the move of ?offset")
         duration = await self._complete(self.antenna.set_offset(d_az, d_el))
         return self._clock(), float(duration)
 
@@ -398,7 +400,7 @@ class AntennaDevice(aiokatcp.DeviceServer):
         if defer and len(self._deferred) >= MAX_DEFERRED:
             raise ArgumentError(f"{len(self._deferred)} deferred integrations wait for ?powers, "
                                 "the most the antenna keeps: read them first")
-        self.clock.check_room(seconds, "?integrate")
+        self.clock.check_room(seconds, f"argument 1 (SECONDS) {quoted(args[0])}: ?integrate")
         integ = await self._complete(self.antenna.integrate(seconds))
         ident = self._next_id
         self._next_id += 1
@@ -459,7 +461,7 @@ class AntennaDevice(aiokatcp.DeviceServer):
         seconds = number(args, 0, "SECONDS")
         if seconds < 0:
             raise ArgumentError(f"argument 1 (SECONDS) {quoted(args[0])}: must not be negative")
-        self.clock.check_room(seconds, "?wait")
+        self.clock.check_room(seconds, f"argument 1 (SECONDS) {quoted(args[0])}: ?wait")
         await self._complete(self.antenna.wait(seconds))
         return (self._clock(),)
 
@@ -470,7 +472,8 @@ class AntennaDevice(aiokatcp.DeviceServer):
         if not args:
             return self._clock(), self.antenna.feed_angle_deg(), 0.0
         angle = within(args, 0, "ANGLE", -FEED_LIMIT_DEG, FEED_LIMIT_DEG, "deg")
-        self.clock.check_room(self.antenna.feed_turn_s(angle), "?feed-angle")
+        self.clock.check_room(self.antenna.feed_turn_s(angle),
+                              f"argument 1 (ANGLE) {quoted(args[0])}: the turn of ?feed-angle")
         duration = await self._complete(self.antenna.set_feed_angle(angle))
         return self._clock(), self.antenna.feed_angle_deg(), float(duration)
 
@@ -485,7 +488,7 @@ class AntennaDevice(aiokatcp.DeviceServer):
         if seconds <= 0:
             raise ArgumentError(f"argument 1 (SECONDS) {quoted(args[0])}: must be positive")
         self._check_samples(args, seconds)
-        self.clock.check_room(seconds, "?camera")
+        self.clock.check_room(seconds, f"argument 1 (SECONDS) {quoted(args[0])}: ?camera")
         r = await self._complete(self.antenna.measure_offset(seconds))
         w = r.weather
         return (self._clock(), r.t_start_s, r.t_end_s, bool(r.found), r.xel_arcsec,
