@@ -62,9 +62,14 @@ async def serve(scenario: Scenario, clock: ClockSpec, host: str = "127.0.0.1", p
         raise _bind_error(err, host, port) from None
     try:
         if out is not None:
+            # both or neither: a session that cannot start leaves nothing to refuse the next
             out.mkdir(parents=True, exist_ok=True)
-            device.log = RequestLog(out / "requests.jsonl")
             _write_truth(device, out)
+            try:
+                device.log = RequestLog(out / "requests.jsonl")
+            except BaseException:
+                (out / "truth.json").unlink(missing_ok=True)
+                raise
         return await _run(device, host, out, say, started)
     except BaseException:
         if device.server is not None and device.server.is_serving():
