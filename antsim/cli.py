@@ -61,9 +61,9 @@ def os_error_line(err: OSError) -> str:
     """One line for a file-system error: the file, what the system said, and its code."""
     import errno
 
-    filename = err.filename if err.filename is not None else _file_of(err)
-    where = (filename if filename is not None
-             else "network" if isinstance(err, ConnectionError | TimeoutError) else "system")
+    network = isinstance(err, ConnectionError | TimeoutError)
+    filename = err.filename if err.filename is not None or network else _file_of(err)
+    where = filename if filename is not None else "network" if network else "system"
     code = errno.errorcode.get(err.errno or 0, "")
     text = f"{where}: {err.strerror or type(err).__name__}" + (f" [{code}]" if code else "")
     if err.filename2 is not None:
