@@ -117,6 +117,23 @@ def _dangling_report(out: Path, base_run: Path) -> None:
     (out / "report.html").symlink_to(out.parent / "nowhere.html")
 
 
+def _links_to_precious(*names: str):
+    """A setup: ``out`` holds ``precious.txt`` and links to it named as outputs (a dangling
+    one where a name ends in "-dangling")."""
+
+    def setup(out: Path, base_run: Path) -> None:
+        out.mkdir()
+        precious = out / "precious.txt"
+        precious.write_text("precious\n", encoding="utf-8")
+        for name in names:
+            if name.endswith("-dangling"):
+                (out / name.removesuffix("-dangling")).symlink_to(out.parent / "nowhere")
+            else:
+                (out / name).symlink_to(precious)
+
+    return setup
+
+
 def _earlier_session(out: Path, base_run: Path) -> None:
     out.mkdir()
     (out / "requests.jsonl").write_text('{"request": "clock"}\n', encoding="utf-8")
@@ -130,6 +147,9 @@ LINKED_SETUPS = {
     "run_recordings_link": _run_with(_recordings_as_link),
     "dangling_report": _dangling_report,
     "earlier_session": _earlier_session,
+    "diagnose_json_link": _links_to_precious("diagnose.json"),
+    "diagnose_figure_links": _links_to_precious("diagnose_residuals.png", "report.html"),
+    "requests_dangling_link": _links_to_precious("requests.jsonl-dangling"),
 }
 
 

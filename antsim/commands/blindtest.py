@@ -44,6 +44,20 @@ def configure(parser: argparse.ArgumentParser) -> None:
                      "cases, false alarms on null cases, amplitude recovered within 3 sigma.")
 
 
+def _check_out_file(name: str) -> None:
+    """``--out FILE`` must name a file in a directory that exists."""
+    import os
+
+    if not name.strip():
+        raise InputError("command line", "--out", name, "is empty", "name a file")
+    if os.path.isdir(name):
+        raise InputError("command line", "--out", name, "is a directory", "name a file in it")
+    parent = os.path.dirname(os.path.abspath(name))
+    if not os.path.isdir(parent):
+        raise InputError("command line", "--out", name,
+                         f"cannot be written: {parent} is not a directory")
+
+
 def main(args: argparse.Namespace) -> int:
     from antsim.bundled import find
     from antsim.diagnose.blind import run_blindtest
@@ -55,6 +69,8 @@ def main(args: argparse.Namespace) -> int:
     if args.seed < 0:
         raise InputError("command line", "--seed", args.seed, "must be >= 0")
     check_processes(args.jobs, "--jobs")
+    if args.out is not None:
+        _check_out_file(args.out)  # before the cases, not after them
     scenario = load_scenario(find(args.scenario, field="--scenario"))
     with Progress("blindtest", args.progress) as shown:
         shown.stage("cases", total=args.n, unit="case")
@@ -70,7 +86,7 @@ def main(args: argparse.Namespace) -> int:
                                cache_dir=args.cache, use_cache=not args.no_cache,
                                jobs=args.jobs, progress=progress)
     doc = report.to_json()
-    if args.out:
+    if args.out is not None:
         from antsim.outdir import write_file
 
         write_file(args.out, json.dumps(doc, indent=2) + "\n")

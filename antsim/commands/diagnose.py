@@ -108,7 +108,27 @@ def main(args: argparse.Namespace) -> int:
 
     out = output_dir(args.out)
     with DirectoryLock(out, "--out", "antsim diagnose"):  # held from the start: refused early
+        _refuse_links(out)
         return _diagnose(args, out)
+
+
+#: the files diagnose writes into --out (and its figures, diagnose*.png)
+OUTPUTS = ("diagnose.json", "diagnose.txt", "report.html", "model_updated.dat",
+           "model_updated.json", "scenario_updated.toml")
+
+
+def _refuse_links(out: Path) -> None:
+    """A symbolic link where diagnose writes one of its files would be written through
+    (its target overwritten): refused before anything runs."""
+    from fnmatch import fnmatch
+
+    links = sorted(p.name for p in out.iterdir() if p.is_symlink() and (
+        p.name in OUTPUTS or fnmatch(p.name, "diagnose*.png")))
+    if links:
+        raise InputError("command line", "--out", str(out),
+                         f"holds {' '.join(links)} as a symbolic link: diagnose writes its "
+                         "outputs there and does not write through a link",
+                         "remove the link, or write into another directory")
 
 
 def _diagnose(args: argparse.Namespace, out: Path | None) -> int:

@@ -278,6 +278,9 @@ def default_cache_dir() -> Path:
     return Path(base) / "antsim"
 
 
+#: a cached simulation larger than this (unpacked) is not one antsim wrote: a campaign of
+#: 200,000 scans takes 66 MB
+MAX_CACHE_BYTES = 256 * 2**20
 #: the arrays of a cached simulation, in the order of its digest
 _CACHED = ("t_s", "source", "res", "pol", "width", "az_rad", "el_rad")
 
@@ -309,6 +312,9 @@ def _read_cached(path: Path, key: str) -> SimProducts:
     with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
         if not hasattr(z, "files"):
             raise ValueError("not an archive of arrays")
+        size = sum(info.file_size for info in z.zip.infolist())
+        if size > MAX_CACHE_BYTES:  # read before its arrays are: no memory taken
+            raise ValueError(f"it unpacks to {size} bytes")
         missing = [k for k in ("key", "digest", *_CACHED) if k not in z.files]
         if missing:
             raise ValueError(f"no {missing[0]}")

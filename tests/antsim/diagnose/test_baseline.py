@@ -148,6 +148,18 @@ def test_an_old_file_without_a_digest_is_not_looked_at(clean, tmp_path):
     assert len(notes) == 1 and "no key" in notes[0]
 
 
+def test_a_file_that_unpacks_beyond_the_bound_is_not_read(clean, tmp_path, monkeypatch):
+    """A compressed archive may unpack to gigabytes (a zip bomb): its declared size is
+    checked before any array is read (the bound lowered here to the files' own size)."""
+    from antsim.diagnose import baseline
+
+    cache = _copy(clean, tmp_path)
+    monkeypatch.setattr(baseline, "MAX_CACHE_BYTES", 1000)
+    base, notes = _load_again(cache)
+    _same(base.products, clean[2])
+    assert len(notes) == 1 and "it unpacks to" in notes[0] and "and 1 more" in notes[0]
+
+
 def test_the_cache_is_written_without_following_a_link(clean, tmp_path):
     cache = _copy(clean, tmp_path)
     victim = tmp_path / "victim"

@@ -143,6 +143,22 @@ def test_a_file_for_other_versions_is_not_used(first, tmp_path):
     assert got == first[2] and len(notes) == 1 and "written for" in notes[0]
 
 
+def test_an_archive_that_unpacks_to_gigabytes_is_not_read(first, tmp_path):
+    """A zip bomb in place of the cache: a member declaring 100 MB of zeros (compressed to
+    100 kB) is refused from the archive's directory, before any array is read."""
+    import zipfile
+
+    def write(path, good):
+        with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z, \
+                z.open("v0.npy", "w", force_zip64=True) as member:
+            chunk = bytes(1 << 20)  # the content does not matter: its size does
+            for _ in range(100):
+                member.write(chunk)
+
+    got, notes, _ = _again(first, tmp_path, write)
+    assert got == first[2] and len(notes) == 1 and "it holds 104857600 bytes" in notes[0]
+
+
 def test_the_cache_is_written_without_following_a_link(first, tmp_path):
     """A symbolic link where the temporary file goes, or where the cache goes: the target
     is never written (the file is made new, then renamed over the link)."""
