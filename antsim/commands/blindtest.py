@@ -20,14 +20,15 @@ DEFAULT_SCENARIO = "ghigo1990"
 
 def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--n", type=int, default=100, metavar="N",
-                        help="number of cases (default 100)")
+                        help="number of cases (default 100, at most 10000)")
     parser.add_argument("--seed", type=int, default=1, metavar="S",
                         help="seed of the draws (default 1)")
     parser.add_argument("--scenario", metavar="SCENARIO", default=DEFAULT_SCENARIO,
                         help="scenario the effects are hidden in: a name or a TOML file "
                              f"(default: {DEFAULT_SCENARIO}, the 1990 run)")
     parser.add_argument("--sims", type=int, default=8, metavar="K",
-                        help="baseline simulations that predict the noise (default 8)")
+                        help="baseline simulations that predict the noise (default 8, at "
+                             "most 1000)")
     parser.add_argument("--jobs", type=int, default=1, metavar="J",
                         help="worker processes (default 1)")
     parser.add_argument("--cache", metavar="DIR", default=None,

@@ -47,9 +47,10 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "scenario_updated.toml and before/after plots into DIR")
     parser.add_argument("--resimulate", type=int, default=None, metavar="K",
                         help="with --out and --scenario: re-simulate the updated scenario K "
-                             "times and compare (default 4; 0 skips it)")
+                             "times and compare (default 4; 0 skips it; at most 1000)")
     parser.add_argument("--sims", type=int, default=8, metavar="K",
-                        help="simulations of the scenario that predict the noise (default 8)")
+                        help="simulations of the scenario that predict the noise (default 8, "
+                             "at most 1000)")
     parser.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1), metavar="J",
                         help="processes for the simulations (default: 2 on a machine with two "
                              "or more cores, else 1)")
