@@ -6,8 +6,9 @@ katcp-python cannot be a dependency of the ``test`` extra: every release that ru
 Python 3 (0.9.x) pins ``tornado>=4.3,<5``, which ``dask[distributed]`` (``tornado>=6.2``)
 excludes, so pip backtracks to katcp 0.6.2, whose source is Python 2 (``except
 struct.error, e:``, a SyntaxError on import). Its 0.9.3 works with tornado 6 when installed
-without its pins (``pip install --no-deps katcp==0.9.3 ply``: future comes with katpoint);
-CI does so (``.ci/run``), and its test skips where katcp-python is not installed.
+without its pins (``pip install --no-deps katcp==0.9.3 ply future``); CI does so after the
+README's test command and runs this module again (``.ci/run``); its test skips where
+katcp-python is not installed.
 """
 
 from __future__ import annotations
