@@ -149,6 +149,15 @@ BAD = [
     # readings take no arguments
     ("?clock 1", "too many arguments (1): usage ?clock"),
     ("?encoder x", "too many arguments (1): usage ?encoder"),
+    # sensor name patterns: no catastrophic backtracking (/(.*)*x/ took 2.8 s per name)
+    ("?sensor-value /(.*)*x/", "argument 1 (NAME) '/(.*)*x/': a repeated group is not "
+                               "allowed in a sensor name pattern"),
+    ("?sensor-list /(a+)+$/", "argument 1 (NAME) '/(a+)+$/': a repeated group is not"),
+    ("?sensor-list /(?:.*)*!/", "a repeated group is not allowed"),
+    ("?sensor-value /.*.*.*.*.*x/", "argument 1 (NAME) '/.*.*.*.*.*x/': 5 repeats; at most 4"),
+    ("?sensor-value /" + "a" * 101 + "/", "a pattern of 101 characters; at most 100"),
+    ("?sensor-value /[/", "argument 1 (NAME) '/[/': not a regular expression (unterminated "
+                          "character set"),
     # sensor sampling: finite, not negative, periods at least 0.1 s
     ("?sensor-sampling encoder.az period nan", "argument 3 (PERIOD) 'nan' is not a finite "
                                                 "number"),
@@ -180,6 +189,14 @@ BAD = [
 @pytest.mark.parametrize(("line", "says"), BAD, ids=[b[0] for b in BAD])
 def test_a_bad_argument_fails_naming_it_and_leaves_the_clock(client, line, says):
     assert says in _fails(client, line)
+
+
+def test_a_sensor_name_pattern_of_single_repeats_is_served(client):
+    reply, informs = client.request(r"?sensor-value /^[a-z]+\\.(az|el)$/")  # KATCP: \\ is \
+    assert reply == "!sensor-value ok 4" and len(informs) == 4  # encoder.*, offset.*
+    t0 = time.perf_counter()
+    reply, informs = client.request("?sensor-list /.*.*.*.*!/")
+    assert reply == "!sensor-list ok 0" and time.perf_counter() - t0 < 1.0
 
 
 def test_the_issues_requests_leave_the_server_serving(client):
