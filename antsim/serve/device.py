@@ -53,8 +53,11 @@ logger = logging.getLogger(__name__)
 
 #: a feed box turns within these angles (deg; the scenarios' feed_angles_deg too)
 FEED_LIMIT_DEG = 360.0
-#: at most this many deferred integrations wait for ?powers (a backend's buffer)
+#: at most this many deferred integrations wait for ?powers (a backend's buffer), holding
+#: at most MAX_DEFERRED_SAMPLES samples together (each waits with its sample times and
+#: encoder commands: 1000 of 100,000 samples would hold 2.4 GB)
 MAX_DEFERRED = 1000
+MAX_DEFERRED_SAMPLES = 1_000_000
 #: program-track times lie within a day before the epoch and a day after the end (s)
 TRACK_MARGIN_S = 86400.0
 #: the shortest sensor sampling period a client may ask for (s): the real-time clock
@@ -411,10 +414,15 @@ class AntennaDevice(aiokatcp.DeviceServer):
             raise ArgumentError(f"argument 2 {quoted(args[1])}: the only option is 'defer'")
         if seconds <= 0:
             raise ArgumentError(f"argument 1 (SECONDS) {quoted(args[0])}: must be positive")
-        self._check_samples(args, seconds)
+        samples = self._check_samples(args, seconds)
         if defer and len(self._deferred) >= MAX_DEFERRED:
             raise ArgumentError(f"{len(self._deferred)} deferred integrations wait for ?powers, "
                                 "the most the antenna keeps: read them first")
+        waiting = sum(integ.n_samples for integ in self._deferred.values())
+        if defer and waiting + samples > MAX_DEFERRED_SAMPLES:
+            raise ArgumentError(f"argument 1 (SECONDS) {quoted(args[0])}: {samples} samples "
+                                f"more than the {waiting} waiting for ?powers would pass "
+                                f"{MAX_DEFERRED_SAMPLES}: read them first")
         self.clock.check_room(seconds, f"argument 1 (SECONDS) {quoted(args[0])}: ?integrate")
         integ = await self._complete(self.antenna.integrate(seconds))
         ident = self._next_id
@@ -428,14 +436,15 @@ class AntennaDevice(aiokatcp.DeviceServer):
             return head
         return head + self._powers(integ)
 
-    def _check_samples(self, args: tuple[bytes, ...], seconds: float) -> None:
-        """At most MAX_SAMPLES receiver samples in one integration or exposure (as a
-        scenario's scan integration)."""
+    def _check_samples(self, args: tuple[bytes, ...], seconds: float) -> int:
+        """The receiver samples of an integration or exposure of ``seconds``: at most
+        MAX_SAMPLES (as a scenario's scan integration)."""
         interval_s = self.world.receiver.config.sample_interval_s
         samples = seconds / interval_s
         if samples > MAX_SAMPLES:
             raise ArgumentError(f"argument 1 (SECONDS) {quoted(args[0])}: {samples:.3g} "
                                 f"samples of {interval_s:g} s; at most {MAX_SAMPLES}")
+        return max(1, round(samples))  # as the receiver counts them
 
     def _powers(self, integ) -> tuple[float, ...]:
         out: list[float] = []

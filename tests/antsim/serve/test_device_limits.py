@@ -263,6 +263,28 @@ def test_deferred_integrations_are_bounded(client):
     assert reply == "!powers ok 1000" and len(informs) == 1000
 
 
+def test_deferred_samples_are_bounded(write_scenario):
+    """With 0.01 s samples, ten deferred integrations of 1000 s (100,000 samples each) wait;
+    the eleventh would pass 1,000,000 waiting samples and is refused, naming its argument;
+    ?powers reads the ten."""
+    path = write_scenario(BASE.read_text(encoding="utf-8"), [
+        ("duration_h = 1.0", "duration_h = 4.0"),
+        ("sample_interval_s = 1.0", "sample_interval_s = 0.01")])
+    with ServerProcess(path) as srv:
+        c = LineClient(srv.port)
+        try:
+            assert c.request("?track 0 180 45 14000 190 50")[0].startswith("!track ok ")
+            replies = c.pipeline([f"?integrate[{k}] 1000 defer" for k in range(1, 12)])
+            assert all(replies[k][0].startswith(f"!integrate[{k}] ok ") for k in range(1, 11))
+            assert unescape(replies[11][0]).endswith(
+                "argument 1 (SECONDS) '1000': 100000 samples more than the 1000000 waiting "
+                "for ?powers would pass 1000000: read them first")
+            reply, informs = c.request("?powers")
+            assert reply == "!powers ok 10" and len(informs) == 10
+        finally:
+            c.close()
+
+
 def test_commands_that_would_pass_the_end_are_refused():
     """Near the end of the simulation a move's time is checked before it starts: an offset,
     a turn of the feed box and a slew that would end after it are refused."""
