@@ -150,6 +150,7 @@ LINKED_SETUPS = {
     "diagnose_json_link": _links_to_precious("diagnose.json"),
     "diagnose_figure_links": _links_to_precious("diagnose_residuals.png", "report.html"),
     "requests_dangling_link": _links_to_precious("requests.jsonl-dangling"),
+    "recordings_fifo": lambda out, base_run: (out.mkdir(), os.mkfifo(out / "recordings.ecsv")),
 }
 
 
