@@ -12,7 +12,7 @@ import importlib
 import sys
 import warnings
 
-from controller.errors import InputError
+from controller.errors import InputError, Note
 from controller.pointing.legacy import RelabelledTermsWarning
 
 from ._version import __version__
@@ -61,13 +61,36 @@ def os_error_line(err: OSError) -> str:
     """One line for a file-system error: the file, what the system said, and its code."""
     import errno
 
-    where = (err.filename if err.filename is not None
-             else "network" if isinstance(err, ConnectionError | TimeoutError) else "system")
+    network = isinstance(err, ConnectionError | TimeoutError)
+    filename = err.filename if err.filename is not None or network else _file_of(err)
+    where = filename if filename is not None else "network" if network else "system"
     code = errno.errorcode.get(err.errno or 0, "")
     text = f"{where}: {err.strerror or type(err).__name__}" + (f" [{code}]" if code else "")
     if err.filename2 is not None:
         text += f" (with {err.filename2})"
     return " ".join(text.split()) + "; files written before it are kept"
+
+
+def _file_of(err: OSError) -> str | None:
+    """The file a failed write was writing, where the error does not name it (ENOSPC from
+    ``write`` knows only a descriptor): the path or open file of the innermost frame that
+    holds one (``Path.write_text``'s own path, a writer's file object). antsim's own
+    outputs name their file (:func:`antsim.outdir.write_file`); this names the others'."""
+    import io
+    from pathlib import PurePath
+
+    frames = []
+    tb = err.__traceback__
+    while tb is not None:
+        frames.append(tb.tb_frame)
+        tb = tb.tb_next
+    for frame in reversed(frames):
+        for value in frame.f_locals.values():
+            if isinstance(value, PurePath):
+                return str(value)
+            if isinstance(value, io.IOBase) and isinstance(getattr(value, "name", None), str):
+                return value.name
+    return None
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -79,9 +102,13 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return EXIT_INPUT
     module = importlib.import_module(args._module)
+    _replace_unencodable(sys.stdout)
     try:
+        if args.command in DRAWS:
+            check_figure_backend()
         with warnings.catch_warnings():
             warnings.simplefilter("always", RelabelledTermsWarning)
+            warnings.simplefilter("always", Note)
             warnings.showwarning = _notes_in_one_line(args.command, warnings.showwarning)
             code = int(module.main(args) or 0)
             sys.stdout.flush()  # here, where a reader that left is caught, not at exit
@@ -101,6 +128,38 @@ def main(argv: list[str] | None = None) -> int:
         return 130
 
 
+#: the commands that draw figures (with matplotlib, which reads MPLBACKEND when imported)
+DRAWS = frozenset({"run", "diagnose", "plan", "demo"})
+
+
+def check_figure_backend() -> None:
+    """A matplotlib backend named by ``MPLBACKEND`` that matplotlib refuses is one line,
+    before anything runs (matplotlib's import raises on it, after the campaign; antsim
+    draws on its own Agg canvases whatever the variable names)."""
+    import os
+
+    name = os.environ.get("MPLBACKEND")
+    if not name:
+        return
+    try:
+        from matplotlib import rcsetup
+
+        rcsetup.validate_backend(name)
+    except ValueError:
+        raise InputError("environment", "MPLBACKEND", name, "is not a matplotlib backend",
+                         "unset it (antsim draws with Agg whatever it names) or name one, "
+                         "e.g. agg") from None
+
+
+def _replace_unencodable(stream) -> None:
+    """Text the stream's encoding cannot hold (a scenario named in Greek on an ASCII
+    terminal, PYTHONIOENCODING=ascii) is written as backslash escapes, not a
+    UnicodeEncodeError after every file was written (stderr does so already)."""
+    reconfigure = getattr(stream, "reconfigure", None)
+    if reconfigure is not None and getattr(stream, "errors", None) == "strict":
+        reconfigure(errors="backslashreplace")
+
+
 EXIT_BROKEN_PIPE = 141
 """A shell's status for a process ended by SIGPIPE (128 + 13), which Python ignores."""
 
@@ -116,12 +175,13 @@ def _silence_stdout() -> None:
 
 def _notes_in_one_line(command: str, show):
     """A ``warnings.showwarning`` printing notes to the user (a file's W terms renamed, see
-    :mod:`controller.pointing.legacy`) as one line, ``antsim COMMAND: note: ...``; other
-    warnings go to ``show``. A note is printed once, however often the file is read."""
+    :mod:`controller.pointing.legacy`; a :class:`~controller.errors.Note`, such as a damaged
+    cache rebuilt) as one line, ``antsim COMMAND: note: ...``; other warnings go to
+    ``show``. A note is printed once, however often the file is read."""
     printed: set[str] = set()
 
     def showwarning(message, category, filename, lineno, file=None, line=None):
-        if issubclass(category, RelabelledTermsWarning):
+        if issubclass(category, RelabelledTermsWarning | Note):
             if str(message) not in printed:
                 printed.add(str(message))
                 print(f"antsim {command}: note: {message}", file=sys.stderr)

@@ -9,7 +9,7 @@ import tempfile
 from os import PathLike, fspath
 from typing import Any
 
-__all__ = ["MAX_INPUT_BYTES", "InputError", "read_text_file", "write_text_file"]
+__all__ = ["MAX_INPUT_BYTES", "InputError", "Note", "read_text_file", "write_text_file"]
 
 #: the largest file a reader takes (bytes): 200,000 scans of recordings are 44 MB; anything
 #: beyond this is not pointing data antsim reads (``/dev/zero`` would fill the memory)
@@ -31,6 +31,11 @@ def _short(value: Any, limit: int = 60) -> str:
         text = repr(value)
     text = " ".join(text.split())
     return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+class Note(UserWarning):
+    """Something the user should know that is not an error (a damaged cache rebuilt, ...):
+    a warning the command line prints as one line, ``antsim COMMAND: note: ...``."""
 
 
 class InputError(ValueError):

@@ -15,6 +15,7 @@ import sys
 from contextlib import nullcontext
 
 from antsim.commands import check_processes
+from antsim.outdir import write_file
 from controller.errors import InputError
 
 
@@ -78,9 +79,9 @@ def main(args: argparse.Namespace) -> int:
             from antsim.figures.plan import plan_figures
 
             progress.stage("figures")
-            (out / "plan.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+            write_file(out / "plan.json", json.dumps(doc, indent=2) + "\n")
             plan_text = result.text(timing=False)
-            (out / "plan.txt").write_text(plan_text, encoding="utf-8")
+            write_file(out / "plan.txt", plan_text)
             figures = plan_figures(doc, out)
             from antsim.plan.report import write_plan_report
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from controller.errors import InputError
@@ -61,11 +62,23 @@ def main(args: argparse.Namespace) -> int:
             raise InputError("command line", option, True, "not with --connect",
                              "the simulation is the server's (antsim serve --seed)")
     with held_output_dir(args.out, "--out", "antsim run") as out:
-        present = [name for name in PRODUCTS if (out / name).exists()]
+        # a link counts (a dangling one too): antsim never writes through one
+        present = [name for name in PRODUCTS if os.path.lexists(out / name)]
         if present and not args.resume:
             raise InputError("command line", "--out", str(out),
                              f"already holds {' '.join(present)} of an earlier run",
                              "use --resume to continue that run, or an empty or new directory")
+        recordings = out / "recordings.ecsv"
+        if args.resume and recordings.is_symlink():
+            raise InputError("command line", "--out", str(out),
+                             "holds recordings.ecsv as a symbolic link: a resumed run appends "
+                             "to its recordings and does not write through a link",
+                             "copy the file there, or run into a new directory")
+        if args.resume and recordings.exists() and not recordings.is_file():
+            raise InputError("command line", "--out", str(out),
+                             "holds recordings.ecsv as something other than a file (a "
+                             "directory, a FIFO): there is no run to resume",
+                             "run into a new directory")
         antenna, seed = None, args.seed
         if args.connect is not None:
             from antsim.serve.remote import connect

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from antsim._version import __version__
+from antsim.outdir import write_file
 
 if TYPE_CHECKING:
     from antsim.figures.style import FigureFile
@@ -248,5 +249,4 @@ def write_report(path: str | Path, title: str, sections: Sequence[Section], *,
     path = Path(path)
     text = render_report(title, sections, subtitle=subtitle, versions=versions)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text, encoding="utf-8")
-    return path
+    return write_file(path, text)

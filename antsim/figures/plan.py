@@ -11,6 +11,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from antsim.outdir import replacing
+
 from .style import FigureFile
 
 __all__ = ["plan_figures"]
@@ -108,7 +110,8 @@ def _duration_figure(answer: dict[str, Any], path: Path) -> FigureFile:
         title = f"How long for {', '.join(answer['terms'])} to reach {goal}"
         fig.suptitle(title, fontsize=11)
         path.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, format="png", dpi=DPI, metadata={"Software": "antsim"})
+        with replacing(path) as fh:  # whole or not at all; an error names the file
+            fig.savefig(fh, format="png", dpi=DPI, metadata={"Software": "antsim"})
     caption = (f"Predicted sigma against the number of {answer['unit']}s of "
                f"'{answer['based_on']}': " + (
                    f"the target is reached after {answer['answer']['count']} "

@@ -16,6 +16,7 @@ from pathlib import Path
 import simpy
 
 from antsim._version import __version__
+from antsim.outdir import write_file
 from antsim.progress import Progress, progress_for
 from antsim.scenario import Scenario
 from antsim.world.world import World
@@ -202,6 +203,7 @@ def run_campaign(scenario: Scenario, out_dir: str | Path, seed: int | None = Non
         try:
             result = simulate(scenario, seed, model, sink=writer.write_scan, progress=progress,
                               antenna=antenna)
+            writer.check_replayed()  # rows this run would not write: refused, kept
         except BaseException:
             # a file with a header and no scan would only block the next plain run
             if writer.rows_written == 0 and writer.existing_rows == 0:
@@ -212,8 +214,7 @@ def run_campaign(scenario: Scenario, out_dir: str | Path, seed: int | None = Non
                 shown.close()
     result.out_dir = out
     if antenna is None:
-        (out / "truth.json").write_text(json.dumps(result.truth, indent=2) + "\n",
-                                        encoding="utf-8")
+        write_file(out / "truth.json", json.dumps(result.truth, indent=2) + "\n")
     return result
 
 

@@ -297,6 +297,18 @@ class RecordingWriter:
                                  "the scans written before them are kept") from None
             self.rows_written += len(fresh)
 
+    def check_replayed(self) -> None:
+        """After the whole campaign: every row found on resuming was one the run wrote again
+        (the run is deterministic); a row beyond them was not written by this run (appended
+        by hand or by another program) and is an InputError naming it. The file is kept."""
+        if self._cursor < len(self._existing):
+            raise InputError(str(self.path), f"row {self._cursor + 1}",
+                             self._existing[self._cursor].strip(),
+                             f"was not written by this run: the campaign ends after row "
+                             f"{self._cursor}, the file holds {len(self._existing)} rows",
+                             "the file is kept as it is; remove the rows after row "
+                             f"{self._cursor}, or run without --resume into a new directory")
+
     def discard(self) -> None:
         """Close and remove the file: for a run that failed before its first scan."""
         self.close()
