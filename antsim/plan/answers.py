@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from antsim.figures.html import format_number
 from antsim.simulate.ensemble import Executor, Job, task_record
 from antsim.simulate.vectorized import quiet_scenario
 from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
@@ -473,7 +474,8 @@ def answers_text(answers: dict[str, list]) -> list[str]:
         if a["reached"]:
             ans = a["answer"]
             sig = ", ".join(f"{n} {s:.1f}\"" for n, s in ans["sigma_arcsec"].items())
-            bias = ", ".join(f"{n} {b:+.1f}\"" for n, b in ans["bias_predicted_arcsec"].items())
+            bias = ", ".join(f"{n} {format_number(b, '+.1f')}\""
+                             for n, b in ans["bias_predicted_arcsec"].items())
             lines.append(
                 f"duration: {ans['count']} {_unit(unit, ans['count'])} of "
                 f"'{a['based_on']}' bring {terms} to {goal} or better "
@@ -523,7 +525,8 @@ def answers_text(answers: dict[str, list]) -> list[str]:
                      f"is {', '.join(best['sources'])} by {a['criterion']}: {sig}{versus}")
     for s in answers.get("separation", []):
         if s["pairs"]:
-            pairs = ", ".join(f"{p['terms'][0]}/{p['terms'][1]} ({p['r_predicted']:+.2f})"
+            pairs = ", ".join(f"{p['terms'][0]}/{p['terms'][1]} "
+                              f"({format_number(p['r_predicted'], '+.2f')})"
                               for p in s["pairs"])
             lines.append(f"separation: '{s['variant']}' cannot separate {pairs}")
     return lines + ([""] if lines else [])

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from antsim.figures.html import format_number
 from antsim.simulate.ensemble import (
     Executor,
     Job,
@@ -254,11 +255,11 @@ def _ratio(a: float | None, b: float | None) -> float | None:
 
 
 def _f(x: float | None, spec: str) -> str:
-    """``format(x, spec)``, or a dash as wide for a missing value."""
+    """``format(x, spec)`` without a negative zero, or a dash as wide for a missing value."""
     if x is None or not math.isfinite(x):
         width = "".join(ch for ch in spec.split(".")[0] if ch.isdigit())
         return f"{'-':>{int(width) if width else 1}}"
-    return format(x, spec)
+    return format_number(x, spec)
 
 
 # ---------------------------------------------------------------------------------------------
