@@ -123,11 +123,13 @@ class VariantResult:
         for j, name in enumerate(self.terms):
             terms[name] = {
                 "sigma_fisher_arcsec": _num(pred.sigma_arcsec[j]),
+                "sigma_fisher_error_arcsec": _num(pred.sigma_error_arcsec[j]),
                 "sigma_mc_arcsec": _num(sigma_mc[j]),
                 "bias_arcsec": _num(bias[j]),
                 "sigma_mc_error_arcsec": _num(sigma_mc[j] / math.sqrt(2.0 * max(n - 1, 1))),
                 "bias_error_arcsec": _num(sigma_mc[j] / math.sqrt(max(n, 1))),
                 "bias_predicted_arcsec": _num(pred.bias_arcsec[j]),
+                "bias_predicted_error_arcsec": _num(pred.bias_error_arcsec[j]),
                 "truth_arcsec": _num(self.truth[j]),
                 "mean_arcsec": _num(self.results.values[ok, j].mean() if n else math.nan),
                 "sigma_tpoint_mean_arcsec": _num(np.mean(self.results.sigma_tpoint[ok, j])
