@@ -51,7 +51,9 @@ from .fisher import (
     rejection_design,
     rejection_draws,
     task_noise,
+    task_thermal,
     truth_vector,
+    with_thermal,
 )
 from .planfile import CoverageQuestion, DurationQuestion, Plan, SourcesQuestion
 from .study import span_words
@@ -87,7 +89,8 @@ class Predicted:
 def predicted_run(scenario, plan: Plan, executor: Executor, ends_of: list[Callable],
                   parts: int, priority: int = 0) -> Chain:
     """The chain of one deterministic run of ``scenario``: its schedule, and when
-    ``ends_of`` asks for predictions, its noise model and, per entry, the predictions of
+    ``ends_of`` asks for predictions, its noise model (and its thermal draws, a task of
+    their own beside it) and, per entry, the predictions of
     the prefixes ``ends_of[i](scenario, shared, noise)`` (the schedule's scan counts; None:
     all), the
     rejections' draws of all of them in ``parts`` tasks each."""
@@ -100,8 +103,12 @@ def predicted_run(scenario, plan: Plan, executor: Executor, ends_of: list[Callab
     terms, fit_name = scenario.controller.fit_spec()
     job = executor.share(Job(f"answer:{uuid.uuid4().hex}", scenario, quiet, shared,
                              tuple(terms), fit_name, plan.seed))
-    noise, _ = yield Task(task_noise, (job, N_THERMAL_ANSWERS), "answer",
-                          f"noise model{{s}} of {span}", priority)
+    # the noise model and its thermal draws at once, two tasks (the longest of the plan)
+    (noise, _), thermal = yield [
+        Task(task_noise, (job, 0), "answer", f"noise model{{s}} of {span}", priority),
+        Task(task_thermal, (job, N_THERMAL_ANSWERS), "answer",
+             f"draw{{s}} of the slow errors over {span}", priority)]
+    noise = with_thermal(noise, shared, thermal)
     ends = [f(scenario, shared, noise) for f in ends_of]
     designs = [rejection_design(shared, terms, noise, e) for e in ends]
     cuts = np.array_split(np.arange(REJECTION_DRAWS), parts)
@@ -158,7 +165,7 @@ class Questions:
             chain = predicted_run(duration_scenario(q0, p), p, self.executor, ends_of,
                                   REJECTION_PARTS, LONG_RUN_PRIORITY)
             self._long[key] = (flow.start(chain), durations)
-            self.steps += 1 + (1 + REJECTION_PARTS * len(durations) if durations else 0)
+            self.steps += 1 + (2 + REJECTION_PARTS * len(durations) if durations else 0)
 
     def start_after(self, flow: Flow, variants: list) -> None:
         """The candidate source lists of each sources question: each one's deterministic
@@ -173,7 +180,7 @@ class Questions:
                     continue
                 handles.append(flow.start(predicted_run(item["scenario"], self.plan,
                                                         self.executor, [_all_scans], 1)))
-                self.steps += 3
+                self.steps += 4
             self._sources.append((q, short, handles))
 
     def answers(self, variants: list) -> dict[str, list]:

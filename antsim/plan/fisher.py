@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -54,7 +54,7 @@ from controller.pointing.thermal import sensor_aux, structure_sensor_names
 
 __all__ = ["NoiseModel", "Prediction", "RejectionDesign", "RejectionDraws", "noise_model",
            "predict", "predict_prefixes", "rejection_design", "rejection_draws", "task_noise",
-           "truth_vector"]
+           "task_thermal", "thermal_errors", "thermal_offsets", "truth_vector", "with_thermal"]
 
 #: nudge of the pointing for the linear response of the powers (arcsec)
 NUDGE_ARCSEC = 1.0
@@ -445,17 +445,46 @@ def _thermal_draws(engine: MemberEngine, plan_seed: int, n_thermal: int,
                    response: np.ndarray, idx: np.ndarray) -> np.ndarray:
     """The offsets (draws, units) of ``n_thermal`` independent draws of the random slow
     errors alone (about their mean), through each scan's response; empty without them."""
-    n = idx.shape[0]
-    random_slow = [1 for kind, _, _ in engine._kinds if kind == "member"]
-    thermal = np.zeros((0, 2 * n))
-    if random_slow and n_thermal > 1:
-        seeds = [int(np.random.SeedSequence(int(plan_seed), spawn_key=(THERMAL_KEY, j))
-                     .generate_state(1, dtype=np.uint64)[0]) for j in range(n_thermal)]
-        errs = engine.slow_errors(seeds)  # (draws, integrations, 2)
-        errs = errs - errs.mean(axis=0)
-        e_units = np.einsum("uaid,ruaid->rua", response, errs[:, idx, :])  # (draws, n, 2)
-        thermal = np.concatenate([e_units[:, :, 0], e_units[:, :, 1]], axis=1)
-    return thermal
+    errors = thermal_errors(engine, plan_seed, n_thermal)
+    if errors is None:
+        return np.zeros((0, 2 * idx.shape[0]))
+    return thermal_offsets(errors, response, idx)
+
+
+def thermal_errors(engine: MemberEngine, plan_seed: int, n_thermal: int) -> np.ndarray | None:
+    """``n_thermal`` independent draws of the random slow errors alone at every integration
+    of ``engine``'s schedule, about their mean: (draws, integrations, 2) xel and el (arcsec);
+    None when the variant has none (or one draw is asked for)."""
+    if not any(kind == "member" for kind, _, _ in engine._kinds) or n_thermal <= 1:
+        return None
+    seeds = [int(np.random.SeedSequence(int(plan_seed), spawn_key=(THERMAL_KEY, j))
+                 .generate_state(1, dtype=np.uint64)[0]) for j in range(n_thermal)]
+    errs = engine.slow_errors(seeds)  # (draws, integrations, 2)
+    return errs - errs.mean(axis=0)
+
+
+def thermal_offsets(errors: np.ndarray, response: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """The offsets (draws, units) of slow errors ``errors`` (:func:`thermal_errors`) through
+    each design scan's response (its integrations ``idx``)."""
+    e_units = np.einsum("uaid,ruaid->rua", response, errors[:, idx, :])  # (draws, n, 2)
+    return np.concatenate([e_units[:, :, 0], e_units[:, :, 1]], axis=1)
+
+
+def task_thermal(job: Job, n_thermal: int) -> np.ndarray | None:
+    """:func:`thermal_errors` of a variant: a task for the executors, beside
+    :func:`task_noise` with no thermal draws of its own (the two halves of a long run's
+    noise model at once; :func:`with_thermal` joins them)."""
+    return thermal_errors(engine_for(job), job.plan_seed, n_thermal)
+
+
+def with_thermal(noise: NoiseModel, shared: SharedSchedule,
+                 errors: np.ndarray | None) -> NoiseModel:
+    """``noise`` (made without thermal draws) with the draws ``errors`` of
+    :func:`task_thermal`: the noise model :func:`noise_model` makes in one piece."""
+    if errors is None:
+        return noise
+    return replace(noise, thermal=thermal_offsets(errors, noise.response,
+                                                  shared.scan_int[noise.scans]))
 
 
 def engine_reduce(engine: MemberEngine, power, std, times):

@@ -134,14 +134,15 @@ def test_source_lists_equal_a_prediction_of_each_candidate(plan, answered):
 
 def test_the_answering_stage_counts_its_steps_to_the_end(answered):
     """After the members, a stage "answering 2 questions" whose count reaches its total
-    (every task of the answers: the long run's schedule, noise model and 8 parts of the
-    rejections' draws; per candidate list a schedule, a noise model and its draws)."""
+    (every task of the answers: the long run's schedule, noise model, thermal draws and 8
+    parts of the rejections' draws; per candidate list a schedule, a noise model, its
+    thermal draws and its rejections' draws)."""
     result, progress = answered
     (stage,) = [s for s in progress.stages if s[0].startswith("answering")]
     text, total, done = stage
     n_candidates = sum(c["feasible"] for c in result.answers["sources"][0]["checked"])
     assert text == "answering 2 questions"
-    assert total == 1 + 1 + 8 + 3 * n_candidates
+    assert total == 1 + 2 + 8 + 4 * n_candidates
     assert done == total
     assert any(s[0].startswith("1 variant: ") for s in progress.stages)
 
