@@ -42,6 +42,7 @@ from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 from controller.errors import InputError
 from controller.pointing.model import PointingModel
 
+from ..progress import span_words
 from .fisher import (
     REJECTION_DRAWS,
     NoiseModel,
@@ -56,7 +57,6 @@ from .fisher import (
     with_thermal,
 )
 from .planfile import CoverageQuestion, DurationQuestion, Plan, SourcesQuestion
-from .study import span_words
 
 __all__ = ["Questions", "answers_text", "coverage_answer", "duration_answer",
            "duration_points", "reachable_cells", "sources_answer", "sources_shortlist"]
@@ -77,7 +77,8 @@ LONG_RUN_PRIORITY = 2
 @dataclass
 class Predicted:
     """A deterministic run of an answer: its schedule, noise model, fitted terms, and the
-    predictions of the prefixes asked for (one per entry of ``ends``)."""
+    predictions of the prefixes asked for (a list per entry of :func:`predicted_run`'s
+    ``ends_of``, a prediction per prefix)."""
 
     scenario: Any
     shared: SharedSchedule
@@ -88,12 +89,12 @@ class Predicted:
 
 def predicted_run(scenario, plan: Plan, executor: Executor, ends_of: list[Callable],
                   parts: int, priority: int = 0) -> Chain:
-    """The chain of one deterministic run of ``scenario``: its schedule, and when
-    ``ends_of`` asks for predictions, its noise model (and its thermal draws, a task of
-    their own beside it) and, per entry, the predictions of
-    the prefixes ``ends_of[i](scenario, shared, noise)`` (the schedule's scan counts; None:
-    all), the
-    rejections' draws of all of them in ``parts`` tasks each."""
+    """The chain of one deterministic run of ``scenario``: its schedule; when ``ends_of``
+    asks for predictions, its noise model (its thermal draws a task of their own beside
+    it) and, per entry, the predictions of the prefixes ``ends_of[i](scenario, shared,
+    noise)`` (the schedule's scan counts; None: all), the rejections' draws of each entry
+    in ``parts`` tasks. Three steps and ``parts`` per entry in all (one without
+    predictions)."""
     span = span_words(scenario.duration_s)
     quiet = quiet_scenario(scenario)
     shared = yield Task(task_record, (quiet,), "answer", f"schedule{{s}} of {span}", priority)

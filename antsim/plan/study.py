@@ -33,7 +33,7 @@ from antsim.simulate.vectorized import MemberResults, SharedSchedule, quiet_scen
 from controller.errors import InputError
 from controller.pointing.signs import UNITS, sign_convention
 
-from ..progress import Progress, progress_for
+from ..progress import Progress, progress_for, span_words
 from ..scenario import Scenario
 from .fisher import (
     REJECTION_DRAWS,
@@ -393,14 +393,6 @@ def _refuse_undetermined(plan: Plan, v: int, shared: SharedSchedule,
                          "leave it out of fit_model, or give the variant what drives it")
     raise InputError(plan.path, f"variants[{v}]", spec.name, f"the scenario's fit: {problem}",
                      "give the variant a fit_model without it")
-
-
-def span_words(duration_s: float) -> str:
-    """A campaign's length in words: "20 days", "8 hours", "1 hour"."""
-    if duration_s >= 2 * 86400.0:
-        return f"{duration_s / 86400.0:.3g} days"
-    hours = f"{duration_s / 3600.0:.3g}"
-    return f"{hours} hour{'s' if hours != '1' else ''}"
 
 
 def _variant(plan: Plan, v: int, count: int, token: str, executor: Executor) -> Chain:
