@@ -147,13 +147,21 @@ def test_the_answering_stage_counts_its_steps_to_the_end(answered):
     assert any(s[0].startswith("1 variant: ") for s in progress.stages)
 
 
-def test_answers_are_the_same_on_a_pool_of_two_workers(plan, answered):
-    """The rejections' draws cut into the same 8 parts whatever the workers: the same
-    answers from a pool of 2 as in this process (to rounding: this process's BLAS may sum in
-    another order, 1e-12)."""
+@pytest.mark.parametrize("engine", ["pool", "dask"])
+def test_answers_are_the_same_on_two_workers_and_on_dask(plan, answered, engine):
+    """The answers' tasks run where the members' do, on a pool of 2 or a Dask cluster of 2,
+    beside the members; the rejections' draws are cut into the same 8 parts whatever the
+    workers: the same answers as in this process (to rounding: this process's BLAS may sum
+    in another order, 1e-12)."""
     result, _ = answered
-    pooled = run_plan(plan, workers=2, progress=False)
-    assert_docs_close(pooled.to_json()["answers"], result.to_json()["answers"], rtol=1e-12)
+    if engine == "pool":
+        other = run_plan(plan, workers=2, progress=False)
+    else:
+        distributed = pytest.importorskip("distributed")
+        with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                      dashboard_address=None) as cluster:
+            other = run_plan(plan, scheduler=cluster.scheduler_address, progress=False)
+    assert_docs_close(other.to_json()["answers"], result.to_json()["answers"], rtol=1e-12)
 
 
 def test_questions_of_one_long_run_simulate_it_once(plan, monkeypatch):
