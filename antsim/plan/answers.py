@@ -108,7 +108,7 @@ def predicted_run(scenario, plan: Plan, executor: Executor, ends_of: list[Callab
     (noise, _), thermal = yield [
         Task(task_noise, (job, 0), "answer", f"noise model{{s}} of {span}", priority),
         Task(task_thermal, (job, N_THERMAL_ANSWERS), "answer",
-             f"draw{{s}} of the slow errors over {span}", priority)]
+             f"sampling{{s}} of the slow errors over {span}", priority)]
     noise = with_thermal(noise, shared, thermal)
     ends = [f(scenario, shared, noise) for f in ends_of]
     designs = [rejection_design(shared, terms, noise, e) for e in ends]
