@@ -34,14 +34,23 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="run the members on a Dask distributed scheduler, e.g. "
                              "tcp://127.0.0.1:8786 (pip install 'antsim[dask]')")
     parser.add_argument("--members", type=int, default=None,
-                        help="Monte Carlo members per variant (default: the plan's)")
+                        help="Monte Carlo members per variant (default: the plan's): fewer "
+                             "make the Monte Carlo columns noisier (their +- grows as "
+                             "1/sqrt(N)) and the members' share of the time smaller; the "
+                             "predictions and the answers do not depend on it, nor does "
+                             "their time")
     parser.add_argument("--no-answers", action="store_true",
-                        help="skip the plan's questions (duration, sources, coverage)")
+                        help="skip the plan's questions (how long, which sources, "
+                             "coverage): the tables of the variants alone, the quick look "
+                             "(the answers' long deterministic runs are most of the time)")
     parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                         help="a progress bar, or none (default: a bar on a terminal, a line "
                              "every few seconds to stderr off one)")
     parser.epilog = ("Results are the same for any --workers or --scheduler: member seeds "
-                     "derive from the plan seed and the member index.")
+                     "derive from the plan seed and the member index, and the answers' "
+                     "simulations are cut into the same tasks whatever the workers. The "
+                     "answers run on the same workers as the members, beside them with two "
+                     "workers or more; the answering stage counts its steps.")
 
 
 def main(args: argparse.Namespace) -> int:

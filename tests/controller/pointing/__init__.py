@@ -1,1 +1,1 @@
-"""Tests of controller.pointing."""
+"""Tests of controller.pointing, a file per module."""
