@@ -7,7 +7,7 @@ from typing import Any, ClassVar
 from controller.pointing.model import PointingModel
 from controller.pointing.terms import TermError, get_term
 
-from .base import Effect, Param, PointingState
+from .base import Effect, Key, PointingState
 
 __all__ = ["GeometricEffect", "TermsEffect"]
 
@@ -51,7 +51,7 @@ class TermsEffect(GeometricEffect):
 
     name: ClassVar[str] = "terms"
     explanation: ClassVar[str] = "additional geometric terms given by their TPOINT names"
-    PARAMS: ClassVar[dict[str, Param]] = {}
+    PARAMS: ClassVar[dict[str, Key]] = {}
 
     def __init__(self, terms_arcsec: dict[str, float] | None = None, **named: Any):
         values = dict(terms_arcsec or {})
