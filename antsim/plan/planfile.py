@@ -34,8 +34,10 @@ A plan is TOML (see ``scenarios/plans/ghigo1990_whatif.toml``)::
     dec_step_deg = 10.0
     max_days = 10
 
-Every bad value is one :class:`~controller.errors.InputError` line naming the file, the key
-and the value (exit status 2 through the command line), as for scenarios.
+Every key is declared once in :mod:`antsim.schema.plan` (a variant's as the scenario's key of
+the same name; ``docs/scenarios.md`` lists them) and read through it. Every bad value is one
+:class:`~controller.errors.InputError` line naming the file, the key and the value (exit
+status 2 through the command line), as for scenarios.
 """
 
 from __future__ import annotations
@@ -51,16 +53,14 @@ from controller.pointing.terms import TermError, get_term
 from controller.scans.config import SkyConfig
 
 from ..bundled import find
-from ..scenario import ESTIMATORS, Scenario, load_scenario
+from ..scenario import Scenario, check_scan, load_scenario
+from ..schema import plan as schema
+from ..schema.plan import MAX_MEMBERS, UNITS, WINDOWS
 from ..tomlcheck import Table, load_toml
 
-__all__ = ["CoverageQuestion", "DurationQuestion", "Plan", "SourcesQuestion", "VariantSpec",
-           "load_plan", "make_variant"]
+__all__ = ["MAX_MEMBERS", "UNITS", "WINDOWS", "CoverageQuestion", "DurationQuestion", "Plan",
+           "SourcesQuestion", "VariantSpec", "load_plan", "make_variant"]
 
-WINDOWS = ("all", "day", "night")
-UNITS = ("hour", "day", "night", "run_day")
-#: most members a plan may ask for per variant
-MAX_MEMBERS = 100_000
 
 
 @dataclass(frozen=True)
@@ -173,14 +173,15 @@ def load_plan(path: str | Path) -> Plan:
     """Read and validate a plan file; raises InputError on the first bad value."""
     path = Path(path)
     root = load_toml(path)
-    name = root.string("name")
-    description = root.string("description", "")
-    base = load_scenario(find(root.string("scenario"), "scenario", str(path), "scenario",
+    keys = schema.ROOT
+    name = keys.read(root, "name")
+    description = keys.read(root, "description")
+    base = load_scenario(find(keys.read(root, "scenario"), "scenario", str(path), "scenario",
                               relative_to=path.parent))
-    seed = root.integer("seed", base.seed, min=0)
-    members = root.integer("members", 200, min=2, max=MAX_MEMBERS)
-    block = root.integer("block_members", 0, min=0, max=4096)
-    level = root.number("separation_level", 0.95, gt=0.0, lt=1.0)
+    seed = keys.read(root, "seed", default=base.seed)
+    members = keys.read(root, "members")
+    block = keys.read(root, "block_members")
+    level = keys.read(root, "separation_level")
     specs = []
     for i, t in enumerate(root.tables("variants")):
         specs.append(_variant(t, f"variants[{i}]"))
@@ -241,44 +242,31 @@ def _fitted_names(scenario: Scenario) -> tuple[str, ...]:
 
 
 def _variant(t: Table, key: str) -> VariantSpec:
-    name = t.string("name")
+    keys = schema.VARIANT
+    name = keys.read(t, "name")
     if not name.strip():
         raise t.error("name", name, "must not be empty")
     if "duration_h" in t and "duration_days" in t:
         raise t.error("duration_days", t.raw("duration_days"),
                       "give duration_h or duration_days, not both")
-    duration = None
-    if "duration_h" in t:
-        duration = t.number("duration_h", gt=0.0, max=24.0 * 366)
-    elif "duration_days" in t:
-        duration = 24.0 * t.number("duration_days", gt=0.0, max=366.0)
-    start = t.string("start_utc", None)
+    duration = keys.read(t, "duration_h")
+    if "duration_days" in t:
+        duration = keys["duration_days"].scale * keys.read(t, "duration_days")
+    else:
+        t.raw("duration_days", None)
+    start = keys.read(t, "start_utc")
     if start is not None:
         _check_time(t, "start_utc", start)
-    sources = t.strings("sources", None) if "sources" in t else None
+    sources = keys.read(t, "sources")
     if sources is not None and not sources:
         raise t.error("sources", sources, "lists no sources")
-    spec = VariantSpec(
-        name=name, description=t.string("description", ""),
-        window=t.string("window", None, choices=WINDOWS) if "window" in t else None,
-        duration_h=duration, start_utc=start,
-        sources=tuple(sources) if sources is not None else None,
-        elevation_min_deg=t.number("elevation_min_deg", None, min=0.0, max=89.0,
-                                   allow_none=True),
-        elevation_max_deg=t.number("elevation_max_deg", None, min=1.0, max=90.0,
-                                   allow_none=True),
-        step_arcmin=t.number("step_arcmin", None, gt=0.0, allow_none=True),
-        integration_s=t.number("integration_s", None, gt=0.0, max=3600.0, allow_none=True),
-        estimator=t.string("estimator", None, choices=ESTIMATORS) if "estimator" in t
-        else None,
-        model=t.string("model", None),
-        fit_model=t.string("fit_model", None),
-        members=t.integer("members", None, min=2, max=MAX_MEMBERS) if "members" in t
-        else None,
-        scenario=t.string("scenario", None),
-        tipping=t.boolean("tipping") if "tipping" in t else None,
-        key=key,
-    )
+    values = keys.read_all(t, ("description", "window", "elevation_min_deg",
+                               "elevation_max_deg", "step_arcmin", "integration_s",
+                               "estimator", "model", "fit_model", "members", "scenario",
+                               "tipping"))
+    spec = VariantSpec(name=name, duration_h=duration, start_utc=start,
+                       sources=tuple(sources) if sources is not None else None, key=key,
+                       **values)
     t.finish()
     return spec
 
@@ -306,18 +294,17 @@ def _scenario_for(t: Table, key: str, names: list[str], scenarios) -> Scenario:
 def _duration(t: Table, key: str, names: list[str], scenarios) -> DurationQuestion:
     scenario = _scenario_for(t, "based_on", names, scenarios)
     fitted = _fitted_names(scenario)
-    terms = _terms(t, "terms", fitted=fitted)
+    terms = _terms(t, "terms", fitted=fitted, raw=schema.DURATION.read(t, "terms"))
     if not terms:
         raise t.error("terms", [], "name at least one term", "e.g. terms = [\"W4\"]")
     for term in terms:
         if term not in fitted:
             raise t.error("terms", term, "is not fitted by this plan",
                           f"fitted terms are {' '.join(fitted)}")
-    q = DurationQuestion(based_on=t.string("based_on"), terms=terms,
+    keys = schema.DURATION
+    q = DurationQuestion(based_on=keys.read(t, "based_on"), terms=terms,
                          targets_arcsec=_targets(t, terms, fitted),
-                         unit=t.string("unit", "day", choices=UNITS),
-                         max_days=t.number("max_days", 10.0, gt=0.0, max=366.0),
-                         note=t.string("note", ""), key=key)
+                         **keys.read_all(t, ("unit", "max_days", "note")), key=key)
     t.finish()
     return q
 
@@ -329,8 +316,9 @@ def _targets(t: Table, terms: tuple[str, ...], fitted: tuple[str, ...]) -> tuple
         raise t.error("target_arcsec", t.raw("target_arcsec", None),
                       "give target_arcsec (one for every term) or targets_arcsec (one per "
                       "term), not both or neither")
+    keys = schema.DURATION
     if "target_arcsec" in t:
-        return (t.number("target_arcsec", gt=0.0),) * len(terms)
+        return (keys.read(t, "target_arcsec"),) * len(terms)
     table = t.table("targets_arcsec")
     given = {_terms(table, k, fitted=fitted, raw=[k])[0]: k for k in table}
     missing = [n for n in terms if n not in given]
@@ -339,7 +327,8 @@ def _targets(t: Table, terms: tuple[str, ...], fitted: tuple[str, ...]) -> tuple
         raise t.error("targets_arcsec", sorted(table.keys()),
                       f"must name exactly the terms {' '.join(terms)}",
                       f"missing {' '.join(missing) or '-'}, not in terms {' '.join(extra) or '-'}")
-    out = tuple(table.number(given[n], gt=0.0) for n in terms)
+    bounds = keys["targets_arcsec"]
+    out = tuple(table.number(given[n], gt=bounds.gt) for n in terms)
     table.finish()
     return out
 
@@ -349,13 +338,7 @@ def _coverage(t: Table, key: str, names: list[str], scenarios) -> CoverageQuesti
     if scenario.mount.kind != "equatorial":
         raise t.error("based_on", t.string("based_on"), "coverage is asked of hour angle and "
                       "declination cells: the variant's mount must be equatorial")
-    q = CoverageQuestion(based_on=t.string("based_on"),
-                         dec_max_deg=t.number("dec_max_deg", min=-90.0, max=90.0),
-                         ha_step_h=t.number("ha_step_h", 1.0, gt=0.0, max=12.0),
-                         dec_step_deg=t.number("dec_step_deg", 10.0, gt=0.0, max=90.0),
-                         min_scans=t.integer("min_scans", 1, min=1, max=1000),
-                         max_days=t.number("max_days", 10.0, gt=0.0, max=366.0),
-                         note=t.string("note", ""), key=key)
+    q = CoverageQuestion(**schema.COVERAGE.read_all(t), key=key)
     t.finish()
     return q
 
@@ -369,15 +352,17 @@ def _sources(t: Table, key: str, names: list[str], scenarios) -> SourcesQuestion
                       f"({', '.join(thermal)}); the source lists are ranked on positions "
                       "alone, without the structure temperatures those terms read",
                       "ask it of a variant that fits the position terms only")
-    terms = _terms(t, "terms", fitted=fitted)
+    terms = _terms(t, "terms", fitted=fitted, raw=schema.SOURCES.read(t, "terms"))
     for term in terms:
         if term not in fitted:
             raise t.error("terms", term, "is not fitted by this plan",
                           f"fitted terms are {' '.join(fitted)}")
+    keys = schema.SOURCES
     n_sources = len(scenario.sources)
-    q = SourcesQuestion(based_on=t.string("based_on"), terms=terms,
-                        min_sources=t.integer("min_sources", 2, min=1, max=n_sources),
-                        candidates=t.integer("candidates", 3, min=1, max=20), key=key)
+    q = SourcesQuestion(based_on=keys.read(t, "based_on"), terms=terms,
+                        min_sources=t.integer("min_sources", keys["min_sources"].default,
+                                              min=int(keys["min_sources"].min), max=n_sources),
+                        candidates=keys.read(t, "candidates"), key=key)
     t.finish()
     return q
 
@@ -418,15 +403,13 @@ def make_variant(base: Scenario, spec: VariantSpec, where: str = "plan") -> Scen
                   f"must exceed elevation_min_deg = {sched.elevation_min_deg:g}")
     scan = c.scan
     if spec.step_arcmin is not None:
-        if spec.step_arcmin > 1.2 * scan.hpbw_arcmin:
-            raise err("step_arcmin", spec.step_arcmin,
-                      f"the +-D points would lie outside the main beam (HPBW "
-                      f"{scan.hpbw_arcmin:g}')", f"use at most {1.2 * scan.hpbw_arcmin:.1f}'")
         scan = replace(scan, step_arcmin=spec.step_arcmin)
     if spec.integration_s is not None:
         scan = replace(scan, integration_s=spec.integration_s)
     if spec.estimator is not None:
         scan = replace(scan, estimator=spec.estimator)
+    # the scenario's own checks of a scan, on the variant's (its keys are the scenario's)
+    check_scan(scan, base.receiver.sample_interval_s, err)
     lowest = sched.elevation_min_deg - 4.0 * scan.step_arcmin / 60.0
     if lowest < base.mount.el.min_deg:
         raise err("elevation_min_deg", sched.elevation_min_deg,
