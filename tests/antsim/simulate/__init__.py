@@ -1,0 +1,1 @@
+"""Tests of antsim.simulate: the engines every feature shares."""

@@ -1,0 +1,1 @@
+"""Tests of controller.program: the control program's configuration, scheduling and loop."""
