@@ -20,7 +20,6 @@ declination; models in TPOINT's equatorial terms, e.g. ``crane11``), ``beam.gain
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass, field, replace
 from itertools import pairwise
 from pathlib import Path
@@ -41,8 +40,9 @@ from controller.program.config import (
 from controller.scans.config import GainCurveConfig, ScanConfig, SkyConfig, TippingConfig
 
 from .schema import scenario as schema
-from .schema.keys import Section
+from .schema.keys import Section, duplicate
 from .schema.scenario import ESTIMATORS, MAX_SAMPLES, MAX_TIMESCALE_S, UNIT_ARCSEC
+from .schema.utc import end_problem, utc_time
 from .tomlcheck import Table, load_toml
 from .world.atmosphere import AtmosphereConfig
 from .world.beam import BeamConfig
@@ -69,6 +69,17 @@ EQUATORIAL_ONLY_EFFECTS = ("polar_torsion",)
 #: radiometer noise of a 1-s sample is ~5e-12 K, below anything a test resolves but not zero
 #: (a reduction divides by the samples' scatter)
 NO_RADIOMETER_BANDWIDTH_MHZ = 1e20
+#: the recordings' name of a scan's channels averaged (no receiver channel may take it)
+AVERAGE_CHANNEL = "AVG"
+#: the smallest step of a five-point scan, in beams (HPBW): the power at +-D is below the
+#: peak's by 1 - exp(-4 ln 2 (D / HPBW)^2), 2.8e-4 at a hundredth of the beam, about a
+#: receiver's gain stability (dG/G, 1e-4..1e-3); a smaller step measures no offset
+MIN_STEP_BEAMS = 0.01
+#: the largest correction a pointing model may make in the sky it is used in (deg): the
+#: bound of an effect's arcsec parameter (10 deg, antsim.world.effects.base.NAME_BOUNDS),
+#: beyond any telescope's pointing error; a larger one points the antenna away from every
+#: source, and the campaign records nothing worth a fit
+MAX_CORRECTION_DEG = 10.0
 
 
 @dataclass(frozen=True)
@@ -147,6 +158,9 @@ def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario file; raises InputError on the first bad value."""
     path = Path(path)
     root = load_toml(path)
+    if "variants" in root:  # read as a scenario, it would lack a site
+        raise root.error("variants", "[[variants]]", "this file is a plan, not a scenario",
+                         "antsim plan runs a plan")
     text = root.text
     top = schema.ROOT
     name = top.read(root, "name")
@@ -155,7 +169,7 @@ def load_scenario(path: str | Path) -> Scenario:
     site = _site(_table(root, top, "site"))
     campaign = _table(root, top, "campaign")
     epoch = _epoch(campaign)
-    duration_s = schema.CAMPAIGN.read(campaign, "duration_h") * 3600.0
+    duration_s = _duration_s(campaign, epoch)
     campaign.finish()
     mount = _mount(_table(root, top, "mount"))
     beam = _beam(_table(root, top, "beam"))
@@ -172,9 +186,10 @@ def load_scenario(path: str | Path) -> Scenario:
     if not sources:
         raise root.error("sources", [], "the scenario lists no sources")
     names = [s.name for s in sources]
-    for i, s in enumerate(names):
-        if names.index(s) != i:
-            raise root.error(f"sources[{i}].name", s, "duplicate source name")
+    repeated = duplicate(names)  # upper and lower case alike: a report or an option names it
+    if repeated is not None:
+        i, s = repeated
+        raise root.error(f"sources[{i}].name", s, "duplicate source name")
     truth = _table(root, top, "truth")
     truth_model = _model(truth, schema.TRUTH, base=path.parent, mount=mount, site=site)
     effects = tuple(_effect(t, mount, site)
@@ -186,6 +201,9 @@ def load_scenario(path: str | Path) -> Scenario:
     sensors = None if sensors_t is None else _sensors(sensors_t, mount)
     controller = _controller(_table(root, top, "controller"), site, epoch, duration_s,
                              sources, receiver, mount, name, path.parent, camera)
+    for table, model in ((truth, truth_model), (root.table("controller", {}),
+                                                 controller.model)):
+        _check_correction(table, model, mount, controller.scheduler)
     if sensors is not None:
         if controller.method != "five_point":
             raise InputError(str(path), "structure_sensors", "(table)",
@@ -225,20 +243,17 @@ def _site(t: Table) -> Site:
 
 
 def _epoch(t: Table) -> str:
-    text = schema.CAMPAIGN.read(t, "start_utc")
-    from astropy.time import Time
+    """``start_utc`` as astropy's ISO UTC time (checked as :mod:`antsim.schema.utc` says)."""
+    return utc_time(t, "start_utc", schema.CAMPAIGN.read(t, "start_utc"))
 
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # ERFA's "dubious year": refused below, by name
-            epoch = Time(text, scale="utc")
-            iso, year = epoch.isot, epoch.ymdhms["year"]
-    except (ValueError, TypeError):
-        raise t.error("start_utc", text, "not an ISO UTC time",
-                      "write e.g. 1990-02-08T17:00:00") from None
-    if not 1900 <= year <= 2200:
-        raise t.error("start_utc", text, "year outside 1900..2200")
-    return iso
+
+def _duration_s(t: Table, epoch: str) -> float:
+    """``duration_h`` in seconds: the campaign ends where UTC is known."""
+    hours = schema.CAMPAIGN.read(t, "duration_h")
+    problem = end_problem(epoch, hours * 3600.0)
+    if problem:
+        raise t.error("duration_h", hours, problem)
+    return hours * 3600.0
 
 
 def _axis(t: Table, section: Section) -> AxisConfig:
@@ -311,7 +326,15 @@ def _receiver(t: Table) -> ReceiverConfig:
     d = ReceiverConfig()
     channels = []
     for ct in t.tables("channels", [{"name": c.name, "tsys_k": c.tsys_k} for c in d.channels]):
-        channels.append(ChannelConfig(**schema.CHANNEL.read_all(ct)))
+        channel = ChannelConfig(**schema.CHANNEL.read_all(ct))
+        # recordings name a scan's channels and their average (AVG) in one column
+        if channel.name.upper() == AVERAGE_CHANNEL:
+            raise ct.error("name", channel.name, "is the recordings' name of the channels' "
+                           "average", "name the channel otherwise (XR, XL, ...)")
+        if duplicate([c.name for c in channels] + [channel.name]) is not None:
+            raise ct.error("name", channel.name, "names two channels (upper and lower case "
+                           "alike): every scan would be recorded twice under it")
+        channels.append(channel)
         ct.finish()
     if not channels:
         raise t.error("channels", [], "the receiver needs at least one channel")
@@ -384,6 +407,9 @@ def _model(t: Table, keys: Section, base: Path, mount: MountConfig | None = None
     """A pointing model from ``model`` (named, or a .mod/.json file) and ``terms``; on an
     equatorial mount from TPOINT's equatorial terms (:mod:`controller.pointing.equatorial`)."""
     spec = keys.read(t, "model")
+    if not spec.strip():  # as a path, it would name the scenario's own directory
+        raise t.error("model", spec, "is empty",
+                      f"give a named model ({', '.join(sorted(NAMED_MODELS))}) or a file")
     scale = UNIT_ARCSEC[keys.read(t, "units")]
     values_table = t.table("terms", {})
     bounds = keys["terms"]
@@ -395,14 +421,20 @@ def _model(t: Table, keys: Section, base: Path, mount: MountConfig | None = None
             equatorial_model,
             equatorial_term,
         )
+    given: dict[str, str] = {}
     for key in values_table:
         try:
             term = (equatorial_term(key, site.latitude_deg) if equatorial else get_term(key))
-            values[term.name] = values_table.number(key, min=bounds.min / scale,
-                                                    max=bounds.max / scale) * scale
         except TermError as err:
             raise values_table.error(key, values_table.raw(key), "not a pointing term",
                                      str(err)) from None
+        if term.name in given:
+            raise values_table.error(key, values_table.raw(key), f"gives the term "
+                                     f"{term.name} again (first as {given[term.name]})",
+                                     "give each term once")
+        given[term.name] = key
+        values[term.name] = values_table.number(key, min=bounds.min / scale,
+                                                max=bounds.max / scale) * scale
     values_table.finish()
     if equatorial:
         if spec not in EQUATORIAL_MODELS:
@@ -426,6 +458,70 @@ def _model(t: Table, keys: Section, base: Path, mount: MountConfig | None = None
                                  f"is not a term of model {model.name!r}",
                                  f"its terms are {' '.join(model.names) or '(none)'}")
     return model.with_values(values) if values else model
+
+
+@dataclass(frozen=True)
+class Overcorrection:
+    """A pointing model that moves the pointing by more than :data:`MAX_CORRECTION_DEG`:
+    the term that moves it most where it moves it most, and what is wrong."""
+
+    term: str
+    value_arcsec: float
+    problem: str
+
+
+def overcorrection(model: PointingModel, mount: MountConfig,
+                   scheduler: SchedulerConfig) -> Overcorrection | None:
+    """Whether ``model`` is no telescope's pointing model: a correction on the sky larger
+    than :data:`MAX_CORRECTION_DEG` somewhere the scheduler observes (on an equatorial
+    mount, within the axes' limits); None when there is none."""
+    if not len(model):
+        return None
+    import numpy as np
+
+    if mount.kind == "equatorial":
+        axis1 = np.linspace(mount.az.min_deg, mount.az.max_deg, 73)
+        axis2 = np.linspace(max(mount.el.min_deg, -89.0), min(mount.el.max_deg, 89.0), 37)
+        names = ("hour angle", "declination")
+    else:
+        axis1 = np.arange(0.0, 360.0, 5.0)
+        axis2 = np.linspace(scheduler.elevation_min_deg, scheduler.elevation_max_deg, 31)
+        names = ("azimuth", "elevation")
+    a1, a2 = (np.radians(g).ravel() for g in np.meshgrid(axis1, axis2))
+    feed = np.zeros_like(a1) if model.needs_feed else None
+    d1, d2 = model.offset_rad(a1, a2, feed)
+    sky_deg = np.degrees(np.hypot(d1 * np.cos(a2), d2))
+    worst = int(np.argmax(sky_deg))
+    if not sky_deg[worst] > MAX_CORRECTION_DEG:
+        return None
+    # the term that moves it most there
+    basis1, basis2 = model.design_matrix(a1[worst:worst + 1], a2[worst:worst + 1],
+                                         None if feed is None else feed[:1])
+    coeff = np.asarray(model.values_arcsec, dtype=float)
+    share = np.hypot(basis1[0] * coeff * math.cos(a2[worst]), basis2[0] * coeff)
+    term = model.names[int(np.argmax(share))]
+    return Overcorrection(term, float(model[term]), (
+        f"moves the pointing by {sky_deg[worst]:.3g} deg at {names[0]} "
+        f"{np.degrees(a1[worst]):.0f}, {names[1]} {np.degrees(a2[worst]):.0f} deg (most of it "
+        f"{term} = {model[term]:g}\"): more than any telescope's pointing error "
+        f"({MAX_CORRECTION_DEG:g} deg)"))
+
+
+def _check_correction(t: Table, model: PointingModel, mount: MountConfig,
+                      scheduler: SchedulerConfig) -> None:
+    """The truth model or the model in use (``model``, of table ``t``) moves the pointing by
+    no more than any telescope's pointing error; the line names the term as the table gives
+    it (or the model, from a file or a name)."""
+    found = overcorrection(model, mount, scheduler)
+    if found is None:
+        return
+    terms = t.data.get("terms", {})
+    key = next((k for k in terms if k.upper() == found.term), None)
+    if key is not None:
+        raise InputError(t.where, f"{t.key('terms')}.{key}", terms[key], found.problem,
+                         "check the value and the table's units")
+    raise InputError(t.where, t.key("model"), t.data.get("model", model.name), found.problem,
+                     "check the model's values and their units")
 
 
 def thermal_terms_of(model: PointingModel) -> list[str]:
@@ -540,6 +636,12 @@ def check_scan(scan: ScanConfig, sample_interval_s: float, error) -> None:
         raise error("step_arcmin", scan.step_arcmin,
                     f"the +-D points would lie outside the main beam (HPBW "
                     f"{scan.hpbw_arcmin:g}')", f"use at most {1.2 * scan.hpbw_arcmin:.1f}'")
+    smallest = scan.hpbw_arcmin * MIN_STEP_BEAMS
+    if scan.step_arcmin < smallest:
+        raise error("step_arcmin", scan.step_arcmin,
+                    f"must be >= {smallest:.3g}: a step below {MIN_STEP_BEAMS:g} of the beam "
+                    f"(HPBW {scan.hpbw_arcmin:g}') changes the power by less than 3 parts "
+                    "in 10,000, which no scan measures")
 
 
 def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, receiver,
@@ -650,11 +752,16 @@ def _fit_fixed(t: Table, fit_terms: tuple[str, ...]) -> tuple[tuple[str, float],
     bounds = keys["fit_fixed"]
     fixed_t = t.table("fit_fixed")
     out = []
+    given: dict[str, str] = {}
     for key in fixed_t:
         name = key.strip().upper()
         if name not in fit_terms:
             raise fixed_t.error(key, fixed_t.raw(key), "is not a term of controller.fit_model",
                                 f"its terms are {' '.join(fit_terms) or '(none given)'}")
+        if name in given:
+            raise fixed_t.error(key, fixed_t.raw(key), f"holds the term {name} again (first "
+                                f"as {given[name]})", "give each term once")
+        given[name] = key
         out.append((name, fixed_t.number(key, min=bounds.min / scale,
                                          max=bounds.max / scale) * scale))
     fixed_t.finish()

@@ -53,9 +53,11 @@ from controller.pointing.terms import TermError, get_term
 from controller.scans.config import SkyConfig
 
 from ..bundled import find
-from ..scenario import Scenario, check_scan, load_scenario
+from ..scenario import Scenario, check_scan, load_scenario, overcorrection
 from ..schema import plan as schema
+from ..schema.keys import duplicate
 from ..schema.plan import MAX_MEMBERS, UNITS, WINDOWS
+from ..schema.utc import end_problem
 from ..tomlcheck import Table, load_toml
 
 __all__ = ["MAX_MEMBERS", "UNITS", "WINDOWS", "CoverageQuestion", "DurationQuestion", "Plan",
@@ -173,11 +175,13 @@ def load_plan(path: str | Path) -> Plan:
     """Read and validate a plan file; raises InputError on the first bad value."""
     path = Path(path)
     root = load_toml(path)
+    if "variants" not in root and "site" in root:
+        raise root.error("site", "[site]", "this file is a scenario, not a plan",
+                         "antsim run runs a scenario; a plan names one as its scenario")
     keys = schema.ROOT
     name = keys.read(root, "name")
     description = keys.read(root, "description")
-    base = load_scenario(find(keys.read(root, "scenario"), "scenario", str(path), "scenario",
-                              relative_to=path.parent))
+    base = _load_base(keys.read(root, "scenario"), path, "scenario")
     seed = keys.read(root, "seed", default=base.seed)
     members = keys.read(root, "members")
     block = keys.read(root, "block_members")
@@ -189,9 +193,10 @@ def load_plan(path: str | Path) -> Plan:
         raise root.error("variants", [], "the plan lists no variants",
                          "add [[variants]] tables, e.g. name = \"as run\"")
     names = [v.name for v in specs]
-    for i, n in enumerate(names):
-        if names.index(n) != i:
-            raise InputError(str(path), f"variants[{i}].name", n, "duplicate variant name")
+    repeated = duplicate(names)  # upper and lower case alike, as a report shows them
+    if repeated is not None:
+        i, n = repeated
+        raise InputError(str(path), f"variants[{i}].name", n, "duplicate variant name")
     scenarios = tuple(make_variant(_variant_base(v, path, base), v, str(path))
                       for v in specs)
     answers = root.table("answers", {})
@@ -213,8 +218,17 @@ def _variant_base(spec: VariantSpec, path: Path, base: Scenario) -> Scenario:
     """The scenario a variant changes: the plan's, or its own ``scenario``."""
     if spec.scenario is None:
         return base
-    return load_scenario(find(spec.scenario, "scenario", str(path), f"{spec.key}.scenario",
-                              relative_to=path.parent))
+    return _load_base(spec.scenario, path, f"{spec.key}.scenario")
+
+
+def _load_base(text: str, plan: Path, key: str) -> Scenario:
+    """The scenario that ``key`` of the plan file ``plan`` names (a plan named there is
+    refused by name: it would be read as a scenario without a site)."""
+    found = find(text, "scenario", str(plan), key, relative_to=plan.parent)
+    if "variants" in load_toml(found):
+        raise InputError(str(plan), key, text, "names a plan, not a scenario",
+                         "a plan's scenario is a scenario file or the name of one")
+    return load_scenario(found)
 
 
 def _terms(t: Table, key: str, default: Any = None, fitted: tuple[str, ...] = (),
@@ -255,8 +269,6 @@ def _variant(t: Table, key: str) -> VariantSpec:
     else:
         t.raw("duration_days", None)
     start = keys.read(t, "start_utc")
-    if start is not None:
-        _check_time(t, "start_utc", start)
     sources = keys.read(t, "sources")
     if sources is not None and not sources:
         raise t.error("sources", sources, "lists no sources")
@@ -269,18 +281,6 @@ def _variant(t: Table, key: str) -> VariantSpec:
                        **values)
     t.finish()
     return spec
-
-
-def _check_time(t: Table, key: str, text: str) -> None:
-    from astropy.time import Time
-
-    try:
-        year = Time(text, scale="utc").datetime.year
-    except (ValueError, TypeError):
-        raise t.error(key, text, "not an ISO UTC time", "write e.g. 1990-02-08T17:00:00") \
-            from None
-    if not 1900 <= year <= 2200:
-        raise t.error(key, text, "year outside 1900..2200")
 
 
 def _scenario_for(t: Table, key: str, names: list[str], scenarios) -> Scenario:
@@ -320,7 +320,13 @@ def _targets(t: Table, terms: tuple[str, ...], fitted: tuple[str, ...]) -> tuple
     if "target_arcsec" in t:
         return (keys.read(t, "target_arcsec"),) * len(terms)
     table = t.table("targets_arcsec")
-    given = {_terms(table, k, fitted=fitted, raw=[k])[0]: k for k in table}
+    given: dict[str, str] = {}
+    for k in table:
+        term = _terms(table, k, fitted=fitted, raw=[k])[0]
+        if term in given:
+            raise table.error(k, table.raw(k), f"gives the term {term} again (first as "
+                              f"{given[term]})", "give each term once")
+        given[term] = k
     missing = [n for n in terms if n not in given]
     extra = [k for n, k in given.items() if n not in terms]
     if missing or extra:
@@ -381,6 +387,10 @@ def make_variant(base: Scenario, spec: VariantSpec, where: str = "plan") -> Scen
     if spec.duration_h is not None or spec.start_utc is not None:
         duration = base.duration_s if spec.duration_h is None else spec.duration_h * 3600.0
         epoch = base.epoch_utc if spec.start_utc is None else _iso(spec.start_utc)
+        problem = end_problem(epoch, duration)
+        if problem:
+            raise err("start_utc" if spec.duration_h is None else "duration_h",
+                      spec.start_utc if spec.duration_h is None else spec.duration_h, problem)
         scenario = replace(scenario, duration_s=duration, epoch_utc=epoch,
                            controller=replace(scenario.controller, duration_s=duration,
                                               epoch_utc=epoch))
@@ -425,15 +435,24 @@ def make_variant(base: Scenario, spec: VariantSpec, where: str = "plan") -> Scen
                   "add [controller.tipping] to the scenario")
     if spec.model is not None:
         controller = replace(controller, model=_model(spec, base, where, err))
+        found = overcorrection(controller.model, base.mount, sched)
+        if found is not None:
+            raise err("model", spec.model, found.problem, "check the model's values and units")
     if spec.fit_model is not None:
         controller = replace(controller, fit_terms=_fit_terms(spec.fit_model, err),
                              fit_model_name=spec.fit_model if spec.fit_model in NAMED_MODELS
                              else "custom")
     scenario = replace(scenario, controller=controller)
-    from antsim.simulate.runner import check_scenario
+    from antsim.simulate.runner import NoScanError, check_scenario
 
     try:
         check_scenario(scenario)
+    except NoScanError as e:
+        raise InputError(where, spec.key or "variant", spec.name, "the controller schedules "
+                         f"no scan in this variant: {e.field.split('.')[-1]} = {e.value!r}: "
+                         f"{e.problem.removeprefix('the controller can schedule no scan: ')}",
+                         "lengthen it, widen its window or elevation limits, or give it "
+                         "sources that are up") from None
     except InputError as e:
         if e.field == "controller.scheduler.sources" or spec.elevation_min_deg is None:
             field = "sources"
@@ -453,6 +472,9 @@ def _iso(text: str) -> str:
 
 def _model(spec: VariantSpec, base: Scenario, where: str, err) -> PointingModel:
     text = spec.model
+    if not text.strip():  # as a path, it would name the plan's own directory
+        raise err("model", text, "is empty", "give scenario, none, truth, a named model or a "
+                  "model file")
     if text == "scenario":
         return base.controller.model
     if text == "truth":

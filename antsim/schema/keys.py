@@ -31,8 +31,9 @@ from typing import Any
 
 from ..tomlcheck import Table
 
-__all__ = ["FROM_SETTINGS", "KINDS", "REQUIRED", "Key", "Section", "check_name",
-           "range_text", "unit_of"]
+__all__ = ["FROM_SETTINGS", "KINDS", "REQUIRED", "Key", "Section", "check_bounds",
+           "check_elements", "check_line", "check_name", "duplicate", "range_text",
+           "read_key", "unit_of"]
 
 
 class _Marker:
@@ -55,7 +56,8 @@ KINDS = {
     "number": "number",
     "integer": "integer",
     "string": "text",
-    "name": "name",          # text written into output files: no control characters
+    "line": "line of text",  # written into output files: no control characters
+    "name": "name",          # a line of text, not empty, without surrounding blanks
     "boolean": "true/false",
     "numbers": "list of numbers",
     "strings": "list of texts",
@@ -147,17 +149,26 @@ def range_text(key: Key, unit: str = "") -> str:
 _CONTROL_CATEGORIES = ("Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp")
 
 
-def check_name(table: Table, name: str, value: str) -> str:
-    """``value`` as a name (of a source, a channel, a variant...): not empty, no leading or
-    trailing blanks, no control characters."""
-    if not value.strip():
-        raise table.error(name, value, "must not be empty")
+def check_line(table: Table, name: str, value: str) -> str:
+    """``value`` as one line of text written into output files (a description, a note): no
+    control characters (a newline would split a recordings row or a report's line)."""
     bad = next((c for c in value if unicodedata.category(c) in _CONTROL_CATEGORIES), None)
     if bad is not None:
         raise table.error(name, value, f"holds the control character U+{ord(bad):04X}",
-                          "names are written into output files: use printable characters")
+                          "it is written into output files: use printable characters on one "
+                          "line")
+    return value
+
+
+def check_name(table: Table, name: str, value: str) -> str:
+    """``value`` as a name (of a source, a channel, a variant...): not empty, one line of
+    printable characters, no leading or trailing blanks."""
+    if not value.strip():
+        raise table.error(name, value, "must not be empty")
+    check_line(table, name, value)
     if value != value.strip():
-        raise table.error(name, value, "begins or ends with blanks")
+        raise table.error(name, value, "begins or ends with blanks",
+                          "other files and options name it exactly")
     return value
 
 
@@ -186,10 +197,18 @@ def read_key(table: Table, name: str, key: Key, default: Any = FROM_SETTINGS) ->
         return table.integer(name, *missing,
                              min=None if key.min is None else int(key.min),
                              max=None if key.max is None else int(key.max))
-    if kind in ("string", "time", "angle", "name"):
+    if kind in ("string", "time", "angle", "name", "line"):
         value = table.string(name, *missing, choices=key.choices)
-        if kind == "name" and value is not None:
+        if value is None:
+            return value
+        if kind == "name":
             check_name(table, name, value)
+        elif kind == "line":
+            check_line(table, name, value)
+        elif kind == "time":
+            from .utc import utc_time
+
+            utc_time(table, name, value)
         return value
     if kind == "boolean":
         if default is None and name not in table:
@@ -218,9 +237,9 @@ def check_bounds(table: Table, name: str, key: Key, value: float) -> None:
                                     ("<=", key.max, lambda b: value > b, key.why),
                                     (">", key.gt, lambda b: value <= b, key.why_min),
                                     ("<", key.lt, lambda b: value >= b, key.why)):
-        if bound is not None and outside(bound):
-            problem = f"must be {op} {bound:g}{unit}"
-            raise table.error(name, value, f"{problem}: {why}" if why else problem)
+        if bound is not None and outside(bound):  # without a reason, as Table.number says it
+            problem = f"must be {op} {bound:g}{unit}: {why}" if why else f"must be {op} {bound:g}"
+            raise table.error(name, value, problem)
 
 
 def _field_default(settings: type, defaults: Any, name: str) -> Any:

@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from .keys import REQUIRED, Key, Section
-from .scenario import CAMPAIGN, SCAN, SCHEDULER
+from .scenario import CAMPAIGN, MAX_DURATION_H, MAX_DURATION_WHY, SCAN, SCHEDULER
 
 __all__ = ["MAX_MEMBERS", "PLAN", "UNITS", "WINDOWS", "section"]
 
@@ -30,8 +30,8 @@ def _scenarios(key: Key) -> Key:
 
 ROOT = Section("", "The plan: a base scenario, what-if variants of it, and the questions "
                "to answer.", {
-    "name": Key(REQUIRED, "the plan's name", kind="string"),
-    "description": Key("", "one line: what the plan asks", kind="string"),
+    "name": Key(REQUIRED, "the plan's name", kind="name"),
+    "description": Key("", "one line: what the plan asks", kind="line"),
     "scenario": Key(REQUIRED, "the base scenario: a name (antsim scenarios lists them) or a "
                     "file, relative to the plan", kind="string", field=None,
                     note="a scenario, not a plan"),
@@ -56,14 +56,15 @@ ROOT = Section("", "The plan: a base scenario, what-if variants of it, and the q
 })
 
 VARIANT = Section("variants[]", "One what-if: the base scenario with these changes.", {
-    "name": Key(REQUIRED, "the variant's name, unique in the plan", kind="string"),
-    "description": Key("", "one line: what the variant changes", kind="string"),
+    "name": Key(REQUIRED, "the variant's name, unique in the plan", kind="name"),
+    "description": Key("", "one line: what the variant changes", kind="line"),
     "scenario": Key(None, "another base scenario for this variant (as the plan's "
                     "scenario)", kind="string"),
     "window": _scenarios(SCHEDULER["window"]),
     "duration_h": _scenarios(CAMPAIGN["duration_h"]),
     "duration_days": Key(None, "the campaign's length in days (or duration_h)",
-                         gt=0.0, max=366.0, field="duration_h", scale=24.0),
+                         gt=0.0, max=MAX_DURATION_H / 24.0, why=MAX_DURATION_WHY,
+                         field="duration_h", scale=24.0),
     "start_utc": _scenarios(CAMPAIGN["start_utc"]),
     "sources": _scenarios(SCHEDULER["sources"]),
     "elevation_min_deg": _scenarios(SCHEDULER["elevation_min_deg"]),
@@ -89,7 +90,7 @@ ANSWERS = Section("answers", "The questions, a table each.", {
 })
 
 _BASED_ON = Key(REQUIRED, "the variant asked about, by name", kind="string")
-_NOTE = Key("", "a note printed beside the answer (e.g. a source's claim)", kind="string")
+_NOTE = Key("", "a note printed beside the answer (e.g. a source's claim)", kind="line")
 
 DURATION = Section("answers.duration[]", "The smallest duration of a variant giving each "
                    "term an error no larger than its target.", {

@@ -33,7 +33,8 @@ from ..world.sky import SourceConfig
 from ..world.weather import WeatherConfig
 from .keys import REQUIRED, Key, Section
 
-__all__ = ["ESTIMATORS", "MAX_SAMPLES", "MAX_TIMESCALE_S", "SCENARIO", "UNIT_ARCSEC",
+__all__ = ["ESTIMATORS", "MAX_DURATION_H", "MAX_SAMPLES", "MAX_TIMESCALE_S", "SCENARIO",
+           "UNIT_ARCSEC",
            "effect_sections", "section"]
 
 #: a table's ``units`` -> arcsec per unit
@@ -45,6 +46,12 @@ ESTIMATORS = ("clark", "lsq")
 MAX_TIMESCALE_S = 1e8
 #: most receiver samples in one integration (each is a few numbers per channel in memory)
 MAX_SAMPLES = 100_000
+#: the longest campaign (h): 364 days. The world computes the Sun from a day before the start
+#: (the structure's heating needs a day of spin-up) to an hour after the end, and an
+#: ephemeris spans at most 366 days (controller.astro.ephemeris)
+MAX_DURATION_H = 364.0 * 24.0
+MAX_DURATION_WHY = ("the simulated Sun runs from a day before the start to an hour after the "
+                    "end, within its ephemeris's 366 days")
 
 
 def _units(field: str | None = None) -> Key:
@@ -66,8 +73,8 @@ def _model(doc: str) -> Key:
 
 
 ROOT = Section("", "The scenario: its name, its seed and its tables.", {
-    "name": Key(REQUIRED, "the scenario's name, written into every output", kind="string"),
-    "description": Key("", "one line: what the scenario is", kind="string"),
+    "name": Key(REQUIRED, "the scenario's name, written into every output", kind="name"),
+    "description": Key("", "one line: what the scenario is", kind="line"),
     "seed": Key(1, "the run's random seed (same scenario and seed, same bytes)",
                 kind="integer", min=0),
     "site": Key(REQUIRED, "where the antenna stands", kind="table"),
@@ -100,13 +107,15 @@ SITE = Section("site", "Where the antenna stands (WGS84).", {
     "latitude_deg": Key(doc="geodetic latitude, North positive", min=-90.0, max=90.0),
     "longitude_deg": Key(doc="longitude, East positive", min=-180.0, max=360.0),
     "height_m": Key(doc="height above the ellipsoid", min=-500.0, max=9000.0),
-    "name": Key(doc="the antenna's name, for reports", kind="string"),
+    "name": Key(doc="the antenna's name, for reports", kind="line"),
 }, settings=Site, source="docs/assumptions.md, The antenna and its site")
 
 CAMPAIGN = Section("campaign", "When the campaign observes.", {
     "start_utc": Key(REQUIRED, "the campaign's start, e.g. 1990-02-08T17:00:00", kind="time",
-                     field=None, note="a year within 1900..2200"),
-    "duration_h": Key(REQUIRED, "the campaign's length", gt=0.0, max=24.0 * 366, field=None,
+                     field=None, note="UTC as ERFA knows it: from 1960 to a few years after "
+                     "its leap-second table (start and end); not a leap second"),
+    "duration_h": Key(REQUIRED, "the campaign's length", gt=0.0, max=MAX_DURATION_H,
+                      field=None, why=MAX_DURATION_WHY,
                       note="at least one observation (a slew, the scan and its overhead)"),
 })
 
@@ -197,7 +206,9 @@ RECEIVER = Section("receiver", "The receiver: its channels, band and gain stabil
 }, settings=ReceiverConfig)
 
 CHANNEL = Section("receiver.channels[]", "One polarization channel.", {
-    "name": Key(doc="the channel's name (XR, XL, ...)", kind="string"),
+    "name": Key(doc="the channel's name (XR, XL, ...), unique in the receiver (upper and "
+                "lower case alike)", kind="name",
+                note="not AVG: the recordings' name of the channels' average"),
     "tsys_k": Key(doc="system temperature", gt=0.0, max=1e5, source="docs/assumptions.md"),
     "gain_fluctuation": Key(doc="this channel's dG/G (default: the receiver's)", min=0.0,
                             max=0.1, unit="1"),
@@ -230,7 +241,8 @@ WEATHER = Section("weather", "Air temperature, pressure, humidity and wind.", {
 }, settings=WeatherConfig)
 
 SOURCE = Section("sources[]", "A pointing source: give ra or ra_deg, dec or dec_deg.", {
-    "name": Key(doc="the source's name, unique in the scenario", kind="string"),
+    "name": Key(doc="the source's name, unique in the scenario (upper and lower case "
+                "alike)", kind="name"),
     "ra": Key(REQUIRED, "right ascension, e.g. 03h16m29.6s (or ra_deg)", kind="angle",
               field="ra_deg", unit="deg", min=0.0, max=360.0),
     "ra_deg": Key(REQUIRED, "right ascension (or ra)", min=0.0, max=360.0),
@@ -242,7 +254,7 @@ SOURCE = Section("sources[]", "A pointing source: give ra or ra_deg, dec or dec_
     "flux_jy": Key(REQUIRED, "flux density at the observing frequency", gt=0.0, max=1e7),
     "size_arcmin": Key(doc="FWHM of a Gaussian of equal second moment (0: point-like)",
                        min=0.0, max=600.0),
-    "note": Key(doc="a note for reports", kind="string"),
+    "note": Key(doc="a note for reports", kind="line"),
 }, settings=SourceConfig)
 
 STARS = Section("stars", "Synthetic bright stars added to the sources (optical pointing).", {
@@ -333,8 +345,10 @@ CONTROLLER = Section("controller", "The control program: the model it points wit
 SCAN = Section("controller.scan", "The five-point cross scan: offsets of -4, -1, 0, +1, +4 "
                "steps in each axis.", {
     "step_arcmin": Key(doc="the step D between the points", gt=0.0,
-                       note="at most 1.2 x hpbw_arcmin; the -4D point at the lowest "
-                            "scheduled elevation above the mount's limit"),
+                       note="within 0.01..1.2 x hpbw_arcmin (a smaller step changes the "
+                            "power by less than 3e-4; a larger one leaves the main beam); "
+                            "the -4D point at the lowest scheduled elevation above the "
+                            "mount's limit"),
     "integration_s": Key(doc="integration at each point", gt=0.0, max=3600.0,
                          note=f"two receiver samples at least, {MAX_SAMPLES:,} at most"),
     "hpbw_arcmin": Key(doc="the beam width the reduction assumes", min=0.01, max=600.0),
@@ -432,8 +446,7 @@ def effect_sections() -> tuple[Section, ...]:
         keys.update(cls.keys())
         doc = (cls.explanation or "").strip()
         if name == "terms":
-            keys["TERM"] = Key(0.0, "the value of a pointing term, by its name (TPOINT's, or "
-                               "the mount's equatorial terms)", unit="arcsec")
+            keys["TERM"] = cls.TERM
         out.append(Section(f"truth.effects[] (effect = \"{name}\")",
                            doc[:1].upper() + doc[1:] + ".", keys))
     return tuple(out)
