@@ -278,7 +278,7 @@ class Section:
     def __post_init__(self) -> None:
         resolved = {}
         for name, key in self.keys.items():
-            if key.default is FROM_SETTINGS and key.kind not in ("table", "tables"):
+            if key.default is FROM_SETTINGS:
                 if not isinstance(self.settings, type) or key.field is None:
                     raise ValueError(f"{self.path}.{name}: FROM_SETTINGS needs a settings "
                                      "field")
