@@ -396,8 +396,6 @@ def _source(t: Table) -> SourceConfig:
         dec_deg=_angle(t, "dec", "deg"),
         **keys.read_all(t, ("frame", "flux_jy", "size_arcmin", "note")),
     )
-    if not src.name.strip():
-        raise t.error("name", src.name, "must not be empty")
     t.finish()
     return src
 

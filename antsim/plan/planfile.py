@@ -258,8 +258,6 @@ def _fitted_names(scenario: Scenario) -> tuple[str, ...]:
 def _variant(t: Table, key: str) -> VariantSpec:
     keys = schema.VARIANT
     name = keys.read(t, "name")
-    if not name.strip():
-        raise t.error("name", name, "must not be empty")
     if "duration_h" in t and "duration_days" in t:
         raise t.error("duration_days", t.raw("duration_days"),
                       "give duration_h or duration_days, not both")
