@@ -55,7 +55,7 @@ from .world.sky import SourceConfig
 from .world.weather import WeatherConfig
 
 __all__ = ["ESTIMATORS", "MAX_SAMPLES", "MAX_TIMESCALE_S", "UNIT_ARCSEC", "EffectSpec",
-           "Scenario", "load_scenario"]
+           "PlanNotScenarioError", "Scenario", "load_scenario"]
 
 #: effects that an equatorial mount accepts: the others model an alt-az mount's geometry,
 #: its elevation-dependent structure or its azimuth track
@@ -80,6 +80,10 @@ MIN_STEP_BEAMS = 0.01
 #: beyond any telescope's pointing error; a larger one points the antenna away from every
 #: source, and the campaign records nothing worth a fit
 MAX_CORRECTION_DEG = 10.0
+
+
+class PlanNotScenarioError(InputError):
+    """A plan file read where a scenario belongs."""
 
 
 @dataclass(frozen=True)
@@ -159,8 +163,8 @@ def load_scenario(path: str | Path) -> Scenario:
     path = Path(path)
     root = load_toml(path)
     if "variants" in root:  # read as a scenario, it would lack a site
-        raise root.error("variants", "[[variants]]", "this file is a plan, not a scenario",
-                         "antsim plan runs a plan")
+        raise PlanNotScenarioError(root.where, "variants", "[[variants]]",
+                           "this file is a plan, not a scenario", "antsim plan runs a plan")
     text = root.text
     top = schema.ROOT
     name = top.read(root, "name")
@@ -478,12 +482,12 @@ def overcorrection(model: PointingModel, mount: MountConfig,
     import numpy as np
 
     if mount.kind == "equatorial":
-        axis1 = np.linspace(mount.az.min_deg, mount.az.max_deg, 73)
-        axis2 = np.linspace(max(mount.el.min_deg, -89.0), min(mount.el.max_deg, 89.0), 37)
+        axis1 = np.linspace(mount.az.min_deg, mount.az.max_deg, 37)
+        axis2 = np.linspace(max(mount.el.min_deg, -89.0), min(mount.el.max_deg, 89.0), 19)
         names = ("hour angle", "declination")
-    else:
-        axis1 = np.arange(0.0, 360.0, 5.0)
-        axis2 = np.linspace(scheduler.elevation_min_deg, scheduler.elevation_max_deg, 31)
+    else:  # every 10 deg of azimuth, 16 elevations: the bound is coarse, so is the grid
+        axis1 = np.arange(0.0, 360.0, 10.0)
+        axis2 = np.linspace(scheduler.elevation_min_deg, scheduler.elevation_max_deg, 16)
         names = ("azimuth", "elevation")
     a1, a2 = (np.radians(g).ravel() for g in np.meshgrid(axis1, axis2))
     feed = np.zeros_like(a1) if model.needs_feed else None

@@ -53,7 +53,7 @@ from controller.pointing.terms import TermError, get_term
 from controller.scans.config import SkyConfig
 
 from ..bundled import find
-from ..scenario import Scenario, check_scan, load_scenario, overcorrection
+from ..scenario import PlanNotScenarioError, Scenario, check_scan, load_scenario, overcorrection
 from ..schema import plan as schema
 from ..schema.keys import duplicate
 from ..schema.plan import MAX_MEMBERS, UNITS, WINDOWS
@@ -224,11 +224,11 @@ def _variant_base(spec: VariantSpec, path: Path, base: Scenario) -> Scenario:
 def _load_base(text: str, plan: Path, key: str) -> Scenario:
     """The scenario that ``key`` of the plan file ``plan`` names (a plan named there is
     refused by name: it would be read as a scenario without a site)."""
-    found = find(text, "scenario", str(plan), key, relative_to=plan.parent)
-    if "variants" in load_toml(found):
+    try:
+        return load_scenario(find(text, "scenario", str(plan), key, relative_to=plan.parent))
+    except PlanNotScenarioError:
         raise InputError(str(plan), key, text, "names a plan, not a scenario",
-                         "a plan's scenario is a scenario file or the name of one")
-    return load_scenario(found)
+                         "a plan's scenario is a scenario file or the name of one") from None
 
 
 def _terms(t: Table, key: str, default: Any = None, fitted: tuple[str, ...] = (),

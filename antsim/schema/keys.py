@@ -152,6 +152,8 @@ _CONTROL_CATEGORIES = ("Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp")
 def check_line(table: Table, name: str, value: str) -> str:
     """``value`` as one line of text written into output files (a description, a note): no
     control characters (a newline would split a recordings row or a report's line)."""
+    if value.isprintable():  # the usual case, in C: no "Other" or "Separator" but spaces
+        return value
     bad = next((c for c in value if unicodedata.category(c) in _CONTROL_CATEGORIES), None)
     if bad is not None:
         raise table.error(name, value, f"holds the control character U+{ord(bad):04X}",
@@ -178,18 +180,21 @@ def read_key(table: Table, name: str, key: Key, default: Any = FROM_SETTINGS) ->
     readers' to read."""
     if default is FROM_SETTINGS:
         default = key.default
-    if default is FROM_SETTINGS:
-        raise ValueError(f"key {table.key(name)}: no default (bind its section to settings)")
-    missing = () if default is REQUIRED else (default,)
+        if default is FROM_SETTINGS:
+            raise ValueError(f"key {table.key(name)}: no default (bind its section to "
+                             "settings)")
     kind = key.kind
-    if kind == "number" and (key.why or key.why_min):
+    if kind == "number" and not (key.why or key.why_min):  # most keys: the getter's bounds
+        if default is REQUIRED:
+            return table.number(name, min=key.min, max=key.max, gt=key.gt, lt=key.lt)
+        return table.number(name, default, min=key.min, max=key.max, gt=key.gt, lt=key.lt,
+                            allow_none=default is None)
+    missing = () if default is REQUIRED else (default,)
+    if kind == "number":
         value = table.number(name, *missing, allow_none=default is None)
         if value is not None:
             check_bounds(table, name, key, value)
         return value
-    if kind == "number":
-        return table.number(name, *missing, min=key.min, max=key.max, gt=key.gt, lt=key.lt,
-                            allow_none=default is None)
     if kind == "integer":
         if default is None and name not in table:
             table.raw(name, None)

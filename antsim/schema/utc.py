@@ -11,6 +11,7 @@ seconds from the start and cannot begin inside one) and a 60th second on a day w
 from __future__ import annotations
 
 import warnings
+from datetime import datetime, timedelta
 from functools import lru_cache
 
 from ..tomlcheck import Table
@@ -23,6 +24,7 @@ FIRST_UTC_YEAR = 1960
 YEARS = (1900, 2200)
 
 
+@lru_cache(maxsize=256)
 def utc_known(year: int, month: int = 1, day: int = 1) -> bool:
     """Whether ERFA knows UTC's offset from atomic time on this day."""
     import erfa
@@ -50,10 +52,11 @@ def unknown_text() -> str:
             "seconds); a campaign outside runs on guessed time")
 
 
-def utc_time(table: Table, name: str, text: str) -> str:
-    """``text`` (the value of key ``name``) as astropy's ISO UTC time, or one InputError line:
-    not a time, a year outside 1900..2200, a year whose UTC ERFA does not know, a leap second,
-    a 60th second on a day without one."""
+@lru_cache(maxsize=256)
+def _parsed(text: str) -> tuple[str, tuple[int, int, int], float, bool] | None:
+    """(ISO time, (year, month, day), second, ERFA found a 60th second past the day's end)
+    of ``text``, or None where astropy reads no UTC time (a scenario is read many times in
+    a plan and in the tests: one parse per text)."""
     import erfa
     from astropy.time import Time
 
@@ -63,16 +66,28 @@ def utc_time(table: Table, name: str, text: str) -> str:
             epoch = Time(text, scale="utc")
             iso, when = epoch.isot, epoch.ymdhms
     except (ValueError, TypeError):
-        raise table.error(name, text, "not an ISO UTC time",
-                          "write e.g. 1990-02-08T17:00:00") from None
-    if not YEARS[0] <= when["year"] <= YEARS[1]:
+        return None
+    past_day = any("after end of day" in str(w.message) for w in caught)
+    return (iso, (int(when["year"]), int(when["month"]), int(when["day"])),
+            float(when["second"]), past_day)
+
+
+def utc_time(table: Table, name: str, text: str) -> str:
+    """``text`` (the value of key ``name``) as astropy's ISO UTC time, or one InputError line:
+    not a time, a year outside 1900..2200, a year whose UTC ERFA does not know, a leap second,
+    a 60th second on a day without one."""
+    parsed = _parsed(text)
+    if parsed is None:
+        raise table.error(name, text, "not an ISO UTC time", "write e.g. 1990-02-08T17:00:00")
+    iso, day, second, past_day = parsed
+    if not YEARS[0] <= day[0] <= YEARS[1]:
         raise table.error(name, text, f"year outside {YEARS[0]}..{YEARS[1]}")
-    if not utc_known(int(when["year"]), int(when["month"]), int(when["day"])):
+    if not utc_known(*day):
         raise table.error(name, text, unknown_text())
-    if when["second"] >= 60.0:
+    if second >= 60.0:
         raise table.error(name, text, "is a leap second: the campaign's clock cannot start "
                           "inside one", "start a second later, at the next minute")
-    if any("after end of day" in str(w.message) for w in caught):
+    if past_day:
         raise table.error(name, text, "has a 60th second on a day without a leap second",
                           "write the next minute")
     return iso
@@ -80,13 +95,9 @@ def utc_time(table: Table, name: str, text: str) -> str:
 
 def end_problem(epoch_iso: str, duration_s: float) -> str:
     """Why a campaign from ``epoch_iso`` lasting ``duration_s`` ends where UTC is not known
-    ("" when it does not)."""
-    from astropy.time import Time, TimeDelta
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # ERFA's "dubious year": the point of the question
-        end = (Time(epoch_iso, scale="utc") + TimeDelta(duration_s, format="sec")).ymdhms
-    if utc_known(int(end["year"]), int(end["month"]), int(end["day"])):
+    ("" when it does not). The end's day is counted in plain days: a leap second moves it by
+    a second, not a day that matters here."""
+    end = datetime.fromisoformat(epoch_iso[:19]) + timedelta(seconds=duration_s)
+    if utc_known(end.year, end.month, end.day):
         return ""
-    return (f"the campaign ends on {int(end['year'])}-{int(end['month']):02d}-"
-            f"{int(end['day']):02d}: {unknown_text()}")
+    return f"the campaign ends on {end:%Y-%m-%d}: {unknown_text()}"

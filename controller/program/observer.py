@@ -83,6 +83,10 @@ def never_visible(observer: Observer, targets: Sequence[Target], config: Schedul
     return missing
 
 
+#: times checked together by :func:`why_unschedulable` (two hours at its 300-s step)
+CHECK_BLOCK = 24
+
+
 def why_unschedulable(observer: Observer, targets: Sequence[Target], config: SchedulerConfig,
                       duration_s: float, step_s: float = 300.0) -> tuple[str, str]:
     """Why the scheduler's constraints (window, elevations, hour angle, declination) let no
@@ -105,23 +109,24 @@ def why_unschedulable(observer: Observer, targets: Sequence[Target], config: Sch
                               f"{sun.min():.1f} deg)")
     else:
         window = np.ones(times.size, dtype=bool)
-    allowed = np.zeros(times.size, dtype=bool)
+    index = np.array([tg.index for tg in targets])[:, None]
     lowest_dec = math.inf
-    for tg in targets:
-        _, el = observer.ephemeris.altaz_rad(tg.index, times)
+    # (target, time) at once, two hours at a time: most campaigns can observe in the first
+    for start in range(0, times.size, CHECK_BLOCK):
+        grid, open_ = times[None, start:start + CHECK_BLOCK], window[start:start + CHECK_BLOCK]
+        _, el = observer.ephemeris.altaz_rad(index, grid)
         el_deg = np.degrees(el)
-        ok = window & (el_deg >= config.elevation_min_deg) & (el_deg <= config.elevation_max_deg)
+        ok = open_ & (el_deg >= config.elevation_min_deg) & (el_deg <= config.elevation_max_deg)
         if config.hour_angle_limit_deg is not None or config.declination_max_deg is not None:
-            ha, dec = observer.ephemeris.hadec_rad(np.full(times.size, tg.index), times)
+            ha, dec = observer.ephemeris.hadec_rad(index, grid)
             dec_deg = np.degrees(dec)
             lowest_dec = min(lowest_dec, float(dec_deg.min()))
             if config.hour_angle_limit_deg is not None:
                 ok &= np.abs(np.degrees(ha)) <= config.hour_angle_limit_deg
             if config.declination_max_deg is not None:
                 ok &= dec_deg <= config.declination_max_deg
-        allowed |= ok
-    if allowed.any():
-        return "", ""
+        if ok.any():
+            return "", ""
     if config.declination_max_deg is not None and lowest_dec > config.declination_max_deg:
         return "declination_max_deg", (f"no source lies at or below it (the southernmost at "
                                        f"{lowest_dec:+.1f} deg)")

@@ -13,7 +13,10 @@ effects that change the world itself (clock, source structure, beam width) do it
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
+from functools import cache
+from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
@@ -73,6 +76,19 @@ def name_bound(name: str) -> float | None:
     return next((bound for suffix, bound in NAME_BOUNDS if name.endswith(suffix)), None)
 
 
+@cache
+def _bounded_keys(cls: type[Effect]) -> Mapping[str, Key]:
+    """:meth:`Effect.keys`, made once per class (read only: it is shared)."""
+    out = {}
+    for name, key in cls.PARAMS.items():
+        bound = name_bound(name)
+        if key.kind == "number" and bound is not None:
+            key = replace(key, min=-bound if key.min is None else key.min,
+                          max=bound if key.max is None else key.max)
+        out[name] = key
+    return MappingProxyType(out)
+
+
 def _instant(value):
     """One instant's field of a block: a number where it is one value (a member block's
     (1,) rows), else the array (members,)."""
@@ -106,17 +122,10 @@ class Effect:
 
     # ------------------------------------------------------------------ configuration
     @classmethod
-    def keys(cls) -> dict[str, Key]:
+    def keys(cls) -> Mapping[str, Key]:
         """:data:`PARAMS` as the scenario reads them: a number whose key gives no bound on
         a side is bounded there by the unit its name ends in (:data:`NAME_BOUNDS`)."""
-        out = {}
-        for name, key in cls.PARAMS.items():
-            bound = name_bound(name)
-            if key.kind == "number" and bound is not None:
-                key = replace(key, min=-bound if key.min is None else key.min,
-                              max=bound if key.max is None else key.max)
-            out[name] = key
-        return out
+        return _bounded_keys(cls)
 
     @classmethod
     def from_table(cls, table: Table) -> Effect:
