@@ -3,6 +3,7 @@ default, one line of meaning and the document it comes from.
 
 * :mod:`.keys`: :class:`~.keys.Key` (one setting) and :class:`~.keys.Section` (a table of
   them, bound to the settings dataclass it fills), and how a value is read through its key;
+* :mod:`.utc`: the times UTC can hold (ERFA's leap seconds; no leap second as a start);
 * :mod:`.scenario`: the scenario's tables (the world's parts, the controller's settings and
   each effect's parameters, which the effects declare beside their physics);
 * :mod:`.plan`: the plan's tables (a variant's keys are the scenario's);
