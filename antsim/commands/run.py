@@ -36,11 +36,14 @@ def main(args: argparse.Namespace) -> int:
     from antsim.outdir import held_output_dir
     from antsim.progress import Progress
     from antsim.run.outputs import PRODUCTS, clear_products, write_outputs
-    from antsim.scenario import load_scenario, thermal_terms_of
+    from antsim.scenario import load_scenario, overcorrection, thermal_terms_of
     from antsim.simulate.runner import run_campaign
 
     if args.seed is not None and args.seed < 0:
         raise InputError("command line", "--seed", args.seed, "must be >= 0")
+    if args.model is not None and not args.model.strip():
+        raise InputError("command line", "--model", args.model, "is empty",
+                         "give a named model (none, ghigo10, ...) or a model file")
     scenario = load_scenario(find(args.scenario))
     model = None
     if args.model is not None and scenario.mount.kind == "equatorial":
@@ -57,6 +60,11 @@ def main(args: argparse.Namespace) -> int:
                              f"has thermal terms ({', '.join(thermal)}), which the controller "
                              "does not apply (they need structure temperatures at every "
                              "instant)", "give a model of the position alone")
+    found = (None if model is None
+             else overcorrection(model, scenario.mount, scenario.controller.scheduler))
+    if found is not None:
+        raise InputError("command line", "--model", args.model, found.problem,
+                         "check the model's values and their units")
     for option, given in (("--seed", args.seed is not None), ("--resume", args.resume)):
         if given and args.connect is not None:
             raise InputError("command line", option, True, "not with --connect",

@@ -1,1 +1,1 @@
-"""Tests of controller.program."""
+"""Tests of controller.program, a file per module."""
