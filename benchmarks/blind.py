@@ -392,6 +392,7 @@ def _finding_pool(base: list[str]) -> dict[str, tuple[str, ...]]:
     each: label -> terms."""
     from antsim.diagnose.candidates.library import CANDIDATES
     from antsim.diagnose.candidates.terms import HarmonicFamilyCandidate, TermsCandidate
+    from controller.pointing.model import PointingModel
 
     pool: dict[str, tuple[str, ...]] = {}
     seen: set[tuple[str, ...]] = set()
@@ -403,10 +404,13 @@ def _finding_pool(base: list[str]) -> dict[str, tuple[str, ...]]:
             pool[label] = terms
 
     for c in CANDIDATES:
+        if "altaz" not in getattr(c, "mounts", ("altaz",)):
+            continue  # an equatorial mount's terms
         if isinstance(c, HarmonicFamilyCandidate):
             for n in c.orders:
                 add(c.label(n), c.order_terms(n))
-        elif isinstance(c, TermsCandidate) and c.kind == "offsets":
+        elif isinstance(c, TermsCandidate) and c.kind == "offsets" \
+                and not PointingModel(list(c.terms)).regressors:  # no recorded temperatures
             add(c.name, c.terms)
     add("az_runout_1a_2a", ("HASA", "HACA", "HASA2", "HACA2"))
     add("az_track_2a_3a", ("HESA2", "HECA2", "HESA3", "HECA3"))

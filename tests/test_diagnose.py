@@ -131,12 +131,13 @@ def test_library_covers_the_signature_table_and_the_non_harmonic_effects():
 def test_harmonic_effect_amplitude_and_phase_round_trip():
     e = AzimuthTrack2A(amplitude_arcsec=6.0, phase_deg=30.0)
     coeff = e.coefficients()
-    # TPOINT's HESA2 is dE = c sin 2A_H with A_H = 180 deg - A_S: minus sin 2A_S
+    # TPOINT's HESA2 is dE = c sin 2A_T with A_T = 180 deg - A_N: minus sin 2(A_N - 180 deg)
     assert coeff["HESA2"] == pytest.approx(-6.0 * math.cos(math.radians(30.0)))
     assert coeff["HECA2"] == pytest.approx(6.0 * math.sin(math.radians(30.0)))
     amp, phase = AzimuthTrack2A.amplitude_phase(coeff["HESA2"], coeff["HECA2"])
     assert (amp, phase) == pytest.approx((6.0, 30.0))
-    # the effect's error is minus its correction a sin(2 A_S + phase) (indicated - true)
+    # the effect's error is minus its correction a sin(2 (A_N - 180 deg) + phase) (indicated
+    # minus true)
     from antsim.world.effects.base import PointingState
 
     st = PointingState(t_s=0.0, az_rad=0.4, el_rad=0.7)
@@ -157,9 +158,9 @@ HARMONIC_PHYSICS = {
 @pytest.mark.parametrize("name", sorted(HARMONIC_PHYSICS))
 @pytest.mark.parametrize("phase_deg", [0.0, 30.0, 135.0, 250.0])
 def test_harmonic_effects_are_the_documented_sinusoid(name, phase_deg):
-    """The error of every harmonic effect is minus a sin(nX + phase), X the South-based
-    azimuth A_S = A_N - 180 deg or the elevation, in dA or dE: whatever the term library's
-    sign convention, and the inverse amplitude_phase gives the parameters back."""
+    """The error of every harmonic effect is minus a sin(nX + phase), X the azimuth counted
+    from South through West, A_N - 180 deg, or the elevation, in dA or dE: whatever the term
+    library's sign convention, and the inverse amplitude_phase gives the parameters back."""
     from antsim.world.effects.base import PointingState
 
     axis, n, arg = HARMONIC_PHYSICS[name]

@@ -449,11 +449,12 @@ def test_tracking_jitter_is_larger_by_day_by_its_day_factors(quiet):
 def _linear_tilt_model(tilt_arcsec: float, tilt_az_deg: float, collimation_arcsec: float):
     """Small-angle equivalent of a tilt towards azimuth phi and a collimation c: to first
     order the encoders read dE = t cos(A - phi), dA = t tan E sin(A - phi) - c sec E
-    (indicated - true), which in TPOINT's terms (DESIGN section 5 table; signs as in
-    tests/test_world.py) is AN = -t cos phi, AW = +t sin phi, CA = -c."""
+    (indicated - true), which in TPOINT's terms (signs as in tests/test_world.py: TPOINT's
+    AN > 0 is the pole north of the zenith, AW > 0 west of it) is AN = t cos phi,
+    AW = -t sin phi, CA = -c."""
     phi = math.radians(tilt_az_deg)
-    return PointingModel(["AN", "AW", "CA"], [-tilt_arcsec * math.cos(phi),
-                                              tilt_arcsec * math.sin(phi),
+    return PointingModel(["AN", "AW", "CA"], [tilt_arcsec * math.cos(phi),
+                                              -tilt_arcsec * math.sin(phi),
                                               -collimation_arcsec])
 
 
