@@ -152,7 +152,7 @@ def test_the_sunset_drift_finding_is_the_benchmarks_output():
     assert f"(seed 1: E {first[6]}\" -> {first[7]}\", D {first[4]}\" -> {first[5]}\")" in section
 
 
-# ------------------------------------------------------------------ diagnose (issue 24)
+# ------------------------------------------------------------------ diagnose
 
 
 def test_the_blind_rates_are_the_harness_output():
@@ -255,7 +255,7 @@ def test_the_real_data_procedures_are_the_benchmarks_output():
             f"to 22 terms and {forward}\" for a forward selection") in section
     assert f"({eight}\" for the eight terms)" in section
     assert f"TPOINT's own 22 terms refitted reach {fauto}\"" in section
-    assert float(ours) <= float(auto)  # issue 24's target
+    assert float(ours) <= float(auto)  # diagnose's target (benchmarks/blind.py)
     ours_m = re.search(r"procedure: diagnose ([\d.]+)\"", mmt).group(1)
     eight_m = re.search(r"eight terms +8 terms: CV Sky RMS leave-one-out ([\d.]+)\"",
                         mmt).group(1)
@@ -306,7 +306,7 @@ def test_the_crane_diagnose_case_is_the_benchmarks_output():
         assert f"{name} {value}" in flat and value.lstrip("+") in absorbed, name
 
 def test_the_thermal_findings_are_the_benchmarks_and_the_plans_output():
-    """Issue 25's bullets: sensors (fit T), without the lag correction, all six terms, the
+    """The thermal bullets: sensors (fit T), without the lag correction, all six terms, the
     D/E ratio, the proxies' before/after, fit A's warnings, and the sensors' what-if."""
     output = (RESULTS / "recovery.txt").read_text(encoding="utf-8")
     section = " ".join(_section("- An observatory has no such mean",
@@ -371,7 +371,7 @@ def test_the_thermal_findings_are_the_benchmarks_and_the_plans_output():
 
 
 def test_the_readmes_thermal_figures_are_the_benchmarks_output():
-    """Issue 25 asks for the recovery's numbers in the README itself: each must be the one
+    """The recovery's numbers in the README itself: each must be the one
     benchmarks/recovery.py printed (docs/results/recovery.txt)."""
     readme = " ".join((REPO / "README.md").read_text(encoding="utf-8").split())
     line = readme[readme.index("**Thermal pointing**"):readme.index("**Your own data**")]
