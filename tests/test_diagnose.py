@@ -283,7 +283,7 @@ def test_a_term_the_model_mimics_is_judged_by_what_the_model_cannot_absorb():
     """sin E on top of IE, TF (cos E) and TX (cot E) over 15-85 deg: r = 1.00 with the model,
     but the part those terms cannot absorb (0.32 per arcsec of HESE over these 160 stars)
     is 25 sigma for 40" in 0.5" noise: accepted, with its correlation in TPOINT's words and
-    the separation in sigma (issue 24: it used to be refused). Without a noise prediction
+    the separation in sigma (it used to be refused). Without a noise prediction
     the F test takes the noise from the residuals, which still hold the effect (1.1" instead
     of 0.5" in elevation before it is fitted): 13 sigma, hence the bound of 10."""
     d = diagnose(synthetic(extra={"HESE": 40.0}, noise_arcsec=0.5))
@@ -303,7 +303,7 @@ def test_a_term_the_model_mimics_is_judged_by_what_the_model_cannot_absorb():
     assert doc["separations"][0]["sigma"] == pytest.approx(sp.sigma, abs=0.01)
 
 
-#: held-out style TPOINT cases (issue 24): effects of elevation alone that IE, TF and TX nearly
+#: held-out style TPOINT cases: effects of elevation alone that IE, TF and TX nearly
 #: mimic (r = 1.00), and an azimuth runout once per turn that was named as the elevation nod
 #: of the same order; 160 stars, 1" noise, seed 3 (8-12 sigma separated)
 HELD_OUT_STYLE = [({"HECE2": 30.0}, "el_eccentricity_2e"),
@@ -356,7 +356,7 @@ def test_a_mimicked_term_below_detection_is_refused_in_words():
 
 def test_a_pair_that_one_term_matches_is_offered_in_that_form():
     """A runout twice per turn with only its sine term (HASA2 1.5" in 1" noise): the pair is
-    named, and HASA2 alone explains as much (the MMT case of issue 24, where one TPOINT term
+    named, and HASA2 alone explains as much (the MMT case, where one TPOINT term
     matched a pair's improvement to 0.001"); the updated model takes that form."""
     d = diagnose(synthetic(extra={"HASA2": 1.5}, seed=7))
     first = d.findings[0]

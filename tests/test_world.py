@@ -1,4 +1,4 @@
-"""Closure tests of the simulated world's geometry (DESIGN section 3 sign conventions).
+"""Closure tests of the simulated world's geometry (the sign conventions of docs/layout.md).
 
 Each geometric term is injected alone as the truth of the noise-free world of
 ``tests/data/scenarios/quiet.toml`` (no gain fluctuation, radiometer noise ~5e-12 K per sample,
@@ -39,7 +39,7 @@ from controller.pointing.model import PointingModel
 from controller.protocol import Antenna
 
 ARCSEC = math.pi / 648000.0  # radians per arcsec
-#: DESIGN/brief: closure of each term to better than 0.01"
+#: closure of each term to better than 0.01"
 CLOSURE_ARCSEC = 0.01
 #: World.pointing_error_rad is the model's own formula: agreement to float rounding of
 #: arcsec-sized numbers (1e-9" is ~1e-15 rad, a few ulp of angles of order 1 rad)
@@ -223,7 +223,7 @@ def test_truth_lists_terms_in_arcsec_and_effects(ghigo_path):
     assert truth["w_terms"] == "Ghigo 1990 (NRAO EDIR 288) section II"
     assert truth["seed"] == 11
     assert truth["model"] == "ghigo10"
-    # the scenario gives Table 3 in arcmin; truth.json holds arcsec (DESIGN section 4)
+    # the scenario gives Table 3 in arcmin; truth.json holds arcsec (docs/contract.md)
     assert truth["terms"]["W6"] == {"value_arcsec": pytest.approx(12.24 * 60.0, abs=1e-9)}
     assert truth["terms"]["W1"]["value_arcsec"] == pytest.approx(-1.88 * 60.0, abs=1e-9)
     assert [e["effect"] for e in truth["effects"]] == ["thermal", "tracking_jitter"]
