@@ -16,7 +16,7 @@ import os
 import sys
 from pathlib import Path
 
-from antsim.commands import MAX_SIMULATIONS, check_count, check_processes
+from antsim.options import MAX_SIMULATIONS, check_count, check_processes
 from controller.errors import InputError
 
 

@@ -14,7 +14,7 @@ import json
 import sys
 from contextlib import nullcontext
 
-from antsim.commands import check_processes
+from antsim.options import check_processes
 from antsim.outdir import write_file
 from controller.errors import InputError
 
