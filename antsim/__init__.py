@@ -7,7 +7,8 @@ simulated world. Each part imports only those listed before it, and :mod:`contro
 * :mod:`.tomlcheck`: TOML read with one-line errors; :mod:`.documents`: what the source
   documents publish (numbers only, beside which a run prints its own); :mod:`.bundled`:
   the scenarios and plans that come with antsim, found by name; :mod:`.progress`: progress
-  of long work, on a terminal and off one;
+  of long work, on a terminal and off one; :mod:`.outdir`: output directories;
+  :mod:`.options`: the limits of a user's counts;
 * :mod:`.world`: the simulated telescope (sky, weather, mount, physical effects, beam,
   receiver, camera) and the protocol's implementation;
 * :mod:`.scenario`: scenario files, read into the world's and the controller's settings
@@ -17,9 +18,10 @@ simulated world. Each part imports only those listed before it, and :mod:`contro
 * :mod:`.figures`: figures by page, and the self-contained HTML page writer; they draw values
   and import nothing else of antsim but the documents' numbers;
 * the features, each one command's work, none importing another: :mod:`.run` (a campaign
-  run's files: fits, report), :mod:`.serve` (the simulated antenna as a KATCP device, for
-  control software outside), :mod:`.plan` (what-if observing plans), :mod:`.diagnose` (what
-  the model leaves out) and :mod:`.studies` (the source reports' studies repeated);
+  run's files: fits, report), :mod:`.fit` (a user's file fitted), :mod:`.serve` (the
+  simulated antenna as a KATCP device, for control software outside), :mod:`.plan`
+  (what-if observing plans), :mod:`.diagnose` (what the model leaves out) and
+  :mod:`.studies` (the source reports' studies repeated);
 * :mod:`.commands` and :mod:`.cli`: the ``antsim`` command line.
 """
 

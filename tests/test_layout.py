@@ -19,7 +19,8 @@ ROOT = Path(__file__).resolve().parents[1]
 
 #: the features: what a user asks for, each one command's work. They share the engines
 #: (:mod:`antsim.simulate`), the figures and pages (:mod:`antsim.figures`) and everything below.
-FEATURES = ("antsim.run", "antsim.serve", "antsim.plan", "antsim.diagnose", "antsim.studies")
+FEATURES = ("antsim.run", "antsim.fit", "antsim.serve", "antsim.plan", "antsim.diagnose",
+            "antsim.studies")
 #: everything that sits above the figures: the features and the command line
 FEATURES_UP = ("antsim.figures", *FEATURES, "antsim.commands", "antsim.cli")
 #: the teaching walk-through (``antsim demo``), a command: its chapters, one module each, and
@@ -71,6 +72,10 @@ RULES: tuple[tuple[str, tuple[str, ...], str], ...] = (
                        "controller.astro", "controller.pointing", "controller.scans",
                        "controller.program"),
      "output directories and their lock are a base of every command that writes"),
+    ("antsim.options", ("antsim.world", "antsim.simulate", "antsim.scenario", *FEATURES_UP,
+                        "controller.astro", "controller.pointing", "controller.scans",
+                        "controller.program"),
+     "the limits of a user's counts are a base of every command and of the Python API"),
     ("antsim.world", ("antsim.simulate", *FEATURES_UP),
      "the simulated world knows nothing of what is done with it"),
     ("antsim.scenario", ("antsim.world.world", "antsim.simulate", *FEATURES_UP),
