@@ -22,7 +22,14 @@ simulated world. Each part imports only those listed before it, and :mod:`contro
   simulated antenna as a KATCP device, for control software outside), :mod:`.plan`
   (what-if observing plans), :mod:`.diagnose` (what the model leaves out) and
   :mod:`.studies` (the source reports' studies repeated);
-* :mod:`.commands` and :mod:`.cli`: the ``antsim`` command line.
+* :mod:`.commands` and :mod:`.cli`: the ``antsim`` command line; :mod:`.api`: the same
+  commands as Python functions, for notebooks.
+
+The Python API's functions are attributes of this package: ``antsim.run_campaign``,
+``antsim.fit_model``, ``antsim.diagnose_model`` and ``antsim.answer_plan``
+(:mod:`antsim.api`, docs/api.md). They are imported when first used (PEP 562), so that
+``import antsim`` (the command line's start) stays as quick as it was; their names are no
+subpackage's, so importing :mod:`antsim.run` or :mod:`antsim.plan` does not hide them.
 """
 
 # no network, before anything touches astropy
@@ -30,4 +37,19 @@ from controller.astro import offline as _offline  # noqa: F401
 
 from ._version import __version__
 
-__all__ = ["__version__"]
+#: the Python API's functions, imported from :mod:`antsim.api` when first used
+API = ("run_campaign", "fit_model", "diagnose_model", "answer_plan")
+
+__all__ = ["__version__", *API]
+
+
+def __getattr__(name: str):
+    if name in API:
+        from . import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'antsim' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *API})

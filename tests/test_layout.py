@@ -30,6 +30,13 @@ DEMO_CHAPTERS = tuple(f"{DEMO}.{name}" for name in (
     "cold_start", "first_campaign", "the_fit", "closed_loop", "hidden_effect"))
 DEMO_SHARED = (f"{DEMO}.story", f"{DEMO}.campaign")
 
+#: the Python API (notebooks), at the command line's level: it may import every feature;
+#: only ``antsim``'s own lazy ``__getattr__`` imports it
+API = "antsim.api"
+BELOW_API = ("controller", "antsim.tomlcheck", "antsim.documents", "antsim.progress",
+             "antsim.bundled", "antsim.outdir", "antsim.options", "antsim.blas",
+             "antsim.world", "antsim.scenario", "antsim.simulate", *FEATURES_UP)
+
 #: (importer prefix, forbidden prefixes, why): no module under the importer imports a module
 #: under a forbidden prefix. Prefixes are dotted module names; "a.b" covers a.b and a.b.*.
 RULES: tuple[tuple[str, tuple[str, ...], str], ...] = (
@@ -91,6 +98,9 @@ RULES: tuple[tuple[str, tuple[str, ...], str], ...] = (
        "a feature imports the engines and the parts below them, never another feature nor "
        "the command line: what two features share belongs below both")
       for feature in FEATURES),
+    *((below, (API,), "the Python API sits at the command line's level: no feature, engine "
+       "or command imports it")
+      for below in BELOW_API),
     *((chapter, (*(c for c in DEMO_CHAPTERS if c != chapter), f"{DEMO}.walkthrough"),
        "a chapter of the walk-through never imports another: what it needs of an earlier "
        "one the walk-through hands it, and what two share is in the demo's shared modules")
@@ -231,6 +241,18 @@ def test_the_demos_rules_name_its_modules(graph):
     assert set(DEMO_CHAPTERS) <= set(graph[f"{DEMO}.walkthrough"])
     assert {m for m in graph if m.startswith(f"{DEMO}.")} == \
         {*DEMO_CHAPTERS, *DEMO_SHARED, f"{DEMO}.walkthrough"}, "a new demo module: rule it"
+
+
+def test_the_api_is_imported_by_antsim_alone(graph):
+    """The rule on the API holds something: the API is there, imports the features the
+    commands run, and only ``antsim`` (its lazy ``__getattr__``) imports it."""
+    api = {m for m in graph if m == API or m.startswith(API + ".")}
+    assert API in graph and f"{API}.campaign" in graph
+    uses = {t for m in api for t in graph[m]}
+    assert {"antsim.run.outputs", "antsim.fit.fitfile", "antsim.diagnose.request",
+            "antsim.plan.outputs"} <= uses
+    importers = {m for m, edges in graph.items() if m not in api and set(edges) & api}
+    assert importers == {"antsim"}
 
 
 def test_a_chapter_importing_another_is_caught(tmp_path):
