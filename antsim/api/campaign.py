@@ -102,6 +102,8 @@ class Campaign(ShownAsTable):
     def fits(self) -> dict[str, Fit | None]:
         """Fits A-F (and T with structure thermometers) of the 1990 report's variants, as
         ``fit_variants.json`` holds them; None where too few observations."""
+        import numpy as np
+
         from antsim.run.outputs import model_caption
         from controller.pointing.variants import VARIANTS, columns, pointing_data, variant_mask
 
@@ -111,11 +113,13 @@ class Campaign(ShownAsTable):
             fit = self.products.fits.get(variant.name)
             if variant.name not in self.products.fits:
                 continue
+            mask = variant_mask(cols, variant)
             out[variant.name] = None if fit is None else Fit(
-                fit, pointing_data(cols, variant_mask(cols, variant)),
+                fit, pointing_data(cols, mask),
                 source=f"{self.scenario} seed {self.seed}, fit {variant.name}",
                 caption=model_caption(self.run) if variant.name == "A" else
-                f"{self.scenario} seed {self.seed}: fit {variant.name}")
+                f"{self.scenario} seed {self.seed}: fit {variant.name}",
+                sun_el_deg=np.asarray(cols["sun_el_deg"], dtype=float)[mask])
         return out
 
     @property

@@ -38,6 +38,9 @@ class Fit(ShownAsTable):
     source: str
     caption: str
     notes: tuple[str, ...] = ()
+    #: the Sun's elevation at each observation (deg), where known: the figures colour day,
+    #: twilight and night by it
+    sun_el_deg: Any = None
 
     # ----------------------------------------------------------------- the numbers
     @property
@@ -182,8 +185,8 @@ class Fit(ShownAsTable):
                 pointing_errors_figure(
                     np.degrees(data.az_rad), np.degrees(data.el_rad), fit.residual_xel_arcsec,
                     fit.residual_el_arcsec, folder / "residuals.png", rejected=~used,
-                    what="residual", title=f"Residuals of {self.source} against elevation "
-                    "and azimuth"),
+                    sun_el_deg=self.sun_el_deg, what="residual",
+                    title=f"Residuals of {self.source} against elevation and azimuth"),
                 residual_quiver_figure(data, fit, folder / "sky.png",
                                        title=f"Residuals of {self.source} on the sky"),
                 histogram_figure(series, folder / "histograms.png",
