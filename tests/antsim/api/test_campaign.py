@@ -130,6 +130,7 @@ def test_a_campaign_shows_a_short_table(campaign):
 @pytest.mark.parametrize(("kwargs", "options"), [
     ({"seed": -1}, ["--seed", "-1"]),
     ({"model": "nonesuch"}, ["--model", "nonesuch"]),
+    ({"model": " "}, ["--model", " "]),
     ({"model": "{run}/recordings.ecsv"}, ["--model", "{run}/recordings.ecsv"]),
     ({"out": "{run}"}, ["--out", "{run}"]),
 ])
