@@ -21,7 +21,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import matplotlib
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
 from antsim.outdir import replacing
 from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
@@ -104,10 +107,6 @@ class Canvas:
         self.size = (width_in, height_in)
 
     def __enter__(self):
-        import matplotlib
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-        from matplotlib.figure import Figure
-
         self._rc = matplotlib.rc_context()
         self._rc.__enter__()
         matplotlib.rcdefaults()

@@ -32,9 +32,13 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.stats import chi2
 
 from controller.pointing.crane import CANDIDATES, CRANE_NAMES, candidate_terms
+from controller.pointing.equatorial import equatorial_model
 from controller.pointing.terms import evaluate_basis
+from controller.scans.gaincurve import corrected_amplitudes, fit_harmonic_gain
+from controller.units import ARCSEC_PER_RAD
 
 __all__ = ["BANDS", "DEC_LIBRARY", "TABLE4", "TABLE5", "Dataset", "absorbed_by_crane",
            "channel_gain", "difference_chi2", "good_rows", "rounding_ratio",
@@ -209,8 +213,6 @@ def difference_chi2(all_fit: Sequence[tuple[float, float]],
                     night_fit: Sequence[tuple[float, float]]) -> tuple[float, int, float]:
     """(chi-square, degrees of freedom, probability of a larger one) of night minus all
     coefficient differences, each in units of the night fit's standard error."""
-    from scipy.stats import chi2
-
     total = 0.0
     for (va, _), (vn, sn) in zip(all_fit, night_fit, strict=True):
         total += ((vn - va) / sn) ** 2
@@ -221,8 +223,6 @@ def difference_chi2(all_fit: Sequence[tuple[float, float]],
 def channel_gain(cols: Mapping[str, np.ndarray], channel: str, flux_jy: Mapping[str, float],
                  hpbw_arcmin: float, opacity: float = 0.0):
     """The harmonic gain curve (controller.scans.gaincurve) of one channel's good rows."""
-    from controller.scans.gaincurve import corrected_amplitudes, fit_harmonic_gain
-
     sel = ((np.asarray(cols["polarization"]).astype(str) == channel)
            & np.asarray(cols["good"]).astype(bool))
     sub = {k: np.asarray(v)[sel] for k, v in cols.items()}
@@ -244,9 +244,6 @@ def absorbed_by_crane(ha_rad: np.ndarray, dec_rad: np.ndarray, latitude_deg: flo
     declinations (rad): the least-squares fit of its errors (cross-declination and
     declination, both axes alike as fit A) by C1..C11, in arcmin (Crane's sign; C5 in its
     own unit, a refraction scale)."""
-    from controller.pointing.equatorial import equatorial_model
-    from controller.units import ARCSEC_PER_RAD
-
     ha = np.asarray(ha_rad, float)
     dec = np.asarray(dec_rad, float)
     effect = equatorial_model(list(terms_arcsec), latitude_deg, list(terms_arcsec.values()))

@@ -25,6 +25,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.stats import f as f_dist
 
 from antsim.world.effects.optics import ExactTiltCollimation
 from controller.pointing.bima import BIMA_TERMS
@@ -146,8 +147,6 @@ def term_significance(data: PointingData, terms: tuple[str, ...], term: str,
                       pattern: np.ndarray) -> TermTest:
     """Least-squares fits of ``terms`` with and without ``term``; the F test of the residual
     sums of squares (both axes, 1 and n - m degrees of freedom)."""
-    from scipy.stats import f as f_dist
-
     full = fit_model(data, terms, robust=False)
     reduced = fit_model(data, tuple(t for t in terms if t != term), robust=False)
     n = 2 * len(data)

@@ -40,7 +40,11 @@ import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
+import erfa
 import numpy as np
+from astropy import units as u
+from astropy.coordinates import FK4, FK5, ICRS, SkyCoord
+from astropy.time import TimeDelta
 
 from .earth import _polar_motion_rad, _ut1, _utc_instant
 from .hermite import hermite_evaluate, hermite_table
@@ -79,9 +83,6 @@ def icrs_radec_rad(sources: Sequence[FixedSource]) -> np.ndarray:
     """
     missing = [s for s in dict.fromkeys(sources) if s not in _ICRS_CACHE]
     if missing:
-        from astropy import units as u
-        from astropy.coordinates import FK4, FK5, ICRS, SkyCoord
-
         groups: dict[tuple[str, str | None, str | None], list[FixedSource]] = {}
         for source in missing:
             groups.setdefault((source.frame, source.equinox, source.obstime), []).append(source)
@@ -208,9 +209,6 @@ class Ephemeris:
     def _exact_hadec(self, grid_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Exact apparent topocentric (HA, Dec) in rad at ``grid_s``, shape (bodies, grid);
         the last body is the Sun."""
-        import erfa
-        from astropy.time import TimeDelta
-
         site = self.site
         times = self.epoch + TimeDelta(grid_s, format="sec")
         ut1 = _ut1(times)
@@ -415,8 +413,6 @@ class Ephemeris:
 
     def time(self, t_s) -> Time:
         """The UTC astropy ``Time`` of campaign time(s) ``t_s`` (s), for reports."""
-        from astropy.time import TimeDelta
-
         if hasattr(t_s, "unit"):
             t_s = t_s.to_value("s")
         return self.epoch + TimeDelta(np.asarray(t_s, dtype=float), format="sec")

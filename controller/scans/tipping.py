@@ -26,6 +26,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.optimize import minimize_scalar
 
 from controller.astro.frames import MountFrame
 from controller.protocol import Antenna, AntennaError
@@ -68,8 +69,6 @@ def fit_opacity(airmass_values, power_k, t_atm_k: float) -> OpacityFit:
     (bounded Brent) followed by the linearised covariance for the standard error of ``tau``.
     Raises ValueError for fewer than three points or a single airmass.
     """
-    from scipy.optimize import minimize_scalar
-
     a = np.asarray(airmass_values, dtype=float).reshape(-1)
     p = np.asarray(power_k, dtype=float).reshape(-1)
     keep = np.isfinite(a) & np.isfinite(p)
