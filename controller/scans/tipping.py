@@ -32,6 +32,7 @@ from controller.astro.frames import MountFrame
 from controller.protocol import Antenna, AntennaError
 
 from .config import TippingConfig
+from .tracking import ProgramTrack
 
 __all__ = ["FixedTrajectory", "OpacityFit", "Tipping", "airmass", "fit_opacity",
            "opacity_from_scans", "tipping_scan"]
@@ -136,9 +137,9 @@ class FixedTrajectory:
     def elevation_deg(self, t_s: float) -> float:
         return self.lat_deg
 
-    def program_track(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def program_track(self) -> ProgramTrack:
         """One point: a program track that holds it (see SourceTrajectory.program_track)."""
-        return np.zeros(1), np.array([self.lon_deg]), np.array([self.lat_deg])
+        return ProgramTrack(np.zeros(1), np.array([self.lon_deg]), np.array([self.lat_deg]))
 
     def covers(self, t_s) -> bool:
         return True
