@@ -42,8 +42,6 @@ from typing import TYPE_CHECKING, Any
 
 import erfa
 import numpy as np
-from astropy import units as u
-from astropy.coordinates import FK4, FK5, ICRS, SkyCoord
 from astropy.time import TimeDelta
 
 from .earth import _polar_motion_rad, _ut1, _utc_instant
@@ -83,6 +81,9 @@ def icrs_radec_rad(sources: Sequence[FixedSource]) -> np.ndarray:
     """
     missing = [s for s in dict.fromkeys(sources) if s not in _ICRS_CACHE]
     if missing:
+        from astropy import units as u
+        from astropy.coordinates import FK4, FK5, ICRS, SkyCoord
+
         groups: dict[tuple[str, str | None, str | None], list[FixedSource]] = {}
         for source in missing:
             groups.setdefault((source.frame, source.equinox, source.obstime), []).append(source)

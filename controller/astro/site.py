@@ -5,11 +5,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-
-from astropy import units as u
-from astropy.coordinates import EarthLocation
+from typing import TYPE_CHECKING
 
 from .values import finite_fields, require_finite
+
+if TYPE_CHECKING:
+    from astropy.coordinates import EarthLocation
 
 __all__ = ["GREEN_BANK_45FT", "Site", "Weather", "standard_pressure_hpa"]
 
@@ -57,6 +58,9 @@ class Site:
 
     def earth_location(self) -> EarthLocation:
         """The site as an astropy ``EarthLocation`` (WGS84), for exact astropy transforms."""
+        from astropy import units as u
+        from astropy.coordinates import EarthLocation
+
         return EarthLocation.from_geodetic(
             lon=self.longitude_deg * u.deg, lat=self.latitude_deg * u.deg,
             height=self.height_m * u.m, ellipsoid="WGS84",

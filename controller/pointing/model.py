@@ -21,7 +21,6 @@ from astropy import units as u
 from controller.units import ARCSEC_PER_RAD, RAD_PER_ARCSEC, to_value
 
 from .data import PointingData
-from .robust import fit_terms
 from .terms import Term, combine_arrays, combine_scalar, evaluate_basis, get_term
 from .thermal import thermal_regressors
 
@@ -241,5 +240,7 @@ class PointingModel:
         )
         # the fitter brings scipy (0.3 s): imported when a model is first fitted, so that
         # importing a model (every controller and simulator module does) stays cheap
+        from .robust import fit_terms
+
         start = PointingModel(list(self.names), name=options.pop("name", "custom"))
         return fit_terms(data, start, **options)
