@@ -98,3 +98,15 @@ def test_a_misspelt_command_is_one_line(argv, line, capsys):
     assert main(argv) == 2
     captured = capsys.readouterr()
     assert captured.out == "" and captured.err == line + "\n"
+
+
+def test_the_command_line_starts_light():
+    """Importing the command line loads neither scipy, astropy.coordinates, matplotlib nor
+    simpy (each is large parts of a second): ``antsim --help`` and a misspelt option answer at
+    once, and each command imports what it needs when it runs."""
+    code = ("import sys, antsim.cli; print(sorted(m for m in sys.modules if m.split('.')[0] in "
+            "('scipy', 'matplotlib', 'simpy') or m.startswith('astropy.coordinates')))")
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+    done = subprocess.run([sys.executable, "-c", code], cwd=REPO, env=env, capture_output=True,
+                          text=True, check=True)
+    assert done.stdout.strip() == "[]"
