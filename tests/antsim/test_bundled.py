@@ -13,7 +13,7 @@ from antsim.cli import main
 from antsim.plan.planfile import load_plan
 from controller.errors import InputError
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 SOURCE = REPO / "scenarios"
 
 

@@ -28,7 +28,7 @@ import pytest
 
 from antsim.cli import main
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 DATA = REPO / "tests" / "data" / "bad_inputs"
 TABLE = tomllib.loads((DATA / "expectations.toml").read_text(encoding="utf-8"))
 CASES = {c["file"]: c for c in TABLE["case"]}

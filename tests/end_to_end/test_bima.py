@@ -23,7 +23,7 @@ from controller.pointing.bima import BIMA_TERMS, WRIGHT_TERMS, tilt_collimation_
 from controller.pointing.model import NAMED_MODELS, PointingModel
 from controller.units import ARCSEC_PER_RAD
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 SCENARIO = REPO / "scenarios" / "wright1992_bima_ant5.toml"
 
 

@@ -30,7 +30,7 @@ from antsim.studies.crane1981 import (
 from controller.pointing.crane import CANDIDATES, CRANE_NAMES
 from controller.program.recordings import read_recordings
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 
 
 def _scenario(band: int) -> Path:

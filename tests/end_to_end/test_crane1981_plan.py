@@ -18,7 +18,7 @@ from controller.errors import InputError
 from controller.pointing.crane import CRANE_NAMES, crane_terms
 from controller.pointing.terms import evaluate_basis
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 
 
 def _scenario(band: int) -> Path:

@@ -19,8 +19,8 @@ from pathlib import Path
 import pytest
 
 from antsim.cli import main
-from tests.test_figures import assert_sane_png
-from tests.test_report import _embedded
+from tests.antsim.figures.test_figures import assert_sane_png
+from tests.antsim.run.test_report_page import _embedded
 
 CHAPTERS = ("1. A cold start", "2. The first campaign", "3. The fit", "4. Closing the loop",
             "5. A hidden effect")
@@ -101,7 +101,7 @@ def test_the_readme_quotes_chapter_5(demo):
     """docs/diagnose.md quotes chapter 5's finding: the words and numbers the demo printed."""
     _, stdout, numbers, _ = demo
     best = numbers["diagnose"]["findings"][0]
-    readme = " ".join((Path(__file__).resolve().parents[1] / "docs" / "diagnose.md").read_text(
+    readme = " ".join((Path(__file__).resolve().parents[2] / "docs" / "diagnose.md").read_text(
         encoding="utf-8").split())
     quote = (f"antsim diagnose names the effect: {best['effect']} (terms "
              f"{', '.join(best['terms'])}). [...] Where (the size of the effect it fitted, and "

@@ -27,10 +27,15 @@ from antsim.diagnose.modelit import residuals_before_after, write_outputs
 from antsim.diagnose.report import FINDINGS_HEADER, RMS_HEADER
 from antsim.figures.charts import histogram_edges, spread_arcsec
 from controller.pointing.modelio import load_model
-from tests.test_figures import assert_sane_png
-from tests.test_report import _embedded, assert_renders_in_a_browser, needs_chromium, read_page
+from tests.antsim.figures.test_figures import assert_sane_png
+from tests.antsim.run.test_report_page import (
+    _embedded,
+    assert_renders_in_a_browser,
+    needs_chromium,
+    read_page,
+)
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 MMT = REPO / "examples" / "mmt_20210821_k_and_e.dat"
 PLOTS = ["diagnose_residuals.png", "diagnose_histograms.png", "diagnose_quiver.png"]
 

@@ -32,7 +32,7 @@ from controller.pointing.model import NAMED_MODELS, PointingModel
 from controller.pointing.terms import get_term
 from controller.units import ARCSEC_PER_RAD, RAD_PER_ARCSEC
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 SCENARIOS = {band: REPO / "scenarios" / f"fomalont1973_{band}.toml" for band in ("x", "s")}
 
 

@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 from antsim.cli import main
 from controller.errors import InputError
 
-DATA = Path(__file__).resolve().parent / "data" / "bad_inputs"
+DATA = Path(__file__).resolve().parents[1] / "data" / "bad_inputs"
 HEAVY = "ANTSIM_FUZZ_EXAMPLES" in os.environ
 FUZZ_EXAMPLES = int(os.environ.get("ANTSIM_FUZZ_EXAMPLES", "30"))
 FUZZ = settings(max_examples=FUZZ_EXAMPLES, deadline=None, derandomize=not HEAVY,

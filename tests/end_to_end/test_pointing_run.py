@@ -22,7 +22,7 @@ from controller.pointing.thermal import PROXY_TERMS
 from controller.pointing.tpoint import TPointModel, write_mod
 from controller.pointing.vocabulary import in_tpoint_terms
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 GHIGO = ROOT / "scenarios" / "ghigo1990.toml"
 #: the page that quotes this campaign (the README's long sections moved there)
 RESULTS_MD = (ROOT / "docs" / "results.md").read_text(encoding="utf-8")

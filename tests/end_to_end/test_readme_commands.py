@@ -26,7 +26,7 @@ start's outputs are not, fails here. What differs from typing them, and why:
 It takes minutes on two shared cores (the demo, three 24-hour campaigns, diagnose's baseline,
 the reduced plan, blindtest): more than the suite's budget for it, so it is not in the
 default suite: ``.ci/run`` runs it as its own step
-(``ANTSIM_README_COMMANDS=1 python3 -m pytest -q tests/test_readme_commands.py``).
+(``ANTSIM_README_COMMANDS=1 python3 -m pytest -q tests/end_to_end/test_readme_commands.py``).
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ from pathlib import Path
 
 import pytest
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 README = (REPO / "README.md").read_text(encoding="utf-8")
 
 TEST_COMMAND = 'python3 -m pip install -e ".[test]" && python3 -m pytest -q'
@@ -62,7 +62,7 @@ PLACE = re.compile(r"The examples below run in this order in (the clone|an empty
 needs_flag = pytest.mark.skipif(
     os.environ.get("ANTSIM_README_COMMANDS") != "1",
     reason="minutes: CI's own step (ANTSIM_README_COMMANDS=1 python3 -m pytest -q "
-           "tests/test_readme_commands.py)")
+           "tests/end_to_end/test_readme_commands.py)")
 
 
 def readme_commands(text: str = README) -> list[str]:
@@ -100,7 +100,8 @@ def test_the_quick_start_test_command_is_what_ci_runs():
     assert TEST_COMMAND in readme_commands()
     assert TEST_COMMAND in _ci_run_lines(), \
         f".ci/run does not run the README's test command {TEST_COMMAND!r}"
-    readme_step = "ANTSIM_README_COMMANDS=1 python3 -m pytest -q tests/test_readme_commands.py"
+    readme_step = ("ANTSIM_README_COMMANDS=1 python3 -m pytest -q "
+                   "tests/end_to_end/test_readme_commands.py")
     assert readme_step in _ci_run_lines()  # this module's own step
 
 

@@ -18,7 +18,7 @@ from antsim.run.outputs import run_fits
 from antsim.scenario import load_scenario
 from antsim.simulate.runner import simulate
 
-GHIGO = Path(__file__).resolve().parents[1] / "scenarios" / "ghigo1990.toml"
+GHIGO = Path(__file__).resolve().parents[2] / "scenarios" / "ghigo1990.toml"
 SEEDS = range(1, 13)
 
 

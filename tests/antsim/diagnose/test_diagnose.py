@@ -27,7 +27,7 @@ from antsim.world.effects import EFFECTS
 from antsim.world.effects.harmonics import HARMONIC_EFFECTS, AzimuthTrack2A
 from controller.units import RAD_PER_ARCSEC
 
-REAL = Path(__file__).resolve().parents[1] / "examples"
+REAL = Path(__file__).resolve().parents[3] / "examples"
 FINDING_KEYS = {"effect", "terms", "explanation", "where", "params", "significance",
                 "sky_rms_before_arcsec", "sky_rms_after_arcsec"}
 
@@ -619,7 +619,7 @@ def test_auxtel_stays_parsimonious_and_reports_the_degeneracy():
     kept = [f for f in d.findings if f.step.heldout is not None]
     assert all(f.step.separation.r <= 0.95 for f in kept)
     # docs/diagnose.md quotes the findings as the command prints them
-    readme = (Path(__file__).resolve().parents[1] / "docs" / "diagnose.md").read_text(
+    readme = (Path(__file__).resolve().parents[3] / "docs" / "diagnose.md").read_text(
         encoding="utf-8")
     headlines = [line for line in text.splitlines() if line[:3] in ("1. ", "2. ", "3. ", "4. ")]
     assert len(headlines) == len(d.findings)
@@ -669,7 +669,7 @@ def test_mmt_needs_at_most_a_small_addition():
 
 def _short_run(tmp_path: Path, scenario: str) -> tuple[Path, Path]:
     """A 3-hour run of one of the repository's scenarios: (scenario file, recordings)."""
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[3]
     text = re.sub(r"(?m)^duration_h = [0-9.]+$", "duration_h = 3.0",
                   (root / "scenarios" / scenario).read_text())
     path = tmp_path / scenario
@@ -715,7 +715,7 @@ def test_a_failed_quiet_run_process_falls_back_to_this_one(tmp_path, monkeypatch
     from antsim.diagnose.fastsim import shared_schedule_columns
     from antsim.scenario import load_scenario
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[3]
     path = tmp_path / "two_hours.toml"
     path.write_text((root / "scenarios" / "ghigo1990.toml").read_text()
                     .replace("duration_h = 24.0", "duration_h = 2.0"))
@@ -747,7 +747,7 @@ def test_shared_schedule_baseline_is_the_full_simulation(tmp_path):
     from antsim.scenario import load_scenario
     from antsim.simulate.runner import simulate
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[3]
     path = tmp_path / "four_hours.toml"
     path.write_text((root / "scenarios" / "ghigo1990.toml").read_text()
                     .replace("duration_h = 24.0", "duration_h = 4.0"))
@@ -782,7 +782,7 @@ def test_offset_scale_follows_the_width_the_reduction_assumed():
     from antsim.diagnose.baseline import offset_scale
     from antsim.scenario import load_scenario
 
-    scenario = load_scenario(Path(__file__).resolve().parents[1] / "scenarios" / "ghigo1990.toml")
+    scenario = load_scenario(Path(__file__).resolve().parents[3] / "scenarios" / "ghigo1990.toml")
     names = np.array(["3C84", "Cassiopeia A", "W31"] * 4)
     n = names.size
     width = np.array([11.0, math.hypot(11.0, 3.46), math.hypot(11.0, 4.0)] * 4)

@@ -31,7 +31,12 @@ from antsim.simulate.vectorized import (
 from antsim.world.effects import PointingState
 from antsim.world.effects.thermal import OUProcess
 from controller.errors import InputError
-from tests.test_report import _embedded, assert_renders_in_a_browser, needs_chromium, read_page
+from tests.antsim.run.test_report_page import (
+    _embedded,
+    assert_renders_in_a_browser,
+    needs_chromium,
+    read_page,
+)
 
 PLAN = """name = "short"
 scenario = "{scenario}"
@@ -332,7 +337,7 @@ def test_a_failing_quiet_run_process_is_an_error_not_a_hang(short_engine):
 
 def test_members_that_cannot_follow_the_quiet_run_are_an_error(short_engine, monkeypatch):
     """Whatever stops the members mid-stream becomes the RuntimeError on which the baseline
-    falls back to running both in this process (tests/test_diagnose.py)."""
+    falls back to running both in this process (tests/antsim/diagnose/test_diagnose.py)."""
     from antsim.simulate import vectorized
     from antsim.simulate.streaming import ScheduleStream, stream_members
 

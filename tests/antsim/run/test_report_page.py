@@ -31,9 +31,9 @@ from antsim.figures.html import (
     software_versions,
     write_report,
 )
-from tests.test_figures import assert_sane_png, png_stats
+from tests.antsim.figures.test_figures import assert_sane_png, png_stats
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[3]
 GHIGO = REPO / "scenarios" / "ghigo1990.toml"
 QUIET = REPO / "tests" / "data" / "scenarios" / "quiet.toml"
 IMG = re.compile(r'<img src="data:image/png;base64,([A-Za-z0-9+/=]+)"[^>]*data-file="([^"]+)"')

@@ -222,7 +222,7 @@ def test_a_model_with_thermal_terms_is_refused_as_the_controller_model(
 def test_the_server_serves_the_structure_temperatures(short_sensors):
     """?antenna counts the sensors, ?structure-temperatures reads them (one inform each),
     and the structure.NAME sensors hold that reading."""
-    from tests.test_serve import LineClient
+    from tests.antsim.serve.test_serve import LineClient
 
     with ServerProcess(short_sensors) as srv:
         client = LineClient(srv.port)
@@ -263,7 +263,7 @@ def test_diagnose_names_the_thermal_effect_in_the_sensors_terms(sunny_day, tmp_p
     # noise on the same scans
     assert s["sky_rms_after_arcsec"] < 0.95 * s["sky_rms_before_arcsec"]
     assert s["cv_sky_rms_after_arcsec"] < 0.95 * s["cv_sky_rms_before_arcsec"]
-    readme = " ".join((Path(__file__).resolve().parents[1] / "docs" / "results.md").read_text(
+    readme = " ".join((Path(__file__).resolve().parents[3] / "docs" / "results.md").read_text(
         encoding="utf-8").split())
     assert (f"Sky RMS {s['sky_rms_before_arcsec']:.1f}\" -> {s['sky_rms_after_arcsec']:.1f}\" "
             f"in sample, {s['cv_sky_rms_before_arcsec']:.1f}\" -> "

@@ -48,7 +48,7 @@ POSITION_TOLERANCE_ARCSEC = 0.1
 REGRESSION_TOLERANCE_ARCSEC = 0.001
 #: the Sun feeds a thermal model and day/night splits only (brief: about an arcsecond)
 SUN_TOLERANCE_ARCSEC = 1.0
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[3]
 
 
 # --------------------------------------------------------------------------- helpers

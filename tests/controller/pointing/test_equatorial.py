@@ -4,7 +4,7 @@ Each scenario (the memo's three runs of 72, 96 and 72 hours) is run once through
 line (``antsim run ... --no-report``, seed 3, 2-3 s each) and checked against its own
 truth.json: every injected term (Table 4) within 3 sigma, the harmonic gain curve (Table 5)
 within 3 sigma, the 10500 MHz tipping opacity within 10%. The memo's own figures are compared
-in tests/test_crane1981.py.
+in tests/end_to_end/test_crane1981.py.
 
 Which sigma: TPOINT's (coefficient sigma scaled by the Sky RMS). Measured at seed 3: the
 largest pull 1.9 (C2 at 4990 MHz); the noise-free closure test below shows that no bias of
@@ -35,7 +35,7 @@ from controller.pointing.model import PointingModel
 from controller.pointing.terms import TermError
 from controller.units import ARCSEC_PER_RAD
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[3]
 FREQUENCIES = (3245, 4990, 10500)
 LAT = 38.437611  # the 140-ft (scenarios: SLALIB GBVA140)
 

@@ -27,7 +27,7 @@ from controller.pointing.terms import KATPOINT_EQUIVALENTS, TermError
 from controller.pointing.tpoint import read_tpoint
 from controller.units import ARCSEC_PER_RAD
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[3]
 DATA = REPO / "tests" / "data" / "tpoint"
 #: the real data files that ship with antsim (examples/README.md: sources and licences)
 REAL = REPO / "examples"

@@ -181,7 +181,7 @@ def test_scalar_and_vectorized_paths_agree():
 # the evidence: TPOINT's own FAUTO fit of the AuxTel file (examples/README.md), 22 free terms
 # (TX10, TPOINT's TX variant, taken as TX), arcsec; sigma where the README gives it
 # ---------------------------------------------------------------------------------------------
-REAL = Path(__file__).resolve().parents[1] / "examples"
+REAL = Path(__file__).resolve().parents[3] / "examples"
 TPOINT_AUXTEL = {
     "IA": (-269.50, 2.568), "NPAE": (-50.97, 3.614), "AN": (44.26, 1.130), "AW": (69.89, 1.428),
     "TF": (491.27, 131.179), "TX": (-126.69, 50.740), "HESE": (-223.21, 17.8),

@@ -3,7 +3,7 @@ whatever their fields, the rotator column reaching the terms that read it, and t
 that name the real problem (no caption, two mounts, an observation given twice).
 
 (The older tests of the module, the real files' parsing and the round trips, are in
-tests/test_tpoint.py.)"""
+tests/controller/pointing/test_tpoint_files.py.)"""
 
 from __future__ import annotations
 

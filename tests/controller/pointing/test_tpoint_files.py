@@ -34,7 +34,7 @@ from controller.pointing.tpoint import (
     write_tpoint,
 )
 
-HERE = Path(__file__).resolve().parent
+HERE = Path(__file__).resolve().parents[2]  # tests/
 DATA = HERE / "data" / "tpoint"
 REAL = HERE.parent / "examples"
 

@@ -21,7 +21,7 @@ from controller.pointing.model import PointingModel
 from controller.program.recordings import COLUMN_NAMES, read_pointing_data, read_recordings
 from controller.scans.config import SkyConfig
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[3]
 GHIGO = ROOT / "scenarios" / "ghigo1990.toml"
 
 

@@ -2,7 +2,7 @@
 dropped, output directories locked and never overwritten, summaries naming only what was
 written, and docs/inputs.md's column tables the readers' own.
 
-(Bad input of every kind, one line and exit 2, is tests/test_bad_inputs.py.)
+(Bad input of every kind, one line and exit 2, is tests/end_to_end/test_bad_inputs.py.)
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from astropy.table import Table
 from antsim.cli import main
 from controller.errors import InputError
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[3]
 DATA = REPO / "tests" / "data" / "bad_inputs"
 ECSV = DATA / "ecsv" / "_base.ecsv"
 CSV = DATA / "csv" / "_base.csv"

@@ -4,7 +4,7 @@ The 45-ft's gain against elevation (Ghigo 1990, section V: flat above 30 deg, 95
 90% at 10 deg) is fitted from the amplitudes of Cassiopeia A and Cygnus A in the 1990
 scenario's run (seed 1, the scenario's own), after correcting them for extinction with the
 opacity measured from the scans' own off-source powers. The 140-ft's harmonic gain curve and
-tipping opacity are checked on its scenarios in tests/test_equatorial.py.
+tipping opacity are checked on its scenarios in tests/controller/pointing/test_equatorial.py.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from controller.scans.gaincurve import (
 )
 from controller.scans.tipping import airmass, fit_opacity
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[3]
 
 
 # --------------------------------------------------------------------------- unit level

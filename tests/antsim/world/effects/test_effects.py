@@ -256,9 +256,9 @@ def test_effect_runs_in_a_scenario_and_reports_its_truth(short_ghigo_text, write
 # =============================================================================================
 # physical checks in the noise-free world
 #: probe tolerance: beam centres from noise-free Gaussian powers are exact to ~1e-4" (see
-#: tests/test_world.py); what changes during a scan (source rates, over the ~6 s between the
-#: three points of an axis) shifts a centre by up to ~0.02", hence 0.03" for time-dependent
-#: effects and 0.01" for static ones
+#: tests/antsim/world/test_world.py); what changes during a scan (source rates, over the ~6 s
+#: between the three points of an axis) shifts a centre by up to ~0.02", hence 0.03" for
+#: time-dependent effects and 0.01" for static ones
 STATIC_ARCSEC = 0.01
 MOVING_ARCSEC = 0.03
 
@@ -450,7 +450,8 @@ def _linear_tilt_model(tilt_arcsec: float, tilt_az_deg: float, collimation_arcse
     """Small-angle equivalent of a tilt towards azimuth phi and a collimation c: to first
     order the encoders read dE = t cos(A - phi), dA = t tan E sin(A - phi) - c sec E
     (indicated - true), which in TPOINT's terms (docs/physics.md's signature table; signs as in
-    tests/test_world.py: TPOINT's AN > 0 is the pole north of the zenith, AW > 0 west of it)
+    tests/antsim/world/test_world.py: TPOINT's AN > 0 is the pole north of the zenith, AW > 0 west
+    of it)
     is AN = t cos phi, AW = -t sin phi, CA = -c."""
     phi = math.radians(tilt_az_deg)
     return PointingModel(["AN", "AW", "CA"], [tilt_arcsec * math.cos(phi),
