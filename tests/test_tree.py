@@ -83,8 +83,9 @@ NOT_IMPORTED: dict[str, str] = {
         "the catalogue's tests in tests/antsim/world/effects/test_effects.py"),
     "antsim.world.effects.tracking": _SPLIT.format(
         "the catalogue's tests in tests/antsim/world/effects/test_effects.py"),
-    "controller.astro.earth": "its UTC labels and IERS values are checked through the "
-                              "ephemeris against astropy (tests/controller/astro/test_astro.py)",
+    "controller.astro.earth": "its UTC instants and IERS values are checked through the "
+                              "ephemeris against astropy "
+                              "(tests/controller/astro/test_ephemeris.py)",
     "controller.program.config": _SPLIT.format(
         "the campaign's tests in tests/controller/program/test_campaign.py"),
     "controller.program.optical": _SPLIT.format(

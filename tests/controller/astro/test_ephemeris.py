@@ -1,5 +1,6 @@
-"""Tests of controller.astro: the fast ephemeris against exact per-point astropy, refraction,
-the Sun, sunrise/sunset, input checks and offline operation.
+"""The fast ephemeris (controller.astro.ephemeris) against exact per-point astropy: sources
+and the Sun, rates, conventions, input checks and offline operation (refraction, the Sun's
+rising and setting and the sources' coordinates have files of their own).
 
 Reference positions are astropy's own transforms, computed point by point (vectorized over
 times, but each time its own frame) from the source's catalogue frame:
@@ -35,9 +36,8 @@ from hypothesis import strategies as st
 from controller.astro import ephemeris as astro
 from controller.astro.ephemeris import Ephemeris
 from controller.astro.refraction import refraction_rad
-from controller.astro.site import GREEN_BANK_45FT, Site, Weather, standard_pressure_hpa
-from controller.astro.sources import GHIGO1990_SOURCES, FixedSource, dec_dms_to_deg, ra_hms_to_deg
-from controller.astro.sun import sunrise_times_s, sunset_times_s
+from controller.astro.site import GREEN_BANK_45FT, Site, Weather
+from controller.astro.sources import GHIGO1990_SOURCES, FixedSource
 
 ARCSEC_PER_RAD = 180.0 / math.pi * 3600.0
 DAY_S = 86400.0
@@ -272,31 +272,6 @@ def test_sun_matches_astropy_get_body(day_1990):
     assert error.max() < 0.005  # regression guard: measured 0.002" (light time is 0.008")
 
 
-def test_sunset_and_sunrise_1990(day_1990):
-    sets = sunset_times_s(day_1990)
-    rises = sunrise_times_s(day_1990)
-    assert sets.shape == (1,) and rises.shape == (1,)
-    # Green Bank, 8 Feb 1990: sunrise about 07:18 EST (12:18 UT), sunset about 17:50 EST
-    assert 12.0 < rises[0] / 3600.0 < 12.6
-    assert 22.6 < sets[0] / 3600.0 < 23.1
-    # at each event the exact (astropy) Sun is at -0.833 deg; the Sun climbs ~10" per second
-    times = day_1990.time(np.concatenate([sets, rises]))
-    location = day_1990.site.earth_location()
-    sun = get_body("sun", times, location).transform_to(
-        AltAz(obstime=times, location=location, pressure=0 * u.hPa)
-    )
-    assert np.abs(sun.alt.deg + 0.833).max() * 3600.0 < 1.0
-    # the geometric centre rises later and sets earlier than the almanac event
-    assert sunrise_times_s(day_1990, horizon_deg=0.0)[0] > rises[0] + 120.0
-    assert sunset_times_s(day_1990, horizon_deg=0.0)[0] < sets[0] - 120.0
-
-
-def test_month_has_one_sunset_per_day(month_1990):
-    sets = sunset_times_s(month_1990)
-    assert sets.size == 30
-    assert np.allclose(np.diff(sets), DAY_S, atol=120.0)  # day length changes ~1 min/day
-
-
 # --------------------------------------------------------------------------- conventions
 def test_azimuth_is_north_based_and_half_open(day_1990):
     index = day_1990.index("Orion A")  # transits south of the zenith at Green Bank
@@ -342,87 +317,11 @@ def test_sun_only_ephemeris():
         ephemeris.altaz_rad(0, 0.0)
 
 
-def test_sexagesimal_parsing():
-    assert ra_hms_to_deg("03h16m29.57s") == pytest.approx(49.1232083333, abs=1e-9)
-    assert ra_hms_to_deg("03:16:29.57") == ra_hms_to_deg("03 16 29.57")
-    assert dec_dms_to_deg("-05d25m16s") == pytest.approx(-5.4211111111, abs=1e-9)
-    assert dec_dms_to_deg("-00d30m00s") == -0.5
-    # the 1990 report's Table 1: 3C84 at 03:16:29.6 +41:19:52 (B1950)
-    assert GHIGO1990_SOURCES[0].ra_deg == ra_hms_to_deg("03:16:29.6")
-    assert GHIGO1990_SOURCES[0].dec_deg == dec_dms_to_deg("+41:19:52")
-    for bad in ("3h16", "25h00m00s", "-01h00m00s", "12h61m00s"):
-        with pytest.raises(ValueError, match="right ascension"):
-            ra_hms_to_deg(bad)
-    with pytest.raises(ValueError, match="declination"):
-        dec_dms_to_deg("+91d00m00s")
-
-
-# --------------------------------------------------------------------------- refraction
+# --------------------------------------------------------------------------- bad input
+#: surface weather for the refraction cases (10 C, 920 hPa, 50 % humidity)
 RADIO_WEATHER = Weather(10.0, 920.0, 0.5)
 
 
-def astropy_refraction_rad(el_deg: np.ndarray, weather: Weather, obswl) -> np.ndarray:
-    """Refraction by astropy: the same direction in a vacuum and a refracting AltAz frame."""
-    location = GREEN_BANK_45FT.earth_location()
-    when = astro._utc_instant(EPOCH_1990)
-    vacuum = SkyCoord(az=np.full_like(el_deg, 135.0) * u.deg, alt=el_deg * u.deg,
-                      frame=AltAz(obstime=when, location=location, pressure=0 * u.hPa))
-    observed = vacuum.transform_to(AltAz(
-        obstime=when, location=location, pressure=weather.pressure_hpa * u.hPa,
-        temperature=weather.temperature_c * u.deg_C,
-        relative_humidity=weather.relative_humidity, obswl=obswl,
-    ))
-    return observed.alt.rad - vacuum.alt.rad
-
-
-@pytest.mark.parametrize(("frequency_ghz", "obswl"), [
-    (8.4, (299792.458 / 8.4) * u.um),  # X-band: radio formula
-    (None, 3.0 * u.cm),  # None means radio; any radio wavelength gives the same answer
-    (599584.916, 0.5 * u.um),  # green light: optical formula
-])
-def test_refraction_matches_astropy(frequency_ghz, obswl):
-    el_deg = np.array([5.0, 10.0, 20.0, 30.0, 45.0, 60.0, 80.0, 89.0])
-    ours = refraction_rad(np.radians(el_deg), RADIO_WEATHER, frequency_ghz=frequency_ghz)
-    ref = astropy_refraction_rad(el_deg, RADIO_WEATHER, obswl)
-    # same ERFA model on both sides; 1 mas covers the frame round trip through ICRS
-    assert np.abs(ours - ref).max() * ARCSEC_PER_RAD < 0.001
-
-
-def test_refraction_matches_design_figures():
-    """docs/physics.md: 5.3' at 10 deg, 2.6' at 20 deg, 0.97' at 45 deg (10 C, 50 % RH), figures of
-    the VLBI Field System model. Pressure assumed: standard atmosphere at 800 m (921 hPa).
-    Tolerance 2 %: a different model and an unstated pressure (2 % is 18 hPa)."""
-    pressure = standard_pressure_hpa(GREEN_BANK_45FT.height_m)
-    assert pressure == pytest.approx(921.0, abs=1.0)
-    weather = Weather(10.0, pressure, 0.5)
-    arcmin = refraction_rad(np.radians([10.0, 20.0, 45.0]), weather, frequency_ghz=8.4)
-    arcmin = arcmin * ARCSEC_PER_RAD / 60.0
-    assert arcmin == pytest.approx([5.3, 2.6, 0.97], rel=0.02)
-
-
-def test_refraction_edges():
-    assert refraction_rad(0.5, Weather(10.0, 0.0, 0.5)) == 0.0  # no air, no refraction
-    low = refraction_rad(np.radians([-5.0, 0.0, 2.0, 2.86]), RADIO_WEATHER)
-    # below ERFA's limit (sin el = 0.05, 2.87 deg) the bending is held near its limit value
-    # (about 11.5'), instead of growing without bound towards the horizon
-    assert np.ptp(low) / low.mean() < 0.02
-    assert 11.0 < low.mean() * ARCSEC_PER_RAD / 60.0 < 12.0
-    assert np.ndim(refraction_rad(0.3, RADIO_WEATHER)) == 0
-
-
-@settings(max_examples=50, deadline=None)
-@given(el_deg=st.floats(5.0, 88.0), temperature_c=st.floats(-30.0, 40.0),
-       pressure_hpa=st.floats(500.0, 1050.0), humidity=st.floats(0.0, 1.0))
-def test_refraction_is_positive_and_falls_with_elevation(el_deg, temperature_c, pressure_hpa,
-                                                         humidity):
-    """Over 5..89 deg: positive, below 1 deg, decreasing. (At exactly 90 deg it is 0; the
-    A tan z + B tan^3 z model peaks near 3.4 deg in thin hot air, below its useful range.)"""
-    weather = Weather(temperature_c, pressure_hpa, humidity)
-    here, higher = refraction_rad(np.radians([el_deg, el_deg + 1.0]), weather)
-    assert 0.0 < higher < here < math.radians(1.0)
-
-
-# --------------------------------------------------------------------------- bad input
 @pytest.mark.parametrize(("build", "message"), [
     (lambda: FixedSource("x", 10.0, 10.0, "galactic"), "frame 'galactic' is not supported"),
     (lambda: FixedSource("x", 400.0, 10.0), "ra_deg = 400.0 is outside 0..360"),
