@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 from controller.pointing.model import NAMED_MODELS, PointingModel
 from controller.units import ARCSEC_PER_RAD, RAD_PER_ARCSEC
+from tests.controller.pointing.test_fitting import GHIGO_TABLE3_ARCSEC, ghigo_truth, synthetic
 
 # A grid over the whole sky the terms are used on: every 15 deg of azimuth, elevation 5-85.
 _AZ, _EL = np.meshgrid(np.radians(np.arange(0.0, 360.0, 15.0)),
@@ -97,3 +98,15 @@ def test_named_models_resolve():
         model = PointingModel(name)
         assert model.names == terms
         assert model.name == name
+
+
+def test_model_fit_method_uses_quantities():
+    from astropy import units as u
+
+    rng = np.random.default_rng(6)
+    data = synthetic(ghigo_truth(), rng, 100)
+    model = PointingModel("ghigo10")
+    result = model.fit(data.az_rad * u.rad, data.el_rad * u.rad, data.xel_arcsec * u.arcsec,
+                       data.el_arcsec * u.arcsec, robust=False)
+    np.testing.assert_allclose(result.model.values_arcsec, GHIGO_TABLE3_ARCSEC, atol=1e-6)
+    assert not model.values_arcsec.any()  # the model itself is unchanged
