@@ -1,4 +1,5 @@
-"""Beam, receiver and atmosphere: the power of an integration and the statistics of its noise.
+"""The receiver (antsim.world.receiver) through the world: the power of an integration (beam,
+receiver and atmosphere together) and the statistics of its noise.
 
 Expected power of a sample (kelvin), channel c, source at elevation E, beam offset u:
 
@@ -32,7 +33,6 @@ import simpy
 from scipy import stats
 
 from antsim.scenario import load_scenario
-from antsim.world.atmosphere import AtmosphereConfig
 from antsim.world.world import World
 
 FOUR_LN2 = 4.0 * math.log(2.0)
@@ -335,12 +335,3 @@ def test_xl_noise_is_above_xr(repeated):
     assert np.std(means[:, 1]) > np.std(means[:, 0])
 
 
-def test_sky_emission_rises_with_airmass():
-    from antsim.world.atmosphere import Atmosphere
-
-    atm = Atmosphere(AtmosphereConfig(zenith_opacity=0.01, temperature_k=265.0))
-    el = np.radians([90.0, 30.0, 10.0])
-    emission = atm.emission_k(el)
-    # T_atm (1 - exp(-tau0 / sin E)): 2.64 K at the zenith, 5.25 K at 30 deg, 14.8 K at 10
-    assert emission == pytest.approx(265.0 * (1 - np.exp(-0.01 / np.sin(el))), rel=1e-12)
-    assert np.all(np.diff(emission) > 0)
