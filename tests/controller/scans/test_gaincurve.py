@@ -5,7 +5,7 @@ The 45-ft's gain against elevation (Ghigo 1990, section V: flat above 30 deg, 95
 90% at 10 deg) is fitted from the amplitudes of Cassiopeia A and Cygnus A in the 1990
 scenario's run (seed 1, the scenario's own), after correcting them for extinction with the
 opacity measured from the scans' own off-source powers. The 140-ft's harmonic gain curve and
-tipping opacity are checked on its scenarios in tests/controller/pointing/test_equatorial.py.
+tipping opacity are checked on its scenarios in tests/end_to_end/test_crane1981_runs.py.
 """
 
 from __future__ import annotations
