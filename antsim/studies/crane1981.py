@@ -2,8 +2,8 @@
 
 The memo's Table 4 (pointing coefficients C1..C11 in arcmin with standard errors, number of
 points and rms per point, per band, all data and night) and Table 5 (gain curves in K/Jy) as
-data, and what ``benchmarks/crane1981.py`` and ``tests/test_crane1981.py`` compare with the
-simulated runs of ``scenarios/crane1981_140ft_*.toml``:
+data, and what ``benchmarks/crane1981.py`` and ``tests/end_to_end/test_crane1981.py`` compare
+with the simulated runs of ``scenarios/crane1981_140ft_*.toml``:
 
 * :func:`sigma_pattern`: the standard errors of C1..C11 that a run's schedule and noise give,
   per axis weighted as Crane's rms per axis implies (weighted least squares with the run's own

@@ -16,8 +16,8 @@ transforms (milliseconds each):
    plain numpy, and turned into azimuth/elevation by exact spherical trigonometry.
 
 Measured against per-point astropy ``AltAz(pressure=0)`` the error is a few micro-arcseconds
-(``benchmarks/ephemeris.py``, ``tests/test_astro.py``); one ``altaz_rad`` call costs tens of
-microseconds.
+(``benchmarks/ephemeris.py``, ``tests/controller/astro/test_ephemeris.py``); one ``altaz_rad``
+call costs tens of microseconds.
 
 Conventions: angles in radians unless the name says otherwise; azimuth from North through
 East (N = 0, E = pi/2) in [0, 2 pi); hour angle positive West; times are float seconds since the
