@@ -16,13 +16,14 @@ from astropy.utils import iers
 
 from . import offline as _offline
 
-__all__ = ["UtcLabeller"]
+__all__ = ["UtcLabeller", "polar_motion_rad", "ut1_two_part", "utc_instant"]
 
 #: astropy's fallback polar motion (50-year mean) for dates outside the IERS tables (arcsec)
 _DEFAULT_POLAR_MOTION_ARCSEC = (0.035, 0.29)
 
 
-def _utc_instant(epoch_utc: Any) -> Time:
+def utc_instant(epoch_utc: Any) -> Time:
+    """``epoch_utc`` (a Time, or anything astropy reads as a UTC time) as a UTC ``Time``."""
     if isinstance(epoch_utc, Time):
         epoch = epoch_utc
     else:
@@ -38,7 +39,7 @@ def _utc_instant(epoch_utc: Any) -> Time:
     return epoch.utc
 
 
-def _ut1(times: Time) -> tuple[np.ndarray, np.ndarray]:
+def ut1_two_part(times: Time) -> tuple[np.ndarray, np.ndarray]:
     """UT1 as two-part Julian dates, exactly as astropy's transforms obtain it."""
     _offline.use_cached_eop_table()
     try:
@@ -49,7 +50,7 @@ def _ut1(times: Time) -> tuple[np.ndarray, np.ndarray]:
     return ut1.jd1, ut1.jd2
 
 
-def _polar_motion_rad(times: Time) -> tuple[np.ndarray, np.ndarray]:
+def polar_motion_rad(times: Time) -> tuple[np.ndarray, np.ndarray]:
     """Polar motion (xp, yp) in rad from the IERS tables, with astropy's fallback (the
     50-year mean) outside them, so positions match astropy's transforms."""
     _offline.use_cached_eop_table()

@@ -44,7 +44,7 @@ import erfa
 import numpy as np
 from astropy.time import TimeDelta
 
-from .earth import _polar_motion_rad, _ut1, _utc_instant
+from .earth import polar_motion_rad, ut1_two_part, utc_instant
 from .hermite import hermite_evaluate, hermite_table
 from .site import Site
 from .sources import FixedSource
@@ -180,7 +180,7 @@ class Ephemeris:
         self.site = site
         self.sources: tuple[FixedSource, ...] = sources
         self.names: tuple[str, ...] = names
-        self.epoch: Time = _utc_instant(epoch_utc)
+        self.epoch: Time = utc_instant(epoch_utc)
         self.duration_s = duration_s
         self.grid_step_s = grid_step_s
         self.margin_s = margin_s
@@ -212,8 +212,8 @@ class Ephemeris:
         the last body is the Sun."""
         site = self.site
         times = self.epoch + TimeDelta(grid_s, format="sec")
-        ut1 = _ut1(times)
-        xp, yp = _polar_motion_rad(times)
+        ut1 = ut1_two_part(times)
+        xp, yp = polar_motion_rad(times)
         epoch_tt = self.epoch.tt
         tt1 = np.full(grid_s.shape, epoch_tt.jd1)
         tt2 = epoch_tt.jd2 + grid_s / 86400.0  # TT runs in SI seconds, like campaign time
