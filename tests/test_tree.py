@@ -45,9 +45,6 @@ NOT_IMPORTED: dict[str, str] = {
     "antsim.commands.run": _COMMAND,
     "antsim.commands.scenarios": _COMMAND,
     "antsim.commands.serve": _COMMAND,
-    "antsim.fit": "the package of antsim.fit.fitfile, below",
-    "antsim.fit.fitfile": "antsim fit's work, run through antsim.cli.main and antsim.fit_model "
-                          "(tests/antsim/commands/test_fit.py, tests/antsim/api/test_fitting.py)",
     "antsim.commands.demo": _DEMO,
     "antsim.commands.demo.campaign": _DEMO,
     "antsim.commands.demo.closed_loop": _DEMO,

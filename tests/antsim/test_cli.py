@@ -141,3 +141,15 @@ def test_a_reader_that_left_ends_the_command_quietly(tmp_path):
         os.close(write_end)
     assert done.returncode == 141, done.stderr
     assert done.stderr == ""
+
+
+def test_the_command_line_starts_light():
+    """Importing the command line loads neither scipy, astropy.coordinates, matplotlib nor
+    simpy (each is large parts of a second): ``antsim --help`` and a misspelt option answer at
+    once, and each command imports what it needs when it runs."""
+    code = ("import sys, antsim.cli; print(sorted(m for m in sys.modules if m.split('.')[0] in "
+            "('scipy', 'matplotlib', 'simpy') or m.startswith('astropy.coordinates')))")
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+    done = subprocess.run([sys.executable, "-c", code], cwd=REPO, env=env, capture_output=True,
+                          text=True, check=True)
+    assert done.stdout.strip() == "[]"

@@ -229,7 +229,7 @@ def test_astropy_one_step_fk4_to_altaz_takes_obstime_from_the_altaz_frame():
     """Pins the astropy behaviour the module documents (issue #10456): the one-step transform
     equals FK4 with obstime = observation time, which differs from B1950 by > 0.1" for Cas A
     in 1990. If astropy changes this, revisit FixedSource.obstime's documentation."""
-    when = astro._utc_instant("1990-02-08T06:00:00")
+    when = astro.utc_instant("1990-02-08T06:00:00")
     frame = AltAz(obstime=when, location=GREEN_BANK_45FT.earth_location(), pressure=0 * u.hPa)
     cas = GHIGO1990_SOURCES[-1]
     b1950 = SkyCoord(cas.ra_deg * u.deg, cas.dec_deg * u.deg, frame=FK4(equinox="B1950"))

@@ -25,7 +25,7 @@ RADIO_WEATHER = Weather(10.0, 920.0, 0.5)
 def astropy_refraction_rad(el_deg: np.ndarray, weather: Weather, obswl) -> np.ndarray:
     """Refraction by astropy: the same direction in a vacuum and a refracting AltAz frame."""
     location = GREEN_BANK_45FT.earth_location()
-    when = astro._utc_instant(EPOCH_1990)
+    when = astro.utc_instant(EPOCH_1990)
     vacuum = SkyCoord(az=np.full_like(el_deg, 135.0) * u.deg, alt=el_deg * u.deg,
                       frame=AltAz(obstime=when, location=location, pressure=0 * u.hPa))
     observed = vacuum.transform_to(AltAz(

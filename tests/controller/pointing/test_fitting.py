@@ -164,6 +164,7 @@ def test_fit_command_runs_with_one_blas_thread(monkeypatch, capsys):
     times the time when the other core was busy (antsim.blas)."""
     from threadpoolctl import threadpool_info
 
+    import antsim.fit.fitfile as fitfile
     import controller.pointing.fitting as fitting_module
 
     def blas_threads() -> list[int]:
@@ -176,7 +177,7 @@ def test_fit_command_runs_with_one_blas_thread(monkeypatch, capsys):
         seen.append(blas_threads())
         return real_fit(*args, **kwargs)
 
-    monkeypatch.setattr(fitting_module, "fit_model", spy)
+    monkeypatch.setattr(fitfile, "fit_model", spy)
     before = blas_threads()
     status = cli_main(["fit", str(real_file("mmt_20210821_k_and_e.dat")), "--terms",
                        ",".join(MMT_TERMS), "--json"])

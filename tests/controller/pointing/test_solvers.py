@@ -122,18 +122,18 @@ def test_a_lad_block_of_unchanged_data_is_taken_from_the_fit_before(monkeypatch)
     y_el = y.copy()
     y_el[8000:] += 30.0 * np.sin(2 * data.az_rad)  # an elevation-only signal removed
     reference = solvers._lad(a, y_el, n_xel=8000)  # solved alone
-    _, blocks = solvers._lad_blocks(a, y, n_xel=8000)
+    _, blocks = solvers.lad_blocks(a, y, n_xel=8000)
     solved = []
     real = solvers._lad_dense
     monkeypatch.setattr(solvers, "_lad_dense", lambda *args: solved.append(args[1]) or real(*args))
-    again, _ = solvers._lad_blocks(a, y_el, n_xel=8000, prior=blocks)
+    again, _ = solvers.lad_blocks(a, y_el, n_xel=8000, prior=blocks)
     assert again.tobytes() == reference.tobytes()
     top = [y_block for y_block in solved if y_block.size == 8000]  # not its subsamples
     assert len(top) == 1 and np.array_equal(top[0], y_el[8000:])  # the elevation block
     solved.clear()
     y_both = y_el.copy()
     y_both[:8000] += 1.0  # both blocks' data changed: both solved
-    solvers._lad_blocks(a, y_both, n_xel=8000, prior=blocks)
+    solvers.lad_blocks(a, y_both, n_xel=8000, prior=blocks)
     assert len([y_block for y_block in solved if y_block.size == 8000]) == 2
 
 
