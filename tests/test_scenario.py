@@ -137,8 +137,8 @@ BAD = {
         [('effect = "tracking_jitter"', 'effect = "wind_gusts"')],
         "truth.effects[1].effect", "'wind_gusts'"),
     "bad effect parameter": (
-        [("gradient_tau_s = 5400.0", "gradient_tau_s = 10.0")],
-        "truth.effects[0].gradient_tau_s", "10.0"),
+        [("cloud_timescale_s = 1800.0", "cloud_timescale_s = 10.0")],
+        "truth.effects[0].cloud_timescale_s", "10.0"),
     "unknown effect parameter": (
         [("xel_rms_arcsec = 17.0", "xel_rms_arcsecs = 17.0")],
         "truth.effects[1].xel_rms_arcsecs", "17.0"),

@@ -153,7 +153,7 @@ def test_selection_adds_a_supported_term_and_nothing_else():
     """20"/K of dish left-right difference in data with the scatter of the 1990 run: TSDRL
     is added (F test, family of candidates, held-out check) and no term the data do not
     carry is (false alarm 0.5% per selection; fixed seed)."""
-    candidates = [n for n in SENSOR_TERMS if n not in ("TSYRL",)]
+    candidates = [n for n in SENSOR_TERMS if n not in ("TPYRL",)]
     chosen = select_terms(_selection_data(20.0, 3), W, candidates)
     assert chosen.accepted == ("TSDRL",) and chosen.terms == (*W, "TSDRL")
     assert chosen.n_family == len(candidates)

@@ -228,7 +228,7 @@ def test_truth_lists_terms_in_arcsec_and_effects(ghigo_path):
     assert truth["terms"]["W6"] == {"value_arcsec": pytest.approx(12.24 * 60.0, abs=1e-9)}
     assert truth["terms"]["W1"]["value_arcsec"] == pytest.approx(-1.88 * 60.0, abs=1e-9)
     assert [e["effect"] for e in truth["effects"]] == ["thermal", "tracking_jitter"]
-    assert truth["effects"][0]["params"]["gradient_tau_s"] == 5400.0
+    assert truth["effects"][0]["params"]["absorptivity"] == 0.25
 
 
 def test_simulated_antenna_is_a_protocol_antenna(quiet):

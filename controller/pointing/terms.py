@@ -642,7 +642,7 @@ def get_term(name: str) -> Term:
         raise TermError(
             f"unknown pointing term {name!r}: use a TPOINT name (IA IE CA NPAE AN AW TF TX "
             "ACEC ACES ECEC ECES), a harmonic such as HESA2 or HSCA2CE, W1..W10, P1..P22, "
-            "A1..A7, B1..B7, or a thermal term (TEDFB TSDRL TEYFB TSYRL TNPNS TWPEW, "
+            "A1..A7, B1..B7, or a thermal term (TEDFB TSDRL TEYFB TPYRL TNPNS TWPEW, "
             "proxies TESUN TEFACE TSSIDE TNSUN TWSUN TEAIR)"
         )
     return term

@@ -1,0 +1,68 @@
+"""The 1990 report's (Ghigo 1990) studies: refraction as W5, Table 2 over seeds.
+
+**Refraction.** The 45-ft's control program carried refraction in its pointing model: the
+report fits ``W5 cot E`` among the W's and calls it "refraction" (Table 3: 0.80' +- 0.05'),
+as Fomalont's 1973 solution held it at 1'.1 (memo I, comment 6). The simulated atmosphere
+refracts by ERFA's radio formula for the weather of the moment
+(:func:`controller.astro.refraction.refraction_rad`); what a fit of the report's ten terms
+makes of it is its least-squares projection on the terms over the scans the fit used
+(:func:`refraction_equivalent_arcsec`), and :func:`w5_of_atmosphere` the W5 part of that for
+a humidity (the report gives none).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from controller.astro.refraction import refraction_rad
+from controller.astro.site import Weather
+from controller.pointing.model import PointingModel
+from controller.units import ARCSEC_PER_RAD
+
+__all__ = ["refraction_arcsec", "refraction_equivalent_arcsec", "w5_of_atmosphere"]
+
+
+def _good(rows: Sequence[Mapping]) -> list[Mapping]:
+    return [r for r in rows if r["polarization"] == "AVG" and r["good"]]
+
+
+def refraction_arcsec(rows: Sequence[Mapping], frequency_ghz: float,
+                      relative_humidity: float | None = None) -> np.ndarray:
+    """The atmosphere's refraction (arcsec, elevation increase) at each row's elevation and
+    recorded weather (``relative_humidity`` instead of the recorded one when given)."""
+    out = []
+    for r in rows:
+        humidity = r["humidity"] if relative_humidity is None else relative_humidity
+        weather = Weather(float(r["air_temp_c"]), float(r["pressure_hpa"]), float(humidity))
+        out.append(float(refraction_rad(np.radians(float(r["el_deg"])), weather,
+                                        frequency_ghz=frequency_ghz)))
+    return np.array(out) * ARCSEC_PER_RAD
+
+
+def refraction_equivalent_arcsec(rows: Sequence[Mapping], terms: Sequence[str],
+                                 frequency_ghz: float,
+                                 relative_humidity: float | None = None) -> dict[str, float]:
+    """What a least-squares fit of ``terms`` to the good averaged rows makes of the
+    atmosphere's refraction alone (arcsec per term, indicated minus true: the control
+    program points at unrefracted positions, so the encoders read the refraction more)."""
+    good = _good(rows)
+    az = np.radians([float(r["az_deg"]) for r in good])
+    el = np.radians([float(r["el_deg"]) for r in good])
+    d_el = refraction_arcsec(good, frequency_ghz, relative_humidity)
+    model = PointingModel(list(terms))
+    basis_az, basis_el = model.design_matrix(az, el)
+    # the W's sign (indicated minus true) is minus TPOINT's basis; both axes of the fit
+    design = -np.vstack([basis_az * np.cos(el)[:, None], basis_el])
+    target = np.concatenate([np.zeros(el.size), d_el])
+    values, *_ = np.linalg.lstsq(design, target, rcond=None)
+    return dict(zip(model.names, (float(v) for v in values), strict=True))
+
+
+def w5_of_atmosphere(rows: Sequence[Mapping], frequency_ghz: float,
+                     relative_humidity: float | None = None) -> float:
+    """The W5 (arcmin) that the report's ten terms fitted to the refraction alone give."""
+    terms = [f"W{i}" for i in range(1, 11)]
+    return refraction_equivalent_arcsec(rows, terms, frequency_ghz, relative_humidity)["W5"] \
+        / 60.0
