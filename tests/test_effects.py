@@ -115,7 +115,7 @@ def test_the_pedestal_relaxes_after_sunset_with_its_time_constant(ghigo_path):
     grid = thermal.t_grid
     i0 = int(np.searchsorted(grid, t_set)) + 1
     tau = thermal.p["heat_capacity_j_m3k"] * thermal.p["pedestal_wall_m"] / thermal._h_plate
-    n = int(round(float(np.mean(tau[i0:i0 + 120])) / GRID_STEP_S))
+    n = round(float(np.mean(tau[i0:i0 + 120])) / GRID_STEP_S)
     start, later = thermal.pedestal_n_k[i0], thermal.pedestal_n_k[i0 + n]
     assert abs(start) > 1.0  # a real difference to decay from (K)
     assert later / start == pytest.approx(math.exp(-1.0), rel=0.02)
