@@ -21,7 +21,8 @@ from controller.astro.site import Weather
 from controller.pointing.model import PointingModel
 from controller.units import ARCSEC_PER_RAD
 
-__all__ = ["refraction_arcsec", "refraction_equivalent_arcsec", "w5_of_atmosphere"]
+__all__ = ["campaign_statistics", "equivalent_arcsec", "pattern_equivalent_arcsec",
+           "refraction_arcsec", "refraction_equivalent_arcsec", "w5_of_atmosphere"]
 
 
 def _good(rows: Sequence[Mapping]) -> list[Mapping]:
@@ -41,6 +42,23 @@ def refraction_arcsec(rows: Sequence[Mapping], frequency_ghz: float,
     return np.array(out) * ARCSEC_PER_RAD
 
 
+def equivalent_arcsec(rows: Sequence[Mapping], terms: Sequence[str], xel_arcsec: np.ndarray,
+                      el_arcsec: np.ndarray) -> dict[str, float]:
+    """What a least-squares fit of ``terms`` to the good averaged rows makes of errors
+    ``xel_arcsec`` (dA cos E) and ``el_arcsec`` (dE) at them (indicated minus true, one
+    value per good row): the terms' share of a systematic error."""
+    good = _good(rows)
+    az = np.radians([float(r["az_deg"]) for r in good])
+    el = np.radians([float(r["el_deg"]) for r in good])
+    model = PointingModel(list(terms))
+    basis_az, basis_el = model.design_matrix(az, el)
+    # the W's sign (indicated minus true) is minus TPOINT's basis; both axes of the fit
+    design = -np.vstack([basis_az * np.cos(el)[:, None], basis_el])
+    target = np.concatenate([xel_arcsec, el_arcsec])
+    values, *_ = np.linalg.lstsq(design, target, rcond=None)
+    return dict(zip(model.names, (float(v) for v in values), strict=True))
+
+
 def refraction_equivalent_arcsec(rows: Sequence[Mapping], terms: Sequence[str],
                                  frequency_ghz: float,
                                  relative_humidity: float | None = None) -> dict[str, float]:
@@ -48,16 +66,22 @@ def refraction_equivalent_arcsec(rows: Sequence[Mapping], terms: Sequence[str],
     atmosphere's refraction alone (arcsec per term, indicated minus true: the control
     program points at unrefracted positions, so the encoders read the refraction more)."""
     good = _good(rows)
-    az = np.radians([float(r["az_deg"]) for r in good])
-    el = np.radians([float(r["el_deg"]) for r in good])
     d_el = refraction_arcsec(good, frequency_ghz, relative_humidity)
-    model = PointingModel(list(terms))
-    basis_az, basis_el = model.design_matrix(az, el)
-    # the W's sign (indicated minus true) is minus TPOINT's basis; both axes of the fit
-    design = -np.vstack([basis_az * np.cos(el)[:, None], basis_el])
-    target = np.concatenate([np.zeros(el.size), d_el])
-    values, *_ = np.linalg.lstsq(design, target, rcond=None)
-    return dict(zip(model.names, (float(v) for v in values), strict=True))
+    return equivalent_arcsec(rows, terms, np.zeros(d_el.size), d_el)
+
+
+def pattern_equivalent_arcsec(rows: Sequence[Mapping], terms: Sequence[str],
+                              world) -> dict[str, float]:
+    """What the fit makes of the world's repeatable irregularities (encoders, gears, track)
+    at the good rows' positions: the bias a fixed pattern gives the terms on this schedule
+    (zero without the effect)."""
+    effect = next((e for e in world.effects if e.name == "irregularities"), None)
+    good = _good(rows)
+    if effect is None:
+        return dict.fromkeys(terms, 0.0)
+    xel, d_el = effect.errors_arcsec(np.radians([float(r["az_deg"]) for r in good]),
+                                     np.radians([float(r["el_deg"]) for r in good]))
+    return equivalent_arcsec(rows, terms, xel, d_el)
 
 
 def w5_of_atmosphere(rows: Sequence[Mapping], frequency_ghz: float,
@@ -66,3 +90,39 @@ def w5_of_atmosphere(rows: Sequence[Mapping], frequency_ghz: float,
     terms = [f"W{i}" for i in range(1, 11)]
     return refraction_equivalent_arcsec(rows, terms, frequency_ghz, relative_humidity)["W5"] \
         / 60.0
+
+
+# --------------------------------------------------------------------------- Table 2 over seeds
+#: the criteria of the reproduction (the physics issue's): each fit's points and rms within
+#: 25% of Table 2, the day and night counts within 20%, points per source within 30%
+TABLE2_TOLERANCE = 0.25
+COUNTS_TOLERANCE = 0.20
+TABLE1_TOLERANCE = 0.30
+#: the reduction's S/N threshold (report section VI)
+SNR_MIN = 4.0
+
+
+def campaign_statistics(result, fits: Mapping) -> dict:
+    """One campaign's figures beside the report's: per fit (xel rms, el rms, points), the
+    points per source of fit A, fit A's terms (arcsec), the refraction's and the repeatable
+    irregularities' shares of them, the outliers fit A rejected, and the S/N of every scan
+    (its lowest axis and channel) with its source and elevation."""
+    from antsim.run.sources import points_per_source
+
+    a = fits["A"]
+    frequency = result.scenario.receiver.frequency_ghz
+    snr = [(min(float(r["xel_snr"]), float(r["el_snr"])), r["source"], float(r["el_deg"]))
+           for r in result.rows if r["polarization"] in ("XR", "XL")]
+    return {
+        "rms": {k: (f.xel_rms_arcsec, f.el_rms_arcsec, f.n_used) for k, f in fits.items()
+                if f is not None and k in "ABCDEF"},
+        "points": points_per_source(result.rows, a),
+        "names": tuple(a.names),
+        "values": np.asarray(a.values_arcsec, dtype=float),
+        "sigma": np.asarray(a.sigma_arcsec, dtype=float),
+        "honest": np.asarray(a.sigma_honest_arcsec, dtype=float),
+        "refraction": refraction_equivalent_arcsec(result.rows, a.names, frequency),
+        "pattern": pattern_equivalent_arcsec(result.rows, a.names, result.world),
+        "rejected": int(fits["F"].n_used - a.n_used) if fits.get("F") is not None else 0,
+        "snr": snr,
+    }
