@@ -91,21 +91,21 @@ def test_xl_differs_from_xr_by_its_system_temperature(runs):
 
 def test_table1_points_differ_where_the_observers_chose(runs, scenario):
     """Table 1's points per source: the scheduler visits every source about equally often
-    per hour it is up (each within 20% of their mean rate), so a source more than 30% off
-    the report is one the 1990 observers visited unevenly: its report rate per visible hour
-    is more than 30% off the report's mean rate (3C84 and Orion A: docs/facts.md)."""
+    per hour it is up (each within 20% of their mean rate), so the sources more than 30% off
+    the report are among those the 1990 observers visited least or most per visible hour
+    (the two at either end of the report's rates; 3C84 and Orion A, least: docs/facts.md),
+    and the others, at least five of the eight, are within 30%."""
     hours = visible_hours(scenario)
     report = GHIGO1990.source_points
     ours = {n: np.mean([r["points"].get(n, 0) for r in runs]) for n in report}
     rate = {n: ours[n] / hours[n] for n in report}
     mean_rate = np.mean(list(rate.values()))
     assert all(abs(v / mean_rate - 1.0) < 0.2 for v in rate.values()), rate
-    report_rate = {n: report[n] / hours[n] for n in report}
-    report_mean = np.mean(list(report_rate.values()))
+    by_report_rate = sorted(report, key=lambda n: report[n] / hours[n])
+    extremes = set(by_report_rate[:2]) | set(by_report_rate[-2:])
     outside = [n for n in report if abs(ours[n] / report[n] - 1.0) > TABLE1_TOLERANCE]
     assert len(outside) <= 3
-    for n in outside:
-        assert abs(report_rate[n] / report_mean - 1.0) > TABLE1_TOLERANCE, n
+    assert set(outside) <= extremes, (outside, by_report_rate)
 
 
 def test_table3_recovered_on_the_reports_functions(runs, scenario):
@@ -131,11 +131,13 @@ def test_table3_recovered_on_the_reports_functions(runs, scenario):
 
 
 def test_w5_is_the_atmospheres_refraction(runs, scenario):
-    """The control program did not correct refraction, so W5 is the atmosphere's: what the
-    ten terms make of ERFA's radio refraction over the run's scans is within 4% of the cot E
-    law's coefficient A (ERFA's refco) at the run's mean weather (the tan^3 z term and the
-    elevation terms W1, W4 share the rest), and rises with humidity (water vapour refracts
-    at radio wavelengths). The report's 0.80' +- 0.05' lies below it for every humidity of
+    """The control program did not correct refraction, so W5 is the atmosphere's. What the
+    study makes of the world's refraction (ERFA's, inverted as eraAtioq does) equals, to 1%,
+    an independent least-squares fit of the report's elevation terms (1, cos A, sin A, cos E,
+    cot E) to ERFA's A cot E + B cot^3 E with refco's constants for each scan's weather
+    (the two differ by the inversion, ~0.1" at 10 deg); it is ~5% below A itself (the
+    tan^3 z term and W1, W4 share the rest) and rises with humidity (water vapour refracts at
+    radio wavelengths). The report's 0.80' +- 0.05' lies below it for every humidity of
     20-95%: a gap (docs/physics.md, Refraction)."""
     import erfa
 
@@ -143,11 +145,17 @@ def test_w5_is_the_atmospheres_refraction(runs, scenario):
 
     result = simulate(scenario, seed=SEEDS[0])
     good = [r for r in result.rows if r["polarization"] == "AVG" and r["good"]]
-    temperature = np.mean([r["air_temp_c"] for r in good])
-    pressure = np.mean([r["pressure_hpa"] for r in good])
-    refa, _ = erfa.refco(pressure, temperature, 0.5, 299792.458 / 8.4)
+    az = np.radians([r["az_deg"] for r in good])
+    el = np.radians([r["el_deg"] for r in good])
+    constants = np.array([erfa.refco(r["pressure_hpa"], r["air_temp_c"], 0.5,
+                                     299792.458 / 8.4) for r in good])
+    cot = 1.0 / np.tan(el)
+    target = (constants[:, 0] * cot + constants[:, 1] * cot ** 3) * ARCSEC_PER_RAD / 60.0
+    design = np.column_stack([np.ones_like(el), np.cos(az), np.sin(az), np.cos(el), cot])
+    independent = np.linalg.lstsq(design, target, rcond=None)[0][4]
     w5 = w5_of_atmosphere(result.rows, 8.4)
-    assert w5 == pytest.approx(refa * ARCSEC_PER_RAD / 60.0, rel=0.04)
+    assert w5 == pytest.approx(independent, rel=0.01)
+    assert 0.9 < w5 / (np.mean(constants[:, 0]) * ARCSEC_PER_RAD / 60.0) < 1.0
     dry, wet = (w5_of_atmosphere(result.rows, 8.4, h) for h in (0.2, 0.95))
     assert dry < w5 < wet
     assert dry > GHIGO1990.terms["W5"][0] + GHIGO1990.terms["W5"][1]
