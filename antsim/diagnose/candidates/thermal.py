@@ -473,14 +473,15 @@ class SensorTermsCandidate(TermsCandidate):
     ``antsim.diagnose.modelit``)."""
 
     def __init__(self):
-        from antsim.world.effects.thermal import ThermalEffect
+        from antsim.world.effects.heating import ThermalEffect
         from controller.pointing.thermal import SENSOR_FAMILY
 
         terms = SENSOR_FAMILY
         super().__init__(
             "thermal_sensors", terms, "thermal deformation seen by the structure sensors",
-            "residuals linear in the structure temperature differences: the dish's front-back "
-            "(dE) and left-right (dA cos E), the yoke's, the pedestal's (an azimuth-axis tilt)",
+            "residuals linear in the structure temperature differences: the feed legs' "
+            "upper-lower (dE) and right-left (dA cos E), the yoke's bow (dE) and roll, the "
+            "pedestal's (an azimuth-axis tilt)",
             ThermalEffect.explanation + "; the structure temperature sensors see it: fit the "
             "thermal terms " + " ".join(terms) + " with the geometric ones (fit T, "
             "'antsim fit --terms ...,TEDFB')",

@@ -10,7 +10,7 @@ each a pair of members whose temperature difference bends the structure:
   intercepts the sunlight over its silhouette, ``sqrt(1 - (s.u)^2)`` of its diameter, and
   loses heat over its whole circumference (pi times the diameter): its equilibrium excess is
   ``alpha E sqrt(1 - (s.u)^2) / (pi h)``; with the Sun behind the dish the dish shades the
-  legs where its aperture stands between a leg and the Sun (eight points along each leg).
+  part of each leg from which its aperture stands between the leg and the Sun.
   The upper leg against the lower (with the dish at the horizon) moves the beam in
   elevation, the right against the left in cross-elevation;
 * the **yoke arms** (steel box girders, plates ``yoke_plate_m`` thick, each plate cooled
@@ -56,15 +56,12 @@ from ..structure import STEEL_EXPANSION_PER_K, Structure
 from .base import Effect, Param, PointingState
 from .thermal import GRID_STEP_S, ScalarInterpolator, campaign_grid_s, interp_rows, ou_series
 
-__all__ = ["LEG_POINTS", "PARTS", "ThermalEffect", "member_forcings"]
+__all__ = ["PARTS", "ThermalEffect", "member_forcings"]
 
 #: the pointing-dependent differences, in the order of the effect's state: feed legs upper
 #: minus lower and right minus left, yoke arms' front minus back faces and right minus left
 #: arm (K)
 PARTS = ("legs_ul", "legs_rl", "yoke_fb", "yoke_rl")
-#: points along a feed leg at which the dish's shadow is tested (centres of equal parts)
-LEG_POINTS = 8
-_LEG_T = (np.arange(LEG_POINTS) + 0.5) / LEG_POINTS
 #: the feeds legs' feet on the rim in the aperture's (up, right) coordinates: upper, lower,
 #: right, left
 _LEG_FEET = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
@@ -72,30 +69,37 @@ _LEG_FEET = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
 ZERO_C_K = 273.15
 
 
+#: the feet of the legs along axis 0, broadcast against (points, ...)
+_FEET_UP = _LEG_FEET[:, 0]
+_FEET_RIGHT = _LEG_FEET[:, 1]
+
+
 def _leg_lit(sb, su, sx, geometry: Structure):
     """Fraction of each of the four legs (axis 0) in sunlight: all of it with the Sun in
-    front of the dish (``sb`` >= 0); behind it, the points whose ray to the Sun crosses the
+    front of the dish (``sb`` >= 0); behind it, the part whose ray to the Sun crosses the
     rim's plane outside the aperture. ``sb``, ``su``, ``sx``: the Sun's components along the
-    boresight, up the aperture and to its right (arrays of one shape)."""
+    boresight, up the aperture and to its right (arrays of one shape).
+
+    A leg's point a fraction t of the way from its foot f (a unit vector across the
+    aperture, in radii) to the focus meets the rim's plane, along the ray to the Sun, at
+    f + t d, d = r s' - f, with s' = (su, sx) and r = (F - R^2/4F) / (R (-sb)) the ray's
+    reach per unit of t: inside the aperture (|f + t d| < 1) for 0 < t < -2 f.d / |d|^2.
+    The shaded fraction is that bound, clipped to [0, 1]."""
     sb, su, sx = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (sb, su, sx)))
     behind = sb < -1e-9
-    if not np.any(behind):
+    if not behind.any():
         return np.ones((4, *sb.shape))
     radius = 0.5 * geometry.diameter_m
     rise = geometry.focal_length_m - geometry.rim_depth_m
-    # distance along the Sun's ray from each point to the rim's plane, over the radius
-    with np.errstate(divide="ignore", invalid="ignore"):
-        reach = np.where(behind, -rise / (radius * sb), 0.0)  # (...)
-    t = _LEG_T.reshape((LEG_POINTS,) + (1,) * sb.ndim)
-    lit = np.empty((4, *sb.shape))
-    for i, (fu, fx) in enumerate(_LEG_FEET):
-        # where the ray meets the rim's plane (in radii): the point's own position across
-        # the aperture plus the Sun's sideways component times the distance
-        cu = (1.0 - t) * fu + t * reach * su
-        cx = (1.0 - t) * fx + t * reach * sx
-        inside = (cu * cu + cx * cx) < 1.0
-        lit[i] = np.where(behind, 1.0 - np.mean(inside, axis=0), 1.0)
-    return lit
+    reach = rise / (radius * np.maximum(-sb, 1e-9))  # (used only where the Sun is behind)
+    lead = (1,) * sb.ndim
+    along_foot = _FEET_UP.reshape((4, *lead)) * su + _FEET_RIGHT.reshape((4, *lead)) * sx
+    f_dot_d = reach * along_foot - 1.0
+    d_squared = np.maximum(reach * reach * (su * su + sx * sx) - 2.0 * reach * along_foot
+                           + 1.0, 1e-300)
+    # -2 f.d / |d|^2 is negative where f.d > 0 (the leg's foot sees past the rim): no shade
+    shaded = np.minimum(np.maximum(-2.0 * f_dot_d / d_squared, 0.0), 1.0)
+    return np.where(behind, 1.0 - shaded, 1.0)
 
 
 def member_forcings(absorbed_w_m2, h_out_w_m2k, h_plate_w_m2k, sun_n, sun_e, sun_u, az_rad,
@@ -103,26 +107,39 @@ def member_forcings(absorbed_w_m2, h_out_w_m2k, h_plate_w_m2k, sun_n, sun_e, sun
     """The equilibrium differences (K) of :data:`PARTS` for the antenna pointing at
     (``az_rad``, ``el_rad``) under the Sun (unit vector north, east, up) delivering
     ``absorbed_w_m2`` (absorptivity times the direct normal irradiance): shape (4, ...)."""
+    absorbed = np.asarray(absorbed_w_m2, dtype=float)
+    shape = np.broadcast_shapes(absorbed.shape, np.shape(az_rad), np.shape(el_rad))
+    if not absorbed.any():  # the Sun down: no member is forced away from the others
+        return np.zeros((4, *shape))
     cos_e, sin_e = np.cos(el_rad), np.sin(el_rad)
     cos_a, sin_a = np.cos(az_rad), np.sin(az_rad)
-    # the Sun along the boresight b, up the aperture (d b / d E) and to its right (d b / d A)
-    sb = sun_n * cos_e * cos_a + sun_e * cos_e * sin_a + sun_u * sin_e
-    su = -sun_n * sin_e * cos_a - sun_e * sin_e * sin_a + sun_u * cos_e
+    # the Sun along the horizontal direction faced, to the right (d b / d A), along the
+    # boresight b and up the aperture (d b / d E)
+    ahead = sun_n * cos_a + sun_e * sin_a
     sx = sun_e * cos_a - sun_n * sin_a
+    sb = ahead * cos_e + sun_u * sin_e
+    su = sun_u * cos_e - ahead * sin_e
     phi = geometry.leg_angle_rad
-    c_phi, s_phi = math.cos(phi), math.sin(phi)
-    along = c_phi * sb
-    lit = _leg_lit(sb, su, sx, geometry)
-    silhouette = [np.sqrt(np.clip(1.0 - (along - s_phi * (fu * su + fx * sx)) ** 2, 0.0, None))
-                  for fu, fx in _LEG_FEET]
-    tube = absorbed_w_m2 / (math.pi * h_out_w_m2k)
-    legs_ul = tube * (silhouette[0] * lit[0] - silhouette[1] * lit[1])
-    legs_rl = tube * (silhouette[2] * lit[2] - silhouette[3] * lit[3])
+    along, across_u, across_x = math.cos(phi) * sb, math.sin(phi) * su, math.sin(phi) * sx
+    # each leg's axis: cos phi along the boresight less sin phi towards its foot (upper,
+    # lower, right, left); its silhouette sqrt(1 - (s.u)^2), times the part in the Sun
+    cosine = np.empty((4, *shape))
+    cosine[0] = along - across_u
+    cosine[1] = along + across_u
+    cosine[2] = along - across_x
+    cosine[3] = along + across_x
+    shown = np.sqrt(np.maximum(1.0 - cosine * cosine, 0.0))
+    if (sb < -1e-9).any():
+        shown *= _leg_lit(sb, su, sx, geometry)
+    out = np.empty((4, *shape))
+    tube = absorbed / (math.pi * h_out_w_m2k)
+    out[0] = tube * (shown[0] - shown[1])
+    out[1] = tube * (shown[2] - shown[3])
     # the yoke's vertical faces: the horizontal direction the antenna faces, and its right
-    face = absorbed_w_m2 / h_plate_w_m2k
-    yoke_fb = face * (sun_n * cos_a + sun_e * sin_a)
-    yoke_rl = 0.25 * face * sx
-    return np.stack(np.broadcast_arrays(legs_ul, legs_rl, yoke_fb, yoke_rl))
+    face = absorbed / h_plate_w_m2k
+    out[2] = face * ahead
+    out[3] = 0.25 * face * sx
+    return out
 
 
 class ThermalEffect(Effect):
@@ -306,11 +323,12 @@ class ThermalEffect(Effect):
         self._parts, self._parts_t = parts, last
         return out
 
-    def _block_parts(self, t, az_rad, el_rad) -> tuple[np.ndarray, list]:
+    def _block_parts(self, t, az_rad, el_rad, series=None) -> tuple[np.ndarray, list]:
         """The differences (4, K[, members]) at times ``t`` (K,) or (K, 1), pointing at
         (az, el) (K,) or (K, members) at each, advanced from the state before them; and the
-        series at those times (:meth:`series_at`)."""
-        series = self.series_at(t)
+        series at those times (:meth:`series_at`, or ``series`` when the caller has them)."""
+        if series is None:
+            series = self.series_at(t)
         sun_n, sun_e, sun_u, absorbed, h_out, h_plate, tau_leg, tau_yoke = series[:8]
         forcing = member_forcings(absorbed, h_out, h_plate, sun_n, sun_e, sun_u, az_rad,
                                   el_rad, self.structure_geometry)
@@ -360,10 +378,10 @@ class ThermalEffect(Effect):
         converges to differences forced from where the beam truly pointed."""
         t = state.t_s  # (K,), or (K, 1) with a member axis
         key = (t.size, float(t.flat[0]), float(t.flat[-1]))
-        if self._block is None or self._block[0] != key:
-            self._block = (key, (self._parts, self._parts_t))
+        if self._block is None or self._block[0] != key:  # the series once per block
+            self._block = (key, (self._parts, self._parts_t), self.series_at(t))
         self._parts, self._parts_t = self._block[1]
-        parts, series = self._block_parts(t, state.az_rad, state.el_rad)
+        parts, series = self._block_parts(t, state.az_rad, state.el_rad, self._block[2])
         return self._errors(parts, series[8], series[9], state.az_rad, state.el_rad)
 
     def equilibrium_errors_arcsec(self, t_s, az_rad, el_rad) -> tuple[np.ndarray, np.ndarray]:

@@ -59,6 +59,16 @@ def _evaluate(series, x):
     return np.sum(amplitudes * np.cos(orders * x[..., None] + phases), axis=-1)
 
 
+def _on_a_turn(series, n: int) -> np.ndarray:
+    """The series at ``n + 1`` equally spaced angles from 0 to 2 pi (both ends): the inverse
+    real FFT of its harmonics (the sum of a_n cos(n x + p_n) on the grid, to rounding)."""
+    orders, amplitudes, phases = series
+    spectrum = np.zeros(n // 2 + 1, dtype=complex)
+    spectrum[orders] = 0.5 * n * amplitudes * np.exp(1j * phases)
+    turn = np.fft.irfft(spectrum, n)
+    return np.append(turn, turn[0])
+
+
 class MountIrregularities(Effect):
     """Repeatable errors of encoders, gears and the azimuth track (see the module)."""
 
@@ -77,9 +87,14 @@ class MountIrregularities(Effect):
         "harmonics": Param(24.0, "highest harmonic per turn", min=2.0, max=360.0),
         "pattern_seed": Param(1.0, "the antenna's own pattern (the same in every campaign)",
                               min=0.0, max=2.0**31),
-        "beyond_model": Param("", "a named pointing model whose fit over the sky is taken "
-                              "out of the pattern (empty: none)", kind="string"),
+        "beyond_model": Param("", "the pointing model whose fit over the sky is taken out "
+                              "of the pattern: the 1990 report's ten W's, or none", kind="string",
+                              choices=("", "ghigo10")),
     }
+    #: the tables the pattern is read from: every 0.01 deg of azimuth over a turn and of
+    #: elevation from 1 to 90 deg (linear interpolation of 24 harmonics: below 2e-4")
+    TABLE_STEP_DEG = 0.01
+    TABLE_EL_MIN_DEG = 1.0
     #: the sky over which the pattern's model part is fitted (deg)
     SKY_AZ_DEG = np.arange(0.0, 360.0, 5.0)
     SKY_EL_DEG = np.arange(10.0, 85.01, 2.5)
@@ -94,6 +109,33 @@ class MountIrregularities(Effect):
         self.model_part = None
         if self.p["beyond_model"]:
             self.model_part = self._model_part(PointingModel(self.p["beyond_model"]).names)
+        self._tabulate()
+
+    def _tabulate(self) -> None:
+        """The four series on their tables, the model part folded in: the ten W's are
+        functions of azimuth alone or elevation alone times cos E or sin E (their shapes, the
+        report's section II), but W10, constant on the sky (:attr:`_xel_constant`)."""
+        s = self.series
+        n = round(360.0 / self.TABLE_STEP_DEG)
+        self._az_grid = np.linspace(0.0, 2.0 * np.pi, n + 1)
+        first = round(self.TABLE_EL_MIN_DEG / self.TABLE_STEP_DEG)
+        last = round(90.0 / self.TABLE_STEP_DEG)
+        self._el_grid = self._az_grid[first:last + 1]
+        a = self._az_grid
+        e = self._el_grid
+        az_cos = _on_a_turn(s["az_encoder"], n)        # times cos E: dA cos E
+        az_sin = _on_a_turn(s["track_sideways"], n)    # times sin E
+        az_el = _on_a_turn(s["track_forward"], n)      # dE
+        el_el = _on_a_turn(s["el_encoder"], n)[first:last + 1]  # dE
+        self._xel_constant = 0.0
+        if self.model_part is not None:
+            w = self.model_part.as_dict()
+            az_cos = az_cos - w["W6"]
+            az_sin = az_sin - (w["W7"] * np.cos(a) + w["W8"] * np.sin(a) + w["W9"])
+            az_el = az_el - (w["W1"] + w["W2"] * np.cos(a) + w["W3"] * np.sin(a))
+            el_el = el_el - (w["W4"] * np.cos(e) + w["W5"] / np.tan(e))
+            self._xel_constant = -w["W10"]
+        self._tables = (az_cos, az_sin, az_el, el_el)
 
     def _pattern_arcsec(self, az_rad, el_rad) -> tuple[np.ndarray, np.ndarray]:
         s = self.series
@@ -116,7 +158,18 @@ class MountIrregularities(Effect):
         return PointingModel(list(names), [float(v) for v in values])
 
     def errors_arcsec(self, az_rad, el_rad) -> tuple[np.ndarray, np.ndarray]:
-        """(dA cos E, dE) in arcsec, indicated minus true, at (``az_rad``, ``el_rad``)."""
+        """(dA cos E, dE) in arcsec, indicated minus true, at (``az_rad``, ``el_rad``), from
+        the tables (:meth:`_tabulate`)."""
+        az_cos, az_sin, az_el, el_el = self._tables
+        a = np.mod(az_rad, 2.0 * np.pi)
+        el = np.asarray(el_rad, dtype=float)
+        xel = (np.interp(a, self._az_grid, az_cos) * np.cos(el)
+               + np.interp(a, self._az_grid, az_sin) * np.sin(el) + self._xel_constant)
+        d_el = np.interp(a, self._az_grid, az_el) + np.interp(el, self._el_grid, el_el)
+        return xel, d_el
+
+    def exact_errors_arcsec(self, az_rad, el_rad) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`errors_arcsec` from the series themselves, not the tables (for tests)."""
         xel, d_el = self._pattern_arcsec(az_rad, el_rad)
         if self.model_part is not None:
             m_az, m_el = self.model_part.offset_rad(az_rad, el_rad)
