@@ -37,7 +37,7 @@ sys.path.insert(0, str(ROOT))
 
 from antsim.documents import GHIGO1990  # noqa: E402
 from antsim.run.outputs import run_fits  # noqa: E402
-from antsim.run.sources import visible_hours  # noqa: E402
+from antsim.run.sources import points_per_source, visible_hours  # noqa: E402
 from antsim.scenario import load_scenario  # noqa: E402
 from antsim.simulate.runner import simulate  # noqa: E402
 from antsim.studies.ghigo1990 import (  # noqa: E402
@@ -56,7 +56,8 @@ REPORT_REJECTED = GHIGO1990.points["F"] - GHIGO1990.points["A"]
 def one(seed: int) -> dict:
     scenario = load_scenario(SCENARIO)
     result = simulate(scenario, seed=seed)
-    return campaign_statistics(result, run_fits(result))
+    fits = run_fits(result)
+    return campaign_statistics(result, fits, points_per_source(result.rows, fits["A"]))
 
 
 def _verdict(ours: float, theirs: float, tolerance: float) -> str:

@@ -183,6 +183,8 @@ SMOKE = {
     "sunset_drift": ({"amplitude_arcsec": 64.48, "tau_s": 5400.0}, None),
     "tracking_jitter": ({"xel_rms_arcsec": 5.0, "el_rms_arcsec": 7.0, "timescale_s": 60.0},
                         None),
+    "irregularities": ({"az_encoder_rms_arcsec": 10.0, "el_encoder_rms_arcsec": 12.0,
+                        "track_rms_arcsec": 8.0, "pattern_seed": 3.0}, None),
     "clock_error": ({"offset_s": 2.0, "drift_s_per_day": 0.5}, None),
     "servo_lag": ({"lag_s": 0.5}, None),
     "backlash": ({"az_arcsec": 10.0, "el_arcsec": 6.0}, None),

@@ -165,13 +165,13 @@ BAD = {
         [("duration_h = 24.0", "duration_h = 0.0")], "campaign.duration_h", "0.0"),
     "unknown effect": (
         [('effect = "tracking_jitter"', 'effect = "wind_gusts"')],
-        "truth.effects[1].effect", "'wind_gusts'"),
+        "truth.effects[2].effect", "'wind_gusts'"),
     "bad effect parameter": (
         [("cloud_timescale_s = 1800.0", "cloud_timescale_s = 10.0")],
         "truth.effects[0].cloud_timescale_s", "10.0"),
     "unknown effect parameter": (
-        [("xel_rms_arcsec = 17.0", "xel_rms_arcsecs = 17.0")],
-        "truth.effects[1].xel_rms_arcsecs", "17.0"),
+        [("xel_rms_arcsec = 5.0", "xel_rms_arcsecs = 5.0")],
+        "truth.effects[2].xel_rms_arcsecs", "5.0"),
     "unknown term in the truth": (
         [("W10 = -1.79", "W11 = -1.79")], "truth.terms.W11", "-1.79"),
     "efficiency table length mismatch": (

@@ -102,13 +102,12 @@ TABLE1_TOLERANCE = 0.30
 SNR_MIN = 4.0
 
 
-def campaign_statistics(result, fits: Mapping) -> dict:
+def campaign_statistics(result, fits: Mapping, points: Mapping[str, int]) -> dict:
     """One campaign's figures beside the report's: per fit (xel rms, el rms, points), the
-    points per source of fit A, fit A's terms (arcsec), the refraction's and the repeatable
-    irregularities' shares of them, the outliers fit A rejected, and the S/N of every scan
-    (its lowest axis and channel) with its source and elevation."""
-    from antsim.run.sources import points_per_source
-
+    points per source of fit A (``points``, ``antsim.run.sources.points_per_source``), fit
+    A's terms (arcsec), the refraction's and the repeatable irregularities' shares of them,
+    the outliers fit A rejected, and the S/N of every scan (its lowest axis and channel)
+    with its source and elevation."""
     a = fits["A"]
     frequency = result.scenario.receiver.frequency_ghz
     snr = [(min(float(r["xel_snr"]), float(r["el_snr"])), r["source"], float(r["el_deg"]))
@@ -116,7 +115,7 @@ def campaign_statistics(result, fits: Mapping) -> dict:
     return {
         "rms": {k: (f.xel_rms_arcsec, f.el_rms_arcsec, f.n_used) for k, f in fits.items()
                 if f is not None and k in "ABCDEF"},
-        "points": points_per_source(result.rows, a),
+        "points": dict(points),
         "names": tuple(a.names),
         "values": np.asarray(a.values_arcsec, dtype=float),
         "sigma": np.asarray(a.sigma_arcsec, dtype=float),

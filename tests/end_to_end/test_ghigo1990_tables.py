@@ -19,7 +19,7 @@ import pytest
 
 from antsim.documents import GHIGO1990
 from antsim.run.outputs import run_fits
-from antsim.run.sources import visible_hours
+from antsim.run.sources import points_per_source, visible_hours
 from antsim.scenario import load_scenario
 from antsim.simulate.runner import simulate
 from antsim.studies.ghigo1990 import (
@@ -48,7 +48,9 @@ def runs(scenario):
     out = []
     for seed in SEEDS:
         result = simulate(scenario, seed=seed)
-        out.append(campaign_statistics(result, run_fits(result)))
+        fits = run_fits(result)
+        out.append(campaign_statistics(result, fits, points_per_source(result.rows,
+                                                                       fits["A"])))
     return out
 
 
