@@ -27,6 +27,7 @@ from antsim.diagnose.modelit import residuals_before_after, write_outputs
 from antsim.diagnose.report import FINDINGS_HEADER, RMS_HEADER
 from antsim.figures.charts import histogram_edges, spread_arcsec
 from controller.pointing.modelio import load_model
+from tests.conftest import NOISE_ONLY, edit_text
 from tests.test_figures import assert_sane_png
 from tests.test_report import _embedded, assert_renders_in_a_browser, needs_chromium, read_page
 
@@ -49,10 +50,11 @@ def mmt(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def short_run(tmp_path_factory, short_ghigo_text) -> tuple[Path, Path]:
-    """(scenario, run directory) of the 1990 scenario cut to 3 hours, seed 1."""
+    """(scenario, run directory) of the 1990 scenario cut to 3 hours, seed 1, its noise
+    without its systematic physics (``NOISE_ONLY``)."""
     base = tmp_path_factory.mktemp("run45")
     scenario = base / "short.toml"
-    scenario.write_text(short_ghigo_text, encoding="utf-8")
+    scenario.write_text(edit_text(short_ghigo_text, NOISE_ONLY), encoding="utf-8")
     assert main(["run", str(scenario), "--out", str(base / "run"), "--no-report",
                  "--no-progress"]) == 0
     return scenario, base / "run"
