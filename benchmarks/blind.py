@@ -190,12 +190,13 @@ def tpoint(args) -> None:
 def _residuals(obs, terms) -> np.ndarray:
     """The errors (2n,) less an unweighted fit of ``terms`` over the good scans: what the
     campaign's own model leaves (noise and unmodelled physics)."""
-    from antsim.diagnose.problem import _lstsq, term_columns
+    from antsim.diagnose.linalg import lstsq
+    from antsim.diagnose.problem import term_columns
 
     x = term_columns(list(terms), obs)
     y = np.concatenate([obs.xel_arcsec, obs.el_arcsec])
     rows = np.concatenate([obs.good, obs.good])
-    coef, _ = _lstsq(x[rows], y[rows])
+    coef, _ = lstsq(x[rows], y[rows])
     return y - x @ coef
 
 
@@ -251,14 +252,14 @@ def _orthogonal_norm(d, s: np.ndarray) -> float:
     """Norm of a signal's part the baseline terms cannot absorb, whitened (sigma units)."""
     from antsim.diagnose.problem import Problem
 
-    q = Problem(d.obs, d.prediction, d.problem.base_terms, offset_scale=d.problem.f)
+    q = Problem(d.obs, d.prediction, d.problem.base_terms, offset_scale=d.problem.offset_scale)
     q.update_outliers()
     return float(np.linalg.norm(q.projector()(s[:, None])))
 
 
 def tilt(args) -> None:
     """Large exact tilts (not drawn by the harness): named and recovered?"""
-    from antsim.diagnose.blind import _absorb_linear
+    from antsim.diagnose.blind import absorb_linear
 
     scenario = load_scenario(SCENARIO)
     base = SimulatedBaseline(scenario, scenario.controller.fit_terms, 8)
@@ -271,7 +272,7 @@ def tilt(args) -> None:
                   "collimation_arcmin": float(rng.uniform(-10.0, 10.0))}
         spec = EffectSpec("exact_tilt_collimation", params)
         s2 = scenario.with_effects((*scenario.effects, spec))
-        model = _absorb_linear(s2, params)
+        model = absorb_linear(s2, params)
         obs = _hidden_run(scenario, "exact_tilt_collimation", params, 900 + i, model)
         d = diagnose(obs, scenario, sim_baseline=base)
         first = d.findings[0].result if d.findings else None
@@ -288,7 +289,8 @@ def tilt(args) -> None:
 
 
 def _cv_fixed(obs, terms, folds):
-    from antsim.diagnose.problem import _lstsq, term_columns
+    from antsim.diagnose.linalg import lstsq
+    from antsim.diagnose.problem import term_columns
 
     cols = term_columns(terms, obs)
     y = np.concatenate([obs.xel_arcsec, obs.el_arcsec])
@@ -296,7 +298,7 @@ def _cv_fixed(obs, terms, folds):
     for k in np.unique(folds):
         test = folds == k
         rows = np.concatenate([~test, ~test])
-        coef, _ = _lstsq(cols[rows], y[rows])
+        coef, _ = lstsq(cols[rows], y[rows])
         r = (y - cols @ coef).reshape(2, -1)[:, test]
         sq += float(np.sum(r**2))
     return math.sqrt(sq / obs.n)
@@ -329,7 +331,7 @@ def _harmonic_pool() -> list[str]:
 
 def _greedy_terms(cols_all, names, y, rows, start, target):
     """Forward selection by in-sample chi^2 alone (no penalty): an automatic search."""
-    from antsim.diagnose.problem import _lstsq
+    from antsim.diagnose.linalg import lstsq
 
     chosen = list(start)
     while len(chosen) < target:
@@ -341,7 +343,7 @@ def _greedy_terms(cols_all, names, y, rows, start, target):
             a = np.column_stack([base, cols_all[rows, j]])
             if np.linalg.matrix_rank(a) < a.shape[1]:
                 continue
-            coef, _ = _lstsq(a, y[rows])
+            coef, _ = lstsq(a, y[rows])
             r = y[rows] - a @ coef
             chi = float(r @ r)
             if best is None or chi < best[0]:
@@ -355,7 +357,8 @@ def _greedy_terms(cols_all, names, y, rows, start, target):
 def _nested_cv(obs) -> tuple[float, float]:
     """Leave-one-star-out Sky RMS of two procedures, selection inside each fold: diagnose,
     and an unpenalized automatic search to 22 terms (TPOINT FAUTO's size)."""
-    from antsim.diagnose.problem import _lstsq, term_columns
+    from antsim.diagnose.linalg import lstsq
+    from antsim.diagnose.problem import term_columns
 
     names = [*EIGHT_TERMS, *_harmonic_pool()]
     cols_all = term_columns(names, obs)
@@ -371,7 +374,7 @@ def _nested_cv(obs) -> tuple[float, float]:
         for terms_used, acc in ((terms, "d"), (auto, "a")):
             idx = [names.index(t) for t in terms_used]
             a = cols_all[:, idx]
-            coef, _ = _lstsq(a[np.concatenate([train, train])], y[np.concatenate([train, train])])
+            coef, _ = lstsq(a[np.concatenate([train, train])], y[np.concatenate([train, train])])
             r = (y - a @ coef).reshape(2, -1)[:, test]
             if acc == "d":
                 sq_d += float(np.sum(r**2))
@@ -402,7 +405,7 @@ def _finding_pool(base: list[str]) -> dict[str, tuple[str, ...]]:
     for c in CANDIDATES:
         if isinstance(c, HarmonicFamilyCandidate):
             for n in c.orders:
-                add(c.label(n), c._pair(n))
+                add(c.label(n), c.order_terms(n))
         elif isinstance(c, TermsCandidate) and c.kind == "offsets":
             add(c.name, c.terms)
     add("az_runout_1a_2a", ("HASA", "HACA", "HASA2", "HACA2"))
@@ -490,7 +493,8 @@ def _nested_cv_selection(obs, base: list[str], pool: dict[str, tuple[str, ...]],
     """Leave-one-star-out Sky RMS of a selection procedure run inside each fold: forward
     selection from ``pool`` by the training stars' own leave-one-out Sky RMS, at most
     ``max_findings``, stopping when no finding lowers it."""
-    from antsim.diagnose.problem import _lstsq, term_columns
+    from antsim.diagnose.linalg import lstsq
+    from antsim.diagnose.problem import term_columns
 
     n = obs.n
     y = np.concatenate([obs.xel_arcsec, obs.el_arcsec])
@@ -519,7 +523,7 @@ def _nested_cv_selection(obs, base: list[str], pool: dict[str, tuple[str, ...]],
             chosen.append(label)
             current = score
         x = np.hstack([base_cols, *(cols[c] for c in chosen)])
-        coef, _ = _lstsq(x[rows], y[rows])
+        coef, _ = lstsq(x[rows], y[rows])
         held = (y - x @ coef).reshape(2, -1)[:, i]
         sq += float(held @ held)
     return math.sqrt(sq / n)

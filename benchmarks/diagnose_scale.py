@@ -1,4 +1,4 @@
-"""antsim diagnose on many observations: wall time and peak memory against 15 s and 600 MiB.
+"""antsim diagnose on many observations: wall time and peak memory against 20 s and 700 MiB.
 
     python benchmarks/diagnose_scale.py [--n 200000] [--seed 28] [--keep DIR]
 
@@ -32,8 +32,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-TARGET_S = 15.0
-TARGET_MIB = 600.0
+TARGET_S = 20.0
+TARGET_MIB = 700.0
 TABLE3_ARCMIN = [-1.88, -0.17, -1.54, -2.16, 0.80, 12.24, 1.62, -0.35, -3.35, -1.79]
 SCAN_S = 300.0
 CHUNK = 100_000  # scans per ephemeris: 347 days

@@ -12,6 +12,7 @@ import contextlib
 import io
 import json
 import re
+import shlex
 import time
 from pathlib import Path
 
@@ -103,11 +104,72 @@ def test_the_readme_quotes_chapter_5(demo):
     readme = " ".join((Path(__file__).resolve().parents[1] / "docs" / "diagnose.md").read_text(
         encoding="utf-8").split())
     quote = (f"antsim diagnose names the effect: {best['effect']} (terms "
-             f"{', '.join(best['terms'])}). [...] Where: {best['where']}. Sky rms "
-             f"{best['sky_rms_before_arcsec']:.1f}\" before, {best['sky_rms_after_arcsec']:.1f}"
-             '" after.')
+             f"{', '.join(best['terms'])}). [...] Where (the size of the effect it fitted, and "
+             f"where it is largest): {best['where']}. Fitted with the ten terms, robustly as "
+             f"fit A, {', '.join(best['terms'])} take the sky rms from "
+             f"{numbers['hidden_fit_sky_rms_arcsec']:.1f}\" to "
+             f"{numbers['after_sky_rms_arcsec']:.1f}\"")
     assert quote in readme
-    assert " ".join(quote.replace("[...] ", "").split()[-20:]) in " ".join(stdout.split())
+    assert " ".join(quote.split("[...] ")[1].split()) in " ".join(stdout.split())
+
+
+def _caption(html: str, figure: str) -> str:
+    """The title and caption of one figure of demo.html, as text."""
+    after = html[html.index(f'data-file="{figure}"'):]
+    return re.sub(r"<[^>]+>", "", after[:after.index("</figcaption>")])
+
+
+def test_the_text_quotes_the_numbers_of_its_tables_and_figures(demo):
+    """Every number of the text from the same fits as the tables and figures beside it:
+    chapter 3's W6 sigma is the honest sigma of its table (and named so), chapter 5's Sky
+    RMS before and after are those of the figure under them."""
+    out, stdout, numbers, _ = demo
+    text = " ".join(stdout.split())
+    html = (out / "demo.html").read_text(encoding="utf-8")
+    w6 = re.search(r"W6 came out ([\d.]+)' \+- ([\d.]+)' \(honest sigma, a jackknife over "
+                   r"observations within 3600 s time blocks; TPOINT's formal sigma is "
+                   r"([\d.]+)'\)", text)
+    assert w6, "chapter 3 names its sigma"
+    fit_a = json.loads((out / "1-first-campaign" / "fit.json").read_text())["terms"]["W6"]
+    assert float(w6.group(1)) == round(fit_a["value_arcsec"] / 60, 2)
+    assert float(w6.group(2)) == round(fit_a["sigma_honest_arcsec"] / 60, 2)
+    assert float(w6.group(3)) == round(fit_a["sigma_arcsec"] / 60, 2)
+    table = html[html.index("<caption>Coefficients against the injected truth</caption>"):]
+    row = re.search(r"<td>W6</td>((?:<td[^>]*>[^<]*</td>){7})", table).group(1)
+    assert f">{fit_a['sigma_honest_arcsec']:.2f}<" in row  # the table's honest sigma
+    before, after = (float(x) for x in re.search(
+        r'take the sky rms from ([\d.]+)" to ([\d.]+)"', text).groups())
+    shown = re.search(r'sky rms ([\d.]+)" \N{RIGHTWARDS ARROW} ([\d.]+)"',
+                      _caption(html, "demo5_diagnose_residuals.png").replace("&quot;", '"'))
+    assert shown, _caption(html, "demo5_diagnose_residuals.png")
+    assert (before, after) == (round(float(shown.group(1)), 1), round(float(shown.group(2)), 1))
+    assert before == round(numbers["hidden_fit_sky_rms_arcsec"], 1)
+
+
+def test_every_command_to_try_runs_as_printed_and_repeats_the_step(demo, tmp_path):
+    """The "try it yourself" commands, run in the order printed, exactly as printed (in this
+    process: the command line's own entry point), each exit 0; the campaigns they repeat are
+    the demo's to the byte, and the fit prints the honest sigmas of the demo's table."""
+    out, stdout, numbers, _ = demo
+    commands = numbers["commands"]
+    assert len(commands) == 5
+    for command in commands:
+        assert f"$ {command}" in stdout  # printed as run
+        argv = shlex.split(command)
+        assert argv[0] == "antsim"
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf):
+            assert main([*argv[1:], "--no-progress"]) == 0, command
+        if argv[1] == "fit":
+            fit_a = json.loads((out / "1-first-campaign" / "fit.json").read_text())
+            honest = fit_a["terms"]["W1"]["sigma_honest_arcsec"]
+            assert re.search(rf"^W1 .* {honest:.4f}$", buf.getvalue(), re.M), buf.getvalue()
+    for campaign in ("1-first-campaign", "2-closed-loop", "3-hidden-effect"):
+        for name in ("recordings.ecsv", "fit.json", "model.dat"):
+            assert (out / "yours" / campaign / name).read_bytes() == \
+                (out / campaign / name).read_bytes(), f"{campaign}/{name}"
+    assert (out / "yours" / "3-hidden-effect" / "diagnose" / "diagnose.json").read_bytes() \
+        == (out / "3-hidden-effect" / "diagnose" / "diagnose.json").read_bytes()
 
 
 def test_demo_diagnose_chapter_is_honest(demo):

@@ -22,6 +22,7 @@ from antsim.diagnose.candidates.base import source_rates_arcsec_s
 from antsim.diagnose.candidates.library import CANDIDATES, candidate
 from antsim.diagnose.data import Observations
 from antsim.diagnose.problem import term_columns
+from antsim.diagnose.shapefit import shape_fit
 from antsim.world.effects import EFFECTS
 from antsim.world.effects.harmonics import HARMONIC_EFFECTS, AzimuthTrack2A
 from controller.units import RAD_PER_ARCSEC
@@ -375,7 +376,7 @@ def test_heldout_losses_are_refits_without_each_star():
     rows together) equal plain refits without the star, and the fold version equals its own
     refits (rounding only)."""
     from antsim.diagnose.crossval import heldout_losses
-    from antsim.diagnose.problem import _lstsq
+    from antsim.diagnose.linalg import lstsq
 
     obs = synthetic(n=30, extra={"HASA2": 3.0}, seed=9)
     x = term_columns(["IA", "IE", "NPAE", "CA", "AN", "AW", "TF", "TX", "HASA2"], obs)
@@ -388,7 +389,7 @@ def test_heldout_losses_are_refits_without_each_star():
         want = []
         for i in np.flatnonzero(used):
             train = used & ((np.arange(30) != i) if f is None else (folds != folds[i]))
-            coef, _ = _lstsq(x[np.concatenate([train, train])], y[np.concatenate([train, train])])
+            coef, _ = lstsq(x[np.concatenate([train, train])], y[np.concatenate([train, train])])
             r = (y - x @ coef).reshape(2, 30)[:, i]
             want.append(float(r @ r))
         np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)
@@ -631,7 +632,7 @@ def test_auxtel_procedure_predicts_held_out_stars():
     for an automatic 22-term search and 20.16" for the eight terms): at most 4 findings in
     every fold, and the held-out Sky RMS well below the eight terms' (measured 12.7" against
     20.1", a ratio of 0.63; 0.75 would still be 3.7" better, the first finding's worth)."""
-    from antsim.diagnose.problem import _lstsq
+    from antsim.diagnose.linalg import lstsq
 
     obs = load_observations(REAL / "auxtel_20200315.dat")
     y = np.concatenate([obs.xel_arcsec, obs.el_arcsec])
@@ -644,7 +645,7 @@ def test_auxtel_procedure_predicts_held_out_stars():
         for key, names in (("diagnose", d.updated_model().names), ("eight", d.baseline.terms)):
             x = term_columns(list(names), obs)
             rows = np.concatenate([train, train])
-            coef, _ = _lstsq(x[rows], y[rows])
+            coef, _ = lstsq(x[rows], y[rows])
             r = (y - x @ coef).reshape(2, -1)[:, ~train]
             sq[key] += float(np.sum(r**2))
     held = {key: math.sqrt(v / obs.n) for key, v in sq.items()}
@@ -822,7 +823,7 @@ def _scans_with_unused_and_scaled(n: int = 150):
 
 @pytest.mark.parametrize("scaled", [True, False])
 def test_a_candidates_test_is_the_projection_it_states(scaled):
-    """Two code paths: a candidate's test (:meth:`Candidate._linear`: it reuses its outlier
+    """Two code paths: a candidate's test (:meth:`Candidate.linear_test`: it reuses its outlier
     mask's last added-columns fit, whitens the raw columns once where the offset scale is 1,
     and keeps no columns but makes them again when read) against the computation in its
     definition (the mask, the cached projector over it, the columns projected and fitted by
@@ -830,26 +831,26 @@ def test_a_candidates_test_is_the_projection_it_states(scaled):
     is 60, rounding is ~1e-14); the masks and the columns identical. A result's columns made
     from another shape than the tested one are refused when read, not returned."""
     from antsim.diagnose.candidates.base import ABSORBED_1MR2, nyholt_trials
-    from antsim.diagnose.problem import _lstsq
+    from antsim.diagnose.linalg import lstsq
 
     problem = _scans_with_unused_and_scaled()
     if not scaled:
-        problem.f = np.ones(problem.n)
+        problem.offset_scale = np.ones(problem.n)
     assert problem.unscaled is not scaled
     for c, theta in ((candidate("az_track_2a"), None), (candidate("el_periodic_az"), 3),
                      (candidate("refraction"), None)):
         raw, names = c.columns(problem.obs, theta)
-        res = c._linear(problem, None, None, raw, names, theta)
+        res = c.linear_test(problem, None, None, raw, names, theta)
         cols = problem.cand(raw)
         mask = problem.mask_for(cols)
         perp, z_perp = problem.perp_for(mask)
-        full = np.linalg.norm(problem.T(raw, mask), axis=0)
+        full = np.linalg.norm(problem.whiten(raw, mask), axis=0)
         left = np.linalg.norm(perp(raw), axis=0)
         keep = (left / full) ** 2 > ABSORBED_1MR2
         if not keep.any():  # refraction: TX, in the model already
             assert res.dof == 0 and res.absorbed == names and np.array_equal(res.columns, cols)
             continue
-        coef, cov = _lstsq(perp(cols)[:, keep], z_perp)
+        coef, cov = lstsq(perp(cols)[:, keep], z_perp)
         fitted = perp(cols)[:, keep] @ coef
         assert np.array_equal(res.mask, mask) and res.comp_names == tuple(
             n for n, k in zip(names, keep, strict=True) if k)
@@ -859,7 +860,7 @@ def test_a_candidates_test_is_the_projection_it_states(scaled):
         assert res.chi2_now == pytest.approx(float(z_perp @ z_perp), rel=1e-9)
         assert res._columns is None and np.array_equal(res.columns, cols[:, keep])
     other, names = candidate("el_periodic_az").columns(problem.obs, 4)
-    res = candidate("el_periodic_az")._linear(problem, None, None, other, names, 3)
+    res = candidate("el_periodic_az").linear_test(problem, None, None, other, names, 3)
     with pytest.raises(RuntimeError, match="not the tested ones"):
         _ = res.columns
     res.columns = other  # set: held as given
@@ -871,7 +872,7 @@ def test_a_candidates_test_is_the_projection_it_states(scaled):
 @pytest.mark.parametrize("scaled", [True, False])
 def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
     """Two code paths: a shape's test from inner products with the model's cached basis over
-    its used scans (:meth:`Problem.shape_fit`: one pass over it, the other scan sets the
+    its used scans (:func:`shape_fit`: one pass over it, the other scan sets the
     outlier mask tries by row corrections, the mask from a bound on what the rest of the
     fit changes) against the explicit projections it replaces (:meth:`_linear_explicit`,
     today's reference). 150 scans, some unused, noise and offset scale per scan, a 30"
@@ -888,7 +889,7 @@ def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
 
     problem = _scans_with_unused_and_scaled()
     if not scaled:
-        problem.f = np.ones(problem.n)
+        problem.offset_scale = np.ones(problem.n)
     obs = problem.obs
     served, checked = [], []
     shapes = [(candidate("az_track_2a"), None), (candidate("el_periodic_az"), 3),
@@ -897,7 +898,7 @@ def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
         raw, names = c.columns(obs, theta)
         fast = c._linear_xp(problem, raw, names, theta)[0]
         ref = c._linear_explicit(problem, raw, problem.cand(raw), names, theta)[0]
-        served.append(problem.shape_fit(raw) is not None)
+        served.append(shape_fit(problem, raw) is not None)
         assert fast.dof == 0 or np.array_equal(fast.columns, ref.columns)
         checked.append((fast, ref))
     # columns that take back the scans the model rejects (each one's error, plus a shape
@@ -911,7 +912,7 @@ def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
     fast = c._linear_xp(problem, raw, names, None)[0]
     ref = c._linear_explicit(problem, raw, problem.cand(raw), names, None)[0]
     assert out.size == 2 and fast.mask[out].all()
-    served.append(problem.shape_fit(raw) is not None)
+    served.append(shape_fit(problem, raw) is not None)
     checked.append((fast, ref))
     for fast, ref in checked:
         assert np.array_equal(fast.mask, ref.mask) and fast.dof == ref.dof
@@ -926,9 +927,9 @@ def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
     # the partners' inputs: the columns' coefficients on the model over the mask (here
     # not the model's scans) and the model's whitened column norms there, against its
     # factor over those scans
-    r = problem._current_qr(problem.used)[1]
+    r = problem.factors.qr(problem.used).r
     on_model, gram = fast._on_model
-    x = problem.T(problem.cand(raw), fast.mask)
+    x = problem.whiten(problem.cand(raw), fast.mask)
     np.testing.assert_allclose(scipy.linalg.solve_triangular(r, on_model),
                                problem.coef_on_current(x, fast.mask), rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(np.sqrt(np.diag(r.T @ gram @ r)),
@@ -939,11 +940,11 @@ def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
     q = problem.basis()
     perp, _ = problem.perp_for(problem.used)
     near = cols[5] + 1e-3 * np.std(cols[5]) / np.std(cols[0]) * cols[0]  # 1 - R^2 ~ 1e-6
-    xn = problem.T(near[:, None])
+    xn = problem.whiten(near[:, None])
     assert 1e-8 < float(np.sum(perp(near[:, None]) ** 2) / np.sum(xn**2)) < 1e-5
     ref = nyholt_trials(perp(np.column_stack(cols[:5])))
     for shapes_now in (cols[:5], cols, [*cols[:5], near]):
-        x = problem.T(np.column_stack(shapes_now))
+        x = problem.whiten(np.column_stack(shapes_now))
         grid, qgrid = x.copy(), [q.T @ x[:, i] for i in range(x.shape[1])]
         grid[:, 1], qgrid[1] = perp(shapes_now[1][:, None])[:, 0], None  # came projected
         # the shape in the model's span (rounding off it) is no trial
@@ -956,20 +957,20 @@ def test_a_shape_test_from_inner_products_is_the_explicit_one(scaled):
 def test_a_partly_absorbed_signature_is_fitted_on_the_columns_the_model_leaves():
     """A signature one of whose columns is in the model's span (TX beside az_track_2a's sin
     2A and cos 2A, offset scale 1: what an accepted term leaves of a signature) is tested
-    from inner products (:meth:`Problem.shape_fit`; the explicit path served it before), its
+    from inner products (:func:`shape_fit`; the explicit path served it before), its
     outlier mask fitted on the columns the model leaves a part of (the explicit path fitted
     the in-span column's rounding-level remainder too). Against the explicit path on those
     columns and on all of them: the same mask, kept and absorbed columns, and numbers to
     1e-9 relative (as the test above: the design's condition number is 60, the kept columns
     far from the span, 1 - R^2 > 1e-3)."""
     problem = _scans_with_unused_and_scaled()
-    problem.f = np.ones(problem.n)
+    problem.offset_scale = np.ones(problem.n)
     obs = problem.obs
     c = candidate("az_track_2a")
     two_a, names2 = c.columns(obs, None)
     raw = np.column_stack([term_columns(("TX",), obs), two_a])
     names = ("TX", *names2)
-    assert problem.shape_fit(raw) is not None
+    assert shape_fit(problem, raw) is not None
     fast = c._linear_xp(problem, raw, names, None)[0]
     assert fast.absorbed == ("TX",) and fast.comp_names == names2 and fast.dof == len(names2)
     for ref in (c._linear_explicit(problem, two_a, two_a, names2, None)[0],
@@ -993,7 +994,7 @@ def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits(
     1e-14 at most; the whitened design's condition number is 60, so rounding stays far below
     1e-9 on any machine's BLAS), and the outlier masks the two fits give are identical."""
     from antsim.diagnose.crossval import heldout_losses
-    from antsim.diagnose.problem import _lstsq, _qr, added_basis, heldout_lstsq
+    from antsim.diagnose.linalg import added_basis, economic_qr, heldout_lstsq, lstsq
 
     n = 150
     problem = _scans_with_unused_and_scaled(n)
@@ -1024,7 +1025,7 @@ def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits(
         closed = heldout_lstsq(x, z, labels)
         refit = np.empty(300)
         for k in np.unique(labels):
-            coef, _ = _lstsq(x[labels != k], z[labels != k])
+            coef, _ = lstsq(x[labels != k], z[labels != k])
             refit[labels == k] = (z - x @ coef)[labels == k]
         np.testing.assert_allclose(closed, refit, rtol=1e-9, atol=1e-12)
     assert heldout_lstsq(x, z, np.zeros(300, int)) is None  # nothing left to fit on
@@ -1034,13 +1035,13 @@ def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits(
     ref = []
     for k in range(5):
         train, test = problem.used & (folds != k), problem.used & (folds == k)
-        coef, _ = _lstsq(whole[np.concatenate([train, train])],
+        coef, _ = lstsq(whole[np.concatenate([train, train])],
                          problem.y_raw[np.concatenate([train, train])])
         ref.append(((problem.y_raw - whole @ coef).reshape(2, n) ** 2).sum(axis=0)[test])
     np.testing.assert_allclose(losses, np.concatenate(ref), rtol=1e-9)
     assert rows.sum() == 2 * losses.size
     # the cross-validated stage's path: the model's basis plus the option's columns
-    q0, r0 = _qr(problem.current_columns()[rows])
+    q0, r0 = economic_qr(problem.current_columns()[rows])
     blocks, d1 = added_basis(q0, extra[rows])
     q = np.hstack(blocks)
     np.testing.assert_allclose(q.T @ q, np.eye(q.shape[1]), atol=1e-12)
@@ -1049,7 +1050,7 @@ def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits(
         via = heldout_losses(whole, problem.y_raw, problem.used, folds, (basis, d))
         np.testing.assert_allclose(via, losses, rtol=1e-9)
     assert problem.cv_chi2(whole, folds) == pytest.approx(
-        sum(float(np.sum(problem.T(problem.y - whole @ problem.fit(whole, problem.used
+        sum(float(np.sum(problem.whiten(problem.y - whole @ problem.fit(whole, problem.used
             & (folds != k)).coef, problem.used & (folds == k)) ** 2)) for k in range(5)),
         rel=1e-9)
 
@@ -1064,7 +1065,7 @@ def test_the_cross_validated_stage_makes_its_options_parameters_before_its_basis
     from antsim.diagnose.candidates.base import Candidate
 
     calls = []
-    qr = crossval._qr
+    qr = crossval.economic_qr
 
     def logged_qr(*args, **kwargs):
         calls.append("basis")
@@ -1076,7 +1077,7 @@ def test_the_cross_validated_stage_makes_its_options_parameters_before_its_basis
             return cv_thetas(self, problem)
         return logged_thetas
 
-    monkeypatch.setattr(crossval, "_qr", logged_qr)
+    monkeypatch.setattr(crossval, "economic_qr", logged_qr)
     for cls in {type(c) for c in CANDIDATES} | {Candidate}:
         if "cv_thetas" in vars(cls):
             monkeypatch.setattr(cls, "cv_thetas", logged(vars(cls)["cv_thetas"]))
@@ -1096,14 +1097,21 @@ def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do(m
     the design's condition number is 60), the choice the same; an option nearly inside the
     model's span (r^2 = 1 - 1e-8) is left to the full losses (None), and of two options with
     the same columns the first is chosen, as the full losses choose it."""
-    from antsim.diagnose.crossval import FoldSums, _best, _losses, contiguous_folds, mimicked
-    from antsim.diagnose.problem import _qr, rows_fortran
+    from antsim.diagnose.crossval import (
+        FoldSums,
+        Ranked,
+        _best,
+        _losses,
+        contiguous_folds,
+        mimicked,
+    )
+    from antsim.diagnose.linalg import economic_qr, rows_fortran
 
     problem = _scans_with_unused_and_scaled()
     obs, n = problem.obs, problem.n
     folds = contiguous_folds(obs.t_s, 5)
     cur, rows = problem.current_columns(), problem.rows()
-    q0, r0 = _qr(rows_fortran(cur, rows))
+    q0, r0 = economic_qr(rows_fortran(cur, rows))
     d0 = np.abs(np.diag(r0))
     labels = np.concatenate([folds[problem.used]] * 2)
     sums = FoldSums(q0, d0, problem.y_raw[rows], labels, np.flatnonzero(rows))
@@ -1111,7 +1119,7 @@ def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do(m
         (candidate("az_track_2a"), None), (candidate("az_runout_1a"), None)]
     ranked = []
     idx = np.flatnonzero(rows)
-    f2 = np.concatenate([problem.f, problem.f])
+    f2 = np.concatenate([problem.offset_scale, problem.offset_scale])
     for c, theta in options:
         raw, names = c.columns(obs, theta)
         total = sums.total(problem.cand(raw))
@@ -1120,7 +1128,7 @@ def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do(m
         xg = raw.take(idx, axis=0)
         assert sums.total_rows(xg * f2[idx, None]) == total
         assert mimicked(problem, raw, xg) == mimicked(problem, raw)
-        assert np.array_equal(xg * problem.weights()[:, None], problem.T(raw))
+        assert np.array_equal(xg * problem.weights()[:, None], problem.whiten(raw))
         losses = _losses(problem, cur, q0, d0, folds, raw)
         assert total == pytest.approx(float(losses.sum()), rel=1e-9)
         # the basis grouped by fold in a copy (scans out of time order) instead of read in
@@ -1129,7 +1137,7 @@ def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do(m
         grouped = FoldSums(q0, d0, problem.y_raw[rows], labels, np.flatnonzero(rows))
         monkeypatch.undo()
         assert grouped.total(problem.cand(raw)) == pytest.approx(total, rel=1e-12)
-        ranked.append((total, c, theta, names))
+        ranked.append(Ranked(total, c, theta, names))
     def best_of(ranked):  # the reference: the least full sum, the first of equals
         i = min(range(len(ranked)), key=lambda i: (float(_losses(
             problem, cur, q0, d0, folds, ranked[i][1].columns(obs, ranked[i][2])[0]).sum()), i))
@@ -1152,18 +1160,19 @@ def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do(m
     assert sums.total(1e-9 * problem.cand(options[0][0].columns(obs, 1)[0])) is None  # tiny
     # a model with dependent columns: the full losses refit fold by fold, no sums
     twice = np.column_stack([cur, cur[:, :1]])
-    q2, r2 = _qr(rows_fortran(twice, rows))
+    q2, r2 = economic_qr(rows_fortran(twice, rows))
     assert FoldSums(q2, np.abs(np.diag(r2)), problem.y_raw[rows], labels,
                     np.flatnonzero(rows)).total(problem.cand(ranked[4][1].columns(
                         obs, None)[0])) is None
     assert _best(problem, cur, q0, d0, folds, []) is None
 
 
-def test_the_current_models_fits_are_kept_while_what_they_depend_on_stays():
-    """The current model's last fit (:meth:`Problem.fit_current`) and raw residuals
-    (:meth:`Problem.raw_residuals`, alone or with a finding's columns) are reused while the
-    scans, the noise scale and the model stay, and made again (the same numbers as a fresh
-    fit, bit for bit: one code path) when any of them changes."""
+def test_the_current_models_fit_is_kept_while_what_it_depends_on_stays():
+    """The current model's last fit (:meth:`Problem.fit_current`) is reused while the scans,
+    the noise scale and the model stay, and made again (the same numbers as a fresh fit,
+    bit for bit: one code path) when any of them changes; its raw residuals
+    (:meth:`Problem.raw_residuals`, alone or with a finding's columns) are those of the
+    stacked design."""
     problem = _scans_with_unused_and_scaled()
     n = problem.n
     az = problem.obs.az_rad
@@ -1185,18 +1194,11 @@ def test_the_current_models_fits_are_kept_while_what_they_depend_on_stays():
     less[np.flatnonzero(less)[:5]] = False
     assert same(problem.fit_current(less), problem.fit(problem.current_columns(), less))
     r = problem.raw_residuals()
-    assert problem.raw_residuals() is r and problem.raw_residuals(
-        problem.current_columns()) is r
+    np.testing.assert_array_equal(problem.raw_residuals(problem.current_columns()), r)
     whole = np.column_stack([problem.current_columns(), extra])
     added = problem.sky_rms_added(extra)
     assert added == problem.sky_rms(whole) and problem.sky_rms_added(extra) == added
-    kept = problem._raw_memo[-1][1]
-    assert problem.sky_rms_added(extra.copy()) == added and problem._raw_memo[-1][1] is kept
-    assert problem.raw_residuals() is r  # the last two kept
     assert problem.sky_rms_added(extra[:, :1]) != added  # other columns: fitted again
-    problem.sky_rms_added(extra[:, 1:])
-    assert problem.raw_residuals() is not r
-    np.testing.assert_array_equal(problem.raw_residuals(), r)
     problem.extra.append(extra)
     problem.extra_names += ["x:HESA2", "x:HECA2"]
     assert same(problem.fit_current(), problem.fit(whole))
@@ -1221,7 +1223,7 @@ def test_a_findings_fitted_signal_comes_from_the_fit_the_outlier_update_starts_f
     cols = problem.current_columns()
     joint = problem.fit(np.column_stack([cols, extra]))
     signal = extra @ joint.coef[cols.shape[1]:]
-    beta, *_ = np.linalg.lstsq(problem.T(cols), problem.T(signal), rcond=None)
+    beta, *_ = np.linalg.lstsq(problem.whiten(cols), problem.whiten(signal), rcond=None)
     want = signal - cols @ beta
     before = problem.add("sin2a", extra, ("HESA2", "HECA2"))
     assert before is cols and problem.current_names[-2:] == ["sin2a:HESA2", "sin2a:HECA2"]
@@ -1344,7 +1346,8 @@ def test_the_exact_tilts_analytic_jacobian_ends_where_finite_differences_did(mon
     from scipy import optimize
 
     from antsim.diagnose.candidates import optics
-    from antsim.diagnose.problem import _lstsq, term_columns
+    from antsim.diagnose.linalg import lstsq
+    from antsim.diagnose.problem import term_columns
 
     n = 3000
     rng = np.random.default_rng(30)
@@ -1371,7 +1374,7 @@ def test_the_exact_tilts_analytic_jacobian_ends_where_finite_differences_did(mon
     proj, z_used = optics._projection(problem, problem.used, rows)
     x = np.array(new.theta)
     fd = np.column_stack([proj((err(x + 0.5 * e) - err(x - 0.5 * e)) / 1.0) for e in np.eye(3)])
-    _, cov = _lstsq(fd, z_used)
+    _, cov = lstsq(fd, z_used)
     np.testing.assert_allclose(sig, np.sqrt(np.diag(cov)), rtol=1e-3)
 
 
@@ -1381,7 +1384,8 @@ def test_the_exact_tilts_covariance_is_that_of_the_jacobian_made_again(monkeypat
     the test's theta (3,000 scans, a 30' tilt hidden; the whole search and the subsample's),
     and the best start's cost below theta = 0's so that it is that path."""
     from antsim.diagnose.candidates import optics
-    from antsim.diagnose.problem import _lstsq, term_columns
+    from antsim.diagnose.linalg import lstsq
+    from antsim.diagnose.problem import term_columns
 
     n = 3000
     problem, perp, z_perp, tilt = _tilted(n, np.random.default_rng(30))
@@ -1393,11 +1397,11 @@ def test_the_exact_tilts_covariance_is_that_of_the_jacobian_made_again(monkeypat
         res = tilt.test(problem, perp, z_perp, float(z_perp @ z_perp))
         assert res.delta_chi2 > 100.0
         again = np.column_stack([proj(row) for row in err.jac_rows(np.array(res.theta))])
-        np.testing.assert_array_equal(res.cov, _lstsq(again, z_used)[1])
+        np.testing.assert_array_equal(res.cov, lstsq(again, z_used)[1])
 
 def _svd_reference_lstsq(a: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The pseudo-inverse least squares by the SVD of the whole ``a`` (what
-    :func:`antsim.diagnose.problem._lstsq` computed before its tall-matrix paths)."""
+    :func:`antsim.diagnose.problem.lstsq` computed before its tall-matrix paths)."""
     u, s, vt = np.linalg.svd(a, full_matrices=False)
     keep = s > 1e-10 * s[0]
     inv = np.where(keep, 1.0 / np.where(keep, s, 1.0), 0.0)
@@ -1409,77 +1413,76 @@ def _svd_reference_lstsq(a: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.n
                                               (2000, 3, 10.1), (2000, 6, 1e6),
                                               (2000, 10, 1e12), (6, 4, 30.0)])
 def test_least_squares_paths_are_the_svds_solution(rows, cols, cond):
-    """Two code paths: :func:`_lstsq` on a tall matrix (the normal equations when its
+    """Two code paths: :func:`lstsq` on a tall matrix (the normal equations when its
     condition number is at most 10, else a QR without Q and the SVD of R) against the SVD of
     the whole. Tolerance: the normal equations' rounding grows as cond^2 eps (100 x 2.2e-16
     here), the QR's like the SVD's own (both backward stable); 1e-12 of the largest
     coefficient (and covariance entry) is a factor 40 over the first bound (measured at
     most 7e-14, at cond 9.9; 3e-15 at cond 1e12). A rank-deficient matrix gets the SVD's
     minimum-norm solution, and a NaN the SVD's ValueError."""
-    from antsim.diagnose.problem import _lstsq
+    from antsim.diagnose.linalg import lstsq
 
     rng = np.random.default_rng(rows + cols)
     u, _ = np.linalg.qr(rng.normal(size=(rows, cols)))
     v, _ = np.linalg.qr(rng.normal(size=(cols, cols)))
     a = (u * np.geomspace(1.0, 1.0 / cond, cols)) @ v.T * 7.0
     for z in (rng.normal(size=rows), rng.normal(size=(rows, 3))):
-        coef, cov = _lstsq(a, z)
+        coef, cov = lstsq(a, z)
         ref_coef, ref_cov = _svd_reference_lstsq(a, z)
         np.testing.assert_allclose(coef, ref_coef, rtol=0, atol=1e-12 * np.abs(ref_coef).max())
         np.testing.assert_allclose(cov, ref_cov, rtol=0, atol=1e-12 * np.abs(ref_cov).max())
     twice = np.column_stack([a[:, 0], 2.0 * a[:, 0]])  # rank 1: the same minimum-norm answer
     z = rng.normal(size=rows)
-    np.testing.assert_allclose(_lstsq(twice, z)[0], _svd_reference_lstsq(twice, z)[0],
+    np.testing.assert_allclose(lstsq(twice, z)[0], _svd_reference_lstsq(twice, z)[0],
                                rtol=1e-12)
     a[rows // 2, 0] = np.nan
     with pytest.raises(ValueError, match="infs or NaNs"):
-        _lstsq(a, z)
+        lstsq(a, z)
 
 
 def test_cached_factors_let_the_least_recently_used_go_first(monkeypatch):
-    """The model's cached QR factors and projectors stay within PERP_CACHE_BYTES, and the
+    """The model's cached QR factors and projectors stay within FACTOR_CACHE_BYTES, and the
     one asked for last stays when another set of scans needs room (the cache cleared itself
     whole before, and factored them again). A factor's projector (which holds its basis)
     goes with it. Those over the model's used scans stay whatever their age: every shape
     test reads them. Measured in the entries' own byte counts."""
-    import antsim.diagnose.problem as problem_module
-
     problem = _scans_with_unused_and_scaled()
     sets = [problem.used.copy() for _ in range(4)]
     for k, used in enumerate(sets, start=1):
         used[np.flatnonzero(used)[:k]] = False  # four sets of scans, not the model's
-    one = 8 * (problem._current_qr(problem.used)[0].size + 2 * 2 * int(problem.used.sum()))
-    problem._perps.clear()
-    problem._perp_bytes.clear()
-    monkeypatch.setattr(problem_module, "PERP_CACHE_BYTES", int(2.5 * one))
-    key = [used.tobytes() + bytes([0]) for used in sets]  # a projector's; b"qr" + a factor's
-    qr0 = problem._current_qr(sets[0])
+    one = 8 * (problem.factors.qr(problem.used).q.size + 2 * 2 * int(problem.used.sum()))
+    problem.factors.clear()
+    monkeypatch.setattr(problem.factors.cache, "max_bytes", int(2.5 * one))
+    key = [(used.tobytes(), 0) for used in sets]  # ("projection", *key): a projector's
+    qr0 = problem.factors.qr(sets[0])
     problem.perp_for(sets[0])  # its projector (a tenth of the factor's bytes here)
-    problem._current_qr(sets[1])
-    assert problem._current_qr(sets[0]) is qr0  # a hit, now the most recent
-    problem._current_qr(sets[2])  # no room for three factors: the oldest go, sets[0]'s stays
-    assert list(problem._perps) == [b"qr" + key[0], b"qr" + key[2]]
-    assert problem._current_qr(sets[0]) is qr0
+    problem.factors.qr(sets[1])
+    assert problem.factors.qr(sets[0]) is qr0  # a hit, now the most recent
+    problem.factors.qr(sets[2])  # no room for three factors: the oldest go, sets[0]'s stays
+    assert problem.factors.cache.keys() == [("qr", *key[0]), ("qr", *key[2])]
+    assert problem.factors.qr(sets[0]) is qr0
     problem.perp_for(sets[0])
-    problem._current_qr(sets[2])
+    problem.factors.qr(sets[2])
     problem.perp_for(sets[0])  # a hit: its projector newer than every factor
-    assert list(problem._perps) == [b"qr" + key[0], b"qr" + key[2], key[0]]
-    problem._current_qr(sets[3])  # sets[0]'s factor is the oldest: it goes, its projector too
-    assert list(problem._perps) == [b"qr" + key[2], b"qr" + key[3]]
-    assert sum(problem._perp_bytes.values()) <= problem_module.PERP_CACHE_BYTES
-    own = b"qr" + problem.used.tobytes() + bytes([0])
-    mine = problem._current_qr(problem.used)
-    problem._current_qr(sets[0])
-    problem._current_qr(sets[1])  # the model's is the oldest, but stays
-    assert list(problem._perps) == [own, b"qr" + key[1]]
-    assert problem._current_qr(problem.used) is mine
+    assert problem.factors.cache.keys() == [("qr", *key[0]), ("qr", *key[2]),
+                                            ("projection", *key[0])]
+    problem.factors.qr(sets[3])  # sets[0]'s factor is the oldest: it goes, its projector too
+    assert problem.factors.cache.keys() == [("qr", *key[2]), ("qr", *key[3])]
+    assert problem.factors.cache.nbytes <= problem.factors.cache.max_bytes
+    own = ("qr", problem.used.tobytes(), 0)
+    mine = problem.factors.qr(problem.used)
+    problem.factors.qr(sets[0])
+    problem.factors.qr(sets[1])  # the model's is the oldest, but stays
+    assert problem.factors.cache.keys() == [own, ("qr", *key[1])]
+    assert problem.factors.qr(problem.used) is mine
 
 
 def test_selection_lets_the_models_factors_go_when_it_accepts_a_finding(monkeypatch):
     """Every cached factor and projector is keyed by the number of accepted columns: once a
-    finding is accepted none is asked for again, and selection lets them go before it fits
-    the whole design for the finding's figures (at 200,000 scans up to 128 MiB beside
-    those fits' copies of the design). On a 30" sin 2A elevation error, found."""
+    finding is accepted none is asked for again, and the problem lets them go as it adds the
+    finding, before the whole design is fitted for the finding's figures (at 200,000 scans
+    up to 128 MiB beside those fits' copies of the design). On a 30" sin 2A elevation
+    error, found."""
     import antsim.diagnose.select as select_module
 
     problem = _scans_with_unused_and_scaled()
@@ -1487,7 +1490,7 @@ def test_selection_lets_the_models_factors_go_when_it_accepts_a_finding(monkeypa
     fitted_signal = select_module._fitted_signal
 
     def watched(problem_, cols, extra):
-        held.append(sum(problem_._perp_bytes.values()))
+        held.append(problem_.factors.cache.nbytes)
         return fitted_signal(problem_, cols, extra)
 
     monkeypatch.setattr(select_module, "_fitted_signal", watched)
@@ -1509,16 +1512,15 @@ def test_the_held_out_check_whitens_column_blocks_as_their_stack():
     used = problem.used
     design = problem._whitened_fortran((cur, extra), used)
     assert design.flags.f_contiguous
-    assert np.array_equal(design, problem.T(whole, used, fortran=True))
+    assert np.array_equal(design, problem.whiten(whole, used, fortran=True))
     folds = np.arange(problem.n) % 5
     assert problem.cv_chi2((cur, extra), folds) == problem.cv_chi2(whole, folds)
 
 
-def test_the_current_models_held_out_chi2_is_kept_and_from_its_cached_factor():
+def test_the_current_models_held_out_chi2_is_from_its_cached_factor():
     """The current model's held-out chi^2 comes from its cached factor over the scans asked
     for (the same factorization of the same whitened design: the same bits as whitening and
-    factoring a copy of its columns) and is kept while the scans, the noise scale, the model
-    and the folds stay."""
+    factoring a copy of its columns)."""
     problem = _scans_with_unused_and_scaled()
     cur = problem.current_columns()
     folds = np.arange(problem.n) % 5
@@ -1527,11 +1529,8 @@ def test_the_current_models_held_out_chi2_is_kept_and_from_its_cached_factor():
     for used in (problem.used, some):
         want = problem.cv_chi2(cur.copy(), folds, used=used)
         got = problem.cv_chi2(cur, folds, used=used)
-        assert got == want and problem._cv_memo[1] == got
-        assert b"qr" + used.tobytes() + bytes([0]) in problem._perps
-        problem._cv_memo = (problem._cv_memo[0], -1.0)  # a kept figure is what is returned
-        assert problem.cv_chi2(cur, folds, used=used) == -1.0
-        assert problem.cv_chi2(cur, folds.copy(), used=used) == want  # other folds: made
+        assert got == want
+        assert ("qr", used.tobytes(), 0) in problem.factors.cache
     problem.scale[1] *= 2.0
     problem._rescale(problem.fit_current())  # a new noise scale (the cached factors go)
     assert problem.cv_chi2(cur, folds) == problem.cv_chi2(cur.copy(), folds) != want
@@ -1543,7 +1542,7 @@ def test_rows_gathered_into_fortran_order_a_block_at_a_time_are_the_whole_gather
     order (a copy and one product per element either way), over several blocks, a last
     partial one, a strided view and into columns of a larger array; blocks of
     FORTRAN_BLOCK_ELEMENTS // k rows for these k = 4 and 7 columns (at least FORTRAN_BLOCK)."""
-    from antsim.diagnose.problem import FORTRAN_BLOCK_ELEMENTS, take_rows_fortran
+    from antsim.diagnose.linalg import FORTRAN_BLOCK_ELEMENTS, take_rows_fortran
 
     rng = np.random.default_rng(5)
     n = 3 * FORTRAN_BLOCK_ELEMENTS // 4 + 17
@@ -1566,13 +1565,13 @@ def test_rows_gathered_into_fortran_order_a_block_at_a_time_are_the_whole_gather
 
 
 def test_rows_near_the_threshold_found_a_block_at_a_time_are_the_wholes():
-    """:func:`near_rows` (``Problem.shape_fit``'s rows whose residual u = zp - x c lies past
+    """:func:`near_rows` (``shape_fit``'s rows whose residual u = zp - x c lies past
     a limit) forms u a block of QT_BLOCK rows at a time: the same rows and the same values,
     bit for bit, as the whole expression it replaced, with one BLAS thread as diagnose runs
     (OpenBLAS's threads split the whole's rows where they like: rounding then differs), for
     the leading columns, chosen columns and none, over whole blocks and a partial one."""
     from antsim.blas import one_blas_thread
-    from antsim.diagnose.problem import QT_BLOCK, near_rows
+    from antsim.diagnose.linalg import QT_BLOCK, near_rows
 
     rng = np.random.default_rng(12)
     n_rows = 3 * QT_BLOCK + 4094  # an odd tail of rows beside whole blocks
@@ -1596,7 +1595,7 @@ def test_blocked_products_over_the_models_basis_match_the_whole_to_rounding():
     another order it moves by at most ~n eps |a| |b| = 4e-12 |a| |b| in the worst case,
     ~sqrt(n) eps typically: the bound below, 1e-12 of |a| |b| by Cauchy-Schwarz, is 100
     times the typical rounding and far below the 6 digits diagnose prints)."""
-    from antsim.diagnose.problem import QT_BLOCK, qt_dot, shape_products
+    from antsim.diagnose.linalg import QT_BLOCK, qt_dot, shape_products
 
     rng = np.random.default_rng(11)
     n_rows = 2 * QT_BLOCK + 3001  # two whole blocks and a partial one

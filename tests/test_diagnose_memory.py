@@ -1,12 +1,11 @@
-"""What diagnose keeps between its tests, and that keeping less changes no number (issue 28:
-diagnose on 200,000 scans within 600 MiB; ``benchmarks/diagnose_scale.py`` measures it)."""
+"""What diagnose keeps between its tests, and that keeping less changes no number (diagnose
+on 200,000 scans within 700 MiB; ``benchmarks/diagnose_scale.py`` measures it)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from antsim.diagnose.candidates.thermal import (
-    OFF_GRID_LEVELS,
     SunsetCandidate,
     SunsetTransientCandidate,
     TemperatureCandidate,
@@ -28,27 +27,6 @@ def _week(n: int = 600) -> Observations:
                         sun_el_deg=40.0 * np.sin(day - 1.0))
 
 
-def test_lagged_candidates_keep_their_grid_and_the_last_few_other_levels():
-    """A thermal candidate keeps every level of its time-constant grid (asked for again in
-    every round and in the cross-validated stage) and only the last OFF_GRID_LEVELS others
-    (a search's points); a level made again after it was let go is the same numbers, and
-    release() lets every one go."""
-    obs = _week()
-    for cand, level in ((SunsetCandidate(), lambda c, tau: c.level(obs, tau)),
-                        (TemperatureCandidate(), lambda c, tau: c.structure(obs, tau)[0])):
-        first = {tau: level(cand, tau).copy() for tau in cand.TAUS}
-        off = [777.0, 1234.5, 4321.0, 9876.0]
-        made = {tau: level(cand, tau).copy() for tau in off}
-        taus = [key[1] for key in cand._cache]
-        assert set(cand.TAUS) <= set(taus)
-        assert [tau for tau in taus if tau not in cand.TAUS] == off[-OFF_GRID_LEVELS:]
-        for tau in (*cand.TAUS, *off):  # kept or made again: the same bytes
-            np.testing.assert_array_equal(level(cand, tau), {**first, **made}[tau])
-        assert level(cand, cand.TAUS[0]) is level(cand, cand.TAUS[0])  # a grid level: kept
-        cand.release()
-        assert not cand._cache
-
-
 def test_the_models_columns_are_held_once_and_released_factors_are_made_again():
     """Once a finding is accepted the base and the accepted columns are views of the stacked
     model (held once), with the values they had; the cached factors released after the
@@ -66,35 +44,12 @@ def test_the_models_columns_are_held_once_and_released_factors_are_made_again():
     assert np.shares_memory(problem.base, whole) and np.shares_memory(problem.extra[0], whole)
     np.testing.assert_array_equal(problem.base, base)
     np.testing.assert_array_equal(problem.extra[0], extra)
-    before = problem._current_qr(problem.used)
-    problem.release()
-    assert not problem._perps
-    again = problem._current_qr(problem.used)
+    before = problem.factors.qr(problem.used)
+    problem.factors.clear()
+    again = problem.factors.qr(problem.used)
     assert again is not before
     for a, b in zip(before, again, strict=True):
         np.testing.assert_array_equal(a, b)
-
-
-def test_release_keeps_only_the_factors_over_the_scans_asked_for_next():
-    """Before a finding's simplest form, the selection lets go of every cached factor and
-    projector but those over the finding's scans (``release(keep=...)``): the model's used
-    scans' go, the finding's stay (the same objects, not made again)."""
-    n = 200
-    problem = Problem(_week(n), Prediction("white", np.zeros(n), np.zeros(n),
-                                           np.full(n, 5.0), np.full(n, 5.0)),
-                      ["IA", "IE", "CA", "AN", "AW"])
-    mask = problem.used.copy()
-    mask[:7] = False
-    problem.perp_for(problem.used)
-    kept = problem.perp_for(mask)
-    factor = problem._current_qr(mask)
-    assert len(problem._perps) >= 4
-    problem.release(keep=mask)
-    assert problem._perps and all(mask.tobytes() in k for k in problem._perps)
-    assert set(problem._perps) == set(problem._perp_bytes)
-    assert problem.perp_for(mask) is kept and problem._current_qr(mask) is factor
-    problem.release()
-    assert not problem._perps and not problem._perp_bytes
 
 
 def test_a_shape_mask_equal_to_the_models_scans_is_that_array():
@@ -118,38 +73,10 @@ def test_a_shape_mask_equal_to_the_models_scans_is_that_array():
     assert np.array_equal(res.mask, problem.used) and res.mask is problem.used
 
 
-def test_trim_heap_gives_freed_heap_pages_back_where_the_c_library_can(monkeypatch):
-    """glibc keeps freed heap pages resident; :func:`trim_heap` gives them back (RSS falls by
-    most of 96 MB freed below the top of the heap), and is a no-op where there is no
-    ``malloc_trim`` (another platform)."""
-    import sys
-    from pathlib import Path
-
-    from antsim import heap
-
-    monkeypatch.setattr(sys, "platform", "darwin")
-    assert heap._malloc_trim() is None
-    monkeypatch.undo()
-    if not heap.trim_heap():
-        return  # no glibc here: nothing to give back by this route
-
-    def rss_mib() -> float:
-        return int(Path("/proc/self/statm").read_text().split()[1]) * 4096 / 2**20
-
-    # 1,000 arrays of 96 KB (below glibc's mmap threshold: on the heap), the last one kept
-    # so that the freed ones lie below the heap's top (not returned by free itself)
-    parts = [np.ones(12_000) for _ in range(1000)]
-    top = parts.pop()
-    del parts
-    before = rss_mib()
-    assert heap.trim_heap()
-    assert before - rss_mib() > 48.0  # half of what was freed, whatever else the heap holds
-    del top
-
-
 def _lagged_problem(cand, tau_s: float, n: int = 3000):
     """A week of scans whose elevation residuals are ``cand``'s signal of time constant
-    ``tau_s`` (40" of it, 5" noise, fixed seed), and the grid's best test of it."""
+    ``tau_s`` (40" of it, 5" noise, fixed seed), the grid's best test of it and the grid's
+    delta chi^2 by time constant."""
     clean = _week(n)
     signal = 40.0 * cand.unit_signal(clean, {"tau_s": tau_s})
     noise = np.random.default_rng(5).normal(0.0, 5.0, 2 * n)
@@ -160,9 +87,10 @@ def _lagged_problem(cand, tau_s: float, n: int = 3000):
     problem = Problem(obs, Prediction("white", np.zeros(n), np.zeros(n), np.full(n, 5.0),
                                       np.full(n, 5.0)), ["IA", "IE", "CA", "AN", "AW"])
     perp, z_perp = problem.perp_for(problem.used)
-    tests = [cand._linear(problem, perp, z_perp, *cand.columns(obs, tau), tau)
+    tests = [cand.linear_test(problem, perp, z_perp, *cand.columns(obs, tau), tau)
              for tau in cand.TAUS]
-    return problem, perp, z_perp, max(tests, key=lambda res: res.delta_chi2)
+    grid = {tau: res.delta_chi2 for tau, res in zip(cand.TAUS, tests, strict=True)}
+    return problem, perp, z_perp, max(tests, key=lambda res: res.delta_chi2), grid
 
 
 def _bounded_search(cand, problem, perp, z_perp, best, log_lo: float, log_hi: float):
@@ -180,7 +108,7 @@ def _bounded_search(cand, problem, perp, z_perp, best, log_lo: float, log_hi: fl
 
     def neg(log_theta: float) -> float:
         theta = math.exp(log_theta)
-        tests[log_theta] = cand._linear(problem, perp, z_perp, *cand.columns(obs, theta), theta)
+        tests[log_theta] = cand.linear_test(problem, perp, z_perp, *cand.columns(obs, theta), theta)
         return -tests[log_theta].delta_chi2
 
     opt = optimize.minimize_scalar(neg, bounds=(log_lo, log_hi), method="bounded",
@@ -192,13 +120,13 @@ def _bounded_search(cand, problem, perp, z_perp, best, log_lo: float, log_hi: fl
 def _counted(cand, monkeypatch) -> list:
     """The time constants ``cand`` tests off its grid from now on."""
     seen: list = []
-    linear = type(cand)._linear
+    linear = type(cand).linear_test
 
     def count(self, problem, perp, z_perp, cols, names, theta):
         seen.append(theta)
         return linear(self, problem, perp, z_perp, cols, names, theta)
 
-    monkeypatch.setattr(type(cand), "_linear", count)
+    monkeypatch.setattr(type(cand), "linear_test", count)
     return seen
 
 
@@ -213,11 +141,11 @@ def test_a_time_constant_at_a_bound_is_the_bound_within_the_searchs_tolerance():
     from antsim.diagnose.candidates.thermal import XATOL_LOG_THETA
 
     cand = SunsetTransientCandidate()
-    problem, perp, z_perp, best = _lagged_problem(cand, 300.0)  # below the bound (400 s)
+    problem, perp, z_perp, best, grid = _lagged_problem(cand, 300.0)  # below the bound
     assert best.theta == cand.TAUS[0]
     lo, b = math.log(cand.TAUS[0] / 1.5), math.log(cand.TAUS[1])
     old, _ = _bounded_search(cand, problem, perp, z_perp, best, lo, b)
-    new = cand._refine_log_theta(problem, perp, z_perp, best, lo, b, lo)
+    new = cand._refine_log_theta(problem, perp, z_perp, best, grid, lo, b, lo)
     assert math.isclose(new.theta, cand.TAUS[0] / 1.5, rel_tol=1e-12)  # exp(log(400 s))
     assert new.theta != old.theta
     # the bounded search stops within its tolerance of the bound (2x: Brent's stopping
@@ -226,11 +154,11 @@ def test_a_time_constant_at_a_bound_is_the_bound_within_the_searchs_tolerance():
     assert new.delta_chi2 >= old.delta_chi2
 
     cand = TemperatureCandidate()
-    problem, perp, z_perp, best = _lagged_problem(cand, 26000.0)  # inside (21600, 32400)
+    problem, perp, z_perp, best, grid = _lagged_problem(cand, 26000.0)  # in (21600, 32400)
     assert best.theta == cand.TAUS[-1]
     a, hi = math.log(cand.TAUS[-2]), math.log(cand.TAUS[-1] * 1.5)
     old, _ = _bounded_search(cand, problem, perp, z_perp, best, a, hi)
-    new = cand._refine_log_theta(problem, perp, z_perp, best, a, hi, hi)
+    new = cand._refine_log_theta(problem, perp, z_perp, best, grid, a, hi, hi)
     assert new.theta < cand.TAUS[-1] * 1.5
     # both within XATOL_LOG_THETA of the optimum (their own stopping rules)
     assert abs(math.log(new.theta / old.theta)) <= 2 * XATOL_LOG_THETA
@@ -248,26 +176,24 @@ def test_a_search_from_the_grid_finds_the_bounded_searchs_time_constant_in_fewer
     as many); both inside the bracket."""
     import math
 
-    from antsim.diagnose.candidates.thermal import XATOL_LOG_THETA, SunsetCandidate
+    from antsim.diagnose.candidates.thermal import XATOL_LOG_THETA
 
     counts = []
     for cand, tau in ((SunsetCandidate(), 2900.0), (SunsetCandidate(), 7900.0),
                       (SunsetTransientCandidate(), 5000.0), (TemperatureCandidate(), 4400.0),
                       (TemperatureCandidate(), 9000.0)):
-        problem, perp, z_perp, best = _lagged_problem(cand, tau)
+        problem, perp, z_perp, best, grid = _lagged_problem(cand, tau)
         i = cand.TAUS.index(best.theta)
         a, b = math.log(cand.TAUS[i - 1]), math.log(cand.TAUS[i + 1])
         old, n_old = _bounded_search(cand, problem, perp, z_perp, best, a, b)
         seen = _counted(cand, monkeypatch)
-        new = cand.refine(problem, perp, z_perp, best)
+        new = cand.refine(problem, perp, z_perp, best, grid)
         monkeypatch.undo()
         assert a < math.log(new.theta) < b and new.theta != best.theta
         assert abs(math.log(new.theta / old.theta)) <= 2 * XATOL_LOG_THETA
         assert math.isclose(new.delta_chi2, old.delta_chi2, rel_tol=1e-5)
         assert 0 < len(seen) <= n_old
         counts.append((len(seen), n_old))
-        # the search's answer's level is kept for its covariance and columns
-        assert (cand._obs_key(problem.obs), round(new.theta, 3)) in cand._cache
     assert sum(c[0] for c in counts) < sum(c[1] for c in counts)
 
 

@@ -104,11 +104,11 @@ def test_fomalont_after_sunset_drift(ghigo_path, cache):
 
 
 def test_a_large_exact_tilt_is_named(short, baseline):
-    from antsim.diagnose.blind import _absorb_linear
+    from antsim.diagnose.blind import absorb_linear
 
     params = {"tilt_arcmin": 40.0, "tilt_az_deg": 60.0, "collimation_arcmin": 5.0}
     s2 = short.with_effects((*short.effects, EffectSpec("exact_tilt_collimation", params)))
-    obs = recordings(short, 13, "exact_tilt_collimation", params, _absorb_linear(s2, params))
+    obs = recordings(short, 13, "exact_tilt_collimation", params, absorb_linear(s2, params))
     d = diagnose(obs, short, sim_baseline=baseline)
     first = d.findings[0].result
     assert first.name == "exact_tilt_collimation"

@@ -22,6 +22,12 @@ ROOT = Path(__file__).resolve().parents[1]
 FEATURES = ("antsim.run", "antsim.serve", "antsim.plan", "antsim.diagnose", "antsim.studies")
 #: everything that sits above the figures: the features and the command line
 FEATURES_UP = ("antsim.figures", *FEATURES, "antsim.commands", "antsim.cli")
+#: the teaching walk-through (``antsim demo``), a command: its chapters, one module each, and
+#: the modules they share (how a chapter is told; a campaign as antsim run writes one)
+DEMO = "antsim.commands.demo"
+DEMO_CHAPTERS = tuple(f"{DEMO}.{name}" for name in (
+    "cold_start", "first_campaign", "the_fit", "closed_loop", "hidden_effect"))
+DEMO_SHARED = (f"{DEMO}.story", f"{DEMO}.campaign")
 
 #: (importer prefix, forbidden prefixes, why): no module under the importer imports a module
 #: under a forbidden prefix. Prefixes are dotted module names; "a.b" covers a.b and a.b.*.
@@ -30,6 +36,10 @@ RULES: tuple[tuple[str, tuple[str, ...], str], ...] = (
     ("controller.errors", ("controller",), "a base module imports nothing of the program"),
     ("controller.units", ("controller",), "a base module imports nothing of the program"),
     ("controller.protocol", ("controller",), "a base module imports nothing of the program"),
+    ("controller.filekind", ("controller.units", "controller.protocol", "controller.wire",
+                             "controller.astro", "controller.pointing", "controller.scans",
+                             "controller.program"),
+     "deciding a file's kind reads text: it imports nothing of the program but its errors"),
     ("controller.wire", ("antsim", "controller.astro", "controller.pointing", "controller.scans",
                          "controller.program"),
      "the wire client is the protocol over a network: part of the controller, it imports "
@@ -44,20 +54,36 @@ RULES: tuple[tuple[str, tuple[str, ...], str], ...] = (
      "the scan engine never imports the control program that runs it"),
     ("controller.program", ("controller.wire",),
      "the control program drives any antenna through the protocol, never the wire's"),
-    ("antsim.tomlcheck", ("antsim.world", "antsim.simulate", "antsim.scenario", *FEATURES_UP),
+    ("antsim.tomlcheck", ("antsim.world", "antsim.simulate", "antsim.scenario",
+                          "antsim.schema", *FEATURES_UP),
      "TOML checking is the base of antsim"),
-    ("antsim.documents", ("antsim.tomlcheck", "antsim.world", "antsim.simulate",
-                          "antsim.scenario", *FEATURES_UP),
+    ("antsim.schema.keys", ("antsim.world", "antsim.simulate", "antsim.scenario",
+                            "antsim.schema.scenario", "antsim.schema.plan",
+                            "antsim.schema.markdown", *FEATURES_UP),
+     "a declared setting is a base of antsim: the world's effects declare their parameters "
+     "with it"),
+    ("antsim.schema", ("antsim.world.world", "antsim.simulate", "antsim.scenario",
+                       *FEATURES_UP),
+     "the schema declares the settings of the world's parts and the controller; the "
+     "scenario reader, the assembled world and all that uses them sit above it"),
+    ("antsim.world", ("antsim.schema.scenario", "antsim.schema.plan",
+                      "antsim.schema.markdown"),
+     "the world's parts declare their settings with antsim.schema.keys; the schema's tables "
+     "of them sit above the parts"),
+    ("antsim.documents", ("antsim.tomlcheck", "antsim.schema", "antsim.world",
+                          "antsim.simulate", "antsim.scenario", *FEATURES_UP),
      "the documents' numbers are a base of antsim: they import nothing of it"),
     ("antsim.progress", ("antsim.tomlcheck", "antsim.documents", "antsim.bundled",
-                         "antsim.world", "antsim.simulate", "antsim.scenario", *FEATURES_UP,
+                         "antsim.schema", "antsim.world", "antsim.simulate", "antsim.scenario",
+                         *FEATURES_UP,
                          "controller"),
      "progress display is a base of antsim: it knows nothing of the work it shows"),
-    ("antsim.bundled", ("antsim.tomlcheck", "antsim.documents", "antsim.world",
-                        "antsim.simulate", "antsim.scenario", *FEATURES_UP),
+    ("antsim.bundled", ("antsim.tomlcheck", "antsim.documents", "antsim.schema",
+                        "antsim.world", "antsim.simulate", "antsim.scenario", *FEATURES_UP),
      "finding the scenarios that come with antsim by name is a base of antsim: it reads no "
      "scenario"),
-    ("antsim.outdir", ("antsim.world", "antsim.simulate", "antsim.scenario", *FEATURES_UP,
+    ("antsim.outdir", ("antsim.schema", "antsim.world", "antsim.simulate", "antsim.scenario",
+                       *FEATURES_UP,
                        "controller.astro", "controller.pointing", "controller.scans",
                        "controller.program"),
      "output directories and their lock are a base of every command that writes"),
@@ -65,6 +91,8 @@ RULES: tuple[tuple[str, tuple[str, ...], str], ...] = (
      "the simulated world knows nothing of what is done with it"),
     ("antsim.scenario", ("antsim.world.world", "antsim.simulate", *FEATURES_UP),
      "a scenario reads the world's parts' settings; the world is built from it, above it"),
+    ("antsim.scenario", ("antsim.schema.markdown",),
+     "the scenario reader reads by the schema's keys, not its reference page"),
     ("antsim.figures", ("antsim.world", "antsim.scenario", "antsim.simulate", *FEATURES,
                         "antsim.commands", "antsim.cli"),
      "figures and pages draw values, never a simulation"),
@@ -76,6 +104,13 @@ RULES: tuple[tuple[str, tuple[str, ...], str], ...] = (
        "a feature imports the engines and the parts below them, never another feature nor "
        "the command line: what two features share belongs below both")
       for feature in FEATURES),
+    *((chapter, (*(c for c in DEMO_CHAPTERS if c != chapter), f"{DEMO}.walkthrough"),
+       "a chapter of the walk-through never imports another: what it needs of an earlier "
+       "one the walk-through hands it, and what two share is in the demo's shared modules")
+      for chapter in DEMO_CHAPTERS),
+    *((shared, (*DEMO_CHAPTERS, f"{DEMO}.walkthrough"),
+       "the demo's shared modules sit below its chapters")
+      for shared in DEMO_SHARED),
 )
 #: no module outside ``antsim.commands`` imports a command (antsim.cli finds them by name)
 COMMANDS = "antsim.commands"
@@ -199,6 +234,34 @@ def test_the_graph_sees_the_imports_it_must(graph):
 
 def test_imports_follow_the_layers(graph):
     assert rule_breaches(graph) == []
+
+
+def test_the_demos_rules_name_its_modules(graph):
+    """A rule on a module that is not there (renamed, moved) would hold nothing: the demo's
+    chapters and shared modules exist, and the walk-through imports every chapter."""
+    for module in (*DEMO_CHAPTERS, *DEMO_SHARED, f"{DEMO}.walkthrough"):
+        assert module in graph, module
+    assert set(DEMO_CHAPTERS) <= set(graph[f"{DEMO}.walkthrough"])
+    assert {m for m in graph if m.startswith(f"{DEMO}.")} == \
+        {*DEMO_CHAPTERS, *DEMO_SHARED, f"{DEMO}.walkthrough"}, "a new demo module: rule it"
+
+
+def test_a_chapter_importing_another_is_caught(tmp_path):
+    root = _fake_tree(tmp_path, {
+        "antsim/__init__.py": "",
+        "antsim/commands/__init__.py": "",
+        "antsim/commands/demo/__init__.py": "",
+        "antsim/commands/demo/story.py": "",
+        "antsim/commands/demo/first_campaign.py": "from .story import Story\n",
+        "antsim/commands/demo/the_fit.py": "from .first_campaign import tell\n",
+        "antsim/commands/demo/campaign.py": "from . import the_fit\n",
+    })
+    assert rule_breaches(import_graph(root, ("antsim",))) == [
+        f"{DEMO}.campaign (line 1) imports {DEMO}.the_fit: the demo's shared modules sit "
+        "below its chapters",
+        f"{DEMO}.the_fit (line 1) imports {DEMO}.first_campaign: a chapter of the "
+        "walk-through never imports another: what it needs of an earlier one the walk-through "
+        "hands it, and what two share is in the demo's shared modules"]
 
 
 def test_no_import_circles(graph):

@@ -1,28 +1,31 @@
-"""Every command the README shows, run as a new user runs it: antsim installed from its
-wheel into a fresh virtual environment outside the clone (``conftest.installed``), in an
-empty directory, in the README's order, each one exiting 0 without a traceback.
+"""Every command the README shows, run as a new user runs it, where the README says: antsim
+installed from its wheel into a fresh virtual environment outside the clone
+(``conftest.installed``), the Quick start in a copy of the clone, then the examples in the
+README's order in the place its sentence "The examples below run in this order in ..." names
+(the clone, or an empty directory), each one exiting 0 without a traceback.
 
-The commands are parsed from the README's ``sh`` code blocks, so that a README change that
-breaks a command fails here. What differs from typing them, and why:
+The commands are parsed from the README's ``sh`` code blocks, and the place from its words, so
+that a README change that breaks a command, or that sends the examples where the Quick
+start's outputs are not, fails here. What differs from typing them, and why:
 
 * ``python3 -m pip install . && REST``: the install is the ``installed`` fixture (this tree's
   wheel, its dependencies taken from the running interpreter: offline, and no minute of
-  installing); ``REST`` runs.
+  installing); ``REST`` runs in the copy of the clone.
+* The copy of the clone is this tree without what ``.gitignore`` and a clone leave out
+  (``.git``, caches, ``runs/``) and without an earlier ``antsim-demo/``.
 * The test command of the Quick start runs the whole suite from a clone: it is not run here
   (it would run this test again); ``test_the_quick_start_test_command_is_what_ci_runs``
   holds it to ``.ci/run``.
 * Long commands run reduced (``REDUCED``): the what-if plan with 20 members per variant and
   without its questions (the full plan takes minutes), blindtest with 2 cases.
-* Commands the README says run "from a clone" name files of the repository (``examples/``,
-  ``docs/``): those files, and only those, are copied into the directory first.
 * ``antsim serve`` runs in the background for each client command after it (a fresh server
   each, as a user would start one; ``--port 0``, the free port it prints substituted for the
   README's, so that parallel test runs never collide), and must stop cleanly on SIGINT
   (Ctrl-C). ``node`` commands are skipped when node is not installed.
 
-It takes 80-95 s on two shared cores at load 4-6 (the demo, three 24-hour campaigns,
-diagnose's baseline, the reduced plan, blindtest): more than the suite's budget for it, so it
-is not in the default suite: ``.ci/run`` runs it as its own step
+It takes minutes on two shared cores (the demo, three 24-hour campaigns, diagnose's baseline,
+the reduced plan, blindtest): more than the suite's budget for it, so it is not in the
+default suite: ``.ci/run`` runs it as its own step
 (``ANTSIM_README_COMMANDS=1 python3 -m pytest -q tests/test_readme_commands.py``).
 """
 
@@ -52,10 +55,13 @@ REDUCED = {
     "antsim blindtest --n 10 --seed 1": "antsim blindtest --n 2 --seed 1",
 }
 LISTENING = re.compile(r"listening on (\S+):(\d+) ")
+#: the README's sentence that says where its examples run, and the places it may name
+PLACE = re.compile(r"The examples below run in this order in (the clone|an empty directory), "
+                   r"after the Quick start's")
 
 needs_flag = pytest.mark.skipif(
     os.environ.get("ANTSIM_README_COMMANDS") != "1",
-    reason="80-95 s: CI's own step (ANTSIM_README_COMMANDS=1 python3 -m pytest -q "
+    reason="minutes: CI's own step (ANTSIM_README_COMMANDS=1 python3 -m pytest -q "
            "tests/test_readme_commands.py)")
 
 
@@ -96,6 +102,34 @@ def test_the_quick_start_test_command_is_what_ci_runs():
         f".ci/run does not run the README's test command {TEST_COMMAND!r}"
     readme_step = "ANTSIM_README_COMMANDS=1 python3 -m pytest -q tests/test_readme_commands.py"
     assert readme_step in _ci_run_lines()  # this module's own step
+
+
+def readme_place(text: str = README) -> str:
+    """Where the README says its examples run: "the clone" or "an empty directory"."""
+    places = PLACE.findall(" ".join(text.split()))
+    assert len(places) == 1, "the README must say once where its examples run: " \
+        "'The examples below run in this order in the clone (or: an empty directory), " \
+        "after the Quick start's run'"
+    return places[0]
+
+
+def test_the_readme_says_where_its_examples_run():
+    assert readme_place() in ("the clone", "an empty directory")
+    assert readme_place("The examples below run in this order in an empty directory, after "
+                        "the Quick start's run.") == "an empty directory"
+    with pytest.raises(AssertionError, match="must say once where"):
+        readme_place("The examples run somewhere.")
+
+
+def copy_of_the_clone(target: Path) -> Path:
+    """This tree as a fresh clone has it: without ``.git``, what ``.gitignore`` leaves out
+    (caches, ``runs/``, builds) and an earlier demo's ``antsim-demo/``."""
+    ignored = [line.strip().strip("/") for line in
+               (REPO / ".gitignore").read_text(encoding="utf-8").splitlines()
+               if line.strip() and not line.startswith("#")]
+    shutil.copytree(REPO, target, ignore=shutil.ignore_patterns(".git", "antsim-demo",
+                                                                *ignored))
+    return target
 
 
 def test_nothing_in_the_readme_points_outside_the_repository():
@@ -146,9 +180,12 @@ class Server:
 
 
 @needs_flag
-def test_every_readme_command_runs_from_an_empty_directory(installed, tmp_path):
-    work = tmp_path / "empty"
-    work.mkdir()
+def test_every_readme_command_runs_where_the_readme_says(installed, tmp_path):
+    clone = copy_of_the_clone(tmp_path / "clone")
+    assert not (clone / "runs").exists()
+    place = readme_place()
+    examples = clone if place == "the clone" else tmp_path / "empty"
+    examples.mkdir(exist_ok=True)
     # a fresh machine: no cache of astropy's tables or of diagnose's baselines
     env = installed.environ(ANTSIM_CACHE=str(tmp_path / "cache"))
     serve: str | None = None
@@ -158,8 +195,9 @@ def test_every_readme_command_runs_from_an_empty_directory(installed, tmp_path):
     for command in readme_commands():
         if command == TEST_COMMAND:
             continue
-        if command.startswith(INSTALL):
-            command = command.removeprefix(INSTALL)
+        work = examples
+        if command.startswith(INSTALL):  # the Quick start: in the clone, whatever follows
+            command, work = command.removeprefix(INSTALL), clone
         command = REDUCED.get(command, command)
         if command.startswith("antsim serve "):
             serve = command
@@ -167,10 +205,6 @@ def test_every_readme_command_runs_from_an_empty_directory(installed, tmp_path):
             continue
         if command.startswith("node ") and shutil.which("node") is None:
             continue
-        for token in shlex.split(command):  # files of a clone, copied as a clone has them
-            if token.startswith(("examples/", "docs/")) and (REPO / token).is_file():
-                (work / token).parent.mkdir(parents=True, exist_ok=True)
-                shutil.copy(REPO / token, work / token)
         server = None
         if readme_port is not None and readme_port in command:
             servers += 1
@@ -185,12 +219,13 @@ def test_every_readme_command_runs_from_an_empty_directory(installed, tmp_path):
         finally:
             status = server.stop() if server is not None else 0
         timings.append(f"{time.perf_counter() - start:6.1f} s  {command}")
-        assert done.returncode == 0, f"{command}\n{done.stdout[-2000:]}\n{done.stderr[-3000:]}"
+        assert done.returncode == 0, \
+            f"{command} (in {place})\n{done.stdout[-2000:]}\n{done.stderr[-3000:]}"
         assert "Traceback" not in done.stderr, f"{command}\n{done.stderr[-3000:]}"
         if server is not None:
             assert status == 0, f"{serve} after SIGINT: {status}\n{''.join(server.lines)}"
     assert servers >= 1 and len(timings) >= 10, timings
     # the files the README tells a user to open
     for path in re.findall(r"`((?:runs|antsim-demo)/[\w./-]+\.\w+)`", README):
-        assert (work / path).is_file(), path
+        assert (examples / path).is_file() or (clone / path).is_file(), path
     print("\n".join(timings))

@@ -42,20 +42,29 @@ from __future__ import annotations
 import math
 import time
 from collections import Counter
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from antsim.simulate.runner import recording_meta, simulate
+from antsim.world.effects import EFFECTS
+from antsim.world.effects.optics import ExactTiltCollimation
+from controller.pointing.model import PointingModel
+
+from ..scenario import EffectSpec
 from .baseline import SimulatedBaseline
 from .candidates.base import DISTINGUISH_R, Candidate
 from .candidates.library import CANDIDATES
 from .candidates.terms import TermsCandidate
 from .core import Diagnosis, diagnose
-from .data import from_rows
+from .data import Observations, from_rows
+from .linalg import lstsq
+from .problem import term_columns
 from .select import ALPHA
 
-__all__ = ["BlindCase", "BlindReport", "Harness", "run_blindtest"]
+__all__ = ["BlindCase", "BlindReport", "Harness", "absorb_linear", "run_blindtest"]
 
 NULL = "none"
 #: shapes of which less survives the baseline's projection (r > 0.99995) are not drawn
@@ -208,8 +217,6 @@ class Harness:
     def _reference(self) -> None:
         """A null recording of the scenario: its scans, predicted noise and the tests'
         degrees of freedom and trials set the thresholds."""
-        from antsim.simulate.runner import recording_meta, simulate
-
         seed = CASE_SEED_BASE - 1
         res = simulate(self.scenario, seed)
         obs = from_rows(res.rows, recording_meta(self.scenario, seed, res.model))
@@ -272,7 +279,7 @@ class Harness:
             sig = c.threshold_sigma(prob.pred, prob.used)
             return math.sqrt(crit) * sig, 1.0
         s = prob.cand(c.nonlinear_part(prob.obs, c.unit_signal(prob.obs, shape)))
-        full = float(np.linalg.norm(prob.T(s)))
+        full = float(np.linalg.norm(prob.whiten(s)))
         left = float(np.linalg.norm(self._perp(s[:, None])))
         if left <= 0:
             return float("inf"), 0.0
@@ -311,11 +318,9 @@ class Harness:
 
     def absorbed_terms(self, error: np.ndarray) -> np.ndarray:
         """The baseline terms' coefficients (arcsec) of :meth:`absorbed`."""
-        from .problem import _lstsq
-
         prob = self.ref.problem
         rows = np.concatenate([prob.valid, prob.valid])
-        coef, _ = _lstsq(prob.base[rows], error[rows])
+        coef, _ = lstsq(prob.base[rows], error[rows])
         return coef
 
     # ------------------------------------------------------------------ cases
@@ -340,10 +345,6 @@ class Harness:
         return c, params, factor, thr
 
     def run_case(self, index: int, seed: int) -> BlindCase:
-        from antsim.simulate.runner import recording_meta, simulate
-
-        from ..scenario import EffectSpec
-
         t0 = time.perf_counter()
         c, params, factor, thr = self.draw(index, seed)
         scenario = self.scenario
@@ -351,7 +352,7 @@ class Harness:
         if c is not None:
             scenario = scenario.with_effects((*scenario.effects, EffectSpec(c.effect, params)))
             if c.name == "exact_tilt_collimation":
-                scenario = scenario.with_controller_model(_absorb_linear(scenario, params))
+                scenario = scenario.with_controller_model(absorb_linear(scenario, params))
             elif c.static:
                 scenario = scenario.with_controller_model(self.model_with(c, params))
         case_seed = CASE_SEED_BASE + seed * 10_000 + index
@@ -367,10 +368,6 @@ class Harness:
     def model_with(self, c: Candidate, params: dict[str, Any]):
         """The controller's model in use with the part of a static effect the baseline
         terms take (:meth:`absorbed`) added to their values."""
-        from controller.pointing.model import PointingModel
-
-        from .problem import term_columns
-
         coeffs = hidden_components(c, params)
         obs = self.ref.problem.obs
         error = term_columns(list(coeffs), obs) @ np.array(list(coeffs.values()))
@@ -383,14 +380,9 @@ class Harness:
                              model.name)
 
 
-def _absorb_linear(scenario, params: dict[str, Any]):
+def absorb_linear(scenario, params: dict[str, Any]):
     """The controller's model in use with the linear part of a large exact tilt added (an
     observatory would already have fitted it; without it the scans miss the source)."""
-    from antsim.world.effects.optics import ExactTiltCollimation
-    from controller.pointing.model import PointingModel
-
-    from .problem import _lstsq, term_columns
-
     model = scenario.controller.model
     az, el = np.meshgrid(np.radians(np.arange(0.0, 360.0, 10.0)),
                          np.radians(np.arange(8.0, 88.0, 4.0)))
@@ -398,13 +390,11 @@ def _absorb_linear(scenario, params: dict[str, Any]):
     eff = ExactTiltCollimation(**params)
     a_enc, e_enc = eff.encoder_from_true(az, el)
     d_az = (a_enc - az + math.pi) % (2 * math.pi) - math.pi
-    from .data import Observations
-
     geo = Observations(t_s=np.zeros(az.size), az_rad=az, el_rad=el, xel_arcsec=az * 0,
                        el_arcsec=az * 0, good=np.ones(az.size, bool))
     err = np.concatenate([d_az * np.cos(el), e_enc - el]) * 206264.80624709636
     cols = term_columns(model.names, geo)
-    coef, _ = _lstsq(cols, err)
+    coef, _ = lstsq(cols, err)
     return PointingModel(model.terms, model.values_arcsec + coef, model.name)
 
 
@@ -422,8 +412,6 @@ def _jsonable(params: dict[str, Any]) -> dict[str, Any]:
 
 def hidden_components(c: Candidate, params: dict[str, Any]) -> dict[str, float]:
     """TPOINT coefficients of a hidden harmonic effect."""
-    from antsim.world.effects import EFFECTS
-
     if c.effect and c.effect != "terms":
         eff = EFFECTS[c.effect](**params)
         if hasattr(eff, "coefficients"):
@@ -495,8 +483,6 @@ def run_blindtest(scenario, n: int = 100, seed: int = 1, n_sims: int = 8, cache_
                                  null_fraction=null_fraction)
     cases: list[BlindCase] = []
     if jobs > 1:
-        from concurrent.futures import ProcessPoolExecutor
-
         with ProcessPoolExecutor(max_workers=jobs, initializer=_init_worker,
                                  initargs=(scenario, n_sims, cache_dir, use_cache,
                                            harness.null_fraction)) as pool:

@@ -2,17 +2,23 @@
 
 from __future__ import annotations
 
+import datetime
 import math
 import time
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
+from astropy.time import Time
 
+from antsim.world.weather import WeatherModel
+from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
+from controller.pointing.data import PointingData
+from controller.pointing.fitting import fit_model
 from controller.pointing.model import PointingModel
+from controller.pointing.robust import fit_terms_before_after
 
 from ..blas import one_blas_thread
-from ..heap import trim_heap
 from .baseline import (
     BaselineSpec,
     SimulatedBaseline,
@@ -22,11 +28,11 @@ from .baseline import (
 )
 from .candidates.terms import TermsCandidate
 from .data import Observations
+from .linalg import lstsq
 from .locate import Location, locate, where_signal
 from .problem import (
     Prediction,
     Problem,
-    _lstsq,
     folds_for,
     folds_words,
     heldout_sky_rms,
@@ -35,7 +41,7 @@ from .problem import (
 )
 from .select import Selection, Step, select
 
-__all__ = ["Diagnosis", "Finding", "diagnose"]
+__all__ = ["Diagnosis", "Finding", "diagnose", "plain"]
 
 #: the simulations predict the systematic residual and the noise scan by scan, from their
 #: scans of the same source at the same time; a recorded scan without one gets a noise level
@@ -73,7 +79,7 @@ class Finding:
 
     @property
     def params(self) -> dict[str, Any]:
-        return _plain(self.result.params)
+        return plain(self.result.params)
 
     def explanation(self) -> str:
         c = self.result.candidate
@@ -97,11 +103,13 @@ class Finding:
         }
 
 
-def _plain(value: Any) -> Any:
+def plain(value: Any) -> Any:
+    """``value`` as JSON writes it: numpy scalars as Python numbers, floats rounded to 6
+    digits (None where not finite), tuples as lists, keys as strings."""
     if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
+        return {str(k): plain(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
-        return [_plain(v) for v in value]
+        return [plain(v) for v in value]
     if isinstance(value, np.generic):
         value = value.item()
     if isinstance(value, float):
@@ -150,7 +158,7 @@ class Diagnosis:
                 term_names.append(None)
         x = np.column_stack(cols)
         rows = p.rows()
-        coef, _ = _lstsq(x[rows], p.y_raw[rows])
+        coef, _ = lstsq(x[rows], p.y_raw[rows])
         names = list(p.base_terms)
         values = list(coef[: len(names)])
         k = len(names)
@@ -222,8 +230,8 @@ class Diagnosis:
             "baseline": {"terms": list(self.baseline.terms), "origin": self.baseline.origin,
                          "noise": self.prediction.description},
             "located": {"words": self.location.words,
-                        "ratio_to_noise": _plain(self.location.ratio),
-                        "p": _plain(self.location.p)},
+                        "ratio_to_noise": plain(self.location.ratio),
+                        "p": plain(self.location.p)},
             "alternatives": [{"finding": f.effect,
                               "alternative": a.result.candidate.label(a.result.theta),
                               "correlation": round(a.correlation, 3), "words": a.reason}
@@ -241,8 +249,8 @@ class Diagnosis:
             "degeneracies": self.degeneracies(),
             "absorbed": [{"effect": r.name, "components": list(r.absorbed)}
                          for r in sel.absorbed],
-            "summary": _plain(self.summary),
-            "variants": _plain(self.variants),
+            "summary": plain(self.summary),
+            "variants": plain(self.variants),
             "stop": sel.stop_reason,
         }
 
@@ -396,10 +404,6 @@ def _diagnose(obs: Observations, scenario, model: str | None, n_sims: int, cache
     }
     diag = Diagnosis(obs, spec, prediction, problem, location, selection, findings, summary,
                      sim_baseline=sim_baseline)
-    # the robust fits' solver allocates on the C heap: not beside the summary's residuals
-    # and the selection's freed, still resident pages (200,000 scans: 60-170 MiB)
-    del held, raw
-    trim_heap()
     diag.variants = fit_variants_before_after(diag)
     diag.runtime_s = time.perf_counter() - t0
     return diag
@@ -407,10 +411,6 @@ def _diagnose(obs: Observations, scenario, model: str | None, n_sims: int, cache
 
 def daily_air_curve(scenario):
     """The scenario's deterministic daily air-temperature curve (C) at campaign times (s)."""
-    from astropy.time import Time
-
-    from antsim.world.weather import WeatherModel
-
     hours = (Time(scenario.epoch_utc, scale="utc").mjd % 1.0) * 24.0
     model = WeatherModel(scenario.weather, hours, scenario.site.longitude_deg,
                          scenario.duration_s, np.random.default_rng(0))
@@ -473,8 +473,6 @@ def _clock(obs: Observations, t_s: float) -> str:
     hours = f"{t_s / 3600.0:.2f} h after the start"
     if not epoch:
         return hours
-    import datetime
-
     try:
         start = datetime.datetime.fromisoformat(str(epoch))
     except ValueError:
@@ -498,19 +496,13 @@ def _channel_where(step: Step) -> str:
 def fit_variants_before_after(diag: Diagnosis) -> dict[str, Any]:
     """Fit D (day, Sun above 0 deg) and E (night, Sun below -12 deg) of the 1990 report on
     the baseline terms, before and after removing the findings' fitted signatures."""
-    from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
-    from controller.pointing.data import PointingData
-    from controller.pointing.fitting import fit_model
-    from controller.pointing.model import PointingModel
-    from controller.pointing.robust import fit_terms_before_after
-
     obs = diag.obs
     if obs.sun_el_deg is None:
         return {}
     p = diag.problem
     cols = p.current_columns()
     rows = p.rows()
-    coef, _ = _lstsq(cols[rows], p.y_raw[rows])
+    coef, _ = lstsq(cols[rows], p.y_raw[rows])
     k = len(p.base_terms)
     signal = cols[:, k:] @ coef[k:] if cols.shape[1] > k else np.zeros(2 * obs.n)
     n = obs.n

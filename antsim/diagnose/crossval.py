@@ -25,22 +25,24 @@ benchmarks that cross-validate whole procedures (``benchmarks/blind.py --real --
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from typing import Any, NamedTuple
 
 import numpy as np
 import scipy.linalg
 
 from .candidates.base import DISTINGUISH_R, Candidate, TestResult, p_value, with_trials
-from .problem import (
+from .linalg import (
     HELDOUT_MIN_EIG,
-    Problem,
-    _lstsq,
-    _qr,
     added_basis,
+    economic_qr,
     heldout_lstsq,
+    lstsq,
     qt_dot,
     rows_fortran,
 )
+from .problem import Problem
 
 __all__ = ["MAX_FINDINGS_CV", "contiguous_folds", "heldout_losses", "heldout_sky_rms",
            "loo_blocks", "loo_residuals", "loo_rms", "mimicked", "orthonormal"]
@@ -124,7 +126,7 @@ def heldout_losses(x: np.ndarray | tuple[np.ndarray, ...], y: np.ndarray, used: 
     for k in np.unique(folds[used]):
         test = used & (folds == k)
         train = used & (folds != k)
-        coef, _ = _lstsq(x[np.concatenate([train, train])], y[np.concatenate([train, train])])
+        coef, _ = lstsq(x[np.concatenate([train, train])], y[np.concatenate([train, train])])
         r = (y - x @ coef).reshape(2, n)
         out[test] = r[0, test] ** 2 + r[1, test] ** 2
     return out[used]
@@ -164,8 +166,8 @@ def mimicked(problem: Problem, raw: np.ndarray, rows: np.ndarray | None = None) 
     """Whether the current model mimics any of the raw columns (2n, q) above
     ``DISTINGUISH_R`` over the used scans (its correlation with the model's span).
     ``rows``: the columns' used rows [xel; el] when the caller has them (white noise: the
-    whitened columns are those rows times their weights, as :meth:`Problem.T` makes them)."""
-    whitened = problem.T(raw) if rows is None else rows * problem.weights()[:, None]
+    whitened columns are those rows times their weights, as :meth:`Problem.whiten` makes them)."""
+    whitened = problem.whiten(raw) if rows is None else rows * problem.weights()[:, None]
     q = problem.basis()
     full2 = np.einsum("ij,ij->j", whitened, whitened)
     # the squared norm of the part in the model's span (q orthonormal): r^2 without
@@ -180,14 +182,13 @@ def _cv_thetas(problem: Problem, candidates: Sequence[Candidate],
                taken: set[str]) -> list[tuple[Candidate, list]]:
     """Each linear candidate not yet taken with the parameter values the stage tries."""
     return [(c, c.cv_thetas(problem)) for c in candidates
-            if c.kind == "offsets" and c.name not in taken]
+            if c.kind == "offsets" and c.linear_signature and c.name not in taken]
 
 
 def _options(problem: Problem, thetas: list[tuple[Candidate, list]], model_terms: set[str],
-             idx: np.ndarray | None):
-    """(candidate, theta, raw columns, component names, the raw columns' rows ``idx`` or
-    None without them) of every linear option not yet in the model and not mimicked by it
-    (:func:`mimicked`; ``idx``: the used rows, gathered once for both, white noise only).
+             idx: np.ndarray | None) -> Iterator[Option]:
+    """Every linear option not yet in the model and not mimicked by it (:func:`mimicked`;
+    ``idx``: the used rows, gathered once for both, white noise only; None: not gathered).
     Only a significance test can accept a term the model mimics (its size is then set by
     the terms it is confused with, and prediction cannot tell it from a change of theirs):
     on the AuxTel file the stage would otherwise add HESE2/HECE2 at 1744" (r = 1.00 with
@@ -196,24 +197,63 @@ def _options(problem: Problem, thetas: list[tuple[Candidate, list]], model_terms
     obs = problem.obs
     for c, values in thetas:
         for theta in values:
-            try:
-                cols, names = c.columns(obs, theta)
-            except NotImplementedError:  # a nonlinear signature (exact tilt)
-                break
+            cols, names = c.columns(obs, theta)
             if set(names) <= model_terms:
                 continue
             rows = None if idx is None else cols.take(idx, axis=0)
             if mimicked(problem, cols, rows):
                 continue
-            yield c, theta, cols, names, rows
+            yield Option(c, theta, cols, names, rows)
+
+
+@dataclass
+class CrossValidated:
+    """A finding of the cross-validated stage: its test, the held-out and in-sample Sky RMS
+    (arcsec) of the model before and after it, and its fitted signal (2n, arcsec)."""
+
+    result: TestResult
+    heldout_sky_rms_before: float
+    heldout_sky_rms_after: float
+    sky_rms_before: float
+    sky_rms_after: float
+    signal: np.ndarray
+
+
+class Option(NamedTuple):
+    """A linear option of the stage: a candidate at one shape, its raw columns (2n, q),
+    their names and, where the caller gathered them, their used rows."""
+
+    candidate: Candidate
+    theta: Any
+    raw: np.ndarray
+    names: tuple[str, ...]
+    rows: np.ndarray | None
+
+
+class Ranked(NamedTuple):
+    """An option by its summed held-out losses (arcsec^2)."""
+
+    total: float
+    candidate: Candidate
+    theta: Any
+    names: tuple[str, ...]
+
+
+class Best(NamedTuple):
+    """The option the stage would add: its held-out losses per observation (arcsec^2)."""
+
+    losses: np.ndarray
+    candidate: Candidate
+    theta: Any
+    raw: np.ndarray
+    names: tuple[str, ...]
 
 
 def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
-             model_terms: set[str], room: int, signal_of):
+             model_terms: set[str], room: int, signal_of) -> list[CrossValidated]:
     """Up to ``room`` cross-validated findings (see the module docstring), added to
-    ``problem``; returns [(TestResult, (held-out Sky RMS before, after), (in-sample Sky RMS
-    before, after), ``signal_of(problem, the model's columns before, the result's columns)``
-    once it is added)]."""
+    ``problem`` (``signal_of(problem, the model's columns before, the result's columns)``:
+    the finding's fitted signal once it is added)."""
     folds = contiguous_folds(problem.obs.t_s, K_FOLDS)
     out = []
     while len(out) < room:
@@ -223,7 +263,7 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
         cur = problem.current_columns()
         # the model's basis over the used rows once; each option adds its columns to it
         rows = problem.rows()
-        q0, r0 = _qr(rows_fortran(cur, rows), overwrite=True)
+        q0, r0 = economic_qr(rows_fortran(cur, rows), overwrite=True)
         d0 = np.abs(np.diag(r0))
         now = heldout_losses(cur, problem.y_raw, problem.used, folds, (q0, d0))
         idx = np.flatnonzero(rows)
@@ -233,31 +273,28 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
         # the mimicry check and, times the offset scale where it is not 1 (as cand() makes
         # the columns), for the sums
         share = problem.white() and sums.idx is idx
-        f2 = None if problem.unscaled else np.concatenate([problem.f, problem.f])[idx, None]
-        ranked = []  # (the held-out losses' sum, candidate, theta, component names)
-        for c, theta, raw, names, xg in _options(problem, thetas, model_terms,
-                                                 idx if share else None):
-            if xg is None:
-                total = sums.total(problem.cand(raw))
+        f2 = None if problem.unscaled else np.concatenate(
+            [problem.offset_scale, problem.offset_scale])[idx, None]
+        ranked = []
+        for option in _options(problem, thetas, model_terms, idx if share else None):
+            if option.rows is None:
+                total = sums.total(problem.cand(option.raw))
             else:
-                total = sums.total_rows(xg if f2 is None else xg * f2)
+                total = sums.total_rows(option.rows if f2 is None else option.rows * f2)
             if total is None:  # degenerate there: the per-option losses say it
-                total = float(_losses(problem, cur, q0, d0, folds, raw).sum())
-            ranked.append((total, c, theta, names))
+                total = float(_losses(problem, cur, q0, d0, folds, option.raw).sum())
+            ranked.append(Ranked(total, option.candidate, option.theta, option.names))
         del sums
         tried = len(ranked)
         best = _best(problem, cur, q0, d0, folds, ranked)
         # the model's unweighted basis (2 n_used x m floats): not beside the test's factor
         # and the whole-design fits below
         del q0, r0
-        if best is None or not improves(now, best[0]):
+        if best is None or not improves(now, best.losses):
             break
-        new, c, theta, raw, names = best
+        c = best.candidate
         perp, z_perp = problem.perp_for(problem.used)
-        res = _tested(problem, c, theta, raw, names, perp, z_perp, tried)
-        # the model's factor and projector: not asked for by the fits below
-        del perp, z_perp
-        problem.release()
+        res = _tested(problem, c, best.theta, best.raw, best.names, perp, z_perp, tried)
         if not res.testable:
             break
         sky_before = problem.sky_rms()
@@ -267,8 +304,9 @@ def cv_stage(problem: Problem, candidates: Sequence[Candidate], taken: set[str],
         signal = signal_of(problem, problem.add(c.name, extra, res.comp_names), extra)
         del extra
         problem.update_outliers()
-        out.append((res, (math.sqrt(float(np.mean(now))), math.sqrt(float(np.mean(new)))),
-                    (sky_before, problem.sky_rms()), signal))
+        out.append(CrossValidated(res, math.sqrt(float(np.mean(now))),
+                                  math.sqrt(float(np.mean(best.losses))), sky_before,
+                                  problem.sky_rms(), signal))
     return out
 
 
@@ -290,21 +328,21 @@ def _losses(problem: Problem, cur: np.ndarray, q0: np.ndarray, d0: np.ndarray,
 
 
 def _best(problem: Problem, cur: np.ndarray, q0: np.ndarray, d0: np.ndarray,
-          folds: np.ndarray, ranked: list):
-    """(losses, candidate, theta, raw columns, names) of the option with the least summed
-    held-out losses (the first of equals, as tried), or None without options: the sums rank,
-    the full losses decide among those within :data:`TIE_RTOL` of the least."""
+          folds: np.ndarray, ranked: list[Ranked]) -> Best | None:
+    """The option with the least summed held-out losses (the first of equals, as tried),
+    or None without options: the sums rank, the full losses decide among those within
+    :data:`TIE_RTOL` of the least."""
     if not ranked:
         return None
-    least = min(r[0] for r in ranked)
+    least = min(r.total for r in ranked)
     best = None
     for total, c, theta, names in ranked:
         if not total <= least + TIE_RTOL * abs(least):
             continue
         raw, _ = c.columns(problem.obs, theta)
         new = _losses(problem, cur, q0, d0, folds, raw)
-        if best is None or new.sum() < best[0].sum():
-            best = (new, c, theta, raw, names)
+        if best is None or new.sum() < best.losses.sum():
+            best = Best(new, c, theta, raw, names)
     return best
 
 
@@ -423,11 +461,11 @@ def _tested(problem: Problem, c: Candidate, theta, raw: np.ndarray, names: tuple
             perp, z_perp: np.ndarray, tried: int) -> TestResult:
     """The option's added-variable test, its parameters and its p-value with the
     look-elsewhere effect of every option tried."""
-    res = c._linear(problem, perp, z_perp, raw, tuple(names), theta)
+    res = c.linear_test(problem, perp, z_perp, raw, tuple(names), theta)
     if res.testable:
         res.trials = float(tried)
         res.p = with_trials(p_value(problem, res.delta_chi2, res.dof, res.chi2_now, res.mask),
                             res.trials)
-        c._finish(problem, res)
+        c.finish(problem, res)
     return res
 

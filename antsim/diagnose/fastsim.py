@@ -17,8 +17,14 @@ import warnings
 from collections.abc import Sequence
 
 import numpy as np
+import simpy
 
+from antsim.world.world import World
 from controller.program.campaign import FWHM_PER_SIGMA
+
+from ..simulate import streaming
+from ..simulate.schedule import REFERENCE_SEED, quiet_scenario, record_schedule
+from ..simulate.vectorized import MemberEngine
 
 __all__ = ["shared_schedule_columns"]
 
@@ -29,22 +35,14 @@ def shared_schedule_columns(scenario, seeds: Sequence[int], jobs: int = 1
     shared schedule; seeds missing from the result need a full simulation. With ``jobs`` >= 2
     (and two cores) the quiet run is a second process and the members follow it here
     (:mod:`antsim.simulate.streaming`; same numbers)."""
-    import simpy
-
-    from antsim.world.world import World
-
-    from ..simulate.schedule import REFERENCE_SEED, quiet_scenario, record_schedule
-    from ..simulate.streaming import stream_available, stream_members, take
-    from ..simulate.vectorized import MemberEngine
-
     if not seeds:
         return {}
     quiet = quiet_scenario(scenario)
     shared = power = std = None
-    if stream_available(jobs):
-        stream = take(scenario, REFERENCE_SEED)
+    if streaming.stream_available(jobs):
+        stream = streaming.take(scenario, REFERENCE_SEED)
         try:
-            shared, (power, std) = stream_members(stream, scenario, seeds)
+            shared, (power, std) = streaming.stream_members(stream, scenario, seeds)
         except RuntimeError as err:  # the same numbers, only later
             warnings.warn(f"{err}; running the quiet campaign and the baseline's members in "
                           "this process", RuntimeWarning, stacklevel=2)

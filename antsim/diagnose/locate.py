@@ -18,8 +18,10 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from astropy.time import Time
 
 from . import pvalues
+from .candidates.base import sun_el_grid_deg, time_grid
 from .data import Observations
 from .problem import Problem
 
@@ -63,8 +65,6 @@ class Location:
 
 
 def _hours_since_sunset(obs: Observations) -> np.ndarray | None:
-    from .candidates.base import sun_el_grid_deg, time_grid
-
     if not obs.has_time or (obs.sun_el_deg is None and "epoch_utc" not in obs.meta):
         return None
     try:
@@ -90,8 +90,6 @@ def groupings(obs: Observations) -> list[Group]:
         lon = float(obs.meta.get("longitude_deg", float("nan")))
         epoch = obs.meta.get("epoch_utc")
         if np.isfinite(lon) and epoch:
-            from astropy.time import Time
-
             hour0 = (Time(str(epoch), scale="utc").mjd % 1.0) * 24.0
             local = (hour0 + lon / 15.0 + obs.t_s / 3600.0) % 24.0
             for lo in range(0, 24, 4):

@@ -23,13 +23,23 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.stats import ks_2samp
 
+from antsim.figures.diagnose import Residuals, before_after_figures, before_figures
+from antsim.figures.style import Canvas, figure_file
+from antsim.scenario import EffectSpec, load_scenario
+from antsim.world.effects import EFFECTS
 from controller.pointing.data import PointingData
 from controller.pointing.fitting import fit_model
+from controller.pointing.modelio import model_to_json, write_model_file
+from controller.pointing.tpoint import TPointModel
 
+from .baseline import SimulatedBaseline
 from .candidates.terms import TermsCandidate
-from .core import Diagnosis, Finding, _plain
-from .problem import Problem, _lstsq
+from .core import Diagnosis, Finding, plain
+from .linalg import lstsq
+from .problem import Problem
+from .report import write_diagnose_report
 
 __all__ = ["effect_specs", "resimulate", "updated_scenario_text", "write_outputs"]
 
@@ -44,36 +54,23 @@ def _effect_params(finding: Finding, scenario=None) -> tuple[str, dict[str, Any]
     if isinstance(c, TermsCandidate):
         terms = dict(p.get("terms_arcsec", {}))
         if c.effect != "terms" and c.pair:
-            from antsim.world.effects import EFFECTS
-
             cls = EFFECTS[c.effect]
             s = terms.get(cls.sin_term, 0.0)
             co = terms.get(cls.cos_term, 0.0)
             amp, phase = cls.amplitude_phase(s, co)
             return c.effect, {"amplitude_arcsec": amp, "phase_deg": phase}
         return "terms", {"terms_arcsec": terms}
+    out = c.effect_from_params(p)
+    if out is None:
+        return None
     if c.name == "source_structure" and scenario is not None:
-        out = c.effect_from_params(p)
         sizes = {s.name: s.size_arcmin for s in scenario.sources}
         out["size_arcmin"] = float(sizes.get(p["source"], p.get("size_arcmin", 0.0)))
-        return c.effect, out
-    if hasattr(c, "effect_from_params"):
-        return c.effect, c.effect_from_params(p)
-    if c.name == "feed_offset":
-        return c.effect, {"offset_arcsec": p["offset_arcsec"], "angle_deg": p["angle_deg"]}
-    if c.name == "servo_lag":
-        return c.effect, {"lag_s": p["lag_s"]}
-    if c.name == "backlash":
-        return c.effect, {"az_arcsec": abs(p.get("az_arcsec", 0.0)),
-                          "el_arcsec": abs(p.get("el_arcsec", 0.0))}
-    return None
+    return c.effect, out
 
 
 def effect_specs(diag: Diagnosis, scenario=None):
     """EffectSpec of every finding that has a simulator effect."""
-    from antsim.scenario import EffectSpec
-    from antsim.world.effects import EFFECTS
-
     specs = []
     for f in diag.findings:
         got = _effect_params(f, scenario)
@@ -120,7 +117,7 @@ def _paired_test(diag: Diagnosis, pred) -> dict[str, Any]:
     """Recorded baseline-fit residuals against a prediction, scan by scan (chi^2 per axis of
     the GLS-whitened differences) — the two samples are the recordings and the simulations."""
     obs = diag.obs
-    prob = Problem(obs, pred, diag.problem.base_terms, offset_scale=diag.problem.f)
+    prob = Problem(obs, pred, diag.problem.base_terms, offset_scale=diag.problem.offset_scale)
     prob.update_outliers()
     gof = prob.gof()
     return {axis: {"chi2": v["chi2"], "dof": v["dof"], "ratio": v["ratio"], "p": v["p"]}
@@ -141,8 +138,6 @@ def _ks(diag: Diagnosis, baseline) -> dict[str, Any]:
     for axis, name in ((0, "xel"), (1, "el")):
         sims = np.concatenate([p.res[:, axis] for p in baseline.products])
         sims = sims[np.isfinite(sims)]
-        from scipy.stats import ks_2samp  # only here: importing scipy.stats costs ~0.7 s
-
         ks = ks_2samp(rec[axis], sims)
         out[name] = {"statistic": float(ks.statistic), "p": float(ks.pvalue)}
     return out
@@ -152,8 +147,6 @@ def resimulate(diag: Diagnosis, scenario, n_sims: int = 4, cache_dir=None,
                use_cache: bool = True, jobs: int = 1) -> dict[str, Any]:
     """Simulate the updated scenario and test recorded against simulated residuals, before
     (the scenario as given) and after (with the findings)."""
-    from .baseline import SimulatedBaseline
-
     specs = effect_specs(diag, scenario)
     updated = scenario.with_effects(tuple(scenario.effects) + tuple(specs))
     model = diag.obs.model_in_use if diag.obs.model_in_use is not None else None
@@ -178,8 +171,6 @@ def residuals_before_after(diag: Diagnosis):
     least-squares fit over the diagnosis's used scans, the residuals its Sky RMS
     (``summary``) is the rms of: the figures print the diagnosis's own numbers. Returns
     (data, before, after) as :class:`antsim.figures.diagnose.Residuals`."""
-    from antsim.figures.diagnose import Residuals
-
     p = diag.problem
     obs = diag.obs
     good = obs.good
@@ -193,7 +184,7 @@ def residuals_before_after(diag: Diagnosis):
     out = []
     for names, cols, key in ((list(p.base_terms), p.base, "before"),
                              (after_names, p.current_columns(), "after")):
-        coef, _ = _lstsq(cols[rows], p.y_raw[rows])
+        coef, _ = lstsq(cols[rows], p.y_raw[rows])
         r = (p.y_raw - cols @ coef).reshape(2, -1)[:, good]
         out.append(Residuals(names, r[0], r[1], used, diag.summary[f"sky_rms_{key}_arcsec"]))
     return data, out[0], out[1]
@@ -202,8 +193,6 @@ def residuals_before_after(diag: Diagnosis):
 def _equatorial_plot(before, after, data, path: Path, caption: str):
     """Residuals against the equatorial mount's axes and time (the shared figures draw an
     alt-az sky); ``after`` None: before only."""
-    from antsim.figures.style import Canvas, figure_file
-
     offsets = ("cross-declination", "declination")
     positions = (("hour angle (h, West +)", np.degrees(data.az_rad) / 15.0),
                  ("declination (deg)", np.degrees(data.el_rad)))
@@ -233,8 +222,6 @@ def plots(diag: Diagnosis, out_dir: Path) -> list:
     """Residual plots into ``out_dir``: before and after the findings, or before only (with
     a caption saying nothing was found and what was tested); returns their
     :class:`antsim.figures.style.FigureFile` s."""
-    from antsim.figures.diagnose import before_after_figures, before_figures
-
     data, before, after = residuals_before_after(diag)
     nothing = diag.nothing_found_words() if not diag.findings else ""
     if diag.obs.mount == "equatorial":  # the shared figures draw an alt-az sky
@@ -253,9 +240,6 @@ def write_outputs(diag: Diagnosis, out_dir: str | Path, scenario=None, resim: in
                   cache_dir=None, use_cache: bool = True, jobs: int = 1) -> dict[str, Any]:
     """Write the report (diagnose.json, diagnose.txt, report.html), the updated model and
     scenario, plots; optionally re-simulate."""
-    from controller.pointing.modelio import model_to_json, write_model_file
-    from controller.pointing.tpoint import TPointModel
-
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written: dict[str, Any] = {}
@@ -281,26 +265,22 @@ def write_outputs(diag: Diagnosis, out_dir: str | Path, scenario=None, resim: in
         text = updated_scenario_text(scenario, diag)
         path = out / "scenario_updated.toml"
         path.write_text(text, encoding="utf-8")
-        from antsim.scenario import load_scenario
-
         load_scenario(path)  # it must load like any scenario
         written["scenario"] = path.name
         if resim > 0 and diag.findings:
             res = resimulate(diag, scenario, resim, cache_dir, use_cache, jobs)
             res.pop("_baseline", None)
-            written["resimulation"] = _plain(res)
+            written["resimulation"] = plain(res)
     figures = plots(diag, out)
     written["plots"] = [f.path.name for f in figures]
     written["report"] = "report.html"
     doc = diag.to_json()
-    doc["outputs"] = _plain(written)
+    doc["outputs"] = plain(written)
     (out / "diagnose.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
     text = diag.text()
     if "resimulation" in written:
         text += "\n" + resimulation_words(written["resimulation"])
     (out / "diagnose.txt").write_text(text + "\n", encoding="utf-8")
-    from .report import write_diagnose_report
-
     write_diagnose_report(doc, text, figures, out, recordings=str(diag.obs.path),
                           axes=diag.axes_label(),
                           nothing_found="" if diag.findings else diag.nothing_found_words())

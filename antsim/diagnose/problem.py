@@ -11,7 +11,7 @@ chi^2 (known noise, from simulation) or F (noise estimated from the data) test o
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,11 +20,13 @@ import scipy.linalg
 from controller.pointing.model import PointingModel
 from controller.pointing.terms import basis_columns
 
-from ..heap import trim_heap
 from . import pvalues
 from .data import Observations
+from .factors import ModelFactors, Projection
+from .linalg import heldout_lstsq, lstsq, rows_fortran, take_rows_fortran
 
-__all__ = ["Prediction", "Problem", "ShapeFit", "term_columns"]
+__all__ = ["OUTLIER_Z", "AddedFit", "LinearFit", "MaskFit", "Prediction", "Problem",
+           "folds_for", "folds_words", "heldout_sky_rms", "sky_of", "term_columns"]
 
 #: a scan whose whitened residual on either axis exceeds this is an outlier (gusts)
 OUTLIER_Z = 4.0
@@ -89,55 +91,33 @@ class LinearFit:
     n_used: int = 0
 
 
-def correlation_matrix(t_s: np.ndarray, model: tuple[tuple[float, float], ...]) -> np.ndarray:
-    """Correlation of the noise between scans at times ``t_s`` (s): 1 on the diagonal and
-    sum_m w_m exp(-|dt| / tau_m) off it (``model`` = ((w_m, tau_m), ...), sum w_m < 1)."""
-    n = t_s.size
-    r = np.zeros((n, n))
-    if model:
-        dt = np.abs(t_s[:, None] - t_s[None, :])
-        for wgt, tau in model:
-            r += wgt * np.exp(-dt / tau)
-    r[np.diag_indices(n)] = 1.0
-    return r
+@dataclass
+class AddedFit:
+    """:meth:`Problem.fit_added`'s fit and, where the model's kept QR served, the whitened
+    added columns ``x``, them projected off the model and the data projected off it (over
+    the scans fitted; None otherwise)."""
+
+    fit: LinearFit
+    x: np.ndarray | None = None
+    x_perp: np.ndarray | None = None
+    z_perp: np.ndarray | None = None
 
 
-#: sets of scans whose row indices and weights whitening keeps (each 2 n_used indices and
-#: weights: 6 MB at 200,000 scans)
-VIEW_CACHE = 4
+@dataclass
+class MaskFit:
+    """:meth:`Problem.mask_fit`: the scans a model with the added columns keeps and, where
+    its last fit was over them and the model's kept QR served, that fit."""
 
-#: the bound on the memory cached projectors hold (their bases; see Problem.perp_for): one
-#: factor of the model over its used scans and its projectors at 200,000 scans (49 MiB),
-#: what the shape tests read (Problem.shape_fit corrects it by rows for other scan sets)
-PERP_CACHE_BYTES = 64 * 2**20
-
-
-#: :meth:`Problem.shape_fit` corrects the model's fit over its used scans by at most this
-#: many rows (another set of scans); beyond, the explicit path factors the model over it
-ROW_UPDATE_MAX = 4096
-
-#: the least 1 - R^2 of a column on the model at which :meth:`Problem.shape_fit` takes its
-#: norm off the model from x^T x - (q^T x)^T (q^T x): the difference loses log10(1 / (1 -
-#: R^2)) of the 16 digits, here at most 5 (11 kept: relative error about 2.2e-16 / (1 -
-#: R^2) <= 2.2e-11, far below the 6 significant digits diagnose prints); closer columns
-#: take the explicit projection
-GRAM_1MR2_MIN = 1e-5
-
-#: a candidate whose every (raw) column has a 1 - R^2 on the model below this is absorbed
-#: whole (four decades below the candidates' ABSORBED_1MR2, beyond the Gram's rounding): it
-#: tests nothing (0 parameters, as the explicit path finds), so no figure depends on its
-#: fit, and :meth:`Problem.shape_fit` gives it the mask of the model alone (the explicit
-#: path's fits the columns' parts off the model, at most 1e-5 of them: the same scans but
-#: where a residual lies within about 1e-3 of OUTLIER_Z)
-ABSORBED_WHOLE_1MR2 = 1e-10
+    mask: np.ndarray
+    last: AddedFit | None
 
 
 class Problem:
     """Whitened data and base design; fits models of base + extra columns on the used scans.
 
     Whitening is generalized least squares: per axis, the residuals of the used scans divided
-    by their predicted noise have the correlation :func:`correlation_matrix` of the
-    prediction's model (identity when the noise is white), and ``T(v)`` maps raw (2n, k)
+    by their predicted noise have the correlation :func:`.factors.correlation_matrix` of the
+    prediction's model (identity when the noise is white), and ``whiten(v)`` maps raw (2n, k)
     columns to ``L^-1 (v / sigma)`` over the used scans (L the Cholesky factor), so that
     every chi^2 below is a sum of independent unit-variance terms.
     """
@@ -147,11 +127,10 @@ class Problem:
         self.obs = obs
         #: how much of a pointing error each scan's measured offset shows (a partly
         #: resolved source shows theta_b^2 / (theta_b^2 + theta_s^2) of it, Clark 1968)
-        self.f = np.ones(obs.n) if offset_scale is None else np.asarray(offset_scale, float)
-        self._perps: dict[bytes, tuple] = {}
-        self._perp_bytes: dict[bytes, int] = {}
-        self._chol: dict[bytes, tuple] = {}
-        self._views: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+        self.offset_scale = np.ones(obs.n) if offset_scale is None \
+            else np.asarray(offset_scale, float)
+        #: the factorizations of the current model, made on request and kept
+        self.factors = ModelFactors(self)
         self._w: tuple[bytes, np.ndarray] | None = None
         self._stacked: tuple[int, np.ndarray] | None = None
         self.pred = pred
@@ -170,28 +149,22 @@ class Problem:
         self.used = ok.copy()
         self.extra: list[np.ndarray] = []  # accepted columns (raw, error convention)
         self.extra_names: list[str] = []
-        # the last fit of the current model and the last raw residuals of it or of it plus
-        # given columns, by what they depend on: outlier updates, goodness of fit, Sky RMS
-        # and the summary ask for the same fits again (each a QR of 2 n_used rows)
-        self._fit_memo: tuple | None = None
-        self._raw_memo: list[tuple] = []
-        self._cv_memo: tuple | None = None  # the current model's last held-out chi^2
 
     # ------------------------------------------------------------------ candidates
     @property
     def unscaled(self) -> bool:
         """Whether every scan shows all of a pointing error (offset scale 1): candidate
         columns are then the raw columns."""
-        return bool(np.all(self.f == 1.0))
+        return bool(np.all(self.offset_scale == 1.0))
 
     def cand(self, columns: np.ndarray) -> np.ndarray:
         """Candidate columns as the recordings show them (scaled by the offset scale)."""
-        f2 = np.concatenate([self.f, self.f])
+        f2 = np.concatenate([self.offset_scale, self.offset_scale])
         return columns * f2[:, None] if columns.ndim == 2 else columns * f2
 
     # ------------------------------------------------------------------ whitening
     @property
-    def w(self) -> np.ndarray:
+    def row_weights(self) -> np.ndarray:
         """1 / (predicted noise) per row (2n), arcsec^-1 (read-only; formed once per noise
         scale, not per call: whitening asks for it thousands of times)."""
         key = self.scale.tobytes()
@@ -207,37 +180,15 @@ class Problem:
         used = self.used if used is None else used
         return np.concatenate([used, used])
 
-    def _factors(self, used: np.ndarray):
-        key = used.tobytes()
-        hit = self._chol.get(key)
-        if hit is None:
-            out = []
-            models = (self.pred.corr_xel, self.pred.corr_el)
-            t = self.obs.t_s[used]
-            for model in models:
-                if model:
-                    c = scipy.linalg.cholesky(correlation_matrix(t, model), lower=True)
-                    # the inverse factor once per set of scans: whitening is then one
-                    # matrix product (many small triangular solves cost more in overhead)
-                    out.append(scipy.linalg.solve_triangular(c, np.eye(c.shape[0]),
-                                                             lower=True))
-                else:
-                    out.append(None)
-            hit = tuple(out)
-            if len(self._chol) > 256:
-                self._chol.clear()
-            self._chol[key] = hit
-        return hit
-
-    def T(self, v: np.ndarray, used: np.ndarray | None = None,
-          fortran: bool = False) -> np.ndarray:
+    def whiten(self, v: np.ndarray, used: np.ndarray | None = None,
+               fortran: bool = False) -> np.ndarray:
         """Whiten raw rows ``v`` (2n,) or (2n, k) over the used scans: (2 n_used[, k]);
         ``fortran``: a (2 n_used, k) result in Fortran order where the noise is white (what
         LAPACK factors without a copy)."""
         used = self.used if used is None else used
-        factors = self._factors(used)
+        factors = self.factors.noise_factors(used)
         if all(f is None for f in factors):  # white: the used rows times their weights
-            idx, wu = self._view(used)
+            idx, wu = self.factors.rows_and_weights(used)
             if idx.size == v.shape[0]:  # every row: the product alone, no gather
                 return np.multiply(v, wu if v.ndim == 1 else wu[:, None],
                                    order="F" if fortran else "C")
@@ -248,7 +199,7 @@ class Problem:
             return out
         flat = v.ndim == 1
         vv = v[:, None] if flat else v
-        w = self.w
+        w = self.row_weights
         n = self.n
         parts = []
         for axis, factor in enumerate(factors):
@@ -264,20 +215,7 @@ class Problem:
         """The weights (1 / predicted noise) of the rows [xel; el] of the scans ``used``
         (default: the model's): white noise's whitening is the rows times these (kept,
         read-only)."""
-        return self._view(self.used if used is None else used)[1]
-
-    def _view(self, used: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(indices, weights) of the rows [xel; el] of the scans ``used``, kept for the last
-        few sets of scans (one boolean selection and stacking per set, not per call)."""
-        key = used.tobytes() + self.scale.tobytes()
-        hit = self._views.get(key)
-        if hit is None:
-            idx = np.flatnonzero(self.rows(used))
-            hit = (idx, self.w[idx])
-            if len(self._views) >= VIEW_CACHE:
-                self._views.pop(next(iter(self._views)))
-            self._views[key] = hit
-        return hit
+        return self.factors.rows_and_weights(self.used if used is None else used)[1]
 
     def current_columns(self) -> np.ndarray:
         """The current model's raw columns (2n, m): the base, then the accepted ones (stacked
@@ -301,6 +239,7 @@ class Problem:
         ``name:component``; returns the model's columns before it (kept: the finding's
         fitted signal is taken off them)."""
         before = self.current_columns()
+        self.factors.clear()  # they were the model's without it
         self.extra.append(extra)
         self.extra_names.extend(f"{name}:{n}" for n in comp_names)
         return before
@@ -320,11 +259,11 @@ class Problem:
 
     def _fit(self, columns: np.ndarray, used: np.ndarray) -> LinearFit:
         """:meth:`fit`, made."""
-        a = self.T(columns, used)
-        z = self.T(self.y, used)
-        coef, cov = _lstsq(a, z)
+        a = self.whiten(columns, used)
+        z = self.whiten(self.y, used)
+        coef, cov = lstsq(a, z)
         wres = z - a @ coef
-        resid = (self.y - columns @ coef) * self.w
+        resid = (self.y - columns @ coef) * self.row_weights
         return LinearFit(coef=coef, chi2=float(wres @ wres), resid=resid, cov=cov, wres=wres,
                          n_used=int(used.sum()))
 
@@ -332,49 +271,27 @@ class Problem:
         """:meth:`fit` of the current model (the last one kept: the same fit is not made
         twice; treat it as read-only)."""
         used = self.used if used is None else used
-        key = (used.tobytes(), self.scale.tobytes(), len(self.extra))
-        if self._fit_memo is None or self._fit_memo[0] != key:
-            self._fit_memo = (key, self._fit(self.current_columns(), used))
-        return self._fit_memo[1]
-
-    def _current_qr(self, used: np.ndarray):
-        """(q, r, q^T z, z, z projected off q) of the whitened current model over the scans
-        ``used`` (z the whitened data), cached with the projectors; None when its columns
-        are not independent there (the callers then fit the whole design)."""
-        key = b"qr" + used.tobytes() + bytes([len(self.extra)])
-        hit = self._cached(key)
-        if hit is None:
-            q, r = _qr(self.T(self.current_columns(), used, fortran=True), overwrite=True)
-            d = np.abs(np.diag(r))
-            full = bool(d.size) and d.min() > 1e-10 * max(float(d.max()), 1e-300)
-            if full:
-                z = self.T(self.y, used)
-                qz = q.T @ z
-                hit = (q, r, qz, z, z - q @ qz)
-            else:
-                hit = ()
-            self._cache(key, hit, 8 * (q.size + 2 * q.shape[0]) if full else 0)
-        return hit or None
+        return self.factors.current_fit(used, lambda: self._fit(self.current_columns(), used))
 
     def current_r(self, used: np.ndarray) -> np.ndarray | None:
         """The R factor (m, m) of the whitened current model over the scans ``used`` (its
         cached QR), or None when the model's columns are not independent there."""
-        qr = self._current_qr(used)
-        return None if qr is None else qr[1]
+        qr = self.factors.qr(used)
+        return None if qr is None else qr.r
 
     def coef_on_current(self, x: np.ndarray, used: np.ndarray) -> np.ndarray | None:
         """Least-squares coefficients of whitened columns ``x`` (2 n_used, k) on the whitened
         current model over ``used``, from its cached QR (R^-1 Q^T x); None when the model's
         columns are dependent there."""
-        qr = self._current_qr(used)
+        qr = self.factors.qr(used)
         if qr is None:
             return None
-        return scipy.linalg.solve_triangular(qr[1], qr[0].T @ x)
+        return scipy.linalg.solve_triangular(qr.r, qr.q.T @ x)
 
     def current_norms(self, used: np.ndarray) -> np.ndarray:
         """Norms of the whitened current model's columns over ``used`` (from its cached R;
         the model's columns must be independent there)."""
-        return np.linalg.norm(self._current_qr(used)[1], axis=0)
+        return np.linalg.norm(self.factors.qr(used).r, axis=0)
 
     def fit_added(self, extra: np.ndarray, used: np.ndarray | None = None) -> LinearFit:
         """:meth:`fit` of the current model plus raw columns ``extra`` (2n, q) by
@@ -382,231 +299,66 @@ class Problem:
         ``extra``, projected off it, is solved for; the same least-squares problem (the
         residual is the same projection, to float rounding), without a factorization of the
         whole design per call. ``cov`` is the extra columns' block only."""
-        return self._added(extra, self.used if used is None else used)[0]
+        return self._added(extra, self.used if used is None else used).fit
 
     def _added(self, extra: np.ndarray, used: np.ndarray, valid_only: bool = False
-               ) -> tuple[LinearFit, tuple[np.ndarray, np.ndarray, np.ndarray] | None]:
-        """:meth:`fit_added` and, when the model's cached QR served, the whitened ``extra``,
-        it projected off the model and the projected data (x, x_perp, z_perp).
-        ``valid_only``: ``resid`` only where the scans are valid (NaN elsewhere), the used
-        rows' from the fit's own residual where the noise is white (what outlier masks
-        need, without a product of the whole design over all rows)."""
-        qr = self._current_qr(used)
+               ) -> AddedFit:
+        """:meth:`fit_added` and, when the model's kept QR served, the whitened ``extra``,
+        it projected off the model and the projected data. ``valid_only``: ``resid`` only
+        where the scans are valid (NaN elsewhere), the used rows' from the fit's own
+        residual where the noise is white (what outlier masks need, without a product of
+        the whole design over all rows)."""
+        qr = self.factors.qr(used)
         if qr is None:
             f = self.fit(np.column_stack([self.current_columns(), extra]), used)
             m = self.current_columns().shape[1]
             f.cov = f.cov[m:, m:]
-            return f, None
-        q, r, qz, _, zp = qr
-        x = self.T(extra, used)
+            return AddedFit(f)
+        q, r, qz, zp = qr.q, qr.r, qr.qz, qr.z_perp
+        x = self.whiten(extra, used)
         qx = q.T @ x
         xp = x - q @ qx
-        coef_x, cov = _lstsq(xp, zp)
+        coef_x, cov = lstsq(xp, zp)
         coef_a = scipy.linalg.solve_triangular(r, qz - qx @ coef_x)
         wres = zp - xp @ coef_x
         if valid_only and self.white(used):
             # white: the used rows' whitened residual is the standardized residual
             resid = np.full(2 * self.n, np.nan)
-            resid[self._view(used)[0]] = wres
+            resid[self.factors.rows_and_weights(used)[0]] = wres
             rest = np.flatnonzero(self.rows(self.valid & ~used))
             resid[rest] = (self.y[rest] - self.current_columns()[rest] @ coef_a
-                           - extra[rest] @ coef_x) * self.w[rest]
+                           - extra[rest] @ coef_x) * self.row_weights[rest]
         else:
-            resid = (self.y - self.current_columns() @ coef_a - extra @ coef_x) * self.w
-        return (LinearFit(coef=np.concatenate([coef_a, coef_x]), chi2=float(wres @ wres),
-                          resid=resid, cov=cov, wres=wres, n_used=int(used.sum())),
-                (x, xp, zp))
-
-    def shape_fit(self, raw: np.ndarray) -> ShapeFit | None:
-        """:meth:`mask_fit` of the candidate's columns (raw ``raw`` (2n, k), scaled by
-        :meth:`cand`) and the fit over the mask it returns, from
-        one pass over the model's cached basis over its used scans U (``q^T x``), not two
-        factors and projections: the same masks and numbers to rounding, or None where the
-        explicit path must serve (correlated noise, dependent model columns, an
-        ill-conditioned candidate Gram, more than :data:`ROW_UPDATE_MAX` rows between U and
-        a scan set tried; the caller refuses columns within :data:`GRAM_1MR2_MIN` of the
-        span). The mask's fits leave out the columns within :data:`ABSORBED_WHOLE_1MR2` of
-        the model's span (the explicit path fits their rounding-level remainder).
-
-        Algebra (white noise: whitening is a weight per row). With the model in its basis
-        q = A_U R^-1 and x the whitened columns over U, every row i of the valid scans has
-        model coordinates g_i (q_i on U, a_i R^-1 elsewhere), the data's residual e_i of the
-        model's fit over U (z_perp on U) and the columns' part p_i = x_i - g_i^T q^T x left by
-        that fit. Over U, sum g g^T = I, sum g p^T = 0, sum g e = 0, sum p e = x^T z_perp and
-        sum p p^T = x^T x - (q^T x)^T (q^T x) (Frisch-Waugh-Lovell from inner products); over
-        any other set of scans S these sums change by the rows S adds and removes, so the fit
-        of model + columns over S is a small (m + k) system. Its residuals on U are
-        z_perp_i - x_i c - q_i d (d the change of the model's coordinates): |q_i d| <= |q_i|
-        |d|, so only rows whose z_perp_i - x_i c lies within that of OUTLIER_Z can fall on
-        the other side; those rows are computed exactly, and the mask is the same set.
-        Where the offset scale is not 1 the raw columns' norms and norms off the model come
-        beside (the signature's, for absorption): x is then [scaled, raw]."""
-        used = self.used
-        qr = self._current_qr(used) if self.white(used) else None
-        if qr is None:
-            return None
-        q, _, _, _, zp = qr
-        rn_max, idx_o, g_o, e_o, zz, uscan, oscan = self._shape_base(used, qr)
-        k = raw.shape[1]
-        scaled = not self.unscaled
-        idx, wu = self._view(used)
-        f2u = np.concatenate([self.f[uscan]] * 2) if scaled else None
-        # whitened over U in Fortran order, the rows gathered once: the scaled columns
-        # (raw times the offset scale, as cand() makes them) then the raw ones; the one
-        # pass over the model's basis and x's inner products made as it is (shape_products)
-        x, qx, xx, xz = shape_products(raw, idx, wu, f2u, q, zp)
-        x_o = raw[idx_o]
-        if scaled:
-            x_o = np.column_stack([x_o * self.f[idx_o % self.n][:, None], x_o])
-        x_o = x_o * self.w[idx_o][:, None]
-        gram = xx - qx.T @ qx
-        d = np.diag(xx)
-        if not np.isfinite(xx).all() or not (d > 0).all():
-            return None
-        ratio = np.diag(gram) / d  # 1 - R^2 of each column on the model
-        if ratio[x.shape[1] - k:].max() < ABSORBED_WHOLE_1MR2:
-            fitted = np.arange(0)  # a signature the model absorbs whole: the model alone
-        else:
-            # the columns the model leaves a part of: one off it by rounding only (a
-            # signature partly absorbed, e.g. by an accepted term) is not fitted, as a
-            # signature absorbed whole is not (its direction would be rounding)
-            fitted = np.flatnonzero(ratio[:k] >= ABSORBED_WHOLE_1MR2)
-        # the fitted columns of x and q^T x (a view where they are the first ones)
-        cols = fitted if 0 < fitted.size < k else slice(0, fitted.size)
-        p_o = x_o - g_o @ qx
-        m = self.current_columns().shape[1] + k
-        nu, no = uscan.size, oscan.size
-
-        def fit(scans: np.ndarray):
-            rm = np.searchsorted(uscan, np.flatnonzero(used & ~scans))
-            ad = np.flatnonzero(scans[oscan])
-            if 2 * (rm.size + ad.size) > ROW_UPDATE_MAX:
-                return None
-            out = _rows_fit(q, x, qx, zp, gram, xz, xx, zz, g_o, p_o, x_o, e_o,
-                            np.concatenate([rm, rm + nu]), np.concatenate([ad, ad + no]),
-                            fitted)
-            if out is None:
-                return None
-            schur, rhs, chi2_now, fullsq, coef, cov, b, model, on_model = out
-            # the standardized residuals of model + columns on the used scans' rows are
-            # z_perp - x c - q d; |q_i d| <= max_i |q_i| |d| = bound, so only rows whose
-            # |z_perp - x c| exceeds OUTLIER_Z - bound can exceed OUTLIER_Z (a margin of
-            # 1e-9 of both for rounding): those are computed exactly
-            dv = b - qx[:, cols] @ coef
-            bound = rn_max * float(np.linalg.norm(dv)) * (1 + 1e-9) + 1e-9
-            near, u_near = near_rows(x, cols, coef, zp, OUTLIER_Z - bound)
-            out_u = near[np.abs(u_near - q[near] @ dv) > OUTLIER_Z]
-            out_o = np.flatnonzero(~(np.abs(e_o - g_o @ b - p_o[:, cols] @ coef)
-                                     <= OUTLIER_Z))
-            keep = self.valid.copy()
-            keep[uscan[out_u % nu]] = False
-            keep[oscan[out_o % no]] = False
-            return keep, ShapeFit(scans, schur, rhs, chi2_now, fullsq, coef, cov, x, qx,
-                                  model, on_model)
-
-        # mask_fit's iterations: from every valid scan, twice
-        scans = self.valid
-        for _ in range(2):
-            out = fit(scans)
-            if out is None:
-                return None
-            keep, res = out
-            if keep.sum() < max(m, 3) or np.array_equal(keep, scans):
-                return res
-            # the model's own scans as one array, not a copy per result (most candidates
-            # keep them: a mask of n bytes each, held by every result of the round)
-            scans = used if np.array_equal(keep, used) else keep
-        out = fit(scans)
-        return None if out is None else out[1]
-
-    def _shape_base(self, used: np.ndarray, qr: tuple):
-        """What :meth:`shape_fit` keeps per model and used scans: the largest row norm of
-        the model's basis q, the rows of the valid scans outside ``used`` (indices into 2n, the
-        model's coordinates there and the data's residual of the model's fit over
-        ``used``), ||z_perp||^2, and the scans of both sets."""
-        key = b"sb" + used.tobytes() + bytes([len(self.extra)])
-        hit = self._cached(key)
-        if hit is None:
-            q, r, qz, _, zp = qr
-            rn_max = float(np.sqrt(np.einsum("ij,ij->i", q, q).max())) if q.size else 0.0
-            other = self.valid & ~used
-            idx_o = np.flatnonzero(self.rows(other))
-            a_o = self.current_columns()[idx_o] * self.w[idx_o][:, None]
-            g_o = scipy.linalg.solve_triangular(r, a_o.T, trans="T").T
-            e_o = self.y[idx_o] * self.w[idx_o] - g_o @ qz
-            hit = (rn_max, idx_o, g_o, e_o, float(zp @ zp), np.flatnonzero(used),
-                   np.flatnonzero(other))
-            self._cache(key, hit, 8 * zp.size)
-        return hit
-
-    def release(self, keep: np.ndarray | None = None) -> None:
-        """Drop the cached projectors and factors (selection calls it when it is done: what
-        follows fits whole designs), but those of the current model over the scans ``keep``
-        when given (what is asked for next)."""
-        held = set() if keep is None else {
-            p + keep.tobytes() + bytes([len(self.extra)]) for p in (b"", b"qr", b"sb")}
-        for k in [k for k in self._perps if k not in held]:
-            del self._perps[k]
-            self._perp_bytes.pop(k, None)
-
-    def _cache(self, key: bytes, value, size: int) -> None:
-        """Keep ``value`` among the cached projectors and factors: at most 64 of them and
-        PERP_CACHE_BYTES together (each holds a basis, 2 n_used x k floats: 200,000 scans
-        and 20 terms are 64 MB), the least recently used let go first, but never those over
-        the model's used scans (its factor, projector and :meth:`shape_fit`'s rows), which
-        every shape test reads (a model larger than the bound would be factored again per
-        shape)."""
-        used = self.used.tobytes() + bytes([len(self.extra)])
-        pinned = {used, b"qr" + used, b"sb" + used}
-        while len(self._perps) > 64 or sum(self._perp_bytes.values()) + size \
-                > PERP_CACHE_BYTES:
-            old = next((k for k in self._perps if k not in pinned), None)
-            if old is None:
-                break
-            # a projector over the same scans holds the factor's basis (counted once, with
-            # the factor): it goes with it
-            for k in (old, old[2:]) if old.startswith(b"qr") else (old,):
-                self._perps.pop(k, None)
-                self._perp_bytes.pop(k, None)
-        self._perps[key] = value
-        self._perp_bytes[key] = size
-
-    def _cached(self, key: bytes):
-        """The cached projector or factor ``key`` (None if not held), now the most recently
-        used."""
-        hit = self._perps.pop(key, None)
-        if hit is not None:
-            self._perps[key] = hit
-            self._perp_bytes[key] = self._perp_bytes.pop(key)
-        return hit
+            resid = (self.y - self.current_columns() @ coef_a - extra @ coef_x) * self.row_weights
+        return AddedFit(LinearFit(coef=np.concatenate([coef_a, coef_x]),
+                                  chi2=float(wres @ wres), resid=resid, cov=cov, wres=wres,
+                                  n_used=int(used.sum())), x, xp, zp)
 
     def mask_for(self, extra: np.ndarray, iterations: int = 2) -> np.ndarray:
         """The scans a model of the current columns plus raw ``extra`` (2n, q) keeps
         (standardized residual <= OUTLIER_Z on both axes), starting from every valid scan: a
         candidate that explains scans the current model rejects gets them back."""
-        return self.mask_fit(extra, iterations)[0]
+        return self.mask_fit(extra, iterations).mask
 
-    def mask_fit(self, extra: np.ndarray, iterations: int = 2):
+    def mask_fit(self, extra: np.ndarray, iterations: int = 2) -> MaskFit:
         """:meth:`mask_for` and, when its last fit was over the scans it returns (the mask
-        settled) and the model's cached QR served, that fit: (LinearFit, (x, x_perp,
-        z_perp)) as :meth:`_added` gives them, else None."""
+        settled) and the model's kept QR served, that fit (with the projected columns)."""
         used = self.valid.copy()
         m = self.current_columns().shape[1] + extra.shape[1]
         last = None
         for _ in range(iterations):
-            f, parts = self._added(extra, used, valid_only=True)
-            last = (f, parts) if parts is not None else None
-            r = np.abs(f.resid)
+            added = self._added(extra, used, valid_only=True)
+            last = added if added.x is not None else None
+            r = np.abs(added.fit.resid)
             keep = self.valid & (r[: self.n] <= OUTLIER_Z) & (r[self.n:] <= OUTLIER_Z)
             if keep.sum() < max(m, 3) or np.array_equal(keep, used):
-                return used, last
+                return MaskFit(used, last)
             used = keep
-        return used, None
+        return MaskFit(used, None)
 
     def update_outliers(self, iterations: int = 2) -> None:
         """Reject scans whose standardized residual exceeds OUTLIER_Z on either axis (and,
         with unknown noise, re-estimate each axis' noise scale from the kept scans)."""
-        trim_heap()  # fits of the whole design follow: not beside freed, resident heap
         for _ in range(iterations):
             f = self.fit_current()
             if not self.pred.known_noise:
@@ -621,8 +373,7 @@ class Problem:
             self.used = keep
         if not self.pred.known_noise:
             self._rescale(self.fit_current())
-        self._perps.clear()
-        self._perp_bytes.clear()
+        self.factors.clear()
 
     def _rescale(self, f: LinearFit) -> None:
         """Per-axis noise scale from the residual rms, corrected for the fitted columns."""
@@ -635,54 +386,29 @@ class Problem:
             ms = float(np.mean(part**2)) * factor if part.size else 1.0
             if ms > 0:
                 self.scale[axis] *= math.sqrt(ms)
-        self._perps.clear()
-        self._perp_bytes.clear()
+        self.factors.clear()
 
     # ------------------------------------------------------------------ tests
     def white(self, used: np.ndarray | None = None) -> bool:
         """Whether whitening over the used scans is a weight per row (no correlated noise):
-        a whitened column is then the raw column times :attr:`w` on the used rows."""
-        return all(f is None for f in self._factors(self.used if used is None else used))
+        a whitened column is then the raw column times :attr:`row_weights` on the used rows."""
+        return all(f is None for f in
+                   self.factors.noise_factors(self.used if used is None else used))
 
     def basis(self, used: np.ndarray | None = None) -> np.ndarray:
         """An orthonormal basis (2 n_used, rank) of the whitened current model over the used
         scans (what :meth:`projector` projects out)."""
-        used = self.used if used is None else used
-        qr = self._current_qr(used)
-        if qr is not None:  # independent columns: the cached factor's basis, all of it
-            return qr[0]
-        a = self.T(self.current_columns(), used)
-        q, r = _qr(a)
-        d = np.abs(np.diag(r))
-        return q[:, d > 1e-10 * max(float(d.max()) if d.size else 0.0, 1e-300)]
+        return self.factors.basis(self.used if used is None else used)
 
-    def projector(self, used: np.ndarray | None = None):
-        """A function raw v (2n, k) -> P_perp T(v): whitened over the used scans, with the
+    def projector(self, used: np.ndarray | None = None) -> Callable[[np.ndarray], np.ndarray]:
+        """A function raw v (2n, k) -> P_perp whiten(v): whitened over the used scans, with the
         current model projected out."""
-        used = self.used if used is None else used
-        q = self.basis(used)
+        return self.factors.projector(self.used if used is None else used)
 
-        def perp(v: np.ndarray) -> np.ndarray:
-            vr = self.T(v, used)  # a new array: the model's part taken off in place
-            vr -= q @ qt_dot(q, vr)
-            return vr
-
-        return perp
-
-    def perp_for(self, used: np.ndarray):
-        """Cached projector of the current model over the scans ``used`` and the projected
-        data: (perp, z_perp)."""
-        key = used.tobytes() + bytes([len(self.extra)])
-        hit = self._cached(key)
-        if hit is None:
-            perp = self.projector(used)
-            qr = self._current_qr(used)
-            hit = (perp, qr[4] if qr is not None else perp(self.y[:, None])[:, 0])
-            # the basis is shared with the cached factors when the model's columns are
-            # independent there (already counted)
-            m = 1 if qr is not None else self.current_columns().shape[1] + 1
-            self._cache(key, hit, 8 * hit[1].size * m)
-        return hit
+    def perp_for(self, used: np.ndarray) -> Projection:
+        """The projector of the current model over the scans ``used`` and the projected
+        data: (perp, z_perp), kept."""
+        return self.factors.projection(used)
 
     def gof(self) -> dict[str, dict[str, float]]:
         """Per-axis goodness of fit of the current model against the predicted noise:
@@ -720,29 +446,15 @@ class Problem:
                       ) -> np.ndarray:
         """(2, n_used) raw residuals (arcsec; cross-axis, then along the second axis) of the
         used scans after an unweighted fit of ``columns`` (default: the current model, plus
-        ``extra`` when given). Those of the current model (plus ``extra``) are kept for the
-        next call: treat them as read-only."""
+        ``extra`` when given)."""
         used = self.used if used is None else used
-        key = None
-        if columns is None or columns is self.current_columns():
-            # the same fit when the scans, the model and the added columns are the same (a
-            # finding's columns compared by value: a result may make them again when read)
-            key = (used.tobytes(), len(self.extra), extra)
-            for old, r in self._raw_memo:
-                if old[:2] == key[:2] and (old[2] is extra or (
-                        extra is not None and old[2] is not None
-                        and np.array_equal(old[2], extra))):
-                    return r
+        if columns is None:
             columns = self.current_columns()
             if extra is not None:
                 columns = np.column_stack([columns, extra])
-        trim_heap()  # a copy of the design's used rows follows
         rows = self.rows(used)
-        coef, _ = _lstsq(columns[rows], self.y_raw[rows])
-        r = (self.y_raw - columns @ coef).reshape(2, -1)[:, used]
-        if key is not None:  # the last two: the Sky RMS before and after a finding
-            self._raw_memo = [*self._raw_memo[-1:], (key, r)]
-        return r
+        coef, _ = lstsq(columns[rows], self.y_raw[rows])
+        return (self.y_raw - columns @ coef).reshape(2, -1)[:, used]
 
     def cv_chi2(self, columns: np.ndarray | tuple[np.ndarray, ...], folds: np.ndarray,
                 refit=None, used: np.ndarray | None = None) -> float:
@@ -751,28 +463,20 @@ class Problem:
         white or ``refit`` is given). ``refit(train_mask) -> columns`` re-derives nonlinear
         shapes on the training data."""
         used = self.used if used is None else used
-        trim_heap()  # a whitened copy of the design follows
         blocks = columns if isinstance(columns, tuple) else (columns,)
         if refit is None and self.white(used):
             lab = folds[used]
             if blocks[0] is self.current_columns() and len(blocks) == 1:
-                # the current model's: its cached factor over ``used`` (what the finding's
-                # simplest form projects with next), and the figure kept (a simpler
-                # equivalent is checked over the same scans)
-                key = (used.tobytes(), self.scale.tobytes(), len(self.extra), folds)
-                memo = self._cv_memo
-                if memo is not None and memo[0][:3] == key[:3] and memo[0][3] is folds:
-                    return memo[1]
-                qr = self._current_qr(used)
+                # the current model's: its kept factor over ``used``
+                qr = self.factors.qr(used)
                 r = None if qr is None else heldout_lstsq(
-                    None, qr[3], np.concatenate([lab, lab]), (qr[0], np.abs(np.diag(qr[1]))))
+                    None, qr.z, np.concatenate([lab, lab]), (qr.q, np.abs(np.diag(qr.r))))
                 if r is not None:
-                    self._cv_memo = (key, float(r @ r))
-                    return self._cv_memo[1]
+                    return float(r @ r)
             else:
                 # whitened in Fortran order and factored in place: one copy of the design
                 # (and none of the blocks stacked)
-                r = heldout_lstsq(self._whitened_fortran(blocks, used), self.T(self.y, used),
+                r = heldout_lstsq(self._whitened_fortran(blocks, used), self.whiten(self.y, used),
                                   np.concatenate([lab, lab]), overwrite=True)
                 if r is not None:
                     return float(r @ r)
@@ -783,17 +487,17 @@ class Problem:
             train = used & (folds != k)
             cols = columns if refit is None else refit(train)
             f = self.fit(cols, train)
-            r = self.T(self.y - cols @ f.coef, test)
+            r = self.whiten(self.y - cols @ f.coef, test)
             total += float(r @ r)
         return total
 
     def _whitened_fortran(self, blocks: tuple[np.ndarray, ...], used: np.ndarray
                           ) -> np.ndarray:
-        """:meth:`T` of the column blocks side by side (white noise), in Fortran order, each
+        """:meth:`whiten` of the column blocks side by side (white noise), in Fortran order, each
         block gathered into the one array (the same numbers as whitening them stacked)."""
         if len(blocks) == 1:
-            return self.T(blocks[0], used, fortran=True)
-        idx, wu = self._view(used)
+            return self.whiten(blocks[0], used, fortran=True)
+        idx, wu = self.factors.rows_and_weights(used)
         out = np.empty((idx.size, sum(b.shape[1] for b in blocks)), order="F")
         j = 0
         for b in blocks:
@@ -820,7 +524,7 @@ class Problem:
             test = self.used & (folds == k)
             train = self.used & (folds != k)
             rows = self.rows(train)
-            coef, _ = _lstsq(columns[rows], self.y_raw[rows])
+            coef, _ = lstsq(columns[rows], self.y_raw[rows])
             parts.append((self.y_raw - columns @ coef).reshape(2, -1)[:, test])
         return np.concatenate(parts, axis=1) if parts else np.zeros((2, 0))
 
@@ -833,317 +537,6 @@ def sky_of(r: np.ndarray) -> float:
 def heldout_sky_rms(r: np.ndarray) -> float:
     """Sky RMS (arcsec) of (2, n) held-out residuals (:meth:`Problem.heldout_residuals`)."""
     return math.sqrt(float(np.sum(r**2)) / max(r.shape[1], 1))
-
-
-#: a held-out group whose leverage leaves less than this of some direction of the model to
-#: the other groups (an eigenvalue of I - Q_S^T Q_S) is refitted without it instead
-HELDOUT_MIN_EIG = 1e-8
-
-
-#: rows gathered or copied into Fortran order at a time (:func:`take_rows_fortran`): a
-#: block of a few columns stays in cache while it is transposed. Narrow arrays (a shape
-#: test's 1-4 columns, :func:`shape_products`' blocks of QT_BLOCK rows) take
-#: FORTRAN_BLOCK_ELEMENTS at a time: one ``take`` per block, not eight (issue 28t)
-FORTRAN_BLOCK = 1024
-FORTRAN_BLOCK_ELEMENTS = 16384
-
-
-def take_rows_fortran(x: np.ndarray, idx: np.ndarray | None = None,
-                      scale: np.ndarray | None = None, out: np.ndarray | None = None
-                      ) -> np.ndarray:
-    """``x[idx]`` (idx row indices; None: every row) in Fortran order, each row times
-    ``scale`` when given: what LAPACK factors in place (:func:`_qr` with ``overwrite``).
-    Gathered a block of rows at a time (the same numbers as gathering, transposing and
-    scaling the whole: a copy and one product per element; the whole's transposition
-    strides through memory, 2-4 times slower at 400,000 rows). ``out``: written there (a
-    Fortran-ordered array of that shape, e.g. some columns of a larger one)."""
-    n = x.shape[0] if idx is None else idx.size
-    if out is None:
-        out = np.empty((n, x.shape[1]), order="F")
-    # ``take`` copies a strided ``x`` (a view of the stacked model) whole on every call:
-    # indexing reads its rows in place
-    contiguous = x.flags.c_contiguous
-    block = max(FORTRAN_BLOCK, FORTRAN_BLOCK_ELEMENTS // max(x.shape[1], 1))
-    for a in range(0, n, block):
-        b = min(a + block, n)
-        part = x[a:b] if idx is None else (x.take(idx[a:b], axis=0) if contiguous
-                                            else x[idx[a:b]])
-        if scale is None:
-            out[a:b] = part
-        else:
-            np.multiply(part, scale[a:b, None], out=out[a:b])
-    return out
-
-
-#: rows of the model's basis read per product in :func:`qt_dot`: the block of q and x
-#: (8192 rows of 12 + 4 columns: 1 MiB) stays in cache while BLAS packs and multiplies it
-QT_BLOCK = 8192
-
-
-def qt_dot(q: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """``q.T @ x`` for tall ``q`` (N, m) and ``x`` (N, k), summed over blocks of
-    :data:`QT_BLOCK` rows: OpenBLAS's one product over 400,000 rows of a thin pair reads
-    memory about twice over (2.4-3.0 ms against 1.5-1.8 ms blocked, one thread, m = 12,
-    k = 2-4). The same sums in another order: equal to rounding (each entry within
-    ~N eps |q_j| |x_l|; tests/test_diagnose.py compares the two)."""
-    n = q.shape[0]
-    if n <= 2 * QT_BLOCK:
-        return q.T @ x
-    out = q[:QT_BLOCK].T @ x[:QT_BLOCK]
-    for a in range(QT_BLOCK, n, QT_BLOCK):
-        out += q[a:a + QT_BLOCK].T @ x[a:a + QT_BLOCK]
-    return out
-
-
-def shape_products(raw: np.ndarray, idx: np.ndarray, wu: np.ndarray, f2u: np.ndarray | None,
-                   q: np.ndarray, zp: np.ndarray
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """:meth:`Problem.shape_fit`'s whitened columns x over the rows ``idx`` (Fortran order:
-    ``raw``'s rows times the offset scale ``f2u`` then times ``wu``, and the same rows times
-    ``wu``; without ``f2u`` the latter alone) with q^T x, x^T x and x^T zp, made
-    :data:`QT_BLOCK` rows at a time: each block's products while it is in cache (x read
-    once, not thrice). x is the whole array's numbers bit for bit (the same products per
-    element); the sums are in blocks (:func:`qt_dot`)."""
-    k = raw.shape[1]
-    kk = k if f2u is None else 2 * k
-    n = idx.size
-    x = np.empty((n, kk), order="F")
-    qx, xx, xz = np.zeros((q.shape[1], kk)), np.zeros((kk, kk)), np.zeros(kk)
-    for a in range(0, n, QT_BLOCK):
-        b = min(a + QT_BLOCK, n)
-        xb = x[a:b]
-        take_rows_fortran(raw, idx[a:b], out=xb[:, kk - k:])
-        if f2u is not None:
-            np.multiply(xb[:, k:], f2u[a:b, None], out=xb[:, :k])
-        xb *= wu[a:b, None]
-        if a == 0:
-            qx, xx, xz = q[:b].T @ xb, xb.T @ xb, xb.T @ zp[:b]
-        else:
-            qx += q[a:b].T @ xb
-            xx += xb.T @ xb
-            xz += xb.T @ zp[a:b]
-    return x, qx, xx, xz
-
-
-def near_rows(x: np.ndarray, cols, coef: np.ndarray, zp: np.ndarray, limit: float
-              ) -> tuple[np.ndarray, np.ndarray]:
-    """The rows i where |u_i| > ``limit``, u = zp - x[:, cols] @ coef, and u there
-    (:meth:`Problem.shape_fit`'s rows near the outlier threshold), made :data:`QT_BLOCK`
-    rows at a time: u's block in cache while it is compared (one pass over x and zp, not
-    four over u). The same numbers as the whole expression (a row's product does not
-    depend on the rows beside it with one BLAS thread, as diagnose runs)."""
-    near, u_near = [np.arange(0)], [np.zeros(0)]
-    for a in range(0, zp.size, QT_BLOCK):
-        u = x[a:a + QT_BLOCK, cols] @ coef
-        np.subtract(zp[a:a + QT_BLOCK], u, out=u)
-        i = np.flatnonzero(np.abs(u) > limit)
-        near.append(i + a)
-        u_near.append(u[i])
-    return np.concatenate(near), np.concatenate(u_near)
-
-
-def rows_fortran(x: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """``x[rows]`` (rows a boolean mask of x's rows) in Fortran order
-    (:func:`take_rows_fortran`)."""
-    return take_rows_fortran(x, np.flatnonzero(rows))
-
-
-@dataclass
-class ShapeFit:
-    """:meth:`Problem.shape_fit`: the scans a model with the candidate keeps and, over them,
-    the candidate's columns (then ``raw``'s) projected off the model as inner products."""
-
-    mask: np.ndarray
-    gram: np.ndarray  # (kk, kk) X_perp^T X_perp over ``mask``
-    rhs: np.ndarray  # (kk,) X_perp^T z_perp over ``mask``
-    chi2_now: float  # z_perp^T z_perp over ``mask`` (the model alone)
-    full_sq: np.ndarray  # (kk,) squared norms of the whitened columns over ``mask``
-    #: the candidate's coefficients over ``mask``, of the columns the model leaves a part of
-    #: (ABSORBED_WHOLE_1MR2; none: the model absorbs its signature whole)
-    coef: np.ndarray
-    cov: np.ndarray  # (k, k) their covariance (whitened units)
-    x: np.ndarray  # (2 n_used, kk) the whitened columns over the model's used scans
-    qx: np.ndarray  # (m, kk) q^T x there (q the model's basis)
-    #: (m, m) the whitened model's Gram over ``mask`` in q's coordinates (R^-T A^T A R^-1,
-    #: R the model's factor over its used scans; the identity over them)
-    model_gram: np.ndarray
-    #: (m, kk) the columns' least-squares coefficients on the model over ``mask``, in q's
-    #: coordinates (R times the model's coefficients; q^T x over the used scans)
-    on_model: np.ndarray
-
-
-def _rows_fit(q, x, qx, zp, gram, xz, xx, zz, g_o, p_o, x_o, e_o, rm, ad, fitted):
-    """:meth:`Problem.shape_fit`'s fit over the used scans less the rows ``rm`` (positions
-    on them) plus the rows ``ad`` (positions among the other valid rows): the sums over the
-    used scans corrected by those rows, the model's block eliminated. None where the rows
-    removed carry half of some direction of the model, or :func:`gram_solve` refuses the
-    columns ``fitted``. Returns (Schur complement, its right-hand side, chi^2 of the model
-    alone, squared column norms, the ``fitted`` columns' coefficients and covariance, the
-    model's change of coordinates, the model's Gram and the columns' least-squares
-    coefficients on the model, both in its coordinates over U)."""
-    m, kk = q.shape[1], x.shape[1]
-    full_sq = np.diag(xx).copy()
-    if rm.size or ad.size:
-        q_rm = q[rm]
-        g = np.vstack([q_rm, g_o[ad]])
-        p = np.vstack([x[rm] - q_rm @ qx, p_o[ad]])
-        e = np.concatenate([zp[rm], e_o[ad]])
-        s = np.concatenate([-np.ones(rm.size), np.ones(ad.size)])
-        gs = g.T * s
-        w, v = np.linalg.eigh(np.eye(m) + gs @ g)
-        if w[0] < 0.5:
-            return None
-        ps = p.T * s
-        cgp = gs @ p
-        model = (v * w) @ v.T
-        sg = (v / w) @ (v.T @ np.column_stack([cgp, gs @ e]))
-        schur = gram + ps @ p - cgp.T @ sg[:, :kk]
-        rhs = xz + ps @ e - cgp.T @ sg[:, kk]
-        chi2_now = zz + float((e * s) @ e) - float((gs @ e) @ sg[:, kk])
-        full_sq += np.vstack([x[rm], x_o[ad]]).T ** 2 @ s
-    else:
-        sg = np.zeros((m, kk + 1))
-        schur, rhs, chi2_now, model = gram, xz, zz, np.eye(m)
-    solved = gram_solve(schur[np.ix_(fitted, fitted)], rhs[fitted])
-    if solved is None:
-        return None
-    coef, cov = solved
-    return (schur, rhs, chi2_now, full_sq, coef, cov, sg[:, kk] - sg[:, fitted] @ coef, model,
-            qx + sg[:, :kk])
-
-
-def gram_solve(gram: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-    """Least-squares coefficients and covariance from the columns' Gram matrix and their
-    inner products with the data (the normal equations); None where the columns'
-    correlation matrix has an eigenvalue below :data:`GRAM_MIN_RATIO` of its largest (the
-    normal equations' rounding grows as its inverse: :func:`_lstsq`'s QR then serves)."""
-    if not rhs.size:
-        return np.zeros(0), np.zeros((0, 0))
-    d = np.diag(gram)
-    if not (d > 0).all():
-        return None
-    s = 1.0 / np.sqrt(d)
-    inv = _gram_inverse(gram * np.outer(s, s))
-    if inv is None:
-        return None
-    cov = inv * np.outer(s, s)
-    return cov @ rhs, cov
-
-
-def _gram_inverse(g: np.ndarray) -> np.ndarray | None:
-    """The inverse of a Gram matrix ``g`` from its eigendecomposition, or None where its
-    smallest eigenvalue is below :data:`GRAM_MIN_RATIO` of its largest (the normal
-    equations' rounding grows as the ratio's inverse)."""
-    w, v = np.linalg.eigh(g)
-    if not w[0] > GRAM_MIN_RATIO * w[-1] > 0.0:
-        return None
-    return (v / w) @ v.T
-
-
-def _qr(x: np.ndarray, overwrite: bool = False) -> tuple[np.ndarray, np.ndarray]:
-    """Economic QR (LAPACK through scipy: on a tall matrix several times faster than
-    numpy's ``linalg.qr``); ``overwrite``: ``x`` is not needed after (a Fortran-ordered
-    ``x`` is then factored in place, not copied)."""
-    return scipy.linalg.qr(x, mode="economic", check_finite=False, overwrite_a=overwrite)
-
-
-def added_basis(q0: np.ndarray, x: np.ndarray
-                ) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray]:
-    """An orthonormal basis of [span(q0), x] as its two blocks (q0, q1), not stacked (a copy
-    of q0 per call), and the diagonal magnitudes of q1's R (those of a QR of the whole, to
-    rounding): ``x`` projected off ``q0`` twice (classical Gram-Schmidt loses orthogonality
-    once, not twice) and factored alone."""
-    rest = x - q0 @ (q0.T @ x)
-    rest -= q0 @ (q0.T @ rest)
-    q1, r1 = _qr(rest)
-    return (q0, q1), np.abs(np.diag(r1))
-
-
-def heldout_lstsq(x: np.ndarray | None, z: np.ndarray, labels: np.ndarray,
-                  basis: tuple[np.ndarray | tuple[np.ndarray, ...], np.ndarray] | None = None,
-                  overwrite: bool = False) -> np.ndarray | None:
-    """Residuals (rows as ``z``) of each group of rows (same ``labels``) predicted by a
-    least-squares fit of ``z`` on ``x`` to the other groups, from one QR of ``x``: with Q its
-    orthonormal basis, e the full fit's residual and S a group's rows, the held-out residual
-    is (I - Q_S Q_S^T)^-1 e_S = e_S + Q_S (I - Q_S^T Q_S)^-1 Q_S^T e_S (Woodbury; the
-    textbook leave-group-out identity), exactly what refitting without S gives, at a cost in
-    the group's rows rather than a factorization of the others per group. ``basis``: Q (or
-    its column blocks, stacked a group's rows at a time) and |diag R| when the caller has
-    them (:func:`added_basis`). None when ``x`` has dependent
-    columns or a group alone determines a direction of the model (the caller then refits
-    per group, whose pseudo-inverse handles that). ``overwrite``: ``x`` may be factored in
-    place (:func:`_qr`)."""
-    if basis is None:
-        q, r = _qr(x, overwrite)
-        d = np.abs(np.diag(r))
-    else:
-        q, d = basis
-    if not d.size or d.min() <= 1e-10 * max(float(d.max()), 1e-300):
-        return None
-    blocks = q if isinstance(q, tuple) else (q,)
-    e = z
-    for b in blocks:
-        e = e - b @ (b.T @ z)
-    out = np.empty_like(e)
-    # the same order either way; small labels (nights, folds) sort by radix, in one pass
-    small = labels.size and labels.min() >= 0 and labels.max() < 2**15
-    order = np.argsort(labels.astype(np.int16) if small else labels, kind="stable")
-    bounds = np.flatnonzero(np.diff(labels[order])) + 1
-    eye = np.eye(sum(b.shape[1] for b in blocks))
-    for rows in np.split(order, bounds):
-        qs = blocks[0][rows] if len(blocks) == 1 else np.hstack([b[rows] for b in blocks])
-        m = eye - qs.T @ qs
-        w, v = np.linalg.eigh(m)
-        if w.min() < HELDOUT_MIN_EIG:
-            return None
-        out[rows] = e[rows] + qs @ (v @ ((v.T @ (qs.T @ e[rows])) / w))
-    return out
-
-
-#: the least ratio of the smallest to the largest eigenvalue of a^T a (1 / cond(a)^2) at
-#: which :func:`_lstsq` solves from the normal equations: their rounding grows as
-#: cond(a)^2 eps, here at most 100 x 2.2e-16 (relative), and every singular value is then
-#: 1e9 times above the pseudo-inverse's cut, so the rank is the SVD's
-GRAM_MIN_RATIO = 1e-2
-
-
-def _lstsq(a: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Least squares with a pseudo-inverse covariance (rank-deficient columns get 0).
-
-    The SVD of ``a`` defines it (singular values below 1e-10 of the largest are dropped).
-    A tall ``a`` (diagnose's are 2 n_used rows by a few columns) is not decomposed whole:
-    well conditioned (:data:`GRAM_MIN_RATIO`), from its Gram matrix a^T a = V S^2 V^T
-    (one pass over ``a``); else from a Householder QR without Q (LAPACK geqrf and ormqr
-    applying it to ``z``) and the SVD of the small R, whose singular values and
-    pseudo-inverse solution are ``a``'s, to rounding."""
-    m, k = a.shape
-    if k == 0:
-        return np.zeros(0), np.zeros((0, 0))
-    if m >= 4 * k:
-        g = a.T @ a
-        az = a.T @ z
-        if np.isfinite(g).all() and np.isfinite(az).all() and np.isfinite(z).all():
-            cov = _gram_inverse(g)
-            if cov is not None:
-                return cov @ az, cov
-        # a non-finite ``a`` or ``z`` raises here, as the SVD did
-        # factored in a Fortran-ordered copy of our own, overwritten (qr_multiply without
-        # overwrite_a makes two copies of ``a``); the same LAPACK calls on the same numbers
-        qz, r = scipy.linalg.qr_multiply(take_rows_fortran(a), z.T, mode="right",
-                                         overwrite_a=True)
-        return _svd_lstsq(r, qz.T)
-    return _svd_lstsq(a, z)
-
-
-def _svd_lstsq(a: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_lstsq` by the SVD of ``a`` itself."""
-    u, s, vt = scipy.linalg.svd(a, full_matrices=False, lapack_driver="gesdd")
-    keep = s > 1e-10 * s[0] if s.size and s[0] > 0 else np.zeros_like(s, dtype=bool)
-    inv = np.where(keep, 1.0 / np.where(keep, s, 1.0), 0.0)
-    uz = u.T @ z
-    coef = vt.T @ ((inv[:, None] if uz.ndim == 2 else inv) * uz)
-    cov = (vt.T * inv**2) @ vt
-    return coef, cov
 
 
 def folds_for(obs: Observations, k: int = 5) -> np.ndarray:

@@ -40,7 +40,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..heap import trim_heap
 from . import pvalues
 from .candidates.base import DISTINGUISH_R, Candidate, TestResult, p_value
 from .candidates.library import CANDIDATES
@@ -186,6 +185,35 @@ class Step:
 
 
 @dataclass
+class Chosen:
+    """The candidate a round chooses, with its family-corrected log p-value and the
+    held-out chi^2 of the model without and with it (it predicts held-out data better)."""
+
+    result: TestResult
+    log_p: float
+    cv_chi2_before: float
+    cv_chi2_after: float
+
+
+def _held_out(problem: Problem, r: TestResult, folds: np.ndarray, log_p: float
+              ) -> Chosen | None:
+    """``r`` chosen if the model with it predicts held-out data (``folds``, over ``r``'s
+    scans) better than the model without it, its nonlinear parameters re-derived on each
+    training set; None if not. Notes the figures in ``r.note``."""
+    cur = problem.current_columns()
+    cv_without = problem.cv_chi2(cur, folds, used=r.mask)
+    refit = None
+    if r.refit is not None:
+        def refit(train, _r=r, _cur=cur):
+            return np.column_stack([_cur, _r.refit(train)])
+    cv_with = problem.cv_chi2((cur, r.columns), folds, refit, used=r.mask)
+    r.note = f"held-out chi2 {cv_without:.1f} -> {cv_with:.1f}"
+    if not cv_with < cv_without:
+        return None
+    return Chosen(r, log_p, cv_without, cv_with)
+
+
+@dataclass
 class Refusal:
     result: TestResult
     reason: str
@@ -210,10 +238,9 @@ def _fitted_signal(problem: Problem, cols: np.ndarray, extra: np.ndarray) -> np.
     model's own terms can take (what the finding adds). The joint fit is the current
     model's (:meth:`Problem.fit_current`): the outlier update after the finding starts
     from it, not from a fit of the same design again."""
-    trim_heap()  # the joint design follows: not beside freed, resident heap
     f = problem.fit_current()
     signal = extra @ f.coef[cols.shape[1]:]
-    beta, *_ = np.linalg.lstsq(problem.T(cols), problem.T(signal), rcond=None)
+    beta, *_ = np.linalg.lstsq(problem.whiten(cols), problem.whiten(signal), rcond=None)
     return signal - cols @ beta
 
 
@@ -247,7 +274,7 @@ class _Correlations:
     """:func:`_signal_corr` over one round's projector ``perp``, each candidate's projected
     fitted signature and each pair's correlation made once: the simpler-equivalent check
     and the alternatives ask for the same pairs (each a projection of 2 n_used rows and a
-    least-squares fit). Holds the projector (the model's basis): let it go with the round's."""
+    least-squares fit)."""
 
     def __init__(self, problem: Problem, perp):
         self.problem, self.perp = problem, perp
@@ -276,7 +303,7 @@ def _single_terms(candidates: tuple[Candidate, ...]) -> list[str]:
     out: list[str] = []
     for c in candidates:
         if isinstance(c, HarmonicFamilyCandidate):
-            names = [t for n in c.orders for t in c._pair(n)]
+            names = [t for n in c.orders for t in c.order_terms(n)]
         elif isinstance(c, TermsCandidate):
             names = list(c.terms)
         else:
@@ -288,14 +315,12 @@ def _single_terms(candidates: tuple[Candidate, ...]) -> list[str]:
 def _simplest_form(problem: Problem, res: TestResult, vocabulary: list[str]
                    ) -> SimplestForm | None:
     """One TPOINT term that explains as much as the finding's terms (None if none does, or
-    the finding is one term already). Selection calls it as it accepts ``res``: the model's
-    cached factors are let go once its projection is done."""
+    the finding is one term already)."""
     if not isinstance(res.candidate, TermsCandidate) or len(res.comp_names) < 2:
         return None
     names = [t for t in vocabulary if t not in _model_terms(problem)]
     if not names:
         return None
-    trim_heap()  # a factor over the finding's scans and the chunks' columns follow
     perp, z_perp = problem.perp_for(res.mask)
     # a few terms at a time: the whole vocabulary's columns over 200,000 scans are 0.5 GB
     # per copy, and each column's numbers are its own
@@ -304,9 +329,6 @@ def _simplest_form(problem: Problem, res: TestResult, vocabulary: list[str]
         part = slice(start, start + SIMPLEST_CHUNK)
         xp = perp(problem.cand(term_columns(names[part], problem.obs)))
         norm2[part], xz[part] = np.einsum("ij,ij->j", xp, xp), xp.T @ z_perp
-    del xp, perp, z_perp  # not alive beside the fits below (2 n x chunk, 2 n x m floats)
-    # the finding is being accepted: the model's cached factors are not asked for again
-    problem.release()
     with np.errstate(invalid="ignore", divide="ignore"):
         gain = np.where(norm2 > 1e-9 * max(float(norm2.max()), 1e-300), xz ** 2 / norm2, 0.0)
     best = int(np.argmax(gain))
@@ -331,7 +353,6 @@ def _alternatives(problem: Problem, corr_of: _Correlations, r: TestResult,
     """The significant candidates the data cannot distinguish from ``r`` or that fit almost
     as well, and the other orders of a harmonic family (``TestResult.siblings``, of ``r``'s
     own or of another candidate's) that the data cannot distinguish from it."""
-    trim_heap()  # the alternatives' projections follow: not beside freed, resident heap
     out = []
     n_obs = 2 * int(problem.used.sum())
     siblings = [s for o in ranked for s in o.siblings]
@@ -389,7 +410,9 @@ def _simpler_equivalent(problem: Problem, corr_of: _Correlations, r: TestResult,
 
 def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
            alpha: float = ALPHA, max_findings: int = MAX_FINDINGS) -> Selection:
-    """Forward selection on ``problem`` (modified in place: accepted columns are added)."""
+    """Forward selection on ``problem`` (modified in place: accepted columns are added), in
+    rounds (the module docstring): each tests the candidates against the current model
+    (:func:`_test_round`), chooses one (:func:`_choose`) and adds it (:func:`_accept`)."""
     obs = problem.obs
     known = problem.pred.known_noise
     problem.update_outliers()
@@ -407,41 +430,12 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
     stop = "no further candidate is significant"
     channel_results: list[TestResult] = []
     offsets: list[TestResult] = []
-
-    def confirmed(r: TestResult) -> tuple[float, float] | None:
-        """Held-out chi^2 without and with ``r`` if it predicts held-out data better."""
-        cur = problem.current_columns()
-        cv_without = problem.cv_chi2(cur, folds, used=r.mask)
-        refit = None
-        if r.refit is not None:
-            def refit(train, _r=r, _cur=cur):
-                return np.column_stack([_cur, _r.refit(train)])
-        cv_with = problem.cv_chi2((cur, r.columns), folds, refit, used=r.mask)
-        r.note = f"held-out chi2 {cv_without:.1f} -> {cv_with:.1f}"
-        if not cv_with < cv_without:
-            refused.append(Refusal(r, f"{r.name} is significant in-sample but does not "
-                                      f"predict held-out data ({r.note})"))
-            return None
-        return cv_without, cv_with
-
     for round_no in range(max_findings + 1):
         perp, z_perp = problem.perp_for(problem.used)
-        chi2_now = float(z_perp @ z_perp)
-        results = []
-        for c in usable:
-            if c.name in accepted or (c.kind == "channel" and round_no > 0):
-                continue
-            if any(r.result.name == c.name for r in refused):
-                continue
-            # a factor over other scans than the model's (a shape's mask on the explicit
-            # path, 2 n x m floats) served its own test: not kept beside the next ones
-            problem.release(keep=problem.used)
-            res = c.test(problem, perp, z_perp, chi2_now)
-            if not res.testable:
-                if round_no == 0:
-                    absorbed.append(res)
-                continue
-            results.append(res)
+        results = _test_round(problem, usable, accepted, refused, round_no, perp, z_perp)
+        if round_no == 0:
+            absorbed = [r for r in results if not r.testable]
+        results = [r for r in results if r.testable]
         if round_no == 0:
             n_family = max(len(results), 1)
             first_round = list(results)
@@ -451,48 +445,12 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
             r.note = ""
         ranked = sorted(offsets, key=lambda r: (log_p_family(problem, r, n_family),
                                                 -r.delta_chi2))
-        chosen = None
-        for r in ranked:
-            lp = log_p_family(problem, r, n_family)
-            if lp >= math.log(alpha):
-                break
-            cv = confirmed(r)
-            if cv is None:
-                continue
-            chosen = (r, lp, *cv)
-            break
+        corr_of = _Correlations(problem, perp)
+        chosen = _choose(problem, corr_of, ranked, n_family, alpha, folds, refused)
         if chosen is None:
             break
-        corr_of = _Correlations(problem, perp)
-        simpler = _simpler_equivalent(problem, corr_of, chosen[0], ranked, n_family, alpha)
-        if simpler is not None:
-            cv = confirmed(simpler)
-            if cv is not None:
-                chosen = (simpler, log_p_family(problem, simpler, n_family), *cv)
-        r, lp, cv0, cv1 = chosen
-        alternatives = _alternatives(problem, corr_of, r, ranked, n_family, alpha)
-        separation = Separation(r.r_model, r.partners, local_sigma(problem, r),
-                                correlation_words(r.name, r.r_model, r.partners))
-        # every cached factor and projector is of the model without ``r`` (keyed by the
-        # number of accepted columns): none is asked for again after the simplest form's
-        # projection; let them go (and this round's projector) before the fits of the
-        # whole design below
-        perp = z_perp = corr_of = None
-        # the simplest form projects over the finding's scans: the factors over others (the
-        # model's used scans' among them, 2 n x m floats) are not beside its own
-        problem.release(keep=r.mask)
-        simplest = _simplest_form(problem, r, vocabulary)
-        problem.release()
-        before = problem.sky_rms()
-        extra = r.columns  # read once (a result may make its columns again when read)
-        after = problem.sky_rms_added(extra)
-        signal = _fitted_signal(problem, problem.add(r.name, extra, r.comp_names), extra)
-        del extra
-        accepted.add(r.name)
-        problem.update_outliers()
-        step = Step(r, min(1.0, math.exp(lp)), lp, before, after, cv0, cv1, alternatives,
-                    problem.gof(), signal, separation, simplest)
-        steps.append(step)
+        steps.append(_accept(problem, corr_of, chosen, ranked, n_family, alpha, vocabulary))
+        accepted.add(chosen.result.name)
         if len(steps) >= max_findings:
             stop = f"the limit of {max_findings} findings"
             break
@@ -501,7 +459,6 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
             break
     if stop == "no further candidate is significant":
         refused += _below_detection(problem, offsets, n_family, alpha)
-    del perp, z_perp  # the last round's projector (2 n x m floats): not used below
     if not known and steps and len(steps) < MAX_FINDINGS_CV:
         added = _cross_validated(problem, usable, accepted, n_family,
                                  MAX_FINDINGS_CV - len(steps))
@@ -511,7 +468,6 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
         if added:
             stop = (f"the limit of {MAX_FINDINGS_CV} findings" if len(steps) >= MAX_FINDINGS_CV
                     else "no further candidate lowers the held-out Sky RMS")
-    problem.release()  # no factor is asked for below: not beside the whole design's fit
     # channel candidates (other recorded quantities): decided once, in the same family
     sky = problem.sky_rms()
     for r in channel_results:
@@ -521,25 +477,91 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
     # best first; the cross-validated findings after the significant ones, in the order
     # they were added (each one's held-out figures continue the previous one's)
     steps.sort(key=lambda s: (s.heldout is not None, s.log_p if s.heldout is None else 0.0))
-    for c in usable:  # what they kept for these recordings: not asked for again
-        c.release()
     return Selection(steps, refused, absorbed, first_round, not_applicable, n_family,
                      gof_before, problem.gof(), stop)
+
+
+def _test_round(problem: Problem, usable: list[Candidate], accepted: set[str],
+                refused: list[Refusal], round_no: int, perp, z_perp: np.ndarray
+                ) -> list[TestResult]:
+    """Each candidate's test against the current model (``perp``, ``z_perp``: its projector
+    over the used scans), but those accepted or refused already, and the channel candidates
+    after the first round (decided once)."""
+    chi2_now = float(z_perp @ z_perp)
+    results = []
+    for c in usable:
+        if c.name in accepted or (c.kind == "channel" and round_no > 0):
+            continue
+        if any(r.result.name == c.name for r in refused):
+            continue
+        results.append(c.test(problem, perp, z_perp, chi2_now))
+    return results
+
+
+def _choose(problem: Problem, corr_of: _Correlations, ranked: list[TestResult],
+            n_family: int, alpha: float, folds: np.ndarray, refused: list[Refusal]
+            ) -> Chosen | None:
+    """The round's finding: the first of ``ranked`` (by family p-value) below ``alpha`` that
+    predicts held-out data better (those that do not are added to ``refused``), or its
+    simpler equivalent where that one does too; None where none passes."""
+    def confirmed(r: TestResult) -> Chosen | None:
+        chosen = _held_out(problem, r, folds, log_p_family(problem, r, n_family))
+        if chosen is None:
+            refused.append(Refusal(r, f"{r.name} is significant in-sample but does not "
+                                      f"predict held-out data ({r.note})"))
+        return chosen
+
+    chosen = None
+    for r in ranked:
+        if log_p_family(problem, r, n_family) >= math.log(alpha):
+            break
+        chosen = confirmed(r)
+        if chosen is not None:
+            break
+    if chosen is None:
+        return None
+    simpler = _simpler_equivalent(problem, corr_of, chosen.result, ranked, n_family, alpha)
+    if simpler is not None:
+        chosen = confirmed(simpler) or chosen
+    return chosen
+
+
+def _accept(problem: Problem, corr_of: _Correlations, chosen: Chosen,
+            ranked: list[TestResult], n_family: int, alpha: float, vocabulary: list[str]
+            ) -> Step:
+    """Add the chosen finding to the model (outliers rejected again) and say it: its
+    alternatives, its separation from the model, its simplest form, the Sky RMS before and
+    after, its fitted signal."""
+    r, lp = chosen.result, chosen.log_p
+    alternatives = _alternatives(problem, corr_of, r, ranked, n_family, alpha)
+    separation = Separation(r.r_model, r.partners, local_sigma(problem, r),
+                            correlation_words(r.name, r.r_model, r.partners))
+    simplest = _simplest_form(problem, r, vocabulary)
+    before = problem.sky_rms()
+    extra = r.columns  # read once (a result may make its columns again when read)
+    after = problem.sky_rms_added(extra)
+    signal = _fitted_signal(problem, problem.add(r.name, extra, r.comp_names), extra)
+    problem.update_outliers()
+    return Step(r, min(1.0, math.exp(lp)), lp, before, after, chosen.cv_chi2_before,
+                chosen.cv_chi2_after, alternatives, problem.gof(), signal, separation,
+                simplest)
 
 
 def _cross_validated(problem: Problem, usable: list[Candidate], accepted: set[str],
                      n_family: int, room: int) -> list[Step]:
     """The cross-validated stage (:mod:`.crossval`) as findings, with their statistics (the
     family-corrected p-value of each, every option tried counted as a trial)."""
-    trim_heap()  # the stage's bases follow: not beside the rounds' freed, resident heap
     out = []
-    for res, heldout, (before, after), signal in cv_stage(
-            problem, usable, accepted, _model_terms(problem), room, _fitted_signal):
+    for added in cv_stage(problem, usable, accepted, _model_terms(problem), room,
+                          _fitted_signal):
+        res = added.result
         lp = math.log(max(min(1.0, res.p * n_family), 1e-300))
         separation = Separation(res.r_model, res.partners, local_sigma(problem, res),
                                 correlation_words(res.name, res.r_model, res.partners))
-        out.append(Step(res, math.exp(lp), lp, before, after, gof_after=problem.gof(),
-                        signal=signal, separation=separation, heldout=heldout))
+        out.append(Step(res, math.exp(lp), lp, added.sky_rms_before, added.sky_rms_after,
+                        gof_after=problem.gof(), signal=added.signal,
+                        separation=separation,
+                        heldout=(added.heldout_sky_rms_before, added.heldout_sky_rms_after)))
     return out
 
 

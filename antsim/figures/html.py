@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from antsim._version import __version__
+from antsim.outdir import write_file
 
 if TYPE_CHECKING:
     from antsim.figures.style import FigureFile
@@ -33,6 +34,7 @@ __all__ = [
     "Preformatted",
     "Section",
     "Table",
+    "format_number",
     "render_report",
     "software_versions",
     "write_report",
@@ -62,15 +64,18 @@ class Preformatted:
 
 @dataclass(frozen=True)
 class Table:
-    """A table: ``header`` and ``rows`` of cells. Strings are shown as given; numbers with
-    ``number_format``; None and non-finite numbers as a dash. ``highlight`` holds (row,
-    column) indices of cells to emphasise."""
+    """A table: ``header`` and ``rows`` of cells. Strings are shown as given (left-aligned);
+    numbers right-aligned with ``number_format`` (or their column's ``column_formats``),
+    never as a negative zero (:func:`format_number`); None and non-finite numbers as a dash.
+    ``highlight`` holds (row, column) indices of cells to emphasise."""
 
     header: Sequence[str]
     rows: Sequence[Sequence[Any]]
     caption: str = ""
     number_format: str = ".1f"
     highlight: frozenset[tuple[int, int]] = field(default_factory=frozenset)
+    #: a format per column for its numbers (None or missing: ``number_format``)
+    column_formats: Sequence[str | None] = ()
 
 
 @dataclass(frozen=True)
@@ -108,7 +113,8 @@ h1 { font-size: 1.6em; border-bottom: 2px solid #1f4e9c; padding-bottom: 0.2em; 
 h2 { font-size: 1.25em; margin-top: 1.8em; color: #1f4e9c; }
 p.subtitle { color: #555; margin-top: -0.5em; }
 nav ol { columns: 2; font-size: 0.92em; }
-table { border-collapse: collapse; margin: 0.6em 0 1.2em; font-size: 0.9em; }
+div.table { overflow-x: auto; max-width: 100%; margin: 0.6em 0 1.2em; }
+table { border-collapse: collapse; font-size: 0.9em; }
 caption { caption-side: top; text-align: left; font-weight: bold; padding-bottom: 0.3em; }
 th, td { border: 1px solid #c8c8c8; padding: 0.2em 0.55em; }
 th { background: #eef2f8; }
@@ -128,6 +134,16 @@ def _esc(text: Any) -> str:
     return html.escape(str(text), quote=True)
 
 
+def format_number(value: float, spec: str) -> str:
+    """``format(value, spec)`` without a negative zero: a value that rounds to zero is
+    printed as zero is ("-0.04" at ".1f" is "0.0", at "+.1f" "+0.0")."""
+    text = format(value, spec)
+    digits = text.strip()
+    if digits[:1] == "-" and digits.lstrip("+-").strip("0.") == "":
+        text = format(0.0, spec)
+    return text
+
+
 def _cell(value: Any, number_format: str) -> tuple[str, bool]:
     """(escaped text, is numeric) of one table cell."""
     if value is None:
@@ -139,15 +155,14 @@ def _cell(value: Any, number_format: str) -> tuple[str, bool]:
     if isinstance(value, float):
         if not math.isfinite(value):
             return "\N{EN DASH}", True
-        text = format(value, number_format)
-        if text.lstrip("+-").strip("0.") == "" and text[:1] == "-":  # no "-0.00"
-            text = format(0.0, number_format)
-        return _esc(text), True
+        return _esc(format_number(value, number_format)), True
     return _esc(value), False
 
 
 def _render_table(table: Table) -> str:
-    out = ["<table>"]
+    """The table in a box that scrolls sideways when the page is narrower than the table (a
+    coefficient table of six fits is ~900 px wide): the page itself never does."""
+    out = ['<div class="table"><table>']
     if table.caption:
         out.append(f"<caption>{_esc(table.caption)}</caption>")
     out.append("<thead><tr>" + "".join(f"<th>{_esc(h)}</th>" for h in table.header)
@@ -158,13 +173,14 @@ def _render_table(table: Table) -> str:
                              f"header {len(table.header)}")
         cells = []
         for j, value in enumerate(row):
-            text, numeric = _cell(value, table.number_format)
+            spec = (table.column_formats[j] if j < len(table.column_formats) else None)
+            text, numeric = _cell(value, spec or table.number_format)
             classes = (["num"] if numeric else []) + (["warn"] if (i, j) in table.highlight
                                                       else [])
             cls = f' class="{" ".join(classes)}"' if classes else ""
             cells.append(f"<td{cls}>{text}</td>")
         out.append("<tr>" + "".join(cells) + "</tr>")
-    out.append("</tbody></table>")
+    out.append("</tbody></table></div>")
     return "\n".join(out)
 
 
@@ -245,5 +261,4 @@ def write_report(path: str | Path, title: str, sections: Sequence[Section], *,
     path = Path(path)
     text = render_report(title, sections, subtitle=subtitle, versions=versions)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text, encoding="utf-8")
-    return path
+    return write_file(path, text)

@@ -4,8 +4,9 @@ and the diagnostics TPOINT and katpoint users expect.
 :func:`run_figures` draws, in the report's order: Fig. 1 the sky distribution of the
 observations (polar alt-az: azimuth as the angle, North up and East to the right, zenith
 distance as the radius); Fig. 2a-d the total pointing errors against elevation and azimuth;
-Fig. 3a-d the residuals after fit A (rejected points marked); Fig. 4 the amplitude of the
-strong sources against elevation with the report's gain curve (section V); a quiver map of
+when the controller pointed with a model, the errors with that model and without it; Fig.
+3a-d the residuals after fit A (rejected points marked); Fig. 4 the amplitude of the strong
+sources against elevation with the report's gain curve (section V); a quiver map of
 the residuals on the sky; residual histograms; residuals against time with the daylight
 marked; the coefficients of fits A-F against the truth; the coefficient sigmas and the rms
 of every fit. Figures other pages draw too are in :mod:`antsim.figures.charts`.
@@ -33,13 +34,22 @@ from .charts import (
     pointing_errors_figure,
     residual_quiver_figure,
 )
-from .style import REJECT_COLOR, SERIES_COLORS, Canvas, FigureFile, binned_mean, figure_file
+from .style import (
+    REJECT_COLOR,
+    SERIES_COLORS,
+    Canvas,
+    FigureFile,
+    binned_mean,
+    figure_file,
+    rms,
+)
 
 __all__ = [
     "REPORT_GAIN_CURVE",
     "STRONG_SOURCES",
     "amplitude_figure",
     "coefficients_figure",
+    "in_use_figure",
     "residual_time_figure",
     "run_figures",
     "sky_distribution_figure",
@@ -69,6 +79,9 @@ class _Observations:
     el_deg: np.ndarray
     xel_arcsec: np.ndarray
     el_arcsec: np.ndarray
+    #: the corrections the model in use applied (arcsec; zero without a model)
+    model_xel_arcsec: np.ndarray
+    model_el_arcsec: np.ndarray
     t_s: np.ndarray
     sun_el_deg: np.ndarray
     source: np.ndarray
@@ -90,6 +103,8 @@ class _Observations:
             xel_arcsec=60.0 * (f["xel_arcmin"] + f["model_xel_arcmin"]
                                + f["applied_xel_arcmin"]),
             el_arcsec=60.0 * (f["el_arcmin"] + f["model_el_arcmin"] + f["applied_el_arcmin"]),
+            model_xel_arcsec=60.0 * f["model_xel_arcmin"],
+            model_el_arcsec=60.0 * f["model_el_arcmin"],
             t_s=f["t_s"], sun_el_deg=f["sun_el_deg"], source=c["source"][sel].astype(str),
             amp_k=0.5 * (f["xel_amp_k"] + f["el_amp_k"]), good=c["good"][sel].astype(bool))
 
@@ -336,7 +351,8 @@ def run_figures(rows, fits: Mapping[str, FitResult | None], out_dir: str | Path,
                 start_label: str = "", el_limit_deg: float | None = None,
                 reference_rms: Mapping[str, tuple[float, float]] | None = None,
                 gain_curve: Sequence[tuple[float, float]] = REPORT_GAIN_CURVE,
-                formats: Sequence[str] = ("png",), gain_fit=None) -> list[FigureFile]:
+                formats: Sequence[str] = ("png",), gain_fit=None,
+                model_in_use: str | None = None) -> list[FigureFile]:
     """The figures of one run into ``out_dir``, in the report's order: see the module
     docstring.
 
@@ -346,12 +362,16 @@ def run_figures(rows, fits: Mapping[str, FitResult | None], out_dir: str | Path,
     coefficients by term name, if known; ``name``: prefixed to the titles;
     ``el_limit_deg``: the scheduler's elevation limit, drawn on the sky; ``reference_rms``:
     ``{fit: (xel, el)}`` published rms (arcsec) drawn beside the run's; ``gain_fit``: the
-    run's fitted elevation gain curve, drawn on Fig. 4.
+    run's fitted elevation gain curve, drawn on Fig. 4; ``model_in_use``: the name of the
+    pointing model the controller applied, if any (:func:`in_use_figure`, after Fig. 2).
     """
     out = Path(out_dir)
     prefix = f"{name}: " if name else ""
     obs = _Observations.from_rows(rows, "AVG")
     files = _recording_figures(obs, out, prefix, el_limit_deg, formats)
+    if model_in_use is not None:
+        files.append(in_use_figure(obs, model_in_use, out / "fig_model_in_use.png", prefix,
+                                   formats))
     fit_a = fits.get("A")
     if fit_a is not None:
         data, sun = _fit_a_data(rows)
@@ -391,6 +411,49 @@ def _recording_figures(obs: _Observations, out: Path, prefix: str,
                     "IV gives as the reason for Fig. 2a's strong dependence on elevation.",
             formats=formats),
     ]
+
+
+def in_use_figure(obs: _Observations, model: str, path: str | Path, prefix: str = "",
+                  formats: Sequence[str] = ("png",)) -> FigureFile:
+    """How the model in use pointed: in the good scans, the pointing error left with the
+    model in use (what the scan measured, plus a search's correction) against the error
+    without it (the model's correction added back), cross-elevation and elevation against
+    elevation and azimuth (arcsec)."""
+    good = obs.good & np.isfinite(obs.xel_arcsec) & np.isfinite(obs.el_arcsec)
+    without = (obs.xel_arcsec[good], obs.el_arcsec[good])
+    with_model = (without[0] - obs.model_xel_arcsec[good],
+                  without[1] - obs.model_el_arcsec[good])
+    az, el = obs.az_deg[good], obs.el_deg[good]
+    title = f"Model in use  {prefix}pointing errors with it ({model}) and without it"
+    with Canvas(10.0, 8.0) as fig:
+        grid = fig.subplots(2, 2)
+        fig.subplots_adjust(left=0.08, right=0.98, bottom=0.07, top=0.91, hspace=0.32,
+                            wspace=0.22)
+        for k, (ax, x, axis, xlabel, xlim) in enumerate((
+                (grid[0, 0], el, 0, "elevation (deg)", (0.0, 90.0)),
+                (grid[0, 1], el, 1, "elevation (deg)", (0.0, 90.0)),
+                (grid[1, 0], az, 0, "azimuth (deg, N = 0, E = 90)", (0.0, 360.0)),
+                (grid[1, 1], az, 1, "azimuth (deg, N = 0, E = 90)", (0.0, 360.0)))):
+            name = ("cross-elevation", "elevation")[axis]
+            ax.scatter(x, without[axis], s=9, color=SERIES_COLORS[1], alpha=0.6, lw=0,
+                       label=f"without the model: rms {rms(without[axis]):.1f}\"")
+            ax.scatter(x, with_model[axis], s=9, color=SERIES_COLORS[0], alpha=0.9, lw=0,
+                       label=f"with it: rms {rms(with_model[axis]):.1f}\"")
+            ax.axhline(0.0, color="k", lw=0.6)
+            ax.set_xlim(*xlim)
+            if xlim[1] > 90:
+                ax.set_xticks(np.arange(0, 361, 45))
+            ax.set_xlabel(xlabel)
+            ax.set_ylabel(f"{name} error (arcsec)")
+            ax.set_title(f"({'abcd'[k]}) {name} error over {x.size} good scans", fontsize=9)
+            ax.legend(loc="lower left", fontsize=7, framealpha=0.8)
+        caption = (f"The pointing error of every good scan with the model in use ({model}): "
+                   "what the scan measured plus any correction the controller added on top "
+                   "of the model (a search's), against the error the antenna would have made "
+                   "without the model (the model's correction added back). Sky rms "
+                   f"{math.hypot(rms(with_model[0]), rms(with_model[1])):.1f}\" with it, "
+                   f"{math.hypot(rms(without[0]), rms(without[1])):.1f}\" without.")
+        return figure_file(fig, Path(path), title, caption, formats)
 
 
 def _residuals_figure(fit_a: FitResult, data: PointingData, sun: np.ndarray, out: Path,

@@ -94,6 +94,9 @@ def coefficient_table(fits: Mapping[str, FitResult | None],
             + (["its name"] if labels else [])
     caption = (f"Coefficients (arcsec; the 1990 report's Table 3). Sign: "
                f"{sign_convention(names)}")
+    if honest is not None:
+        caption += (f". Honest sigma: a jackknife over {fit_a.honest_clusters_words}, "
+                    "widened for its degrees of freedom (docs/outputs.md)")
     if terms:
         caption += f". Beside them {reference.citation}'s, its arcmin times 60"
     return Table(header, rows, caption=caption, number_format="+.2f")
@@ -201,7 +204,8 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
     figures = run_figures(result.rows, fits, out / "figures", truth_arcsec=truth or None,
                           name=scenario.name, start_label=f"UTC {scenario.epoch_utc}",
                           el_limit_deg=scenario.controller.scheduler.elevation_min_deg,
-                          reference_rms=reference, gain_fit=_elevation_gain_fit(result))
+                          reference_rms=reference, gain_fit=_elevation_gain_fit(result),
+                          model_in_use=result.model.name if len(result.model) else None)
     good = sum(1 for r in result.rows if r["polarization"] == "AVG" and r["good"])
     fit_a = fits.get("A")
     summary = (f"{scenario.description or scenario.name}. Campaign of "
@@ -248,7 +252,8 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
         text = ("Pull = (fit - truth) / sigma. With independent Gaussian residuals pulls "
                 "scatter with unit standard deviation. TPOINT's sigma assumes independent "
                 "residuals; the honest sigma allows for residuals correlated in time "
-                "(a jackknife over one-hour blocks, widened for its few degrees of freedom), "
+                f"(a jackknife over {fit_a.honest_clusters_words}, widened for its few "
+                "degrees of freedom), "
                 "so its pulls are the ones to trust. "
                 f"Cells above {PULL_WARN:g} are highlighted.")
         if effects:

@@ -25,18 +25,18 @@ a scan's integrations at a time):
 
 Where the physics does not allow a shared schedule the member is simulated in full
 (:func:`antsim.simulate.runner.simulate`) instead: a member one of whose scans the controller
-would not detect (a gust, a low S/N: with searching enabled it searches, which changes every later time
-and adopts a correction); whole variants when the deterministic run itself searched (a cold
-start: where the controller points then depends on the noise), when the running correction
-follows each scan (``search.update_gain`` > 0), or when an effect's random realisation has no
-member axis (see :attr:`MemberEngine.unshareable`). The weather's wander shifts a real
-member's refraction correction and its true refraction by the same arcseconds and its timing by
-milliseconds; the shared schedule keeps the quiet run's, which changes no pointing error. Where
-the controller corrects no refraction from the weather (the 1990 scenario: its model's W5
-carries it), a member's true refraction follows its own weather alone: the shared paths are
-shifted by the refraction's change with the member's temperature, to first order in the
-wander, at each integration's start (the world takes the weather once per track: within 0.1"
-at 10 deg, :class:`_RefractionWander`).
+would not detect (a gust, a low S/N: with searching enabled it searches, which changes every
+later time and adopts a correction); whole variants when the deterministic run itself searched
+(a cold start: where the controller points then depends on the noise), when the running
+correction follows each scan (``search.update_gain`` > 0), or when an effect's random
+realisation has no member axis (see :attr:`MemberEngine.unshareable`). The weather's wander
+shifts a real member's refraction correction and its true refraction by the same arcseconds and
+its timing by milliseconds; the shared schedule keeps the quiet run's, which changes no
+pointing error. Where the controller corrects no refraction from the weather (the 1990
+scenario: its model's W5 carries it), a member's true refraction follows its own weather
+alone: the shared paths are shifted by the refraction's change with the member's temperature,
+to first order in the wander, at each integration's start (the world takes the weather once per
+track: within 0.1" at 10 deg, :class:`_RefractionWander`).
 """
 
 from __future__ import annotations

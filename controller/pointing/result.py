@@ -152,15 +152,22 @@ class FitResult:
             },
         }
 
+    @property
+    def honest_clusters_words(self) -> str:
+        """What the honest sigma's jackknife leaves out at a time, in a few words: the
+        observations within each time block where the data have times, else each single
+        observation (docs/outputs.md, "The honest sigma")."""
+        if self.honest_block_s:
+            return f"observations within {self.honest_block_s:g} s time blocks"
+        return "single observations (the data have no times)"
+
     def honest_method(self) -> str:
         """How the honest sigma is computed, in words."""
         return ("cluster jackknife (CV3) of the same least-squares coefficients, "
-                "clusters = observations"
-                + (f" within {self.honest_block_s:g} s time blocks"
-                   + (f", variances averaged over {self.honest_phases} block grids "
-                      f"shifted by 1/{self.honest_phases} block"
-                      if self.honest_phases > 1 else "")
-                   if self.honest_block_s else "")
+                f"clusters = {self.honest_clusters_words}"
+                + (f", variances averaged over {self.honest_phases} block grids "
+                   f"shifted by 1/{self.honest_phases} block"
+                   if self.honest_block_s and self.honest_phases > 1 else "")
                 + (", scaled by the mean variance ratio of replicates that repeat the "
                    "fit's outlier rejection" if self.robust and self.honest_block_s else "")
                 + ", times sqrt(dof/(dof-2)) for its Satterthwaite degrees of freedom")
@@ -198,6 +205,13 @@ class FitResult:
             f"condition number {self.condition_number:.3g}",
         ]
         if self.sigma_honest_arcsec is not None:
-            lines.append(f"honest sigma: {self.honest_method()}")
+            lines.append(f"honest sigma: {self.honest_method()}; {self.honest_clusters} "
+                         "clusters")
+            fitted = np.isfinite(self.sigma_arcsec)
+            blank = [n for n, ok, h in zip(self.names, fitted, self.sigma_honest_arcsec,
+                                           strict=True) if ok and not math.isfinite(h)]
+            if blank:
+                lines.append(f"honest sigma blank for {', '.join(blank)}: "
+                             f"{self.honest_clusters} clusters are too few to estimate it")
         lines += [f"warning: {w}" for w in self.warnings]
         return "\n".join(lines)

@@ -5,20 +5,27 @@ correction). The package docstring says what a candidate knows."""
 from __future__ import annotations
 
 import math
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
 import scipy.linalg
+from astropy.time import Time, TimeDelta
 
+from controller.astro.ephemeris import Ephemeris
+from controller.astro.site import Site
 from controller.units import ARCSEC_PER_RAD
 
 from .. import pvalues
 from ..data import Observations
-from ..problem import Problem, _lstsq, qt_dot
+from ..factors import kept_sun_grid, remade_when_read
+from ..linalg import gram_solve, lstsq, qt_dot
+from ..problem import Problem
+from ..shapefit import ABSORBED_WHOLE_1MR2, GRAM_1MR2_MIN, shape_fit
 
-__all__ = ["DISTINGUISH_R", "Candidate", "TestResult", "nyholt_gram", "nyholt_trials", "obs_key",
+__all__ = ["DISTINGUISH_R", "Candidate", "TestResult", "nyholt_gram", "nyholt_trials",
            "p_value", "periodic_interp", "source_rates_arcsec_s", "stacked", "sun_el_grid_deg",
            "time_grid", "with_trials"]
 
@@ -131,18 +138,6 @@ def source_rates_arcsec_s(obs: Observations) -> tuple[np.ndarray, np.ndarray]:
     return d_a * np.cos(e) * ARCSEC_PER_RAD, d_e * ARCSEC_PER_RAD
 
 
-def obs_key(obs: Observations) -> tuple:
-    """A content key for per-observation caches (never ``id``, which Python reuses)."""
-    import hashlib
-
-    h = hashlib.blake2b(digest_size=12)
-    for arr in (obs.t_s, obs.air_temp_c, obs.sun_el_deg, obs.good):
-        if arr is not None:
-            h.update(np.ascontiguousarray(arr).tobytes())
-    h.update(str(sorted(obs.meta.items())).encode())
-    return (obs.n, h.hexdigest(), obs.air_daily_c is not None)
-
-
 def time_grid(obs: Observations) -> np.ndarray:
     end = float(np.nanmax(obs.t_s)) if obs.n else 0.0
     return np.arange(-SPINUP_S, end + 2 * GRID_STEP_S, GRID_STEP_S)
@@ -162,27 +157,22 @@ def periodic_interp(t_grid: np.ndarray, t: np.ndarray, v: np.ndarray) -> np.ndar
     return out
 
 
-_SUN_CACHE: dict[tuple, np.ndarray] = {}
-
-
 def sun_el_grid_deg(obs: Observations, t_grid: np.ndarray) -> np.ndarray:
     """Sun elevation (deg) on the grid: from the site and epoch when the recordings name them
-    (ephemeris), else from the recorded Sun elevations (a day repeats)."""
+    (ephemeris), else from the recorded Sun elevations (a day repeats); kept by site, epoch
+    and grid (:func:`.factors.kept_sun_grid`)."""
     meta = obs.meta
     key = (meta.get("epoch_utc"), meta.get("latitude_deg"), meta.get("longitude_deg"),
            float(t_grid[0]), float(t_grid[-1]), t_grid.size)
-    if key in _SUN_CACHE:
-        return _SUN_CACHE[key]
-    if len(_SUN_CACHE) > 64:
-        _SUN_CACHE.clear()
+    return kept_sun_grid(key, lambda: _sun_el_grid_deg(obs, t_grid))
+
+
+def _sun_el_grid_deg(obs: Observations, t_grid: np.ndarray) -> np.ndarray:
+    """:func:`sun_el_grid_deg`, made."""
+    meta = obs.meta
     out = None
     if all(k in meta for k in ("epoch_utc", "latitude_deg", "longitude_deg")):
         try:
-            from astropy.time import Time, TimeDelta
-
-            from controller.astro.ephemeris import Ephemeris
-            from controller.astro.site import Site
-
             site = Site(float(meta["latitude_deg"]), float(meta["longitude_deg"]),
                         float(meta.get("height_m", 0.0)))
             epoch = Time(str(meta["epoch_utc"]), scale="utc") + TimeDelta(t_grid[0],
@@ -196,7 +186,6 @@ def sun_el_grid_deg(obs: Observations, t_grid: np.ndarray) -> np.ndarray:
             raise ValueError("no Sun elevations")
         ok = np.isfinite(obs.sun_el_deg)
         out = periodic_interp(t_grid, obs.t_s[ok], obs.sun_el_deg[ok])
-    _SUN_CACHE[key] = out
     return out
 
 
@@ -238,8 +227,6 @@ def _grid_trials(problem: Problem, grid: np.ndarray, qgrid: list[np.ndarray | No
     (ABSORBED_WHOLE_1MR2: its projection is rounding) is no trial, as a zero column is not;
     where a shape is within GRAM_1MR2_MIN of the model (the difference would lose digits),
     the grid is projected explicitly instead."""
-    from ..problem import ABSORBED_WHOLE_1MR2, GRAM_1MR2_MIN
-
     if all(g is None for g in qgrid):
         return nyholt_trials(grid, overwrite=True)
     m = next(g.size for g in qgrid if g is not None)
@@ -284,8 +271,32 @@ def p_value(problem: Problem, dchi2: float, q: int, current_chi2: float | None =
 # ---------------------------------------------------------------------------------------------
 # The base class
 # ---------------------------------------------------------------------------------------------
-class Candidate:
-    """Base class; see the module docstring."""
+class Candidate(ABC):
+    """The candidate interface, whole: every attribute and method the selection, the
+    cross-validated stage, the model update and the blind harness read of a candidate is
+    declared here, with the default a family overrides (or NotImplementedError where a
+    family must say it). A candidate is a description and its functions: it keeps nothing
+    between calls (what is worth keeping for speed, :mod:`..factors` keeps).
+
+    Description: ``name``, ``effect`` (the simulator effect, ``"terms"`` for pointing terms,
+    None), ``title``, ``terms``, ``signature``, ``explanation``, ``params_doc``, ``kind``
+    (``"offsets"``: a signature in the pointing errors; ``"channel"``: a test on other
+    recorded quantities), ``linear_signature``, ``needs``, ``needs_simulation``,
+    ``mounts``, ``static``, ``amplitude_param``, ``blind_exclusion``; :meth:`describe`.
+
+    Selection: :meth:`applicable`; :meth:`test` (the added-variable test against the current
+    model, its nonlinear parameters searched over :meth:`thetas` and :meth:`refine`d,
+    :meth:`linear_test` per shape, :meth:`finish` for the parameters and the model terms it
+    is confused with); :meth:`columns` (an offsets candidate's signature as regressors);
+    :meth:`params_from`; :meth:`label`; :meth:`cv_thetas` (the cross-validated stage's
+    shapes).
+
+    Model update: :meth:`effect_from_params` (the simulator effect's parameters).
+
+    Blind harness: :meth:`draw_shape`, :meth:`unit_signal`, :meth:`effect_params`,
+    :meth:`nonlinear_part`, :meth:`signal_power`, :meth:`hidden_amplitude`,
+    :meth:`hidden_label`, :meth:`threshold_sigma` (channel candidates).
+    """
 
     name: str = ""
     effect: str | None = None  # simulator effect (antsim.world.effects.EFFECTS) or None
@@ -305,6 +316,9 @@ class Candidate:
     needs_simulation: bool = False
     #: the mounts whose recordings it is tried on (its signature is written on their axes)
     mounts: tuple[str, ...] = ("altaz",)
+    #: its signature is linear in its parameters at each shape: :meth:`columns` gives it
+    #: (False: a nonlinear signature, fitted by its own :meth:`test`)
+    linear_signature: bool = True
 
     def applicable(self, obs: Observations, known_noise: bool) -> bool:
         if obs.mount not in self.mounts:
@@ -323,15 +337,16 @@ class Candidate:
         return True
 
     # -- offsets candidates -------------------------------------------------------------------
+    @abstractmethod
     def columns(self, obs: Observations, theta: Any = None) -> tuple[np.ndarray, tuple[str, ...]]:
-        raise NotImplementedError
+        """The signature at shape ``theta`` as raw columns (2n, q): the error (indicated
+        minus true, arcsec) per unit of each linear parameter, xel rows then el rows; and
+        the parameters' names (NotImplementedError where the signature is not linear in
+        the parameters or not in the offsets: ``linear_signature``, ``kind``)."""
 
     def thetas(self, obs: Observations) -> list[Any]:
+        """The shapes (values of the nonlinear parameters) :meth:`test` tries."""
         return [None]
-
-    def release(self) -> None:
-        """Drop what the candidate keeps between its tests of the recordings last seen
-        (:func:`..select.select` calls it once it is done with them)."""
 
     def cv_thetas(self, problem) -> list[Any]:
         """The shapes the cross-validated stage (:mod:`..crossval`) compares: all of them
@@ -357,9 +372,11 @@ class Candidate:
         # with q^T x (q the model's basis there; zero for a column projected off it already)
         grid = np.empty((z_perp.size, len(thetas))) if len(thetas) > 1 else None
         qgrid: list[np.ndarray | None] = []
+        tested: dict[Any, float] = {}  # each theta -> its delta chi^2 (refine starts there)
         for theta in thetas:
             cols, names = self.columns(obs, theta)
             res, xu, qxu = self._linear_xp(problem, cols, names, theta)
+            tested[theta] = res.delta_chi2
             if cols.shape[1] == 1 and grid is not None:
                 grid[:, len(qgrid)] = xu[:, 0] if xu is not None \
                     else perp(problem.cand(cols))[:, 0]
@@ -368,20 +385,23 @@ class Candidate:
                 best = res
             del cols, xu
         assert best is not None
-        best = self.refine(problem, perp, z_perp, best)
+        best = self.refine(problem, perp, z_perp, best, tested)
         best.trials = _grid_trials(problem, grid[:, :len(qgrid)], qgrid) \
             if len(qgrid) > 1 else 1.0
         del grid
         best.p = with_trials(p_value(problem, best.delta_chi2, best.dof, best.chi2_now,
                                      best.mask), best.trials)
         if best.dof > 0:
-            self._finish(problem, best)
+            self.finish(problem, best)
         return best
 
-    def refine(self, problem: Problem, perp, z_perp, best: TestResult) -> TestResult:
+    def refine(self, problem: Problem, perp, z_perp, best: TestResult,
+               grid: dict[Any, float]) -> TestResult:
+        """The best result refined beyond the grid of :meth:`thetas` (``grid``: each theta
+        tested -> its delta chi^2); the grid's best as it is by default."""
         return best
 
-    def _linear(self, problem: Problem, perp, z_perp, cols: np.ndarray,
+    def linear_test(self, problem: Problem, perp, z_perp, cols: np.ndarray,
                 names: tuple[str, ...], theta: Any) -> TestResult:
         """chi^2 decrease from adding raw ``cols`` (scaled here by the offset scale), on the
         scans a model with the candidate keeps (``perp``, ``z_perp``: unused, the test
@@ -390,13 +410,13 @@ class Candidate:
 
     def _linear_xp(self, problem: Problem, cols: np.ndarray, names: tuple[str, ...],
                    theta: Any) -> tuple[TestResult, np.ndarray | None, np.ndarray | None]:
-        """:meth:`_linear`, the candidate's columns whitened over the model's used scans and
+        """:meth:`linear_test`, the candidate's columns whitened over the model's used scans and
         q^T of them (q the model's basis there; None: the columns are projected off it
         already), or (None, None) where they were not formed there. From the model's cached
-        basis by inner products (:meth:`Problem.shape_fit`) where it serves, else by
+        basis by inner products (:func:`.shapefit.shape_fit`) where it serves, else by
         explicit projections (:meth:`_linear_explicit`)."""
         raw = cols
-        sf = problem.shape_fit(raw)
+        sf = shape_fit(problem, raw)
         res = None if sf is None else self._from_shape_fit(problem, sf, raw, names, theta)
         if res is not None:
             k = raw.shape[1]
@@ -406,12 +426,10 @@ class Candidate:
 
     def _from_shape_fit(self, problem: Problem, sf, raw: np.ndarray, names: tuple[str, ...],
                         theta: Any) -> TestResult | None:
-        """:meth:`_linear_explicit`'s result from :meth:`Problem.shape_fit`'s inner products
+        """:meth:`_linear_explicit`'s result from :func:`.shapefit.shape_fit`'s inner products
         over the same scans (the same least-squares problem); None where a column kept is
         within GRAM_1MR2_MIN of the model's span or the kept ones' Gram is ill-conditioned
         (the explicit path then serves)."""
-        from ..problem import GRAM_1MR2_MIN, gram_solve
-
         k = raw.shape[1]
         j = slice(0, k) if problem.unscaled else slice(k, 2 * k)  # the raw signature's
         full_sq, left_sq = sf.full_sq[j], np.diag(sf.gram)[j]
@@ -444,26 +462,27 @@ class Candidate:
 
     def _linear_explicit(self, problem: Problem, raw: np.ndarray, cols: np.ndarray,
                          names: tuple[str, ...], theta: Any) -> tuple[TestResult, np.ndarray]:
-        """:meth:`_linear` by explicit projections (the reference :meth:`_from_shape_fit`
+        """:meth:`linear_test` by explicit projections (the reference :meth:`_from_shape_fit`
         is tested against, and the path where it does not serve), and the candidate's
         columns whitened and projected off the model over the scans it kept (2 n_kept, q)."""
-        mask, last = problem.mask_fit(cols)
+        fitted_mask = problem.mask_fit(cols)
+        mask, last = fitted_mask.mask, fitted_mask.last
         perp, z_perp = problem.perp_for(mask)
         # the mask's last fit projected the columns already (the same projection)
-        xp = perp(cols) if last is None else last[1][1]
+        xp = perp(cols) if last is None else last.x_perp
         # degeneracy with the model is a property of the signature itself (before the
         # per-source offset scale): judge absorption and correlation on the raw columns
         if problem.unscaled:
-            full = np.linalg.norm(problem.T(raw, mask) if last is None else last[1][0], axis=0)
+            full = np.linalg.norm(problem.whiten(raw, mask) if last is None else last.x, axis=0)
             left = np.linalg.norm(xp, axis=0)
         elif last is not None:  # the model's cached factor over the mask: whiten raw once
-            xr = problem.T(raw, mask)
+            xr = problem.whiten(raw, mask)
             q = problem.basis(mask)
             full = np.linalg.norm(xr, axis=0)
             left = np.linalg.norm(xr - q @ qt_dot(q, xr), axis=0)  # what perp(raw) computes
             del xr
         else:
-            full = np.linalg.norm(problem.T(raw, mask), axis=0)
+            full = np.linalg.norm(problem.whiten(raw, mask), axis=0)
             left = np.linalg.norm(perp(raw), axis=0)
         with np.errstate(invalid="ignore", divide="ignore"):
             one_minus_r2 = np.where(full > 0, (left / full) ** 2, 0.0)
@@ -473,10 +492,10 @@ class Candidate:
             return TestResult(self, 0.0, 0, 1.0, 1.0, theta, None, names, absorbed=absorbed,
                               mask=mask, _remake=self._remaker(problem, theta, cols)), xp
         if last is not None and keep.all():  # the mask's last fit solved this problem
-            xk, coef, cov = xp, last[0].coef[-xp.shape[1]:], last[0].cov
+            xk, coef, cov = xp, last.fit.coef[-xp.shape[1]:], last.fit.cov
         else:
             xk = xp[:, keep]
-            coef, cov = _lstsq(xk, z_perp)
+            coef, cov = lstsq(xk, z_perp)
         fitted = xk @ coef
         r = np.sqrt(np.clip(1.0 - one_minus_r2[keep], 0.0, 1.0))
         return TestResult(self, float(fitted @ fitted), int(keep.sum()), 1.0, 1.0, theta,
@@ -488,27 +507,16 @@ class Candidate:
     def _remaker(self, problem: Problem, theta: Any, cols: np.ndarray,
                  keep: np.ndarray | None = None, raw: bool = False
                  ) -> Callable[[], np.ndarray]:
-        """A function that makes the candidate columns ``cols`` (scaled, 2n x q; the
-        ``keep`` ones) again from :meth:`columns` at ``theta``; it checks them against a
-        fingerprint of ``cols`` (a test of columns made otherwise must not be remade).
-        ``raw``: ``cols`` are the raw columns (the fingerprint scales their rows as
-        :meth:`Problem.cand` does)."""
-        rows = slice(None, None, max(1, cols.shape[0] // 64))
-        # not ``cols``: the point is to free it
-        mark = cols[rows] * np.concatenate([problem.f, problem.f])[rows][:, None] if raw \
-            else cols[rows].copy()
-        shape = cols.shape
+        """The candidate columns ``cols`` (scaled, 2n x q; the ``keep`` ones) made again from
+        :meth:`columns` at ``theta`` when a result's columns are read
+        (:func:`..factors.remade_when_read`). ``raw``: ``cols`` are the raw columns (their
+        fingerprint scales their rows as :meth:`Problem.cand` does)."""
+        scale = np.concatenate([problem.offset_scale, problem.offset_scale]) if raw else None
+        return remade_when_read(
+            lambda: problem.cand(self.columns(problem.obs, theta)[0]), cols, keep, scale,
+            f"{self.name}: columns at {theta!r} are not the tested ones")
 
-        def remake() -> np.ndarray:
-            again = problem.cand(self.columns(problem.obs, theta)[0])
-            if again.shape != shape or not np.array_equal(again[rows], mark,
-                                                               equal_nan=True):
-                raise RuntimeError(f"{self.name}: columns at {theta!r} are not the tested ones")
-            return again if keep is None or keep.all() else again[:, keep]
-
-        return remake
-
-    def _finish(self, problem: Problem, res: TestResult) -> None:
+    def finish(self, problem: Problem, res: TestResult) -> None:
         """Parameters, and the model terms the candidate is most correlated with."""
         if problem.pred.known_noise:
             cov = res.cov
@@ -527,11 +535,11 @@ class Candidate:
             cols = res.columns  # read once (may be made again)
             if cols is None or not cols.size:
                 return
-            x = problem.T(cols, res.mask)
+            x = problem.whiten(cols, res.mask)
             beta = problem.coef_on_current(x, res.mask)
             if beta is None:
-                a = problem.T(problem.current_columns(), res.mask)
-                beta, _ = _lstsq(a, x)
+                a = problem.whiten(problem.current_columns(), res.mask)
+                beta, _ = lstsq(a, x)
                 norms = np.linalg.norm(a, axis=0)
             else:  # the whitened model's column norms are its R's (Q is orthonormal)
                 norms = problem.current_norms(res.mask)
@@ -552,6 +560,17 @@ class Candidate:
         raise NotImplementedError
 
     def effect_params(self, shape: dict[str, Any], amplitude: float) -> dict[str, Any]:
+        """The simulator effect's parameters of a drawn shape at ``amplitude``."""
+        raise NotImplementedError
+
+    def effect_from_params(self, params: dict[str, Any]) -> dict[str, Any] | None:
+        """The simulator effect's parameters from a finding's ``params`` (None: the
+        candidate names no simulator effect, or its terms say it)."""
+        return None
+
+    def threshold_sigma(self, pred, used: np.ndarray) -> float:
+        """A channel candidate's standard error at the predicted noise, for the blind
+        harness's detection threshold."""
         raise NotImplementedError
 
     def nonlinear_part(self, obs: Observations, signal: np.ndarray) -> np.ndarray:

@@ -28,6 +28,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from antsim.world.effects.steps import Step
+
 from .. import pvalues
 from ..problem import Problem
 from .base import Candidate, TestResult, p_value, stacked, with_trials
@@ -99,8 +101,6 @@ class StepCandidate(Candidate):
     MIN_SIDE = 3
 
     def __init__(self):
-        from antsim.world.effects.steps import Step
-
         self.explanation = Step.explanation
 
     def change_times(self, obs) -> np.ndarray:
@@ -177,7 +177,7 @@ class StepCandidate(Candidate):
         qz = q.T @ z_perp
         for axis in range(2):
             rows = slice(axis * n_used, (axis + 1) * n_used)
-            g = problem.f[used] * problem.w[axis * n:(axis + 1) * n][used]
+            g = problem.offset_scale[used] * problem.row_weights[axis * n:(axis + 1) * n][used]
             if axis == 0:  # an azimuth step shows as dA cos E in cross-elevation
                 g = g * np.cos(obs.el_rad[used])
             g = g[order]
@@ -219,7 +219,7 @@ class StepCandidate(Candidate):
         best = int(np.argmax(gain))
         theta = self._theta(times, best)
         cols, names = self.columns(obs, theta)
-        res = self._linear(problem, perp, z_perp, cols, names, theta)
+        res = self.linear_test(problem, perp, z_perp, cols, names, theta)
         if not res.testable:
             return res
         m = times.size
@@ -235,7 +235,7 @@ class StepCandidate(Candidate):
         axis_gain = gain[:m] if best < m else gain[m:]
         inside = times[axis_gain >= axis_gain.max() - PROFILE_95]
         res.theta = (*theta, float(inside.min()), float(inside.max()))
-        self._finish(problem, res)
+        self.finish(problem, res)
         return res
 
     def params_from(self, obs, theta, coef, cov, names):

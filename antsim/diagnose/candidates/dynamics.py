@@ -8,6 +8,8 @@ from typing import ClassVar
 
 import numpy as np
 
+from antsim.world.effects.dynamics import Backlash, ClockError, ServoLag
+
 from .base import (
     Candidate,
     source_rates_arcsec_s,
@@ -31,8 +33,6 @@ class ClockCandidate(Candidate):
     mounts = ("altaz", "equatorial")
 
     def __init__(self):
-        from antsim.world.effects.dynamics import ClockError
-
         self.explanation = ClockError.explanation
 
     def columns(self, obs, theta=None):
@@ -81,8 +81,6 @@ class ServoLagCandidate(Candidate):
                        "offset")
 
     def __init__(self):
-        from antsim.world.effects.dynamics import ServoLag
-
         self.explanation = ServoLag.explanation
 
     def columns(self, obs, theta=None):
@@ -92,6 +90,9 @@ class ServoLagCandidate(Candidate):
 
     def params_from(self, obs, theta, coef, cov, names):
         return {"lag_s": float(coef[0])}, float(coef[0]), math.sqrt(max(cov[0, 0], 0.0))
+
+    def effect_from_params(self, params):
+        return {"lag_s": params["lag_s"]}
 
 
 class BacklashCandidate(Candidate):
@@ -109,8 +110,6 @@ class BacklashCandidate(Candidate):
                        "that IA and IE absorb; the slew direction does not reach the offsets")
 
     def __init__(self):
-        from antsim.world.effects.dynamics import Backlash
-
         self.explanation = Backlash.explanation
 
     def applicable(self, obs, known_noise):
@@ -125,3 +124,7 @@ class BacklashCandidate(Candidate):
         cols = np.column_stack([stacked(0.5 * sa * np.cos(obs.el_rad), None, obs.n),
                                 stacked(None, 0.5 * se, obs.n)])
         return cols, ("az_arcsec", "el_arcsec")
+
+    def effect_from_params(self, params):
+        return {"az_arcsec": abs(params.get("az_arcsec", 0.0)),
+                "el_arcsec": abs(params.get("el_arcsec", 0.0))}

@@ -9,6 +9,8 @@ candidate is tried only on recordings of the mounts it names (``Candidate.mounts
 
 from __future__ import annotations
 
+from antsim.world.effects import EFFECTS
+
 from .base import Candidate
 from .changes import StepCandidate
 from .dynamics import BacklashCandidate, ClockCandidate, ServoLagCandidate
@@ -26,8 +28,6 @@ __all__ = ["CANDIDATES", "candidate"]
 
 def _harmonic(name: str, title: str, signature: str,
               mounts: tuple[str, ...] = ("altaz",)) -> TermsCandidate:
-    from antsim.world.effects import EFFECTS
-
     cls = EFFECTS[name]
     return TermsCandidate(name, (cls.sin_term, cls.cos_term), title, signature,
                           cls.explanation, effect=name, signs=cls.signs, mounts=mounts)

@@ -11,11 +11,19 @@ from typing import Any, ClassVar
 import numpy as np
 from scipy import optimize
 
+from antsim.world.effects.optics import (
+    BeamWidthError,
+    ExactTiltCollimation,
+    PolarizationSquint,
+    SourceStructure,
+    TiltedSky,
+)
 from controller.units import ARCSEC_PER_RAD, RAD_PER_ARCMIN
 
 from .. import pvalues
 from ..data import Observations
-from ..problem import _lstsq, term_columns
+from ..linalg import lstsq
+from ..problem import term_columns
 from .base import (
     Candidate,
     TestResult,
@@ -43,8 +51,6 @@ class SourceCandidate(Candidate):
     mounts = ("altaz", "equatorial")
 
     def __init__(self):
-        from antsim.world.effects.optics import SourceStructure
-
         self.explanation = SourceStructure.explanation
 
     def thetas(self, obs):
@@ -120,6 +126,7 @@ class ExactTiltCandidate(Candidate):
                        "errors reach 4-12' near the zenith, beyond what a five-point scan "
                        "with 7' steps measures; it is proven separately at 25-40' "
                        "(tests/test_diagnose_sim.py, benchmarks/blind.py --tilt)")
+    linear_signature = False
     #: the chi^2 decrease of this 3-parameter even (quadratic) family is referred to chi^2_6,
     #: the dimension of the space of quadratic forms its signature spans (conservative)
     REFERENCE_DOF = 6
@@ -130,8 +137,6 @@ class ExactTiltCandidate(Candidate):
     SEARCH_SCANS = 10_000
 
     def __init__(self):
-        from antsim.world.effects.optics import ExactTiltCollimation
-
         self.explanation = ExactTiltCollimation.explanation
 
     @staticmethod
@@ -154,11 +159,13 @@ class ExactTiltCandidate(Candidate):
         np.multiply(d_el, ARCSEC_PER_RAD, out=out[k:])
         return out
 
+    def columns(self, obs, theta=None):
+        raise NotImplementedError(f"{self.name}: its signature is not linear in its "
+                                  "parameters (its own test fits it)")
+
     def error(self, obs: Observations, theta: Sequence[float]) -> np.ndarray:
         """Error (2n,) arcsec of an exact tilt (north, east components) and collimation,
         arcmin."""
-        from antsim.world.effects.optics import TiltedSky
-
         return self._sky_error(TiltedSky(obs.az_rad, obs.el_rad), theta)
 
     def _shown(self, problem, rows: np.ndarray | None, lin: np.ndarray):
@@ -167,10 +174,8 @@ class ExactTiltCandidate(Candidate):
         scans would miss the source), so the recordings show the linear part whole and the
         rest scaled by each source's offset scale. ``lin``: the AN, AW, CA columns of every
         scan (:func:`term_columns`, made once a test)."""
-        from antsim.world.effects.optics import TiltedSky
-
         obs = problem.obs
-        f2 = np.concatenate([problem.f, problem.f])
+        f2 = np.concatenate([problem.offset_scale, problem.offset_scale])
         if rows is None:
             sky, lin_cols = TiltedSky(obs.az_rad, obs.el_rad), lin
         else:
@@ -260,7 +265,7 @@ class ExactTiltCandidate(Candidate):
         best_x, best_c, base, (err, proj, z_perp, jac) = self._fit(problem, used, starts, lin)
         dchi2 = max(base - best_c, 0.0)
         # covariance from the Jacobian at the optimum (least_squares' is resid_jac's: minus)
-        _, cov = _lstsq(np.column_stack([proj(row) for row in err.jac_rows(best_x)])
+        _, cov = lstsq(np.column_stack([proj(row) for row in err.jac_rows(best_x)])
                         if jac is None else np.negative(jac, order="C"), z_perp)
         cols = self._shown(problem, None, lin)(best_x)[:, None]
         res = TestResult(self, dchi2, self.REFERENCE_DOF, 1.0, 1.0, tuple(best_x), cols,
@@ -268,10 +273,10 @@ class ExactTiltCandidate(Candidate):
                          chi2_now=base)
         res.p = p_value(problem, dchi2, self.REFERENCE_DOF, base)
         # correlation of the nonlinear part (the error minus its best linear AN/AW/CA fit)
-        beta, _ = _lstsq(lin, cols[:, 0])
+        beta, _ = lstsq(lin, cols[:, 0])
         quad = (cols[:, 0] - lin @ beta)[:, None]
         xp = perp(quad)
-        full = np.linalg.norm(problem.T(quad))
+        full = np.linalg.norm(problem.whiten(quad))
         res.r_model = float(math.sqrt(max(0.0, 1 - (np.linalg.norm(xp) / full) ** 2))) \
             if full > 0 else 1.0
         res.params, res.amplitude, res.amplitude_sigma = self.params_from(
@@ -305,7 +310,7 @@ class ExactTiltCandidate(Candidate):
 
     def nonlinear_part(self, obs, signal):
         lin = term_columns(("AN", "AW", "CA"), obs)
-        beta, _ = _lstsq(lin, signal)
+        beta, _ = lstsq(lin, signal)
         return signal - lin @ beta
 
     def effect_params(self, shape, amplitude):
@@ -328,7 +333,7 @@ def _projection(problem, used: np.ndarray, rows: np.ndarray):
     perp, z_perp = problem.perp_for(used)
     both = np.concatenate([rows, rows + problem.n])
     if problem.white(used):  # whitening is a weight per row: only the used rows
-        w = problem.w[both]
+        w = problem.row_weights[both]
         q = problem.basis(used)
 
         def proj(v):
@@ -364,9 +369,11 @@ class SquintCandidate(Candidate):
     mounts = ("altaz", "equatorial")
 
     def __init__(self):
-        from antsim.world.effects.optics import PolarizationSquint
-
         self.explanation = PolarizationSquint.explanation
+
+    def columns(self, obs, theta=None):
+        raise NotImplementedError(f"{self.name}: tested on the XR - XL offsets, not the "
+                                  "pointing errors")
 
     def test(self, problem, perp=None, z_perp=None, chi2_now=None):
         obs, pred = problem.obs, problem.pred
@@ -375,7 +382,7 @@ class SquintCandidate(Candidate):
         if ok.sum() < 3:
             return TestResult(self, 0.0, 0, 1.0, 1.0)
         d = d[ok]
-        f = problem.f[ok][:, None]
+        f = problem.offset_scale[ok][:, None]
         if pred.pol_sig is not None and pred.known_noise:
             sig = pred.pol_sig[ok]
         else:
@@ -436,12 +443,14 @@ class BeamWidthCandidate(Candidate):
     mounts = ("altaz", "equatorial")
 
     def __init__(self):
-        from antsim.world.effects.optics import BeamWidthError
-
         self.explanation = BeamWidthError.explanation
 
     def applicable(self, obs, known_noise):
         return super().applicable(obs, known_noise) and "beam_hpbw_arcmin" in obs.meta
+
+    def columns(self, obs, theta=None):
+        raise NotImplementedError(f"{self.name}: tested on the measured beam widths, not the "
+                                  "pointing errors")
 
     def _stats(self, problem):
         obs, pred = problem.obs, problem.pred

@@ -10,6 +10,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from antsim.world.effects.harmonics import FeedOffset
+
 from ..problem import term_columns
 from .base import (
     Candidate,
@@ -101,9 +103,6 @@ class TermsCandidate(Candidate):
             return float(np.hypot.reduce(list(params["terms_arcsec"].values())))
         return super().hidden_amplitude(params)
 
-    def model_terms(self, params: dict[str, Any]) -> dict[str, float]:
-        return dict(params.get("terms_arcsec", {}))
-
 
 class HarmonicFamilyCandidate(TermsCandidate):
     """A periodic error with an unknown number of cycles n per turn of an axis: the pair
@@ -113,14 +112,14 @@ class HarmonicFamilyCandidate(TermsCandidate):
     def __init__(self, name: str, result: str, arg: str, orders: Sequence[int], title: str,
                  signature: str, explanation: str, mounts: tuple[str, ...] = ("altaz",)):
         self.result, self.arg, self.orders = result, arg, tuple(orders)
-        super().__init__(name, (self._pair(self.orders[0])), title, signature, explanation,
+        super().__init__(name, (self.order_terms(self.orders[0])), title, signature, explanation,
                          effect="terms", mounts=mounts)
         #: the pattern (a finding names its actual terms, e.g. HESE7 HECE7)
         self.terms = (f"H{result}S{arg}n", f"H{result}C{arg}n")
         self.params_doc = {"n": "cycles per turn", "amplitude_arcsec": "amplitude (arcsec)",
                            "phase_deg": "phase: sine term a cos(phase), cosine a sin(phase)"}
 
-    def _pair(self, n: int) -> tuple[str, str]:
+    def order_terms(self, n: int) -> tuple[str, str]:
         k = "" if n == 1 else str(n)
         return (f"H{self.result}S{self.arg}{k}", f"H{self.result}C{self.arg}{k}")
 
@@ -129,14 +128,14 @@ class HarmonicFamilyCandidate(TermsCandidate):
 
     def columns(self, obs, theta=None):
         n = self.orders[0] if theta is None else int(theta)
-        pair = self._pair(n)
+        pair = self.order_terms(n)
         return term_columns(pair, obs), pair
 
     def test(self, problem, perp, z_perp, chi2_now):
         results = []
         for n in self.orders:
             cols, names = self.columns(problem.obs, n)
-            results.append(self._linear(problem, perp, z_perp, cols, names, n))
+            results.append(self.linear_test(problem, perp, z_perp, cols, names, n))
         for res in results:
             res.trials = float(len(self.orders))
             res.p = with_trials(p_value(problem, res.delta_chi2, res.dof, res.chi2_now,
@@ -144,7 +143,7 @@ class HarmonicFamilyCandidate(TermsCandidate):
         best = max(results, key=lambda res: res.delta_chi2)
         best.siblings = [res for res in results if res is not best and res.dof > 0]
         if best.dof > 0:
-            self._finish(problem, best)
+            self.finish(problem, best)
         return best
 
     def params_from(self, obs, theta, coef, cov, names):
@@ -164,7 +163,7 @@ class HarmonicFamilyCandidate(TermsCandidate):
         return cols @ np.array([math.cos(phi), math.sin(phi)])
 
     def effect_params(self, shape, amplitude):
-        s_term, c_term = self._pair(shape["n"])
+        s_term, c_term = self.order_terms(shape["n"])
         phi = math.radians(shape["phase_deg"])
         return {"terms_arcsec": {s_term: float(amplitude * math.cos(phi)),
                                  c_term: float(amplitude * math.sin(phi))}}
@@ -187,8 +186,6 @@ class FeedOffsetCandidate(Candidate):
     amplitude_param = "offset_arcsec"
 
     def __init__(self):
-        from antsim.world.effects.harmonics import FeedOffset
-
         self.explanation = FeedOffset.explanation
         self.blind_exclusion = ("with the 45-ft's fixed feed the feed offset is a constant "
                                 "collimation pair that CA (W10) and IE (W1) absorb")
@@ -209,3 +206,6 @@ class FeedOffsetCandidate(Candidate):
         g = np.array([a, b])[: len(coef)] / r if r > 0 else np.zeros(len(coef))
         return ({"offset_arcsec": r, "angle_deg": math.degrees(math.atan2(b, a)) % 360.0},
                 r, float(np.sqrt(g @ cov @ g)) if r > 0 else float("nan"))
+
+    def effect_from_params(self, params):
+        return {"offset_arcsec": params["offset_arcsec"], "angle_deg": params["angle_deg"]}

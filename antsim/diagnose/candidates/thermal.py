@@ -10,13 +10,24 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from antsim.world.effects.drifts import TemperatureDrift, structure_temperature_c
+from antsim.world.effects.heating import ThermalEffect
+from antsim.world.effects.thermal import (
+    SunsetDrift,
+    since_sunset,
+    sunset_level,
+    transient_level,
+)
+from controller.pointing.model import PointingModel
+from controller.pointing.thermal import SENSOR_FAMILY
+
 from ..data import Observations
-from ..problem import Problem, _lstsq
+from ..linalg import lstsq
+from ..problem import Problem
 from .base import (
     GRID_STEP_S,
     Candidate,
     TestResult,
-    obs_key,
     periodic_interp,
     stacked,
     sun_el_grid_deg,
@@ -26,12 +37,6 @@ from .terms import TermsCandidate
 
 __all__ = ['SensorTermsCandidate', 'SunsetCandidate', 'SunsetTransientCandidate',
            'TemperatureCandidate']
-
-#: levels off a lagged candidate's time-constant grid that it keeps (n floats each): the
-#: searches ask for each of their points once, then for the best one again (its parameters
-#: and a result's columns, rebuilt when read); only the grid's levels are asked for again in
-#: every round and in the cross-validated stage
-OFF_GRID_LEVELS = 2
 
 #: the time-constant searches' tolerance in log theta: 1% of tau, some 20 times finer than
 #: tau's own standard error (Fomalont's drift, 16 seeds: 22-31% of tau,
@@ -79,7 +84,7 @@ class _LaggedCandidate(Candidate):
     harness draws tau log-uniformly between 30 min and 3 h, with either sign."""
 
     def _refine_log_theta(self, problem: Problem, perp, z_perp, best: TestResult,
-                          log_lo: float, log_hi: float,
+                          grid: dict[Any, float], log_lo: float, log_hi: float,
                           end: float | None = None) -> TestResult:
         """The time constant between exp(log_lo) and exp(log_hi) that fits best (a search
         in log theta to XATOL_LOG_THETA), or ``best`` if that fits better.
@@ -89,8 +94,9 @@ class _LaggedCandidate(Candidate):
         and XATOL_LOG_THETA inside it, the optimum of a unimodal decrease lies within that
         tolerance of the bound, and the bound is the answer (two tests).
 
-        Otherwise the search starts from what the grid found: the best point and its
-        neighbours (their tests this round, :meth:`_linear_xp`'s) bracket the optimum, and
+        Otherwise the search starts from what the grid found (``grid``: each time constant
+        of the grid tested this round -> its delta chi^2): the best point and its
+        neighbours bracket the optimum, and
         each step tests the vertex of the parabola through the best point and the nearest
         tested ones on either side (kept XATOL_LOG_THETA from each; the bracket's wider side
         by the golden section where a parabola does not narrow it), until both lie within
@@ -105,20 +111,17 @@ class _LaggedCandidate(Candidate):
 
         def run(log_theta: float) -> TestResult:
             theta = math.exp(log_theta)
-            res = self._linear(problem, perp, z_perp, *self.columns(obs, theta), theta)
+            res = self.linear_test(problem, perp, z_perp, *self.columns(obs, theta), theta)
             tested[log_theta], values[log_theta] = res, res.delta_chi2
-            if res.delta_chi2 >= max(values.values()):
-                self._pinned = round(theta, 3)
             return res
 
-        self._pinned = None
         if end is not None:
             inside = end + (XATOL_LOG_THETA if end == log_lo else -XATOL_LOG_THETA)
             at_end, near = run(end), run(inside)
             if at_end.delta_chi2 >= max(near.delta_chi2, best.delta_chi2):
                 return at_end
         # the grid's tests bracketing the search (theta > 0) and its best
-        for theta, dchi2 in self._grid_tests.items():
+        for theta, dchi2 in grid.items():
             if theta > 0 and log_lo - 1e-12 <= math.log(theta) <= log_hi + 1e-12:
                 values.setdefault(math.log(theta), dchi2)
         for bound in (log_lo, log_hi):  # a bound the grid did not test: tested
@@ -137,9 +140,6 @@ class _LaggedCandidate(Candidate):
             widths.append((b if b is not None else x) - (a if a is not None else x))
             run(_next_point(a, x, b, values, widths))
         x = max(values, key=values.get)
-        # its level kept for the covariance and the result's columns (OFF_GRID_LEVELS
-        # others may be made in between)
-        self._pinned = round(math.exp(x), 3)
         res = tested.get(x)
         if res is None:  # a grid point: the test passed in
             return best
@@ -147,71 +147,8 @@ class _LaggedCandidate(Candidate):
 
     TAUS: tuple[float, ...] = ()
 
-    def __init__(self):
-        self._cache: dict[tuple, Any] = {}
-        self._last_obs: tuple[Observations, tuple] | None = None
-        self._grids: dict[str, tuple[tuple, np.ndarray]] = {}  # name -> (recordings, grid)
-        self._grid_tests: dict[float, float] = {}  # the last test's grid: tau -> delta chi^2
-        self._pinned: float | None = None  # a search's answer: its level kept (rounded tau)
-
     def thetas(self, obs):
-        self._grid_tests = {}  # a test (or the cross-validated stage) starts here
         return list(self.TAUS)
-
-    def _linear_xp(self, problem, cols, names, theta):
-        """:meth:`Candidate._linear_xp`; a grid point's delta chi^2 noted for the search
-        that starts from the grid (:meth:`_refine_log_theta`)."""
-        out = super()._linear_xp(problem, cols, names, theta)
-        if theta in self.TAUS:
-            self._grid_tests[theta] = out[0].delta_chi2
-        return out
-
-    def _cached(self, obs: Observations, tau_s: float, make) -> Any:
-        """``make()``, the level of time constant ``tau_s`` for ``obs``, kept while it may be
-        asked for again: every level of the grid (:attr:`TAUS`) and the last
-        :data:`OFF_GRID_LEVELS` others (the searches' points; the last search's answer among
-        them: its covariance and columns ask for it after its neighbours), for the recordings
-        last seen (at 200,000 scans every level asked for, kept up to 64 MiB a candidate, was
-        169 MiB in three; their grids' 35 levels are 53 MiB)."""
-        key = (self._obs_key(obs), round(tau_s, 3))
-        cache = self._cache
-        hit = cache.pop(key, None)
-        if hit is None:
-            hit = make()
-            if any(k[0] != key[0] for k in cache):  # other recordings: not asked for again
-                cache.clear()
-            if tau_s not in self.TAUS:
-                off = [k for k in cache if k[1] not in self.TAUS]
-                let_go = [k for k in off if k[1] != self._pinned]  # the oldest first
-                for k in let_go[:max(len(off) - OFF_GRID_LEVELS + 1, 0)]:
-                    del cache[k]
-        cache[key] = hit  # the most recently used last
-        return hit
-
-    def release(self) -> None:
-        """Drop the levels and grids kept for the recordings last seen."""
-        self._cache.clear()
-        self._grids.clear()
-        self._grid_tests = {}
-        self._pinned = None
-        self._last_obs = None
-
-    def _grid(self, name: str, obs: Observations, make) -> np.ndarray:
-        """``make()``, a quantity on the time grid that is the same for every time constant
-        (the night, the air temperature): kept for the recordings last seen."""
-        key = self._obs_key(obs)
-        hit = self._grids.get(name)
-        if hit is None or hit[0] != key:
-            hit = self._grids[name] = (key, make())
-        return hit[1]
-
-    def _obs_key(self, obs: Observations) -> tuple:
-        """:func:`obs_key` of ``obs``, hashed once for the recordings the candidate last saw
-        (held, so that their identity stands for their content while they are)."""
-        last = self._last_obs
-        if last is None or last[0] is not obs:
-            last = self._last_obs = (obs, obs_key(obs))
-        return last[1]
 
     def draw_shape(self, rng, obs):
         return {"tau_s": float(math.exp(rng.uniform(math.log(1800.0), math.log(10800.0)))),
@@ -239,8 +176,6 @@ class SunsetCandidate(_LaggedCandidate):
     shape = "relaxation"
 
     def __init__(self):
-        from antsim.world.effects.thermal import SunsetDrift
-
         super().__init__()
         self.explanation = SunsetDrift.explanation + " (Fomalont 1973: 1' in the 4 h after " \
                                                       "sunset)"
@@ -250,30 +185,18 @@ class SunsetCandidate(_LaggedCandidate):
             obs.sun_el_deg is not None or "epoch_utc" in obs.meta) and np.ptp(obs.t_s) > 4 * 3600
 
     def level(self, obs: Observations, tau_s: float) -> np.ndarray:
-        from antsim.world.effects.thermal import since_sunset, sunset_level, transient_level
-
-        def make() -> np.ndarray:
-            t = time_grid(obs)
-            if self.shape == "transient":  # the steps since sunset: the same for every tau
-                steps = self._grid("since_sunset", obs,
-                                   lambda: since_sunset(self._night(obs, t).astype(float)))
-                lev = transient_level(steps, GRID_STEP_S, tau_s)
-            else:
-                lev = sunset_level(self._night(obs, t).astype(float), GRID_STEP_S, tau_s,
-                                   self.shape)
-            return np.interp(obs.t_s, t, lev)
-
-        return self._cached(obs, tau_s, make)
-
-    def _night(self, obs: Observations, t: np.ndarray) -> np.ndarray:
-        """Where the Sun is down on the time grid ``t``, the same for every time constant:
-        kept for the recordings last seen (a byte a minute)."""
-        return self._grid("night", obs, lambda: sun_el_grid_deg(obs, t) < 0.0)
+        t = time_grid(obs)
+        night = (sun_el_grid_deg(obs, t) < 0.0).astype(float)
+        if self.shape == "transient":
+            lev = transient_level(since_sunset(night), GRID_STEP_S, tau_s)
+        else:
+            lev = sunset_level(night, GRID_STEP_S, tau_s, self.shape)
+        return np.interp(obs.t_s, t, lev)
 
     def columns(self, obs, theta=None):
         return stacked(None, self.level(obs, float(theta)), obs.n)[:, None], ("amplitude",)
 
-    def refine(self, problem, perp, z_perp, best):
+    def refine(self, problem, perp, z_perp, best, grid):
         if best.dof == 0:
             return best
         obs = problem.obs
@@ -284,7 +207,7 @@ class SunsetCandidate(_LaggedCandidate):
             else hi
 
         end = lo if i == 0 else hi if i == len(self.TAUS) - 1 else None
-        res = self._refine_log_theta(problem, perp, z_perp, best, a, b, end)
+        res = self._refine_log_theta(problem, perp, z_perp, best, grid, a, b, end)
         # joint covariance of (amplitude, log tau) from the Jacobian
         tau = float(res.theta)
         h = 0.01
@@ -292,7 +215,7 @@ class SunsetCandidate(_LaggedCandidate):
             / (2 * h) * float(res.coef[0])
         perp, z_perp = problem.perp_for(res.mask)
         jac = perp(np.column_stack([res.columns, problem.cand(d)]))
-        _, cov2 = _lstsq(jac, z_perp)
+        _, cov2 = lstsq(jac, z_perp)
         res.cov = cov2
         res.refit = self._refit_factory(problem)
         return res
@@ -368,8 +291,6 @@ class TemperatureCandidate(_LaggedCandidate):
             21600.0)
 
     def __init__(self):
-        from antsim.world.effects.drifts import TemperatureDrift
-
         super().__init__()
         self.explanation = TemperatureDrift.explanation
 
@@ -378,40 +299,32 @@ class TemperatureCandidate(_LaggedCandidate):
             float(np.nanstd(obs.air_temp_c)) > 0.3
 
     def structure(self, obs: Observations, tau_s: float) -> tuple[np.ndarray, float]:
-        from antsim.world.effects.drifts import structure_temperature_c
+        t = time_grid(obs)
+        ts = np.interp(obs.t_s, t, structure_temperature_c(t, self._air(obs, t), tau_s))
+        return ts, float(np.mean(ts[obs.good]) if obs.good.any() else 0.0)
 
-        def make() -> tuple[np.ndarray, float]:
-            t = time_grid(obs)
-            ts = np.interp(obs.t_s, t, structure_temperature_c(t, self._air(obs, t), tau_s))
-            return ts, float(np.mean(ts[obs.good]) if obs.good.any() else 0.0)
-
-        return self._cached(obs, tau_s, make)
-
-    def _air(self, obs: Observations, t: np.ndarray) -> np.ndarray:
-        """The air temperature (C) on the time grid ``t``, the same for every time constant:
-        kept for the recordings last seen."""
-        def make() -> np.ndarray:
-            ok = np.isfinite(obs.air_temp_c)
-            if obs.air_daily_c is not None and np.ptp(obs.t_s[ok]) < 72000.0:
-                # a campaign much shorter than a day: the day before follows the scenario's
-                # daily curve, shifted to the recorded temperatures
-                curve = np.asarray(obs.air_daily_c(t), dtype=float)
-                shift = float(np.median(obs.air_temp_c[ok]
-                                        - np.asarray(obs.air_daily_c(obs.t_s[ok]))))
-                air = np.interp(t, obs.t_s[ok], obs.air_temp_c[ok])
-                outside = (t < obs.t_s[ok].min()) | (t > obs.t_s[ok].max())
-                air[outside] = curve[outside] + shift
-            else:
-                air = periodic_interp(t, obs.t_s[ok], obs.air_temp_c[ok])
-            return air
-
-        return self._grid("air", obs, make)
+    @staticmethod
+    def _air(obs: Observations, t: np.ndarray) -> np.ndarray:
+        """The air temperature (C) on the time grid ``t``."""
+        ok = np.isfinite(obs.air_temp_c)
+        if obs.air_daily_c is not None and np.ptp(obs.t_s[ok]) < 72000.0:
+            # a campaign much shorter than a day: the day before follows the scenario's
+            # daily curve, shifted to the recorded temperatures
+            curve = np.asarray(obs.air_daily_c(t), dtype=float)
+            shift = float(np.median(obs.air_temp_c[ok]
+                                    - np.asarray(obs.air_daily_c(obs.t_s[ok]))))
+            air = np.interp(t, obs.t_s[ok], obs.air_temp_c[ok])
+            outside = (t < obs.t_s[ok].min()) | (t > obs.t_s[ok].max())
+            air[outside] = curve[outside] + shift
+        else:
+            air = periodic_interp(t, obs.t_s[ok], obs.air_temp_c[ok])
+        return air
 
     def columns(self, obs, theta=None):
         ts, mean = self.structure(obs, float(theta))
         return stacked(None, ts - mean, obs.n)[:, None], ("arcsec_per_k",)
 
-    def refine(self, problem, perp, z_perp, best):
+    def refine(self, problem, perp, z_perp, best, grid):
         if best.dof == 0:
             return best
         obs = problem.obs
@@ -423,7 +336,7 @@ class TemperatureCandidate(_LaggedCandidate):
             a = math.log(taus[i - 1]) if taus[i - 1] > 0 else math.log(60.0)
             b = math.log(taus[i + 1]) if i + 1 < len(taus) else math.log(taus[-1] * 1.5)
 
-            res = self._refine_log_theta(problem, perp, z_perp, best, a, b,
+            res = self._refine_log_theta(problem, perp, z_perp, best, grid, a, b,
                                          b if i + 1 == len(taus) else None)
         tau = float(res.theta)
         if tau > 0:
@@ -432,7 +345,7 @@ class TemperatureCandidate(_LaggedCandidate):
                  - self.columns(obs, tau * math.exp(-h))[0]) / (2 * h) * float(res.coef[0])
             perp, z_perp = problem.perp_for(res.mask)
             jac = perp(np.column_stack([res.columns, problem.cand(d)]))
-            _, res.cov = _lstsq(jac, z_perp)
+            _, res.cov = lstsq(jac, z_perp)
 
         def refit(train: np.ndarray) -> np.ndarray:
             best_d, best_tau = -1.0, taus[0]
@@ -473,9 +386,6 @@ class SensorTermsCandidate(TermsCandidate):
     ``antsim.diagnose.modelit``)."""
 
     def __init__(self):
-        from antsim.world.effects.heating import ThermalEffect
-        from controller.pointing.thermal import SENSOR_FAMILY
-
         terms = SENSOR_FAMILY
         super().__init__(
             "thermal_sensors", terms, "thermal deformation seen by the structure sensors",
@@ -489,8 +399,6 @@ class SensorTermsCandidate(TermsCandidate):
             blind_exclusion="it needs recordings with structure temperatures")
 
     def applicable(self, obs, known_noise):
-        from controller.pointing.model import PointingModel
-
         need = PointingModel(list(self.terms)).regressors
         return super().applicable(obs, known_noise) and obs.structure is not None \
             and need <= set(obs.structure)

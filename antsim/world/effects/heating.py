@@ -53,7 +53,7 @@ from ..heat import (
     sky_temperature_k,
 )
 from ..structure import STEEL_EXPANSION_PER_K, Structure
-from .base import Effect, Param, PointingState
+from .base import Effect, Key, PointingState
 from .thermal import GRID_STEP_S, ScalarInterpolator, campaign_grid_s, interp_rows, ou_series
 
 __all__ = ["PARTS", "ThermalEffect", "member_forcings"]
@@ -151,37 +151,42 @@ class ThermalEffect(Effect):
         "their temperature differences bend the structure, follow the Sun and the antenna's "
         "direction with time constants of minutes to an hour, and relax after sunset"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "absorptivity": Param(0.25, "solar absorptivity of the paint (white: 0.19-0.25 new, "
-                              "up to ~0.4 weathered)", min=0.0, max=1.0),
-        "emissivity": Param(0.9, "long-wave emissivity of the paint", min=0.0, max=1.0),
-        "heat_capacity_j_m3k": Param(3.6e6, "volumetric heat capacity of the steel "
-                                     "(J/(m^3 K))", min=1e5, max=1e7),
-        "expansion_per_k": Param(STEEL_EXPANSION_PER_K, "linear expansion of the steel (1/K)",
-                                 min=0.0, max=1e-4),
-        "leg_wall_m": Param(0.006, "wall thickness of the feed legs' tubes (m)", min=1e-4,
-                            max=0.1),
-        "yoke_plate_m": Param(0.015, "plate thickness of the yoke arms (m)", min=1e-4,
-                              max=0.2),
-        "pedestal_wall_m": Param(0.02, "wall thickness of the pedestal (m)", min=1e-4,
-                                 max=0.2),
-        "inside_w_m2k": Param(5.0, "heat transfer from a plate to the still air and the "
-                              "other plates inside a closed box girder (W/(m^2 K))",
-                              min=0.0, max=100.0),
-        "diameter_m": Param(13.7, "dish diameter (m)", min=1.0, max=200.0),
-        "focal_length_m": Param(5.5, "prime focal length (m)", min=0.5, max=100.0),
-        "yoke_height_m": Param(3.0, "height of the yoke arms, azimuth bearing to elevation "
-                               "axis (m)", min=0.1, max=50.0),
-        "yoke_depth_m": Param(1.0, "depth of a yoke arm, front face to back face (m)",
-                              min=0.05, max=20.0),
-        "yoke_separation_m": Param(4.0, "distance between the yoke arms (m)", min=0.1,
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "absorptivity": Key(0.25, "solar absorptivity of the paint (white: 0.19-0.25 new, up "
+                            "to ~0.4 weathered)", min=0.0, max=1.0, unit="1",
+                            source="tables of coatings' solar absorptance"),
+        "emissivity": Key(0.9, "long-wave emissivity of the paint (white: 0.85-0.94)",
+                          min=0.0, max=1.0, unit="1"),
+        "heat_capacity_j_m3k": Key(3.6e6, "volumetric heat capacity of the steel (7850 kg/m^3 "
+                                   "x 460 J/(kg K))", min=1e5, max=1e7, unit="J/(m^3 K)"),
+        "expansion_per_k": Key(STEEL_EXPANSION_PER_K, "linear expansion of the steel",
+                               min=0.0, max=1e-4, unit="1/K"),
+        "leg_wall_m": Key(0.006, "wall thickness of the feed legs' tubes (4-8 mm)", min=1e-4,
+                          max=0.1),
+        "yoke_plate_m": Key(0.015, "plate thickness of the yoke arms (10-25 mm)", min=1e-4,
+                            max=0.2),
+        "pedestal_wall_m": Key(0.02, "wall thickness of the pedestal (12-25 mm)", min=1e-4,
+                               max=0.2),
+        "inside_w_m2k": Key(5.0, "heat transfer from a plate to the still air and the other "
+                            "plates inside a closed box girder (3-8)", min=0.0, max=100.0,
+                            unit="W/(m^2 K)"),
+        "diameter_m": Key(13.7, "dish diameter", min=1.0, max=200.0,
+                          source="Ghigo 1990, section I"),
+        "focal_length_m": Key(5.5, "prime focal length (F/D 0.3-0.45)", min=0.5, max=100.0),
+        "yoke_height_m": Key(3.0, "height of the yoke arms, azimuth bearing to elevation axis "
+                             "(2-4.5)", min=0.1, max=50.0),
+        "yoke_depth_m": Key(1.0, "depth of a yoke arm, front face to back face (0.6-1.5)",
+                            min=0.05, max=20.0),
+        "yoke_separation_m": Key(4.0, "distance between the yoke arms (3-6)", min=0.1,
+                                 max=100.0),
+        "pedestal_height_m": Key(5.0, "height of the pedestal (3-7)", min=0.1, max=100.0),
+        "pedestal_diameter_m": Key(2.5, "diameter of the pedestal (1.8-3.5)", min=0.1,
                                    max=100.0),
-        "pedestal_height_m": Param(5.0, "height of the pedestal (m)", min=0.1, max=100.0),
-        "pedestal_diameter_m": Param(2.5, "diameter of the pedestal (m)", min=0.1,
-                                     max=100.0),
-        "cloud_modulation": Param(0.1, "rms fraction of the direct sunlight that passing "
-                                  "thin cloud removes (0: a clear sky)", min=0.0, max=1.0),
-        "cloud_timescale_s": Param(1800.0, "correlation time of the cloud (s)", min=60.0),
+        "cloud_modulation": Key(0.1, "rms fraction of the direct sunlight that passing thin "
+                                "cloud removes (0: a clear sky)", min=0.0, max=1.0, unit="1",
+                                source="Ghigo 1990, section IV: quite clear during most of "
+                                "the run"),
+        "cloud_timescale_s": Key(1800.0, "correlation time of the cloud", min=60.0),
     }
 
     # ------------------------------------------------------------------ set-up

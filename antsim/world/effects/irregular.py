@@ -33,7 +33,7 @@ import numpy as np
 from controller.pointing.model import PointingModel
 from controller.units import RAD_PER_ARCSEC
 
-from .base import Effect, Param, PointingState
+from .base import Effect, Key, PointingState
 
 __all__ = ["MountIrregularities", "harmonic_series"]
 
@@ -77,24 +77,23 @@ class MountIrregularities(Effect):
         "encoder and gear errors and an uneven azimuth track: errors fixed in azimuth and "
         "elevation, the same every night, beyond the pointing model's terms"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "az_encoder_rms_arcsec": Param(0.0, "rms of the azimuth encoder and gear errors "
-                                       "(arcsec of azimuth)", min=0.0),
-        "el_encoder_rms_arcsec": Param(0.0, "rms of the elevation encoder and gear errors "
-                                       "(arcsec)", min=0.0),
-        "track_rms_arcsec": Param(0.0, "rms of the alidade's rocking on its track, "
-                                  "forward and sideways each (arcsec)", min=0.0),
-        "harmonics": Param(24.0, "highest harmonic per turn", min=2.0, max=360.0),
-        "pattern_seed": Param(1.0, "the antenna's own pattern (the same in every campaign)",
-                              min=0.0, max=2.0**31),
-        "beyond_model": Param("", "the pointing model whose fit over the sky is taken out "
-                              "of the pattern: the 1990 report's ten W's, or none", kind="string",
-                              choices=("", "ghigo10")),
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "az_encoder_rms_arcsec": Key(0.0, "rms over a turn of the azimuth encoder and gear "
+                                     "errors (arcsec of azimuth; 5-40 on antennas of the era)",
+                                     min=0.0, source="Gawronski, Baher and Gama 2006 (DSS-25)"),
+        "el_encoder_rms_arcsec": Key(0.0, "rms over a turn of the elevation encoder and gear "
+                                     "errors (arcsec)", min=0.0),
+        "track_rms_arcsec": Key(0.0, "rms of the alidade's rocking on its track, forward and "
+                                "sideways each (arcsec)", min=0.0,
+                                source="Gawronski, Baher and Gama 2006 (DSS-25's track)"),
+        "harmonics": Key(24.0, "highest harmonic per turn (the lowest is the second)",
+                         min=2.0, max=360.0, unit="1"),
+        "pattern_seed": Key(1.0, "the antenna's own pattern (the same in every campaign)",
+                            min=0.0, max=2.0**31, unit="1"),
+        "beyond_model": Key("", "the pointing model whose fit over the sky is taken out of "
+                            "the pattern: the 1990 report's ten W's, or none", kind="string",
+                            choices=("", "ghigo10")),
     }
-    #: the tables the pattern is read from: every 0.01 deg of azimuth over a turn and of
-    #: elevation from 1 to 90 deg (linear interpolation of 24 harmonics: below 2e-4")
-    TABLE_STEP_DEG = 0.01
-    TABLE_EL_MIN_DEG = 1.0
     #: the sky over which the pattern's model part is fitted (deg)
     SKY_AZ_DEG = np.arange(0.0, 360.0, 5.0)
     SKY_EL_DEG = np.arange(10.0, 85.01, 2.5)

@@ -20,7 +20,7 @@ import numpy as np
 
 from controller.units import RAD_PER_ARCSEC
 
-from .base import Effect, Param, PointingState
+from .base import Effect, Key, PointingState
 
 __all__ = ["SUNSET_SHAPES", "OUProcess", "SunsetDrift", "interp_rows", "ou_series", "relax",
            "since_sunset", "sunset_level", "transient_level"]
@@ -274,14 +274,14 @@ class SunsetDrift(Effect):
         "after sunset the structure cools and relaxes from its daytime shape with a time "
         "constant of hours, so the elevation error drifts systematically"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "amplitude_arcsec": Param(60.0, "total elevation change after sunset (arcsec)"),
-        "tau_s": Param(5400.0, "time constant of the drift (s)", min=60.0),
-        "nights": Param(0.0, "after the first this many sunsets of the campaign only "
-                             "(0: every night)", min=0.0, max=1000.0),
-        "shape": Param("relaxation", "relaxation (a lasting change, back after sunrise) or "
-                       "transient (a change at sunset that dies away)", kind="string",
-                       choices=SUNSET_SHAPES),
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "amplitude_arcsec": Key(60.0, "total elevation change after sunset (arcsec)"),
+        "tau_s": Key(5400.0, "time constant of the drift (s)", min=60.0),
+        "nights": Key(0.0, "after the first this many sunsets of the campaign only "
+                           "(0: every night)", min=0.0, max=1000.0, unit="1"),
+        "shape": Key("relaxation", "relaxation (a lasting change, back after sunrise) or "
+                     "transient (a change at sunset that dies away)", kind="string",
+                     choices=SUNSET_SHAPES),
     }
 
     def start(self, world, rng: np.random.Generator) -> None:

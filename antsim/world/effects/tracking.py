@@ -9,7 +9,7 @@ import numpy as np
 
 from controller.units import RAD_PER_ARCSEC
 
-from .base import Effect, Param
+from .base import Effect, Key
 from .thermal import OUProcess
 
 __all__ = ["TrackingJitter"]
@@ -50,27 +50,30 @@ class TrackingJitter(Effect):
         "wind buffeting and servo noise move the beam randomly on time scales of seconds "
         "to minutes"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "xel_rms_arcsec": Param(5.0, "rms of the cross-elevation wander (arcsec)", min=0.0),
-        "el_rms_arcsec": Param(5.0, "rms of the elevation wander (arcsec)", min=0.0),
-        "timescale_s": Param(60.0, "correlation time of the wander (s)", min=1e-3),
-        "wind_ref_m_s": Param(10.0, "wind speed that doubles the rms (m/s), without the "
-                              "compliance law", min=0.1),
-        "wind_arcsec_per_m2s2": Param(0.0, "pointing per (m/s)^2 of wind: the structure's "
-                                      "and drives' compliance (0: the wind_ref law)",
-                                      min=0.0, max=100.0),
-        "turbulence_intensity": Param(0.2, "rms of the wind's fluctuations over its mean",
-                                      min=0.0, max=2.0),
-        "gust_factor": Param(1.7, "a gust's peak wind over the mean (the compliance law)",
-                             min=1.0, max=5.0),
-        "gust_rate_per_h": Param(0.0, "mean number of gusts per hour", min=0.0, max=3600.0),
-        "gust_arcsec": Param(60.0, "rms beam displacement of a gust per axis (arcsec), "
-                             "without the compliance law", min=0.0),
-        "gust_duration_s": Param(30.0, "duration of a gust (s)", min=1.0),
-        "day_xel_factor": Param(1.0, "cross-elevation rms by day (Sun above the horizon) over "
-                                "xel_rms_arcsec", min=0.0, max=100.0),
-        "day_el_factor": Param(1.0, "elevation rms by day (Sun above the horizon) over "
-                               "el_rms_arcsec", min=0.0, max=100.0),
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "xel_rms_arcsec": Key(5.0, "rms of the cross-elevation wander (arcsec): servo noise "
+                              "and encoder steps, with the compliance law", min=0.0),
+        "el_rms_arcsec": Key(5.0, "rms of the elevation wander (arcsec)", min=0.0),
+        "timescale_s": Key(60.0, "correlation time of the wander (s)", min=1e-3),
+        "wind_ref_m_s": Key(10.0, "wind speed that doubles the rms (m/s), without the "
+                            "compliance law", min=0.1),
+        "wind_arcsec_per_m2s2": Key(0.0, "pointing per (m/s)^2 of wind: the structure's and "
+                                    "drives' compliance (0: the wind_ref law); 0.03-0.04 for "
+                                    "precision 10-12 m antennas", min=0.0, max=100.0,
+                                    unit="arcsec/(m/s)^2",
+                                    source="ASTE 10 m (2.4\" in 9.3 m/s); MMA memo 159"),
+        "turbulence_intensity": Key(0.2, "rms of the wind's fluctuations over its mean "
+                                    "(0.1-0.3 near the ground)", min=0.0, max=2.0, unit="1"),
+        "gust_factor": Key(1.7, "a gust's peak wind over the mean, with the compliance law "
+                           "(1.4-2.0)", min=1.0, max=5.0, unit="1"),
+        "gust_rate_per_h": Key(0.0, "mean number of gusts per hour", min=0.0, max=3600.0),
+        "gust_arcsec": Key(60.0, "rms beam displacement of a gust per axis (arcsec), "
+                           "without the compliance law", min=0.0),
+        "gust_duration_s": Key(30.0, "duration of a gust (s)", min=1.0),
+        "day_xel_factor": Key(1.0, "cross-elevation rms by day (Sun above the horizon) over "
+                              "xel_rms_arcsec", min=0.0, max=100.0, unit="1"),
+        "day_el_factor": Key(1.0, "elevation rms by day (Sun above the horizon) over "
+                             "el_rms_arcsec", min=0.0, max=100.0, unit="1"),
     }
     #: step of the table of day (Sun up) and night over the campaign (s)
     DAY_TABLE_STEP_S: ClassVar[float] = 60.0

@@ -1,0 +1,1 @@
+"""Tests of antsim.diagnose.candidates, a file per module."""
