@@ -94,6 +94,10 @@ class MountIrregularities(Effect):
                             "the pattern: the 1990 report's ten W's, or none", kind="string",
                             choices=("", "ghigo10")),
     }
+    #: the tables the pattern is read from: every 0.01 deg of azimuth over a turn and of
+    #: elevation from 1 to 90 deg (linear interpolation of 24 harmonics: below 2e-4")
+    TABLE_STEP_DEG = 0.01
+    TABLE_EL_MIN_DEG = 1.0
     #: the sky over which the pattern's model part is fitted (deg)
     SKY_AZ_DEG = np.arange(0.0, 360.0, 5.0)
     SKY_EL_DEG = np.arange(10.0, 85.01, 2.5)
