@@ -62,6 +62,10 @@ sys.path.insert(0, str(ROOT))
 from antsim.run.outputs import run_fits  # noqa: E402
 from antsim.scenario import Scenario, load_scenario  # noqa: E402
 from antsim.simulate.runner import simulate  # noqa: E402
+from antsim.studies.ghigo1990 import (  # noqa: E402
+    pattern_equivalent_arcsec,
+    refraction_equivalent_arcsec,
+)
 from controller.pointing.fitting import fit_model  # noqa: E402
 from controller.pointing.model import named_model_terms  # noqa: E402
 from controller.pointing.selection import ALPHA  # noqa: E402
@@ -80,11 +84,11 @@ def without(scenario: Scenario, effect: str) -> Scenario:
 
 
 def unbent(scenario: Scenario) -> Scenario:
-    """The scenario with its structure heated as before but not bending: every arcsec per
-    kelvin of the thermal effect 0 (the sensors read the same temperatures)."""
+    """The scenario with its structure heated as before but not bending: the steel's
+    expansion 0, so every pointing per kelvin is 0 (the sensors read the same
+    temperatures)."""
     def zero(e):
-        return replace(e, params={k: 0.0 if k.endswith("arcsec_per_k") else v
-                                  for k, v in e.params.items()})
+        return replace(e, params={**e.params, "expansion_per_k": 0.0})
     return replace(scenario, effects=tuple(zero(e) if e.name == "thermal" else e
                                            for e in scenario.effects))
 
@@ -136,6 +140,15 @@ def fit_seed(args) -> dict:
     fit D with fit T's terms and fit T without the sensors' response-time correction."""
     scenario, seed, correction = args
     result = simulate(scenario, seed=seed)
+    names = scenario.truth_model.names
+    truth = scenario.truth_model.as_dict()
+    if correction is None:  # what the ten terms make of refraction and the irregularities
+        refraction = refraction_equivalent_arcsec(result.rows, names,
+                                                  scenario.receiver.frequency_ghz)
+        pattern = pattern_equivalent_arcsec(result.rows, names, result.world)
+        recoverable = np.array([truth[n] + refraction[n] + pattern[n] for n in names])
+    else:  # the correction took them out with the rest of each scan's systematic error
+        recoverable = np.array([truth[n] for n in names])
     if correction is not None:
         rows = []
         for r in result.rows:
@@ -147,7 +160,8 @@ def fit_seed(args) -> dict:
         result.rows = rows
     fits = run_fits(result)
     a = fits["A"]
-    out = {"A": (a.values_arcsec, a.sigma_arcsec, a.sigma_honest_arcsec)}
+    out = {"A": (a.values_arcsec, a.sigma_arcsec, a.sigma_honest_arcsec),
+           "recoverable": recoverable}
     if correction is not None:
         return out
     m = len(scenario.truth_model.names)
@@ -186,8 +200,8 @@ def recovery(scenario: Scenario, seeds: range, workers: int,
             results = pool.map(fit_seed, jobs, chunksize=4)
     else:
         results = [fit_seed(j) for j in jobs]
-    out = {"truth": scenario.truth_model.values_arcsec, "names": scenario.truth_model.names,
-           "per_seed": results}
+    out = {"truth": np.array([r["recoverable"] for r in results]),
+           "names": scenario.truth_model.names, "per_seed": results}
     for key in ("A", "T", "T_raw", "T_all"):
         if key in results[0]:
             values, tpoint, honest = (np.array(x) for x in zip(*(r[key] for r in results),
