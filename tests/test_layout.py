@@ -291,7 +291,7 @@ def test_a_bad_import_and_a_circle_are_caught(tmp_path):
     """The checker on a small tree with one import of each kind this test forbids: the
     program importing the simulation (in a function), the scan engine importing the control
     program (type-only), the command line importing a command (it must find them by name), and
-    a circle through a relative import; and the two rules of issue 26's pieces: the wire
+    a circle through a relative import; and the two rules of the wire's pieces: the wire
     client importing the server, the server importing the run."""
     root = _fake_tree(tmp_path, {
         "controller/__init__.py": "",

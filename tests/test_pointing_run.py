@@ -1,4 +1,4 @@
-"""Issue 4 end to end: the 1990 tables, the run's fit files, and the closed loop."""
+"""The 1990 run end to end: its tables, the run's fit files, and the closed loop."""
 
 from __future__ import annotations
 
@@ -215,7 +215,7 @@ def sky_rms_of_pointing(rows) -> float:
 
 def test_closed_loop_second_campaign_points_well(ghigo, campaign, tmp_path):
     """The model fitted from one campaign, used in the next through its model.dat, leaves
-    pointing errors close to the first fit's residuals (issue 4: at most 1.3 times); the
+    pointing errors close to the first fit's residuals (at most 1.3 times); the
     second run says so in one line, in fit.txt and in its report."""
     _, fits = campaign
     first = fits["A"]

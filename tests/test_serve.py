@@ -630,7 +630,7 @@ def test_node_client_scans_a_source_and_finds_what_its_model_misses(tmp_path, re
     section II), runs one cross scan and prints the offsets: they must be the injected truth
     minus its model, plus the mount's repeatable irregularities there (the world's truth
     beyond the ten W's), scaled by 0.91 (Cas A's 3.46' size shrinks measured offsets by
-    11^2 / (11^2 + 3.46^2), DESIGN section 5). The client corrects refraction from the
+    11^2 / (11^2 + 3.46^2), docs/physics.md). The client corrects refraction from the
     antenna's weather, as the world refracts. Tolerance 0.5': the solar heating of the hour
     (about 0.3', not in the truth's geometry) and the client's ephemeris and refraction (no
     nutation or aberration, a cot E law: about 0.3')."""

@@ -56,7 +56,7 @@ MIN_MATCHED_FRACTION = 0.9
 
 @dataclass
 class Finding:
-    """One finding, as the JSON of DESIGN section 4 reports it (plus the selection step)."""
+    """One finding, as the JSON of docs/contract.md reports it (plus the selection step)."""
 
     step: Step
     where: str
@@ -221,7 +221,7 @@ class Diagnosis:
         return out
 
     def to_json(self) -> dict[str, Any]:
-        """``antsim diagnose --json`` (DESIGN section 4), extended with the baseline, the
+        """``antsim diagnose --json`` (docs/contract.md), extended with the baseline, the
         located mismatch, the refusals and the summary statistics."""
         sel = self.selection
         return {

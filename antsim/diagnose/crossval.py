@@ -4,7 +4,7 @@ recordings diagnosed without a scenario).
 The significance tests of :mod:`.select` estimate the noise from the residuals. Once they
 have shown a mismatch (at least one finding), those residuals still hold whatever else the
 model leaves out, and the tests lose power exactly where it matters; a further effect is
-then judged by prediction instead (issue 24). Forward, the stage adds the library's linear
+then judged by prediction instead. Forward, the stage adds the library's linear
 candidate (each order of a family, each value of a nonlinear parameter, as a separate
 option; none that the model mimics, r > 0.95, whose size prediction cannot fix) that most
 lowers the held-out Sky RMS of an unweighted fit of the raw errors

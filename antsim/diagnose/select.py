@@ -15,7 +15,7 @@ The most significant candidate is then
 * refused when it does not lower the chi^2 of held-out data (another night when the data
   span several, else 5-fold cross-validation interleaved in time; nonlinear parameters are
   re-derived on each training set);
-* otherwise accepted, however closely the model mimics it (issue 24): its correlation with
+* otherwise accepted, however closely the model mimics it: its correlation with
   the model is reported in TPOINT's words ("X and Y cannot reliably be distinguished",
   r above 0.95; "strongly correlated", above 0.85) beside how many sigma the data separate
   it by (the local significance of its orthogonal part). A candidate the model mimics is

@@ -175,7 +175,7 @@ def test_the_cache_is_written_without_following_a_link(clean, tmp_path):
 
 
 def test_a_damaged_cache_does_not_change_diagnoses_answer(tmp_path, capsys):
-    """The issue's case: the same recordings and scenario, the cache damaged in place,
+    """The case once reported: the same recordings and scenario, the cache damaged in place,
     give the same finding (a tilt/collimation effect at 2.8 sigma), with one note line."""
     args = ["diagnose", str(RECORDINGS), "--scenario", str(BASE), "--sims", "2",
             "--jobs", "1", "--json", "--no-progress", "--cache", str(tmp_path)]
