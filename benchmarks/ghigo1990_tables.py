@@ -12,7 +12,8 @@ why):
   (day and night) by their counts within 20%;
 * Table 3 (fit A): per term the report's value and standard error, the mean fitted value,
   the truth it should recover (the mount's injected geometry plus what the fit makes of the
-  atmosphere's refraction: the control program did not correct it), the mean TPOINT sigma
+  atmosphere's refraction, the control program correcting none, of the repeatable
+  irregularities and of the Sun's heating), the mean TPOINT sigma
   against the report's standard error, the mean pull and the fraction within 3 sigma; and
   W5 against the atmosphere's;
 * Table 1: per source the mean points in fit A beside the report's, within 30% each or the
@@ -107,12 +108,13 @@ def main() -> int:
     truth = scenario.truth_model.as_dict()
     refraction = np.array([[r["refraction"][n] for n in names] for r in runs])
     pattern = np.array([[r["pattern"][n] for n in names] for r in runs])
-    expected = np.array([truth[n] for n in names]) + refraction + pattern
+    heating = np.array([[r["heating"][n] for n in names] for r in runs])
+    expected = np.array([truth[n] for n in names]) + refraction + pattern + heating
     print("\nTable 3 (arcmin): the report's value and s.e.; our mean fit A; the truth it "
-          "recovers (the mount's + what the fit makes of the atmosphere's refraction and of "
-          "the repeatable irregularities on this schedule; the heating's share is not in it: "
-          "benchmarks/recovery.py); mean TPOINT sigma and its ratio to the report's s.e.; "
-          "mean pull and the fraction within 3 sigma (TPOINT | honest)")
+          "recovers (the mount's + what the fit makes of the atmosphere's refraction, of "
+          "the repeatable irregularities and of the Sun's heating, the legs and yoke at "
+          "equilibrium, on this schedule); mean TPOINT sigma and its ratio to the report's "
+          "s.e.; mean pull and the fraction within 3 sigma (TPOINT | honest)")
     for j, n in enumerate(names):
         value, se = GHIGO1990.terms[n]
         pull_t = (values[:, j] - expected[:, j]) / sigma[:, j]
@@ -133,7 +135,10 @@ def main() -> int:
     print(f"W5: the report's {w5:.2f}' +- {se5:.2f}'; the atmosphere's refraction alone "
           f"{atm:.3f}' ({(atm - w5) / se5:+.1f} report s.e.); fitted {fitted:.3f}' "
           f"({(fitted - w5) / se5:+.1f}), the irregularities' bias "
-          f"{pattern[:, j5].mean() / 60:+.3f}', the heating's the rest")
+          f"{pattern[:, j5].mean() / 60:+.3f}', the heating's {heating[:, j5].mean() / 60:+.3f}'")
+    shift = heating.mean(axis=0) / sigma.mean(axis=0)
+    print("the heating's shift of fit A in TPOINT sigma: "
+          + ", ".join(f"{n} {s:+.1f}" for n, s in zip(names, shift, strict=True)))
 
     hours = visible_hours(scenario)
     print(f"\nTable 1: points in fit A, the report's, ours (min-max), ratio, within "

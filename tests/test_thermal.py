@@ -70,8 +70,8 @@ def test_terms_are_the_shapes_of_the_1990_model_times_a_difference():
     assert "thermal terms" in sign_convention(THERMAL_TERMS)
     assert "TPOINT's:" not in sign_convention(THERMAL_TERMS)
     ttilt = get_term("TTILT")
-    assert ttilt.components == SENSOR_TERMS["TNPNS"].components \
-        + SENSOR_TERMS["TWPEW"].components
+    south = tuple((axis, -sign, f) for axis, sign, f in SENSOR_TERMS["TNPNS"].components)
+    assert ttilt.components == south + SENSOR_TERMS["TWPEW"].components
 
 
 def test_each_axis_reads_its_own_half_of_the_scan():

@@ -84,6 +84,23 @@ def pattern_equivalent_arcsec(rows: Sequence[Mapping], terms: Sequence[str],
     return equivalent_arcsec(rows, terms, xel, d_el)
 
 
+def heating_equivalent_arcsec(rows: Sequence[Mapping], terms: Sequence[str],
+                              world) -> dict[str, float]:
+    """What the fit makes of the Sun's heating at the good rows' times and positions: the
+    pedestal's tilt as the world has it, the feed legs and the yoke at their equilibrium for
+    pointing there (their time constants, 17-55 min, are long beside a scan, short beside
+    the day, so this is the shift a day's fit shares; zero without the effect)."""
+    effect = next((e for e in world.effects if e.name == "thermal"), None)
+    good = _good(rows)
+    if effect is None or not hasattr(effect, "equilibrium_errors_arcsec"):
+        return dict.fromkeys(terms, 0.0)
+    xel, d_el = effect.equilibrium_errors_arcsec(
+        np.array([float(r["t_s"]) for r in good]),
+        np.radians([float(r["az_deg"]) for r in good]),
+        np.radians([float(r["el_deg"]) for r in good]))
+    return equivalent_arcsec(rows, terms, np.asarray(xel), np.asarray(d_el))
+
+
 def w5_of_atmosphere(rows: Sequence[Mapping], frequency_ghz: float,
                      relative_humidity: float | None = None) -> float:
     """The W5 (arcmin) that the report's ten terms fitted to the refraction alone give."""
@@ -105,7 +122,8 @@ SNR_MIN = 4.0
 def campaign_statistics(result, fits: Mapping, points: Mapping[str, int]) -> dict:
     """One campaign's figures beside the report's: per fit (xel rms, el rms, points), the
     points per source of fit A (``points``, ``antsim.run.sources.points_per_source``), fit
-    A's terms (arcsec), the refraction's and the repeatable irregularities' shares of them,
+    A's terms (arcsec), the refraction's, the repeatable irregularities' and the heating's
+    shares of them,
     the outliers fit A rejected, and the S/N of every scan (its lowest axis and channel)
     with its source and elevation."""
     a = fits["A"]
@@ -122,6 +140,7 @@ def campaign_statistics(result, fits: Mapping, points: Mapping[str, int]) -> dic
         "honest": np.asarray(a.sigma_honest_arcsec, dtype=float),
         "refraction": refraction_equivalent_arcsec(result.rows, a.names, frequency),
         "pattern": pattern_equivalent_arcsec(result.rows, a.names, result.world),
+        "heating": heating_equivalent_arcsec(result.rows, a.names, result.world),
         "rejected": int(fits["F"].n_used - a.n_used) if fits.get("F") is not None else 0,
         "snr": snr,
     }

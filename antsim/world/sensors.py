@@ -86,11 +86,13 @@ def thermal_truth(params: dict[str, float]) -> dict[str, float]:
     difference is its part's difference (without the sensors' imperfections), so TEDFB and
     TSDRL are the feed legs' arcsec per kelvin, TEYFB the yoke's bow and TPYRL its roll,
     TNPNS, TWPEW and TTILT the pedestal's tilt per kelvin (the geometry's,
-    :class:`antsim.world.structure.Structure`)."""
+    :class:`antsim.world.structure.Structure`), towards the cooler side: TNPNS (north by c
+    per kelvin of north minus south) its negative, TWPEW (west by c per kelvin of east minus
+    west) and TTILT (towards the cooler side) the tilt itself."""
     full = {k: spec.default for k, spec in ThermalEffect.PARAMS.items()}
     k = ThermalEffect(**{**full, **params}).coefficients()
     return {"TEDFB": k["legs_el"], "TSDRL": k["legs_xel"], "TEYFB": k["yoke_bow"],
-            "TPYRL": k["yoke_roll"], "TNPNS": k["pedestal_tilt"],
+            "TPYRL": k["yoke_roll"], "TNPNS": -k["pedestal_tilt"],
             "TWPEW": k["pedestal_tilt"], "TTILT": k["pedestal_tilt"]}
 
 

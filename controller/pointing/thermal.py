@@ -13,7 +13,7 @@ difference, per axis:
 | S | dA cos E = c dT | W10 (collimation: constant on the sky) |
 | P | dA cos E = c dT sin E | W9 (the axes' non-perpendicularity: a rolled elevation axis) |
 | N | dE = c dT cos A, dA cos E = c dT sin A sin E | W2 = W8: the azimuth axis tilted north |
-| W | dE = -c dT sin A, dA cos E = c dT cos A sin E | W3 = -W7: the azimuth axis tilted east |
+| W | dE = -c dT sin A, dA cos E = c dT cos A sin E | W3 = -W7: the azimuth axis tilted west |
 
 in the report's sign (indicated minus true), so that a coefficient is the error per kelvin
 (arcsec/K) that the structure's bending adds. Names: ``T`` + shape + the sensor pair
@@ -80,7 +80,7 @@ _SHAPES = {
     "N": ((("E", -1.0, (COS_AN,)), ("A", -1.0, (SIN_AN, TAN_E))),
           "azimuth axis tilted north by c dT: dE = c dT cos A, dA cos E = c dT sin A sin E"),
     "W": ((("E", 1.0, (SIN_AN,)), ("A", -1.0, (COS_AN, TAN_E))),
-          "azimuth axis tilted east by c dT: dE = -c dT sin A, dA cos E = c dT cos A sin E"),
+          "azimuth axis tilted west by c dT: dE = -c dT sin A, dA cos E = c dT cos A sin E"),
     "P": ((("A", -1.0, (TAN_E,)),), "elevation axis rolled by c dT: dA cos E = c dT sin E"),
 }
 
@@ -100,12 +100,15 @@ def _sensor_terms() -> dict[str, Term]:
     for name, shape, pair in spec:
         plus, minus = SENSOR_PAIRS[pair]
         out[name] = _thermal(name, shape, Regressor(plus, minus), f"{plus} - {minus} (K)")
-    # an axisymmetric pedestal tilts the same per kelvin whichever way its difference lies:
-    # TNPNS and TWPEW with one coefficient
-    north, east = out["TNPNS"], out["TWPEW"]
+    # an axisymmetric pedestal bends away from its warmer side by the same angle per kelvin
+    # whichever way its difference lies: the axis tilts towards the cooler side, north by c
+    # per kelvin of south minus north (TNPNS = -c) and west by c per kelvin of east minus
+    # west (TWPEW = c)
+    north, west = out["TNPNS"], out["TWPEW"]
+    south = tuple((axis, -sign, factors) for axis, sign, factors in north.components)
     out["TTILT"] = Term("TTILT", "azimuth axis tilted towards the cooler side of the pedestal "
-                        "by c per kelvin: TNPNS and TWPEW with one coefficient c",
-                        north.components + east.components, kind="thermal")
+                        "by c per kelvin: TWPEW = c and TNPNS = -c with one coefficient",
+                        south + west.components, kind="thermal")
     return out
 
 

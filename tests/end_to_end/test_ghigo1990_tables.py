@@ -112,24 +112,25 @@ def test_table1_points_differ_where_the_observers_chose(runs, scenario):
 
 def test_table3_recovered_on_the_reports_functions(runs, scenario):
     """Fit A's mean over the seeds recovers the mount's W's plus what the fit makes of the
-    refraction and of the repeatable irregularities (the campaign's recoverable truth),
-    within three of its standard errors (TPOINT sigma over sqrt(4)) plus the heating's
-    shift, which is the same in every seed: measured at most 1.5 TPOINT sigma but for W2 and
-    W8 (the pedestal's tilt, docs/physics.md), negative there. The TPOINT sigmas are the
-    report's standard errors within 25% term by term."""
+    refraction, of the repeatable irregularities and of the Sun's heating (the campaign's
+    recoverable truth; the feed legs and the yoke at their equilibrium) within 3 TPOINT
+    sigma: the noise's share of the mean is 1.5 sigma at most (three standard errors of a
+    4-seed mean), the rest is the equilibrium approximation's, the same in every seed
+    (measured at most 1.8 sigma, W2, over seeds 1-4). The heating's share tilts the azimuth
+    axis north (W2, W8 positive: the pedestal bends away from its sunlit south face). The
+    TPOINT sigmas are the report's standard errors within 25% term by term."""
     truth = scenario.truth_model.as_dict()
     names = runs[0]["names"]
     values = np.array([r["values"] for r in runs])
     sigma = np.array([r["sigma"] for r in runs])
-    expected = np.array([[truth[n] + r["refraction"][n] + r["pattern"][n] for n in names]
-                         for r in runs])
+    expected = np.array([[truth[n] + r["refraction"][n] + r["pattern"][n] + r["heating"][n]
+                          for n in names] for r in runs])
     pull = (values - expected).mean(axis=0) / sigma.mean(axis=0)
     for j, n in enumerate(names):
         assert sigma[:, j].mean() / 60.0 == pytest.approx(GHIGO1990.terms[n][1], rel=0.25), n
-        if n in ("W2", "W8"):
-            assert pull[j] < 0.0, n
-        else:
-            assert abs(pull[j]) < 1.5 + 3.0 / math.sqrt(len(SEEDS)), (n, pull[j])
+        assert abs(pull[j]) < 3.0, (n, pull[j])
+    for n in ("W2", "W8"):
+        assert all(r["heating"][n] > 0.0 for r in runs), n
 
 
 def test_w5_is_the_atmospheres_refraction(runs, scenario):

@@ -249,7 +249,9 @@ class ThermalEffect(Effect):
         mean_excess = (self._absorbed * cos_h / math.pi - sky_loss) / h_plate
         self.structure_c = relax_varying(air + mean_excess, tau_ped, step, float(air[0]))
         tilt = self.k["pedestal_tilt"]
-        # the heated side expands: the axis tilts away from the Sun
+        # the warmer side expands and the pedestal bends away from it: the azimuth axis
+        # tilts towards the cooler side (north when the south face is the warmer, west when
+        # the east face is), in both directions alike. Tilts towards north and east (arcsec)
         self._tilt_n_arcsec = -tilt * self.pedestal_n_k
         self._tilt_e_arcsec = -tilt * self.pedestal_e_k
         #: (time -> forcings, differences and time constants of the pointing-dependent
@@ -352,14 +354,17 @@ class ThermalEffect(Effect):
 
     # ------------------------------------------------------------------ the errors
     def _errors(self, parts, tilt_n, tilt_e, az_rad, el_rad):
-        """(d_az, d_el) in rad from the differences (4, ...) and the tilts (arcsec)."""
+        """(d_az, d_el) in rad from the differences (4, ...) and the azimuth axis' tilts
+        towards north and east (arcsec). An axis tilted north by i (its pole north of the
+        zenith) tips the frame's northern horizon down: indicated minus true dE = i cos A,
+        dA cos E = i sin A sin E; tilted east, dE = i sin A, dA cos E = -i cos A sin E."""
         k = self.k
         sin_e, cos_e = np.sin(el_rad), np.cos(el_rad)
         sin_a, cos_a = np.sin(az_rad), np.cos(az_rad)
         el = k["legs_el"] * parts[0] + k["yoke_bow"] * parts[2] \
-            + (-tilt_n * cos_a + tilt_e * sin_a)
+            + (tilt_n * cos_a + tilt_e * sin_a)
         xel = k["legs_xel"] * parts[1] + k["yoke_roll"] * parts[3] * sin_e
-        d_az = xel / cos_e - (tilt_n * sin_a + tilt_e * cos_a) * sin_e / cos_e
+        d_az = xel / cos_e + (tilt_n * sin_a - tilt_e * cos_a) * sin_e / cos_e
         return d_az * RAD_PER_ARCSEC, el * RAD_PER_ARCSEC
 
     def pointing_error(self, state: PointingState) -> tuple[float, float]:

@@ -91,16 +91,16 @@ def test_the_dish_shadow_on_the_legs_against_ray_tracing():
             assert lit[i] == pytest.approx(1.0 - shaded, abs=1e-3), (s, i)
 
 
-def _world(wind_m_s=3.0, air_c=0.0, duration_s=6 * 3600.0):
-    """The parts of a world the effect's start asks for: a fixed Sun (south, 30 deg), a
-    steady wind and air, a site at 800 m."""
+def _world(wind_m_s=3.0, air_c=0.0, duration_s=6 * 3600.0, sun_az=SUN_AZ):
+    """The parts of a world the effect's start asks for: a fixed Sun (30 deg up, due south
+    unless ``sun_az`` says otherwise), a steady wind and air, a site at 800 m."""
     weather = SimpleNamespace(daily_curve_c=lambda t: np.full(np.shape(t), air_c),
                               wind_m_s=lambda t: np.full(np.shape(t), wind_m_s))
     return SimpleNamespace(
         duration_s=duration_s, weather=weather,
         scenario=SimpleNamespace(site=SimpleNamespace(height_m=800.0)),
         sun_el_rad_periodic=lambda t: np.full(np.shape(t), SUN_EL),
-        sun_az_rad=lambda t: np.full(np.shape(t), SUN_AZ),
+        sun_az_rad=lambda t: np.full(np.shape(t), sun_az),
         air_temperature_c=lambda t: np.full(np.shape(t), air_c))
 
 
@@ -151,3 +151,77 @@ def test_the_pedestal_leans_away_from_the_sun():
     assert abs(effect.pedestal_e_k[-1]) < 1e-9 * abs(settled)
     tilt_n = effect._tilt_n_arcsec[-1]
     assert tilt_n == pytest.approx(-effect.k["pedestal_tilt"] * settled) and tilt_n > 0.0
+
+
+def test_the_pedestal_leans_away_from_a_morning_sun_too():
+    """The same with the Sun due east: the east face is the warmer and the axis tilts west
+    (negative towards the east) by the same arcsec per kelvin: the pedestal bends away from
+    its warmer side whichever way that lies."""
+    effect = _effect(_world(duration_s=4 * 3600.0, sun_az=math.radians(90.0)))
+    east = effect.pedestal_e_k[-1]
+    assert east > 0.0 and abs(effect.pedestal_n_k[-1]) < 1e-9 * east
+    tilt_e = effect._tilt_e_arcsec[-1]
+    assert tilt_e == pytest.approx(-effect.k["pedestal_tilt"] * east) and tilt_e < 0.0
+
+
+def _tilted_axis_errors(tilt_n_arcsec, tilt_e_arcsec, az, el):
+    """Indicated minus true (dA cos E, dE) arcsec of a mount whose azimuth axis (its pole)
+    is tilted towards north and east by the given angles, by rotating the direction it
+    indicates out of the tilted frame (no small-angle algebra)."""
+    from scipy.spatial.transform import Rotation
+
+    tilt = np.radians(np.array([tilt_n_arcsec, tilt_e_arcsec]) / 3600.0)
+    up = np.array([tilt[0], tilt[1], 1.0])  # north, east, up
+    up /= np.linalg.norm(up)
+    axis = np.cross([0.0, 0.0, 1.0], up)
+    angle = math.asin(np.linalg.norm(axis))
+    true = Rotation.from_rotvec(axis / np.linalg.norm(axis) * angle).apply(_vec(az, el))
+    true_az, true_el = math.atan2(true[1], true[0]), math.asin(true[2])
+    d_az = (az - true_az + math.pi) % (2.0 * math.pi) - math.pi
+    return math.degrees(d_az) * 3600.0 * math.cos(el), math.degrees(el - true_el) * 3600.0
+
+
+@pytest.mark.parametrize("tilt_n, tilt_e", [(40.0, 0.0), (0.0, 40.0), (-25.0, 30.0)])
+def test_the_tilt_turns_the_beam_as_a_tilted_azimuth_axis(tilt_n, tilt_e):
+    """The effect's errors for the axis' tilts towards north and east are those of a frame
+    so tilted (to 0.1": the second order, i^2 tan E, is 0.04" for 40" at 80 deg; a flipped
+    sign is off by twice the tilt): pole north, the northern horizon
+    tips down and a northern source is indicated too high (dE = i cos A, dA cos E = i sin A
+    sin E). A flipped sign in either direction fails at the first azimuth."""
+    effect = _effect(_world())
+    parts = np.zeros(4)
+    for az_deg in (0.0, 60.0, 135.0, 210.0, 300.0):
+        for el_deg in (15.0, 50.0, 80.0):
+            az, el = math.radians(az_deg), math.radians(el_deg)
+            d_az, d_el = effect._errors(parts, tilt_n, tilt_e, az, el)
+            got = (d_az * math.cos(el) * 3600.0 * 180.0 / math.pi,
+                   d_el * 3600.0 * 180.0 / math.pi)
+            want = _tilted_axis_errors(tilt_n, tilt_e, az, el)
+            assert got == pytest.approx(want, abs=0.1), (az_deg, el_deg)
+
+
+def test_the_sensors_tilt_terms_are_the_heatings_tilt():
+    """The controller's pedestal terms with the sensors' truth (TNPNS = -c, TWPEW = c, and
+    TTILT = c alone: towards the cooler side) give the heating's tilt errors for the same
+    north-minus-south and east-minus-west differences, so a fit of sensors recovers the
+    world's own geometry with one sign convention in both directions."""
+    from antsim.world.sensors import thermal_truth
+    from controller.pointing.model import PointingModel
+
+    effect = _effect(_world())
+    c = effect.k["pedestal_tilt"]
+    truth = thermal_truth({})
+    assert (truth["TNPNS"], truth["TWPEW"], truth["TTILT"]) == pytest.approx((-c, c, c))
+    rng = np.random.default_rng(3)
+    az = rng.uniform(0.0, 2.0 * math.pi, 40)
+    el = rng.uniform(math.radians(12.0), math.radians(80.0), 40)
+    north, east = rng.normal(0.0, 3.0, 40), rng.normal(0.0, 3.0, 40)  # K
+    zero = np.zeros(40)
+    aux = {"pedestal_north": (north, north), "pedestal_south": (zero, zero),
+           "pedestal_east": (east, east), "pedestal_west": (zero, zero)}
+    d_az, d_el = effect._errors(np.zeros((4, 40)), -c * north, -c * east, az, el)
+    for model in (PointingModel(["TNPNS", "TWPEW"], [truth["TNPNS"], truth["TWPEW"]]),
+                  PointingModel(["TTILT"], [truth["TTILT"]])):
+        m_az, m_el = model.offset_rad(az, el, aux=aux)
+        np.testing.assert_allclose(m_az, d_az, atol=1e-12)
+        np.testing.assert_allclose(m_el, d_el, atol=1e-12)
