@@ -631,10 +631,14 @@ def test_node_client_scans_a_source_and_finds_what_its_model_misses(tmp_path, re
     minus its model, plus the mount's repeatable irregularities there (the world's truth
     beyond the ten W's), scaled by 0.91 (Cas A's 3.46' size shrinks measured offsets by
     11^2 / (11^2 + 3.46^2), docs/physics.md). The client corrects refraction from the
-    antenna's weather, as the world refracts. Tolerance 0.5': the solar heating of the hour
-    (about 0.3', not in the truth's geometry) and the client's ephemeris and refraction (no
+    antenna's weather, as the world refracts; the Sun's heating at noon (about 2' in
+    elevation at Cas A) is added as the world's heating effect gives it in the scan's first
+    minutes (the virtual clock starts the campaign there; the feed legs and the yoke at their
+    equilibrium for Cas A). Tolerance 0.5': the heating's change over the scan's minutes and
+    the legs' approach to equilibrium (about 0.1'), the client's ephemeris and refraction (no
     nutation or aberration, a cot E law: about 0.3')."""
     from antsim.world.effects import EFFECTS
+    from antsim.world.world import World
     from controller.pointing.model import PointingModel
 
     model = {"W1": -5.6, "W2": 0.0, "W3": -1.8, "W4": -2.0, "W5": 0.6, "W6": 15.0, "W7": 1.5,
@@ -656,8 +660,13 @@ def test_node_client_scans_a_source_and_finds_what_its_model_misses(tmp_path, re
     irregular = EFFECTS[spec.name](**spec.params)
     irregular.start(None, None)  # the antenna's own pattern: no generator of the run's
     i_xel, i_el = irregular.errors_arcsec(az, el)
-    expected_xel = 0.91 * (math.degrees(float(ta - ma)) * 60.0 * math.cos(el) + i_xel / 60.0)
-    expected_el = 0.91 * (math.degrees(float(te - me)) * 60.0 + i_el / 60.0)
-    assert abs(expected_xel) > 1.2 and abs(expected_el) > 2.0  # the test can tell a sign
+    world = World(scenario, simpy.Environment(), None)  # the server's world: its seed
+    heating = next(e for e in world.effects if e.name == "thermal")
+    h_xel, h_el = (float(v) for v in heating.equilibrium_errors_arcsec(120.0, az, el))
+    expected_xel = 0.91 * (math.degrees(float(ta - ma)) * 60.0 * math.cos(el)
+                           + (i_xel + h_xel) / 60.0)
+    expected_el = 0.91 * (math.degrees(float(te - me)) * 60.0 + (i_el + h_el) / 60.0)
+    # the test can tell a sign: a flipped one is off by twice the value, beyond 2 x 0.5'
+    assert abs(expected_xel) > 1.0 and abs(expected_el) > 2.0
     assert result["xel_arcmin"] == pytest.approx(expected_xel, abs=0.5)
     assert result["el_arcmin"] == pytest.approx(expected_el, abs=0.5)
