@@ -107,7 +107,7 @@ RESULTS: tuple[Result, ...] = (
     Result("crane1981_days", ("benchmarks/crane1981_days.py", "--workers", "2"),
            ("benchmarks/crane1981_days.py", "--members", "2", "--workers", "1"), 6.0,
            timing=(r"\(\d+ s\)", r"; \d+ s$")),
-    Result("ghigo1990_tables", ("benchmarks/ghigo1990_tables.py", "--seeds", "40",
+    Result("ghigo1990_tables", ("benchmarks/ghigo1990_tables.py", "--seeds", "20",
                                 "--workers", "2"),
            ("benchmarks/ghigo1990_tables.py", "--seeds", "1", "--workers", "1"), 4.0),
     Result("plan_accuracy", ("benchmarks/plan_accuracy.py", "--workers", "1"),

@@ -24,11 +24,18 @@ def chi2_sf(x: float, dof: float) -> float:
 
 
 def chi2_logsf(x: float, dof: float) -> float:
-    """log P(chi2_dof > x) (-inf where it underflows, as scipy.stats gives)."""
+    """log P(chi2_dof > x). Where the probability underflows (a chi^2 of ~1400 and more),
+    the tail's leading term, log Q(k/2, x/2) ~ -x/2 + (k/2 - 1) log(x/2) - log Gamma(k/2),
+    instead of -inf, whose Gaussian equivalent would be NaN."""
     p = chi2_sf(x, dof)
     if math.isnan(p):
         return math.nan
-    return math.log(p) if p > 0 else -math.inf
+    if p > 0:
+        return math.log(p)
+    if not math.isfinite(x):
+        return -math.inf
+    half_x = 0.5 * x
+    return -half_x + (0.5 * dof - 1.0) * math.log(half_x) - math.lgamma(0.5 * dof)
 
 
 def chi2_isf(p: float, dof: float) -> float:

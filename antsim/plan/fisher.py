@@ -325,7 +325,7 @@ def _jitter_statistics(engine: MemberEngine) -> tuple[np.ndarray, float, tuple |
             jit_sd[k] = (float(a[0]) * math.cos(el) * 206264.80624709636,
                          float(e[0]) * 206264.80624709636)
         rate = float(spec.params["gust_rate_per_h"]) / 3600.0
-        if rate > 0 and spec.params["gust_arcsec"] > 0:
+        if rate > 0 and (spec.params["gust_arcsec"] > 0 or effect.compliance > 0):
             dur = float(spec.params["gust_duration_s"])
             probe = TrackingJitter(**spec.params)
             probe.start(engine._view(0), np.random.default_rng(0))
@@ -333,7 +333,9 @@ def _jitter_statistics(engine: MemberEngine) -> tuple[np.ndarray, float, tuple |
             probe.gust_rad = np.array([[1.0, 1.0]])
             tau_grid = np.linspace(-1.0, dur + 1.0, 2000)
             profile = probe.gusts_rad(tau_grid)[:, 0]
-            gust = (rate * float(spec.params["gust_arcsec"]) ** 2, dur, tau_grid, profile)
+            energy = (rate * float(spec.params["gust_arcsec"]) ** 2 if effect.compliance == 0
+                      else probe.gust_energy_arcsec2_per_s(np.concatenate(sh.t)))
+            gust = (energy, dur, tau_grid, profile)
     return jit_sd, tau_j, gust
 
 

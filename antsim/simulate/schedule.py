@@ -34,8 +34,9 @@ REFERENCE_SEED = 0
 QUIET_BANDWIDTH_MHZ = 1e15
 #: parameters that switch an effect's random part off (its expected value stays)
 QUIET_PARAMS: dict[str, dict[str, float]] = {
-    "thermal": {"cloud_modulation": 0.0, "lateral_gradient_k": 0.0},
-    "tracking_jitter": {"xel_rms_arcsec": 0.0, "el_rms_arcsec": 0.0, "gust_rate_per_h": 0.0},
+    "thermal": {"cloud_modulation": 0.0},
+    "tracking_jitter": {"xel_rms_arcsec": 0.0, "el_rms_arcsec": 0.0, "gust_rate_per_h": 0.0,
+                        "wind_arcsec_per_m2s2": 0.0},
 }
 
 

@@ -32,7 +32,11 @@ correction follows each scan (``search.update_gain`` > 0), or when an effect's r
 realisation has no member axis (see :attr:`MemberEngine.unshareable`). The weather's wander
 shifts a real member's refraction correction and its true refraction by the same arcseconds and
 its timing by milliseconds; the shared schedule keeps the quiet run's, which changes no
-pointing error.
+pointing error. Where the controller corrects no refraction from the weather (the 1990
+scenario: its model's W5 carries it), a member's true refraction follows its own weather
+alone: the shared paths are shifted by the refraction's change with the member's temperature,
+to first order in the wander, at each integration's start (the world takes the weather once per
+track: within 0.1" at 10 deg, :class:`_RefractionWander`).
 """
 
 from __future__ import annotations
@@ -288,6 +292,39 @@ def fit_rows(columns: dict[str, np.ndarray], terms: Sequence[str], name: str,
         return None
 
 
+class _RefractionWander:
+    """The change of each member's true refraction from the quiet run's (rad), its air
+    temperature wandering from the quiet run's by dT: dR/dT dT, dR/dT from ERFA's refraction
+    (a central difference of 1 K) at the quiet weather of the integration's start."""
+
+    #: half the temperature step of the central difference (K)
+    HALF_STEP_K = 0.5
+
+    def __init__(self, reference: World, weathers: Sequence):
+        self.reference = reference
+        self.weathers = weathers
+
+    def delta_rad(self, t0_s: np.ndarray, el_rad: np.ndarray) -> np.ndarray:
+        """(K, n, members) for integrations starting at ``t0_s`` (K,) whose sources are at
+        ``el_rad`` (K, n) (radians)."""
+        from controller.astro.refraction import refraction_rad
+        from controller.astro.site import Weather
+
+        quiet = self.reference.weather
+        frequency = self.reference.sky.frequency_ghz
+        d_t = np.stack([w.air_temperature_c(t0_s) for w in self.weathers], axis=-1) \
+            - quiet.air_temperature_c(t0_s)[:, None]  # (K, members)
+        slope = np.empty(el_rad.shape)
+        h = self.HALF_STEP_K
+        for k, t in enumerate(t0_s.tolist()):
+            r = quiet.reading(t)
+            up, down = (refraction_rad(el_rad[k], Weather(r.temperature_c + d, r.pressure_hpa,
+                                                          r.relative_humidity),
+                                       frequency_ghz=frequency) for d in (h, -h))
+            slope[k] = (np.asarray(up) - np.asarray(down)) / (2.0 * h)
+        return slope[..., None] * d_t[:, None, :]
+
+
 class _MemberRun:
     """Members integrating a schedule in time order (the slow errors' fixed point and the
     OU processes carry from one integration to the next). Integrations are queued and
@@ -297,9 +334,11 @@ class _MemberRun:
     #: at most this many integrations per block (a few scans; memory stays small)
     MAX_BLOCK = 64
 
-    def __init__(self, world: _MemberWorld, n_members: int, channels: tuple[str, ...]):
+    def __init__(self, world: _MemberWorld, n_members: int, channels: tuple[str, ...],
+                 refraction: _RefractionWander | None = None):
         self.world = world
         self.channels = channels
+        self.refraction = refraction
         self.error = (np.zeros(n_members), np.zeros(n_members))
         self._empty = np.zeros((0, n_members, len(channels)))
         self.power: list[np.ndarray] = []
@@ -323,6 +362,9 @@ class _MemberRun:
         paths = [(i, np.stack([b[5][j][1] for b in block])[..., None],
                   np.stack([b[5][j][2] for b in block])[..., None])
                  for j, (i, _, _) in enumerate(block[0][5])]
+        if self.refraction is not None:  # each member's own refraction
+            paths = [(i, az, el + self.refraction.delta_rad(t[:, 0], el[..., 0]))
+                     for i, az, el in paths]
         samples, self.error = self.world.sample_blocks(
             t, np.stack([b[2] for b in block])[..., None],
             np.stack([b[3] for b in block])[..., None], [b[4] for b in block], paths,
@@ -485,7 +527,11 @@ class MemberEngine:
         if nudges is not None:
             fast.append(_Nudge(*nudges))
         world = _MemberWorld(self.reference, slow, fast, self._receiver(seeds, quiet))
-        return _MemberRun(world, n_members, self.shared.channels)
+        refraction = None
+        if not quiet and self.scenario.controller.refraction != "weather":
+            refraction = _RefractionWander(self.reference,
+                                           [self._view(s).weather for s in seeds])
+        return _MemberRun(world, n_members, self.shared.channels, refraction)
 
     def simulate(self, seeds: Sequence[int] | None, *, nudges: tuple | None = None,
                  quiet: bool = False) -> tuple[np.ndarray, np.ndarray]:

@@ -3,8 +3,8 @@
 A Gaussian source of FWHM ``theta_s`` seen by a Gaussian beam of FWHM ``theta_b`` gives a
 Gaussian response of FWHM ``sqrt(theta_b^2 + theta_s^2)`` whose peak is
 ``theta_b^2 / (theta_b^2 + theta_s^2)`` of a point source's (flux is conserved). Five-point
-offsets measured with the nominal beam width are then scaled by the same factor (DESIGN
-section 5: about 0.91 for Taurus A and Cassiopeia A at 11').
+offsets measured with the nominal beam width are then scaled by the same factor (docs/physics.md,
+Site and sky: about 0.91 for Taurus A and Cassiopeia A at 11').
 
 The gain falls at low elevation as the 1990 report's section V describes: flat above
 30 deg, 95% at 20 deg, 90% at 10 deg (linear in between, held below the table).

@@ -6,8 +6,9 @@ A moving target is met by iterating the slew time against the target's position 
 Azimuth is on a cable wrap (encoder range wider than 360 deg): the mount chooses the turn
 that is quickest to reach while leaving ``wrap_margin_s`` of tracking before a limit.
 
-The 45-ft's own slew figures were not found (DESIGN section 5); the scenario states the
-values used and their analogues (VLBA: 90 deg/min in azimuth, 30 deg/min in elevation).
+The 45-ft's own slew figures were not found (docs/physics.md, Mount, atmosphere, thermal);
+the scenario states the values used and their analogues (VLBA: 90 deg/min in azimuth,
+30 deg/min in elevation).
 
 An equatorial mount uses the same logic with hour angle as the first axis (its limits around
 0; the "wrap" then only maps the trajectory's [0, 360) hour angle onto them) and declination

@@ -1,7 +1,7 @@
 """Dual-polarization total-power receiver with radiometer noise and gain fluctuations.
 
 Each channel (XR, XL: right and left circular) has its own system temperature (XL about
-15% above XR, DESIGN section 5). Samples every ``sample_interval_s``:
+15% above XR, Ghigo 1990, section IV). Samples every ``sample_interval_s``:
 
     P = G(t) * T_in + n,     n ~ N(0, T_in / sqrt(B * dt))        (radiometer equation)
 

@@ -5,7 +5,7 @@ the early afternoon (local mean solar time), rising as a half cosine over the mo
 falling as a half cosine over the rest of the day, plus a slow random wander drawn per run.
 The wind follows the same daily shape between a calm night and a breezier afternoon (surface
 wind typically peaks with the afternoon's convective mixing).
-For 8 Feb 1990 (DESIGN section 5: 0 to 15 C by day, -4 to 3 C at night) the scenario sets
+For 8 Feb 1990 (Ghigo 1990, section IV: 0 to 15 C by day, -4 to 3 C at night) the scenario sets
 minimum -4 C, maximum 15 C.
 """
 

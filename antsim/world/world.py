@@ -181,7 +181,7 @@ class World:
 
     # ------------------------------------------------------------------ truth for reports
     def truth(self) -> dict:
-        """The injected truth in the ``truth.json`` schema of DESIGN section 4."""
+        """The injected truth in the ``truth.json`` schema of docs/contract.md."""
         model = self.scenario.truth_model
         truth = {
             "seed": int(self.seed),

@@ -24,7 +24,8 @@ INDICATED_MINUS_TRUE = (
     (re.compile(r"^P([1-9]|1\d|2[0-2])$"), "P1..P22 (katpoint)"),
     (re.compile(r"^[AB][1-7]$"), "A1..A7, B1..B7 (Wright 1992, BIMA memo 23, a(i), b(i))"),
     (re.compile(r"^C([1-9]|1[01])$"), "C1..C11 (Crane 1981, NRAO Engineering Memo 147)"),
-    (re.compile(r"^(T[ES](DFB|YFB|DRL|YRL|SUN|FACE|SIDE|AIR)|TNPNS|TWPEW|TNSUN|TWSUN|TTILT)$"),
+    (re.compile(r"^(T[ES](DFB|YFB|DRL|YRL|SUN|FACE|SIDE|AIR)|TPYRL|TNPNS|TWPEW|TNSUN|TWSUN"
+                r"|TTILT)$"),
      "the thermal terms (controller.pointing.thermal; per kelvin, or per unit of a proxy)"),
 )
 

@@ -706,7 +706,7 @@ def get_term(name: str) -> Term:
 #: the terms any unknown name is told about
 KNOWN_TERMS = ("a TPOINT name (IA IE CA NPAE AN AW TF TX ACEC ACES ECEC ECES NRX NRY), a "
                "harmonic such as HESA2 or HSCA2CE, a polynomial such as PEE1, W1..W10, "
-               "P1..P22, A1..A7, B1..B7, or a thermal term (TEDFB TSDRL TEYFB TSYRL TNPNS "
+               "P1..P22, A1..A7, B1..B7, or a thermal term (TEDFB TSDRL TEYFB TPYRL TNPNS "
                "TWPEW, proxies TESUN TEFACE TSSIDE TNSUN TWSUN TEAIR)")
 
 #: TPOINT terms antsim knows of but cannot define from public documents, and why

@@ -11,8 +11,9 @@ difference, per axis:
 |---|---|---|
 | E | dE = c dT | W1 (elevation offset) |
 | S | dA cos E = c dT | W10 (collimation: constant on the sky) |
+| P | dA cos E = c dT sin E | W9 (the axes' non-perpendicularity: a rolled elevation axis) |
 | N | dE = c dT cos A, dA cos E = c dT sin A sin E | W2 = W8: the azimuth axis tilted north |
-| W | dE = -c dT sin A, dA cos E = c dT cos A sin E | W3 = -W7: the azimuth axis tilted east |
+| W | dE = -c dT sin A, dA cos E = c dT cos A sin E | W3 = -W7: the azimuth axis tilted west |
 
 in the report's sign (indicated minus true), so that a coefficient is the error per kelvin
 (arcsec/K) that the structure's bending adds. Names: ``T`` + shape + the sensor pair
@@ -22,10 +23,10 @@ axis' half of the cross scan (:func:`structure_column`), corrected for the senso
 time where it is known (:func:`sensor_aux`).
 
 The sensors (:data:`STRUCTURE_SENSORS`) are those of antsim's simulated 45-ft
-(``antsim.world.sensors``; where and why, ``docs/assumptions.md``): pairs across the dish
-(front and back of the backup structure, left and right rims), across the yoke (the alidade
-arms: front and back faces, left and right arms) and around the pedestal (north, east,
-south, west faces).
+(``antsim.world.sensors``; where and why, ``docs/assumptions.md`` and ``docs/physics.md``):
+pairs on the feed legs (the upper and lower leg, named front and back as the JCMT names its
+leg pairs; the right and left leg), across the yoke (the arms' front and back faces, the
+right and left arm) and around the pedestal (north, east, south, west faces).
 
 Without sensors, proxies that every recording allows (:mod:`controller.pointing.proxies`:
 the Sun's height and its direction relative to the dish, lagged by a structure time
@@ -48,12 +49,12 @@ __all__ = ["PROXY_TERMS", "SENSOR_FAMILY", "SENSOR_PAIRS", "SENSOR_TERMS", "STRU
 
 #: where each structure temperature sensor sits (antsim's 45-ft; docs/assumptions.md)
 STRUCTURE_SENSORS: dict[str, str] = {
-    "dish_front": "dish backup structure, front chord behind the surface (sunlit face)",
-    "dish_back": "dish backup structure, rear chord",
-    "dish_left": "dish backup structure, left rim (looking out along the beam)",
-    "dish_right": "dish backup structure, right rim (towards increasing azimuth)",
-    "yoke_front": "yoke (alidade) arm, front face",
-    "yoke_back": "yoke (alidade) arm, back face",
+    "dish_front": "feed leg above the feed (with the dish at the horizon)",
+    "dish_back": "feed leg below the feed",
+    "dish_left": "feed leg on the left (looking out along the beam)",
+    "dish_right": "feed leg on the right (towards increasing azimuth)",
+    "yoke_front": "yoke arms, front faces (facing where the antenna points)",
+    "yoke_back": "yoke arms, back faces",
     "yoke_left": "left yoke arm",
     "yoke_right": "right yoke arm",
     "pedestal_north": "pedestal, north face",
@@ -79,7 +80,8 @@ _SHAPES = {
     "N": ((("E", -1.0, (COS_AN,)), ("A", -1.0, (SIN_AN, TAN_E))),
           "azimuth axis tilted north by c dT: dE = c dT cos A, dA cos E = c dT sin A sin E"),
     "W": ((("E", 1.0, (SIN_AN,)), ("A", -1.0, (COS_AN, TAN_E))),
-          "azimuth axis tilted east by c dT: dE = -c dT sin A, dA cos E = c dT cos A sin E"),
+          "azimuth axis tilted west by c dT: dE = -c dT sin A, dA cos E = c dT cos A sin E"),
+    "P": ((("A", -1.0, (TAN_E,)),), "elevation axis rolled by c dT: dA cos E = c dT sin E"),
 }
 
 
@@ -93,17 +95,20 @@ def _thermal(name: str, shape: str, regressor: Regressor, what: str) -> Term:
 
 def _sensor_terms() -> dict[str, Term]:
     spec = (("TEDFB", "E", "DFB"), ("TSDRL", "S", "DRL"), ("TEYFB", "E", "YFB"),
-            ("TSYRL", "S", "YRL"), ("TNPNS", "N", "PNS"), ("TWPEW", "W", "PEW"))
+            ("TPYRL", "P", "YRL"), ("TNPNS", "N", "PNS"), ("TWPEW", "W", "PEW"))
     out = {}
     for name, shape, pair in spec:
         plus, minus = SENSOR_PAIRS[pair]
         out[name] = _thermal(name, shape, Regressor(plus, minus), f"{plus} - {minus} (K)")
-    # an axisymmetric pedestal tilts the same per kelvin whichever way its difference lies:
-    # TNPNS and TWPEW with one coefficient
-    north, east = out["TNPNS"], out["TWPEW"]
+    # an axisymmetric pedestal bends away from its warmer side by the same angle per kelvin
+    # whichever way its difference lies: the axis tilts towards the cooler side, north by c
+    # per kelvin of south minus north (TNPNS = -c) and west by c per kelvin of east minus
+    # west (TWPEW = c)
+    north, west = out["TNPNS"], out["TWPEW"]
+    south = tuple((axis, -sign, factors) for axis, sign, factors in north.components)
     out["TTILT"] = Term("TTILT", "azimuth axis tilted towards the cooler side of the pedestal "
-                        "by c per kelvin: TNPNS and TWPEW with one coefficient c",
-                        north.components + east.components, kind="thermal")
+                        "by c per kelvin: TWPEW = c and TNPNS = -c with one coefficient",
+                        south + west.components, kind="thermal")
     return out
 
 
@@ -123,7 +128,7 @@ def _proxy_terms() -> dict[str, Term]:
 SENSOR_TERMS: dict[str, Term] = _sensor_terms()
 #: the six pair terms: one term per sensor pair (TTILT is TNPNS and TWPEW with one
 #: coefficient); fit T and diagnose test them as one family
-SENSOR_FAMILY: tuple[str, ...] = ("TEDFB", "TSDRL", "TEYFB", "TSYRL", "TNPNS", "TWPEW")
+SENSOR_FAMILY: tuple[str, ...] = ("TEDFB", "TSDRL", "TEYFB", "TPYRL", "TNPNS", "TWPEW")
 #: terms in proxies (arcsec per unit of the proxy; :mod:`controller.pointing.proxies`)
 PROXY_TERMS: dict[str, Term] = _proxy_terms()
 THERMAL_TERMS: dict[str, Term] = {**SENSOR_TERMS, **PROXY_TERMS}

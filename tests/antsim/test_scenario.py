@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from dataclasses import replace
 
 import pytest
 
@@ -42,9 +43,13 @@ def test_ghigo1990_loads_as_documented(ghigo_path):
     assert (s.weather.air_min_c, s.weather.air_max_c) == (-4.0, 15.0)
     # Table 3 is given in arcmin and held in arcsec
     assert s.truth_model.as_dict()["W6"] == pytest.approx(12.24 * 60.0, abs=1e-9)
-    assert [e.name for e in s.effects] == ["thermal", "tracking_jitter"]
+    assert [e.name for e in s.effects] == ["thermal", "irregularities", "tracking_jitter"]
     tsys = {c.name: c.tsys_k for c in s.receiver.channels}
     assert tsys["XL"] == pytest.approx(1.15 * tsys["XR"], rel=1e-9)  # XL 15% above XR
+    # XL differs from XR by its Tsys alone (section IV): the same gain stability
+    assert {c.gain_fluctuation for c in s.receiver.channels} == {None}
+    # the control program carried refraction in its model's W5 (docs/physics.md)
+    assert s.controller.refraction == "none" and s.truth_model.as_dict()["W5"] == 0.0
     assert s.controller.scan.step_arcmin == 7.0
     assert s.controller.scan.integration_s == 15.0
     # the catalogue carries the source sizes and the reduction widens the beam by them
@@ -54,6 +59,31 @@ def test_ghigo1990_loads_as_documented(ghigo_path):
     assert s.controller.scan.width_for(3.46) == pytest.approx(11.531, abs=1e-3)
     assert s.controller.scan.width_for(0.0) == 11.0
     assert (s.controller.sky.zenith_opacity, s.controller.sky.t_atm_k) == (0.010, 260.0)
+
+
+def test_the_random_night_scenario_is_the_1990_one_but_for_the_night_residual(repo_root,
+                                                                          ghigo_text):
+    """scenarios/ghigo1990_random_night.toml (the plan's all-random night) is ghigo1990.toml
+    from [site] on, but without the repeatable irregularities and with servo noise and
+    buffeting large enough to give the night's rms alone: the two cannot drift apart."""
+    random_text = (repo_root / "scenarios" / "ghigo1990_random_night.toml").read_text()
+    base = load_scenario(repo_root / "scenarios" / "ghigo1990.toml")
+    other = load_scenario(repo_root / "scenarios" / "ghigo1990_random_night.toml")
+    assert [e.name for e in other.effects] == ["thermal", "tracking_jitter"]
+    jitter = {e.name: e.params for e in base.effects}["tracking_jitter"]
+    random_jitter = {e.name: e.params for e in other.effects}["tracking_jitter"]
+    changed = {k for k in jitter if jitter[k] != random_jitter[k]}
+    assert changed == {"xel_rms_arcsec", "el_rms_arcsec", "timescale_s"}
+    assert random_jitter["el_rms_arcsec"] > 4 * jitter["el_rms_arcsec"]
+    for name in ("site", "weather", "receiver", "beam", "atmosphere", "sources", "mount"):
+        assert getattr(other, name) == getattr(base, name), name
+    assert other.truth_model.as_dict() == base.truth_model.as_dict()
+    assert other.controller.model.as_dict() == base.controller.model.as_dict()
+    assert replace(other.controller, scenario_name="", model=None) == \
+        replace(base.controller, scenario_name="", model=None)
+    assert {e.name: e.params for e in other.effects}["thermal"] == \
+        {e.name: e.params for e in base.effects}["thermal"]
+    assert "[site]" in random_text and ghigo_text.count("[[truth.effects]]") == 3
 
 
 # ---------------------------------------------------------------------------------------------
@@ -135,13 +165,13 @@ BAD = {
         [("duration_h = 24.0", "duration_h = 0.0")], "campaign.duration_h", "0.0"),
     "unknown effect": (
         [('effect = "tracking_jitter"', 'effect = "wind_gusts"')],
-        "truth.effects[1].effect", "'wind_gusts'"),
+        "truth.effects[2].effect", "'wind_gusts'"),
     "bad effect parameter": (
-        [("gradient_tau_s = 5400.0", "gradient_tau_s = 10.0")],
-        "truth.effects[0].gradient_tau_s", "10.0"),
+        [("cloud_timescale_s = 1800.0", "cloud_timescale_s = 10.0")],
+        "truth.effects[0].cloud_timescale_s", "10.0"),
     "unknown effect parameter": (
-        [("xel_rms_arcsec = 17.0", "xel_rms_arcsecs = 17.0")],
-        "truth.effects[1].xel_rms_arcsecs", "17.0"),
+        [("xel_rms_arcsec = 5.0", "xel_rms_arcsecs = 5.0")],
+        "truth.effects[2].xel_rms_arcsecs", "5.0"),
     "unknown term in the truth": (
         [("W10 = -1.79", "W11 = -1.79")], "truth.terms.W11", "-1.79"),
     "efficiency table length mismatch": (

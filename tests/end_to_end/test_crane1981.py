@@ -87,17 +87,17 @@ def test_standard_error_pattern_of_the_chosen_definitions(runs):
     # the chosen C1..C11 give Table 4's standard errors (outside the rounding of its last
     # digit) within 30% for every term of the all-data fits but C6, which comes out 1.43-1.61
     # times the memo's (C11 0.75-0.76); at night C9-C11 come out smaller (0.55-0.75) and C6
-    # 1.16-1.57. The textbook reading is off by up to 12x (C8 0.08-0.12 of the memo's)
+    # 1.16-1.57. C6's excess is a known gap (docs/telescopes.md), printed by
+    # benchmarks/crane1981.py and not held here. The textbook reading is off by up to 12x
+    # (C8 0.08-0.12 of the memo's)
     lat = load_scenario(_scenario(3245)).site.latitude_deg
     data = table4_datasets(runs, {b: _night_deg(b) for b in BANDS})
     for d in data:
         chosen = rounding_ratio(sigma_pattern(d.ha_rad, d.dec_rad, d.xel_rms_arcsec,
                                               d.dec_rms_arcsec, lat), d.memo_sigma)
-        c6 = chosen[CRANE_NAMES.index("C6")]
         if d.label.endswith("all"):
             others = np.delete(chosen, CRANE_NAMES.index("C6"))
             assert np.all((others >= 0.7) & (others <= 1.3)), (d.label, np.round(chosen, 2))
-            assert 1.3 < c6 < 1.8, d.label
         textbook = rounding_ratio(sigma_pattern(d.ha_rad, d.dec_rad, d.xel_rms_arcsec,
                                                 d.dec_rms_arcsec, lat, "textbook"), d.memo_sigma)
         assert worst_factor(textbook) > 5.0
@@ -107,19 +107,15 @@ def test_standard_error_pattern_of_the_chosen_definitions(runs):
     assert best[0][1] == CANDIDATES["crane1981"] and best[1][0] > best[0][0]
 
 
-def test_no_day_night_difference(runs):
-    # Crane: "no significant difference between the two fits" (sections II, III; summary 2).
-    # Memo's own night-minus-all chi-square (11 dof, night errors): 7.3 and 19.6 (P 0.77,
-    # 0.05); ours 4.8 and 1.4: no thermal effect is simulated, the nights agree
-    for band in (3245, 4990):
-        r = runs[band]
-        all_fit = [(r["fit"]["terms"][n]["value_arcsec"], r["fit"]["terms"][n]["sigma_arcsec"])
-                   for n in CRANE_NAMES]
-        night = r["variants"]["E"]["terms"]
-        night_fit = [(night[n]["value_arcsec"], night[n]["sigma_arcsec"]) for n in CRANE_NAMES]
-        assert difference_chi2(all_fit, night_fit)[2] > 0.05, band
+def test_the_memos_own_day_night_comparison():
+    """Crane: "no significant difference between the two fits" (sections II, III; summary
+    2): the memo's own night-minus-all chi-square (11 dof, night errors) is 7.3 at 3245 MHz
+    (P 0.77). The simulated runs are not compared: no heating is simulated for the 140-ft
+    (its thermal shielding, the memo's reason), so their day and night fits agree by
+    construction and such a test could not fail."""
     memo = difference_chi2(TABLE4[3245]["all"]["c"], TABLE4[3245]["night"]["c"])
     assert memo[0] == pytest.approx(7.3, abs=0.05)
+    assert memo[2] > 0.05
 
 
 def test_subreflector_offset_moves_c1_and_c6_at_4990(runs):

@@ -34,6 +34,7 @@ from tests.antsim.run.test_report_page import (
     needs_chromium,
     read_page,
 )
+from tests.conftest import NOISE_ONLY, edit_text
 
 REPO = Path(__file__).resolve().parents[2]
 MMT = REPO / "examples" / "mmt_20210821_k_and_e.dat"
@@ -54,10 +55,11 @@ def mmt(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def short_run(tmp_path_factory, short_ghigo_text) -> tuple[Path, Path]:
-    """(scenario, run directory) of the 1990 scenario cut to 3 hours, seed 1."""
+    """(scenario, run directory) of the 1990 scenario cut to 3 hours, seed 1, its noise
+    without its systematic physics (``NOISE_ONLY``)."""
     base = tmp_path_factory.mktemp("run45")
     scenario = base / "short.toml"
-    scenario.write_text(short_ghigo_text, encoding="utf-8")
+    scenario.write_text(edit_text(short_ghigo_text, NOISE_ONLY), encoding="utf-8")
     assert main(["run", str(scenario), "--out", str(base / "run"), "--no-report",
                  "--no-progress"]) == 0
     return scenario, base / "run"

@@ -21,7 +21,7 @@ from antsim.diagnose.baseline import SimulatedBaseline
 from antsim.diagnose.data import from_rows
 from antsim.scenario import EffectSpec, load_scenario
 from antsim.simulate.runner import recording_meta, run_campaign, simulate
-from tests.conftest import edit_text
+from tests.conftest import NOISE_ONLY, edit_text
 
 ELEVEN_HOURS = (("duration_h = 24.0", "duration_h = 11.0"),)
 N_SIMS = 4
@@ -30,7 +30,8 @@ N_SIMS = 4
 @pytest.fixture(scope="module")
 def short(tmp_path_factory, ghigo_text):
     path = tmp_path_factory.mktemp("diag") / "short.toml"
-    path.write_text(edit_text(ghigo_text, ELEVEN_HOURS), encoding="utf-8")
+    path.write_text(edit_text(ghigo_text, (*ELEVEN_HOURS, *NOISE_ONLY)),
+                    encoding="utf-8")
     return load_scenario(path)
 
 

@@ -48,7 +48,10 @@ def test_the_what_if_answer_is_the_plans_output():
     assert len(numbers) >= 12
     for number in numbers:
         assert re.search(rf"(?<![\d.]){re.escape(number.lstrip('+'))}(?![\d])", output), number
-    assert "cannot separate W6/W10 (-0.99), W9/W10" in flat_output
+    # the pairs the section names for the run as made are the output's
+    w1_w4 = re.search(r"W1/W4 too \(([-+][\d.]+) as run\)", " ".join(section.split()))[1]
+    assert f"'as run' cannot separate W1/W4 ({w1_w4}), " in flat_output
+    assert re.search(r"'as run' cannot separate [^\n]*W6/W10 \(-0\.99\)[^\n]*W9/W10", output)
 
 
 def _recovery_table(output: str, title: str) -> dict[str, list[str]]:

@@ -18,14 +18,7 @@ SUFFIXES = {".py", ".md", ".toml", ".txt", ".mjs", ".cfg", ".ini"}
 OUTSIDE = re.compile(r"\bDESIGN\b|\.\./shared|(?<!astropy )\b[Ii]ssues? [0-9]+[a-z]?\b"
                      r"|\b[Tt]he issue'?s?\b")
 #: files still to be swept, each with the reason; drop a file when it is
-EXCEPTIONS = {
-    # being rewritten by the 1990 scenario's own change
-    "scenarios/ghigo1990.toml", "scenarios/ghigo1990_sensors.toml",
-    # the simulated world, being changed for the 45-ft's physics at the same time
-    "antsim/world/beam.py", "antsim/world/mount.py", "antsim/world/receiver.py",
-    "antsim/world/weather.py", "antsim/world/world.py", "antsim/world/effects/drifts.py",
-    "antsim/world/effects/steps.py", "antsim/world/effects/thermal.py",
-}
+EXCEPTIONS: set[str] = set()
 #: this file and the README check of tests/end_to_end/test_readme_commands.py name the patterns
 SELF = {"tests/end_to_end/test_self_contained.py", "tests/end_to_end/test_readme_commands.py"}
 

@@ -11,9 +11,9 @@ from typing import Any, ClassVar
 import numpy as np
 
 from antsim.world.effects.drifts import TemperatureDrift, structure_temperature_c
+from antsim.world.effects.heating import ThermalEffect
 from antsim.world.effects.thermal import (
     SunsetDrift,
-    ThermalEffect,
     since_sunset,
     sunset_level,
     transient_level,
@@ -389,8 +389,9 @@ class SensorTermsCandidate(TermsCandidate):
         terms = SENSOR_FAMILY
         super().__init__(
             "thermal_sensors", terms, "thermal deformation seen by the structure sensors",
-            "residuals linear in the structure temperature differences: the dish's front-back "
-            "(dE) and left-right (dA cos E), the yoke's, the pedestal's (an azimuth-axis tilt)",
+            "residuals linear in the structure temperature differences: the feed legs' "
+            "upper-lower (dE) and right-left (dA cos E), the yoke's bow (dE) and roll, the "
+            "pedestal's (an azimuth-axis tilt)",
             ThermalEffect.explanation + "; the structure temperature sensors see it: fit the "
             "thermal terms " + " ".join(terms) + " with the geometric ones (fit T, "
             "'antsim fit --terms ...,TEDFB')",

@@ -1,12 +1,14 @@
 """The catalogue of physical effects, all behind one interface (:class:`Effect`).
 
 One family per module: :mod:`.base` (the interface), :mod:`.geometric` (pointing-model
-terms), :mod:`.harmonics` (harmonic errors, the feed offset), :mod:`.thermal` (solar heating,
-sunset drift), :mod:`.drifts` (temperature drift), :mod:`.tracking` (wind and servo jitter),
-:mod:`.dynamics` (clock, servo lag, backlash), :mod:`.steps` (a change at one instant),
-:mod:`.optics` (squint, beam width, source structure, refraction anomaly, exact tilt and
-collimation), :mod:`.equatorial` (an equatorial mount's structure: the polar drive's
-torsion). :data:`EFFECTS` names them as scenarios do.
+terms), :mod:`.harmonics` (harmonic errors, the feed offset), :mod:`.heating` (the Sun
+heating the structure), :mod:`.thermal` (sunset drift), :mod:`.drifts` (temperature drift),
+:mod:`.tracking` (wind and servo jitter), :mod:`.irregular` (encoder,
+gear and track irregularities), :mod:`.dynamics` (clock, servo lag, backlash),
+:mod:`.steps` (a change at one instant), :mod:`.optics` (squint, beam width, source
+structure, refraction anomaly, exact tilt and collimation), :mod:`.equatorial` (an
+equatorial mount's structure: the polar drive's torsion). :data:`EFFECTS` names them as
+scenarios do.
 """
 
 from __future__ import annotations
@@ -17,6 +19,8 @@ from .dynamics import Backlash, ClockError, ServoLag
 from .equatorial import EQUATORIAL_HARMONIC_EFFECTS
 from .geometric import GeometricEffect, TermsEffect
 from .harmonics import HARMONIC_EFFECTS, FeedOffset
+from .heating import ThermalEffect
+from .irregular import MountIrregularities
 from .optics import (
     BeamWidthError,
     ExactTiltCollimation,
@@ -25,7 +29,7 @@ from .optics import (
     SourceStructure,
 )
 from .steps import Step
-from .thermal import SunsetDrift, ThermalEffect
+from .thermal import SunsetDrift
 from .tracking import TrackingJitter
 
 __all__ = ["EFFECTS", "Effect", "GeometricEffect", "Key", "PointingState"]
@@ -38,6 +42,7 @@ EFFECTS: dict[str, type[Effect]] = {
         ThermalEffect,
         SunsetDrift,
         TrackingJitter,
+        MountIrregularities,
         ClockError,
         ServoLag,
         Backlash,

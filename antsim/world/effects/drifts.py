@@ -5,7 +5,7 @@ The bulk temperature of the structure relaxes towards the air temperature with t
 day before the campaign); the elevation error is ``arcsec_per_k * (T_structure -
 reference_c)``: a uniformly warming structure lengthens the feed legs and the dish's focal
 length changes, tipping the beam by an amount proportional to the temperature (the JCMT
-corrects 6.5" per kelvin of structure temperature difference, DESIGN section 5).
+corrects 6.5" per kelvin of structure temperature difference, docs/physics.md).
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
 """A step: the pointing changes at one instant and stays changed.
 
 An encoder that slips (its zero point jumps), a subreflector or feed that is moved, a
-mount that is re-levelled: the error is one offset before and another after (DESIGN
-section 5's signature table, "step change at an unknown time"; Crane 1981's 4990 MHz run of
+mount that is re-levelled: the error is one offset before and another after (docs/physics.md's
+signature table, "a step at an unknown time"; Crane 1981's 4990 MHz run of
 the 140-ft is a real case, where a subreflector offset moved C1 and C6). Here the azimuth
 and elevation zero points change by ``az_arcsec`` and ``el_arcsec`` (indicated minus true,
 arcsec of azimuth and of elevation) at ``t_s`` seconds after the campaign's start; the

@@ -628,10 +628,17 @@ def test_node_client_scans_a_source_and_finds_what_its_model_misses(tmp_path, re
     """docs/katcp_client.mjs tracks Cas A with its own ephemeris and the 1990 model in use,
     deliberately put 4' off in elevation zero (W1) and 3' in azimuth zero (W6; the report's
     section II), runs one cross scan and prints the offsets: they must be the injected truth
-    minus its model, scaled by 0.91 (Cas A's 3.46' size shrinks measured offsets by 11^2 /
-    (11^2 + 3.46^2), docs/physics.md). Tolerance 0.5': the solar heating of the hour (about
-    0.3', not in the truth's geometry) and the client's ephemeris (no nutation or aberration,
-    about 0.3')."""
+    minus its model, plus the mount's repeatable irregularities there (the world's truth
+    beyond the ten W's), scaled by 0.91 (Cas A's 3.46' size shrinks measured offsets by
+    11^2 / (11^2 + 3.46^2), docs/physics.md). The client corrects refraction from the
+    antenna's weather, as the world refracts; the Sun's heating at noon (about 2' in
+    elevation at Cas A) is added as the world's heating effect gives it in the scan's first
+    minutes (the virtual clock starts the campaign there; the feed legs and the yoke at their
+    equilibrium for Cas A). Tolerance 0.5': the heating's change over the scan's minutes and
+    the legs' approach to equilibrium (about 0.1'), the client's ephemeris and refraction (no
+    nutation or aberration, a cot E law: about 0.3')."""
+    from antsim.world.effects import EFFECTS
+    from antsim.world.world import World
     from controller.pointing.model import PointingModel
 
     model = {"W1": -5.6, "W2": 0.0, "W3": -1.8, "W4": -2.0, "W5": 0.6, "W6": 15.0, "W7": 1.5,
@@ -645,11 +652,21 @@ def test_node_client_scans_a_source_and_finds_what_its_model_misses(tmp_path, re
     assert "tracking Cassiopeia A" in run.stderr
     result = json.loads(run.stdout)
     az, el = math.radians(result["az_deg"] % 360.0), math.radians(result["el_deg"])
-    truth = load_scenario(ghigo_path).truth_model
+    scenario = load_scenario(ghigo_path)
+    truth = scenario.truth_model
     used = PointingModel("ghigo10", {k: 60.0 * v for k, v in model.items()})
     (ta, te), (ma, me) = truth.offset_rad(az, el), used.offset_rad(az, el)
-    expected_xel = 0.91 * math.degrees(float(ta - ma)) * 60.0 * math.cos(el)
-    expected_el = 0.91 * math.degrees(float(te - me)) * 60.0
-    assert abs(expected_xel) > 1.2 and abs(expected_el) > 2.0  # the test can tell a sign
+    (spec,) = [e for e in scenario.effects if e.name == "irregularities"]
+    irregular = EFFECTS[spec.name](**spec.params)
+    irregular.start(None, None)  # the antenna's own pattern: no generator of the run's
+    i_xel, i_el = irregular.errors_arcsec(az, el)
+    world = World(scenario, simpy.Environment(), None)  # the server's world: its seed
+    heating = next(e for e in world.effects if e.name == "thermal")
+    h_xel, h_el = (float(v) for v in heating.equilibrium_errors_arcsec(120.0, az, el))
+    expected_xel = 0.91 * (math.degrees(float(ta - ma)) * 60.0 * math.cos(el)
+                           + (i_xel + h_xel) / 60.0)
+    expected_el = 0.91 * (math.degrees(float(te - me)) * 60.0 + (i_el + h_el) / 60.0)
+    # the test can tell a sign: a flipped one is off by twice the value, beyond 2 x 0.5'
+    assert abs(expected_xel) > 1.0 and abs(expected_el) > 2.0
     assert result["xel_arcmin"] == pytest.approx(expected_xel, abs=0.5)
     assert result["el_arcmin"] == pytest.approx(expected_el, abs=0.5)

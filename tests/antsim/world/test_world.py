@@ -226,8 +226,9 @@ def test_truth_lists_terms_in_arcsec_and_effects(ghigo_path):
     # the scenario gives Table 3 in arcmin; truth.json holds arcsec (docs/contract.md)
     assert truth["terms"]["W6"] == {"value_arcsec": pytest.approx(12.24 * 60.0, abs=1e-9)}
     assert truth["terms"]["W1"]["value_arcsec"] == pytest.approx(-1.88 * 60.0, abs=1e-9)
-    assert [e["effect"] for e in truth["effects"]] == ["thermal", "tracking_jitter"]
-    assert truth["effects"][0]["params"]["gradient_tau_s"] == 5400.0
+    assert [e["effect"] for e in truth["effects"]] == ["thermal", "irregularities",
+                                                       "tracking_jitter"]
+    assert truth["effects"][0]["params"]["absorptivity"] == 0.35
 
 
 def test_simulated_antenna_is_a_protocol_antenna(quiet):
