@@ -1,4 +1,5 @@
-"""The library: every candidate, DESIGN section 5's signature table first, as data.
+"""The library: every candidate, the signature table of docs/diagnose.md's effects first, as
+data.
 
 Each row names the simulator effect it reproduces, its title, signature and the physical
 cause; :data:`CANDIDATES` is the library in the order the selection tries them, and
@@ -30,12 +31,61 @@ def _harmonic(name: str, title: str, signature: str,
               mounts: tuple[str, ...] = ("altaz",)) -> TermsCandidate:
     cls = EFFECTS[name]
     return TermsCandidate(name, (cls.sin_term, cls.cos_term), title, signature,
-                          cls.explanation, effect=name, signs=cls.signs, mounts=mounts)
+                          cls.explanation, effect=name, signs=cls.signs, mounts=mounts,
+                          mechanisms=MECHANISMS.get(name, ()))
+
+
+#: what each pure harmonic is consistent with: a harmonic of an axis angle is named as a
+#: harmonic ("dE varies as sin 2A"), these listed beside it, none asserted (a mechanism
+#: shows itself beyond the harmonic: on both axes in a fixed relation, in its phase, in
+#: time, in a sensor)
+MECHANISMS: dict[str, tuple[str, ...]] = {
+    "az_track_2a": ("an azimuth track or bearing race with two high points per turn (the "
+                    "mount nods as it rolls over them)",
+                    "a foundation or pedestal that settled unevenly",
+                    "an elevation-axis error that repeats twice per azimuth turn"),
+    "az_track_3a": ("an azimuth track or bearing race with three high points per turn",
+                    "a pedestal on three supports that settled unevenly"),
+    "az_runout_1a": ("an azimuth encoder mounted off the axis (runout)",
+                     "an eccentric azimuth bull gear or pinion"),
+    "az_runout_2a": ("an elliptical azimuth encoder disc or bull gear",
+                     "an encoder coupling that flexes twice per turn"),
+    "el_nod_1a": ("an azimuth track with one high point", "a foundation that settled on "
+                  "one side", "a tilted azimuth axis (whose dA tan E part AN, AW hold)"),
+    "el_eccentricity": ("an elevation encoder mounted off the axis",
+                        "a tube flexure beyond the sin Z law"),
+    "el_eccentricity_2e": ("an elliptical elevation encoder or gear",
+                           "a tube or counterweight flexure that varies twice per turn"),
+    "az_runout_1a_2a": ("an azimuth encoder off the axis and elliptical",
+                        "an eccentric, elliptical azimuth bull gear"),
+    "az_track_2a_3a": ("an azimuth track with two and three high points per turn",
+                       "a pedestal that settled unevenly"),
+    "el_periodic_el": ("an elevation gear or encoder error that repeats n times per turn",
+                       "an elevation-dependent table (optics, collimation) sampled in "
+                       "elevation", "a tube flexure of higher order"),
+    "xel_periodic_el": ("a collimation that changes with elevation (secondary, feed or "
+                        "instrument shifting sideways)",
+                        "Nasmyth or rotator optics misaligned"),
+    "el_periodic_az": ("an azimuth track with n high points (rail joints, segments)",
+                       "an azimuth bearing race with n undulations"),
+    "az_periodic_az": ("an azimuth encoder, pinion or bull-gear error that repeats n times "
+                       "per turn",),
+    "ha_periodic_ha": ("a polar gear, pinion or encoder error that repeats n times per "
+                       "turn",),
+    "dec_periodic_ha": ("a bent polar shaft", "an uneven polar bearing", "a yoke that "
+                        "flexes as the polar axis turns"),
+    "dec_periodic_dec": ("a declination gear or encoder error that repeats n times per "
+                         "turn",),
+    "xdec_periodic_dec": ("a collimation that changes with declination (the optics shift "
+                          "sideways)",),
+    "ha_encoder_eccentricity": ("an hour-angle encoder or polar gear off the polar axis",),
+    "dec_encoder_eccentricity": ("a declination encoder or gear off the declination axis",),
+}
 
 
 IN_SPAN = "already in the 45-ft's ten-term model (W terms), so invisible with that baseline"
 
-#: DESIGN's signature table, harmonic rows: simulator effect, title, signature
+#: the signature table's harmonic rows: simulator effect, title, signature
 HARMONIC_ROWS = (
     ("az_track_2a", "azimuth track unevenness (twice per turn)",
      "dE ~ sin 2A, cos 2A (BIMA memo 23 saw 6\" rms)"),
@@ -48,7 +98,7 @@ HARMONIC_ROWS = (
      "dE ~ sin 2E, cos 2E"),
 )
 
-#: the rows of DESIGN's signature table that name two orders at once (one finding each:
+#: the signature table's rows that name two orders at once (one finding each:
 #: an encoder both eccentric and elliptical, a track with two and three high points)
 TWO_ORDER_ROWS = (
     ("az_runout_1a_2a", ("HASA", "HACA", "HASA2", "HACA2"),
@@ -164,15 +214,18 @@ EQUATORIAL_FAMILIES = (
 def _equatorial_rows() -> list[Candidate]:
     lib: list[Candidate] = [_harmonic(*row, mounts=EQUATORIAL)
                             for row in EQUATORIAL_HARMONIC_ROWS]
-    lib += [TermsCandidate(name, terms, title, signature, cause, pair=pair, mounts=EQUATORIAL)
+    lib += [TermsCandidate(name, terms, title, signature, cause, pair=pair, mounts=EQUATORIAL,
+                           mechanisms=MECHANISMS.get(name, ()))
             for name, terms, title, signature, cause, pair in EQUATORIAL_TERM_ROWS]
-    lib += [HarmonicFamilyCandidate(*row, mounts=EQUATORIAL) for row in EQUATORIAL_FAMILIES]
+    lib += [HarmonicFamilyCandidate(*row, mounts=EQUATORIAL, mechanisms=MECHANISMS[row[0]])
+            for row in EQUATORIAL_FAMILIES]
     return lib
 
 
 def _library() -> list[Candidate]:
     lib: list[Candidate] = [_harmonic(*row) for row in HARMONIC_ROWS]
-    lib += [TermsCandidate(name, terms, title, signature, cause, pair=False)
+    lib += [TermsCandidate(name, terms, title, signature, cause, pair=False,
+                           mechanisms=MECHANISMS[name])
             for name, terms, title, signature, cause in TWO_ORDER_ROWS]
     lib += [
         TermsCandidate("gravity", ("TF",), "gravitational sag", "dE ~ cos E",
@@ -197,7 +250,8 @@ def _library() -> list[Candidate]:
                        "the azimuth axis is not vertical", pair=False,
                        blind_exclusion=IN_SPAN + " (W2, W3, W7, W8)"),
     ]
-    lib += [HarmonicFamilyCandidate(*row) for row in HARMONIC_FAMILIES]
+    lib += [HarmonicFamilyCandidate(*row, mechanisms=MECHANISMS[row[0]])
+            for row in HARMONIC_FAMILIES]
     lib += [
         FeedOffsetCandidate(),
         SunsetCandidate(),

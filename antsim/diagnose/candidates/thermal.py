@@ -146,6 +146,7 @@ class _LaggedCandidate(Candidate):
         return best if res.delta_chi2 < best.delta_chi2 else res
 
     TAUS: tuple[float, ...] = ()
+    look_elsewhere = "grid"
 
     def thetas(self, obs):
         return list(self.TAUS)
