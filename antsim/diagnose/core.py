@@ -20,9 +20,11 @@ from controller.pointing.robust import fit_terms_before_after
 
 from ..blas import one_blas_thread
 from .baseline import (
+    CORRELATED_SCANS,
     BaselineSpec,
     SimulatedBaseline,
     offset_scale,
+    residual_correlation,
     resolve_baseline,
     white_prediction,
 )
@@ -46,6 +48,8 @@ __all__ = ["Diagnosis", "Finding", "diagnose", "plain"]
 #: noise is estimated from the data instead (then no findings on 12 seeds of 12;
 #: benchmarks/crane1981_diagnose.py)
 MIN_MATCHED_FRACTION = 0.9
+#: the lag (s) at which the noise's correlation in time is said in words: successive scans
+SUCCESSIVE_S = 300.0
 
 
 @dataclass
@@ -135,7 +139,7 @@ class Finding:
         params = ", ".join(f"{k} = {_fmt(v)}" for k, v in shown.items())
         terms = f" [{' '.join(j['terms'])}]" if j["terms"] else ""
         name = f"{s.signature}{terms} ({self.label})" if self.harmonic else \
-            f"{self.effect}{terms}"
+            f"{self.label}{terms}"
         how = [f"{j['significance']:.1f} sigma"]
         if s.stability is not None:
             how.append(f"chosen in {100 * s.stability:.0f}% of {s.n_resamples} resamples")
@@ -481,6 +485,10 @@ def _diagnose(obs: Observations, scenario, model: str | None, n_sims: int, cache
             prediction = white_prediction(obs)
     problem = Problem(obs, prediction, spec.terms, offset_scale=offset_scale(obs, scenario))
     problem.update_outliers()
+    if not prediction.known_noise and obs.has_time and not prediction.corr_xel \
+            and not prediction.corr_el and problem.used.sum() <= CORRELATED_SCANS:
+        problem = _correlated(problem, spec.terms, offset_scale(obs, scenario))
+        prediction = problem.pred
     location = locate(problem)
     selection = select(problem, held_out=held_out)
     findings = []
@@ -501,6 +509,27 @@ def _diagnose(obs: Observations, scenario, model: str | None, n_sims: int, cache
     diag.variants = fit_variants_before_after(diag)
     diag.runtime_s = time.perf_counter() - t0
     return diag
+
+
+def _correlated(problem: Problem, terms, scale: np.ndarray) -> Problem:
+    """Recordings in time without a noise prediction: the correlation of their noise in
+    time estimated from the base model's residuals (:func:`.baseline.residual_correlation`)
+    and the problem made again with it, so that every test and fold treats successive scans
+    as the correlated measurements they are (the heat of a day, the weather of an hour);
+    the problem as it was where the residuals show none."""
+    used = problem.used
+    z = problem.fit_current().resid.reshape(2, -1)[:, used] / problem.scale[:, None]
+    corr = residual_correlation(problem.obs.t_s[used], z)
+    if not any(corr):
+        return problem
+    at = [sum(w * math.exp(-SUCCESSIVE_S / tau) for w, tau in model) for model in corr]
+    pred = replace(problem.pred, corr_xel=corr[0], corr_el=corr[1],
+                   description=f"{problem.pred.description}, correlated in time as its "
+                               f"residuals show (successive scans {at[0]:.2f} xel, "
+                               f"{at[1]:.2f} el)")
+    out = Problem(problem.obs, pred, terms, offset_scale=scale)
+    out.update_outliers()
+    return out
 
 
 def _figures(problem: Problem, selection: Selection) -> dict[str, Any]:

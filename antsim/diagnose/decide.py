@@ -10,10 +10,11 @@ a bootstrap resample) is small linear algebra on those rows. No candidate is ask
 anything during a decision and nothing is simulated.
 
 Whitening: each row (a scan's cross-axis or second-axis error) is divided by its predicted
-noise; where the prediction has noise correlated in time, the rows of each axis are
-decorrelated once, over the design's scans, by the inverse Cholesky factor of their
-correlation, and a set of scans is then a set of independent rows. Without a noise
-prediction each axis' noise level is estimated from the residuals, as :mod:`.problem` does.
+noise; where the noise is correlated in time (as a scenario's simulations predict it, or as
+the residuals of recordings without one show it), the rows of each axis are decorrelated
+once, over the design's scans, by the inverse Cholesky factor of their correlation, and a
+set of scans is then a set of independent rows. Without a noise prediction each axis'
+noise level is estimated from the residuals, as :mod:`.problem` does.
 
 The rule, round by round (forward selection, as docs/diagnose.md states it):
 
@@ -143,10 +144,12 @@ class Design:
         obs = problem.obs
         self.problem = problem
         self.white = not problem.pred.known_noise
-        # without a noise prediction every valid scan (a decision rejects its own outliers);
-        # with correlated noise, the scans the base model keeps (an outlier would spread
-        # through the decorrelated rows of the scans after it)
-        mask = (problem.valid if self.white else problem.used).copy()
+        #: the noise is correlated in time (predicted, or estimated from the residuals)
+        self.correlated = bool(problem.pred.corr_xel or problem.pred.corr_el)
+        # white noise: every valid scan (a decision rejects its own outliers); correlated
+        # noise: the scans the base model keeps (an outlier would spread through the
+        # decorrelated rows of the scans after it)
+        mask = (problem.used if self.correlated else problem.valid).copy()
         self.n_file = int(mask.sum())
         if self.n_file > DECIDE_SCANS:
             every = -(-self.n_file // DECIDE_SCANS)
@@ -206,7 +209,7 @@ class Design:
         with np.errstate(divide="ignore"):
             w = np.where(self.sigma > 0, 1.0 / self.sigma, 0.0)
         out = vv * w[:, None]
-        if not self.white:
+        if self.correlated:
             for axis, factor in enumerate(p.factors.noise_factors(self.mask)):
                 if factor is not None:
                     sl = slice(axis * self.u, (axis + 1) * self.u)

@@ -19,12 +19,13 @@ from .optics import BeamWidthCandidate, ExactTiltCandidate, SourceCandidate, Squ
 from .terms import FeedOffsetCandidate, HarmonicFamilyCandidate, TermsCandidate
 from .thermal import (
     SensorTermsCandidate,
+    SolarDishCandidate,
     SunsetCandidate,
     SunsetTransientCandidate,
     TemperatureCandidate,
 )
 
-__all__ = ["CANDIDATES", "candidate"]
+__all__ = ["CANDIDATES", "HEATING", "candidate", "naming"]
 
 
 def _harmonic(name: str, title: str, signature: str,
@@ -257,6 +258,7 @@ def _library() -> list[Candidate]:
         SunsetCandidate(),
         SunsetTransientCandidate(),
         TemperatureCandidate(),
+        SolarDishCandidate(),
         SensorTermsCandidate(),
         StepCandidate(),
         ClockCandidate(),
@@ -274,6 +276,20 @@ def _library() -> list[Candidate]:
 
 
 CANDIDATES: tuple[Candidate, ...] = tuple(_library())
+
+
+#: the candidates that name the Sun's heating of the structure (the ``thermal`` effect): its
+#: drift after sunset and its transient, its lag behind the air temperature, the dish it
+#: heats on the side it faces, the structure sensors' terms
+HEATING = ("sunset_drift", "sunset_transient", "temperature_drift", "solar_dish_heating",
+           "thermal_sensors")
+
+
+def naming(effect: str) -> set[str]:
+    """The candidates whose finding names the simulator effect ``effect``: those that
+    reproduce it, and for the Sun's heating every one of :data:`HEATING`."""
+    out = {c.name for c in CANDIDATES if c.effect == effect}
+    return out | set(HEATING) if effect == "thermal" else out
 
 
 def candidate(name: str) -> Candidate:
