@@ -8,10 +8,14 @@ simulated world. Each part imports only those listed before it, and :mod:`contro
   documents publish (numbers only, beside which a run prints its own); :mod:`.bundled`:
   the scenarios and plans that come with antsim, found by name; :mod:`.progress`: progress
   of long work, on a terminal and off one;
+* :mod:`.schema.keys`: a declared setting (kind, unit, range, default, meaning, source);
 * :mod:`.world`: the simulated telescope (sky, weather, mount, physical effects, beam,
   receiver, camera) and the protocol's implementation;
+* :mod:`.schema`: every key of scenario and plan files, declared once, and the reference
+  page written from it (``docs/scenarios.md``);
 * :mod:`.scenario`: scenario files, read into the world's and the controller's settings
-  (the world's parts' settings are below it, the world built from a scenario above it);
+  through the schema (the world's parts' settings are below it, the world built from a
+  scenario above it);
 * :mod:`.simulate`: the engines: a campaign run, the quiet run's shared schedule, Monte
   Carlo members vectorized across seeds, and the executors that spread them over processes;
 * :mod:`.figures`: figures by page, and the self-contained HTML page writer; they draw values

@@ -73,6 +73,10 @@ def find(spec: str | Path, kind: Kind = "scenario", where: str = "command line",
         # the file first: a long path's value is shortened in the line
         raise InputError(text if relative_to is None else where, field, text,
                          f"no such {kind} file", hint)
+    other: Kind = "plan" if kind == "scenario" else "scenario"
+    if text.removesuffix(".toml") in names(other):  # the other kind's name: say which
+        command = "plan" if other == "plan" else "run"
+        listing = f"{text} is a {other}: antsim {command} {text.removesuffix('.toml')}"
     raise InputError(where, field, text, f"neither a file nor the name of a {kind}", listing)
 
 

@@ -17,7 +17,7 @@ import time
 from collections.abc import Callable
 from typing import IO, Literal
 
-__all__ = ["EVERY_S", "Progress", "progress_for"]
+__all__ = ["EVERY_S", "Progress", "progress_for", "span_words"]
 
 #: seconds between two lines off a terminal
 EVERY_S = 5.0
@@ -151,3 +151,11 @@ def progress_for(value: Progress | bool | None, command: str) -> tuple[Progress,
 
 def _number(x: float) -> str:
     return f"{x:g}" if isinstance(x, int) or float(x).is_integer() else f"{x:.1f}"
+
+
+def span_words(duration_s: float) -> str:
+    """A campaign's length in words for a progress line: "20 days", "8 hours", "1 hour"."""
+    if duration_s >= 2 * 86400.0:
+        return f"{duration_s / 86400.0:.3g} days"
+    hours = f"{duration_s / 3600.0:.3g}"
+    return f"{hours} hour{'s' if hours != '1' else ''}"

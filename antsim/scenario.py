@@ -3,8 +3,12 @@
 A scenario names the telescope and its site, the campaign window, the sources, the injected
 truth (a pointing model plus a list of physical effects), the receiver, beam, atmosphere and
 weather, and the control program's own settings (the pointing model in use, the scan, the
-scheduler). Every bad value becomes one :class:`~controller.errors.InputError` line naming the
-file, the key and the value; unknown keys are errors too. See ``scenarios/ghigo1990.toml``.
+scheduler). Every key is declared once, with its kind, unit, range, default and meaning, in
+:mod:`antsim.schema.scenario` (``docs/scenarios.md`` is generated from it), and read here
+through that declaration: every bad value becomes one :class:`~controller.errors.InputError`
+line naming the file, the key and the value; unknown keys are errors too. The checks between
+keys (a step within the beam, a band below twice its frequency) are made here, after each
+table's keys are read. See ``scenarios/ghigo1990.toml``.
 
 Beyond the 45-ft (``docs/telescopes.md``): ``mount.kind = "equatorial"`` (axes hour angle and
 declination; models in TPOINT's equatorial terms, e.g. ``crane11``), ``beam.gain_harmonics``,
@@ -16,18 +20,16 @@ declination; models in TPOINT's equatorial terms, e.g. ``crane11``), ``beam.gain
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass, field, replace
 from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
 from controller.astro.site import Site
-from controller.astro.sun import NIGHT_SUN_MAX_DEG
 from controller.errors import InputError
 from controller.pointing.model import NAMED_MODELS, PointingModel
-from controller.pointing.modelio import MAX_VALUE_ARCSEC
 from controller.pointing.terms import TermError, get_term
+from controller.program.campaign import EPHEMERIS_MARGIN_S
 from controller.program.config import (
     CatalogSource,
     ControllerConfig,
@@ -36,8 +38,11 @@ from controller.program.config import (
     SearchConfig,
 )
 from controller.scans.config import GainCurveConfig, ScanConfig, SkyConfig, TippingConfig
-from controller.scans.gaincurve import HARMONIC_NAMES
 
+from .schema import scenario as schema
+from .schema.keys import Section, duplicate
+from .schema.scenario import ESTIMATORS, MAX_SAMPLES, MAX_TIMESCALE_S, UNIT_ARCSEC
+from .schema.utc import end_problem, utc_time
 from .tomlcheck import Table, load_toml
 from .world.atmosphere import AtmosphereConfig
 from .world.beam import BeamConfig
@@ -49,10 +54,9 @@ from .world.sensors import SensorConfig
 from .world.sky import SourceConfig
 from .world.weather import WeatherConfig
 
-__all__ = ["EffectSpec", "Scenario", "load_scenario"]
+__all__ = ["ESTIMATORS", "MAX_SAMPLES", "MAX_TIMESCALE_S", "UNIT_ARCSEC", "EffectSpec",
+           "PlanNotScenarioError", "Scenario", "load_scenario"]
 
-UNIT_ARCSEC = {"arcsec": 1.0, "arcmin": 60.0, "deg": 3600.0}
-ESTIMATORS = ("clark", "lsq")
 #: effects that an equatorial mount accepts: the others model an alt-az mount's geometry,
 #: its elevation-dependent structure or its azimuth track
 EQUATORIAL_EFFECTS = ("tracking_jitter", "clock_error", "polarization_squint", "beam_width",
@@ -65,11 +69,21 @@ EQUATORIAL_ONLY_EFFECTS = ("polar_torsion",)
 #: radiometer noise of a 1-s sample is ~5e-12 K, below anything a test resolves but not zero
 #: (a reduction divides by the samples' scatter)
 NO_RADIOMETER_BANDWIDTH_MHZ = 1e20
-#: longest correlation time of a random process (s): about 3 years; beyond it a process is a
-#: constant, and its one-step correlation rounds to 1 (a division by zero)
-MAX_TIMESCALE_S = 1e8
-#: most receiver samples in one integration (each is a few numbers per channel in memory)
-MAX_SAMPLES = 100_000
+#: the recordings' name of a scan's channels averaged (no receiver channel may take it)
+AVERAGE_CHANNEL = "AVG"
+#: the smallest step of a five-point scan, in beams (HPBW): the power at +-D is below the
+#: peak's by 1 - exp(-4 ln 2 (D / HPBW)^2), 2.8e-4 at a hundredth of the beam, about a
+#: receiver's gain stability (dG/G, 1e-4..1e-3); a smaller step measures no offset
+MIN_STEP_BEAMS = 0.01
+#: the largest correction a pointing model may make in the sky it is used in (deg): the
+#: bound of an effect's arcsec parameter (10 deg, antsim.world.effects.base.NAME_BOUNDS),
+#: beyond any telescope's pointing error; a larger one points the antenna away from every
+#: source, and the campaign records nothing worth a fit
+MAX_CORRECTION_DEG = 10.0
+
+
+class PlanNotScenarioError(InputError):
+    """A plan file read where a scenario belongs."""
 
 
 @dataclass(frozen=True)
@@ -148,40 +162,52 @@ def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario file; raises InputError on the first bad value."""
     path = Path(path)
     root = load_toml(path)
+    if "variants" in root:  # read as a scenario, it would lack a site
+        raise PlanNotScenarioError(root.where, "variants", "[[variants]]",
+                           "this file is a plan, not a scenario", "antsim plan runs a plan")
     text = root.text
-    name = root.string("name")
-    description = root.string("description", "")
-    seed = root.integer("seed", 1, min=0)
-    site = _site(root.table("site"))
-    campaign = root.table("campaign")
+    top = schema.ROOT
+    name = top.read(root, "name")
+    description = top.read(root, "description")
+    seed = top.read(root, "seed")
+    site = _site(_table(root, top, "site"))
+    campaign = _table(root, top, "campaign")
     epoch = _epoch(campaign)
-    duration_s = campaign.number("duration_h", gt=0.0, max=24.0 * 366) * 3600.0
+    duration_s = _duration_s(campaign, epoch)
     campaign.finish()
-    mount = _mount(root.table("mount", {}))
-    beam = _beam(root.table("beam", {}))
-    receiver = _receiver(root.table("receiver", {}))
-    atmosphere = _atmosphere(root.table("atmosphere", {}))
-    weather = _weather(root.table("weather", {}))
-    camera = _camera(root.table("camera")) if "camera" in root else None
-    sources = tuple(_source(t) for t in root.tables("sources", []))
-    if "stars" in root:
-        sources += _stars(root.table("stars"))
+    mount = _mount(_table(root, top, "mount"))
+    beam = _beam(_table(root, top, "beam"))
+    receiver = _receiver(_table(root, top, "receiver"))
+    atmosphere = _settings(_table(root, top, "atmosphere"), schema.ATMOSPHERE,
+                           AtmosphereConfig)
+    weather = _weather(_table(root, top, "weather"))
+    camera_t = _table(root, top, "camera")
+    camera = None if camera_t is None else _settings(camera_t, schema.CAMERA, CameraConfig)
+    sources = tuple(_source(t) for t in root.tables("sources", top["sources"].default))
+    stars_t = _table(root, top, "stars")
+    if stars_t is not None:
+        sources += _stars(stars_t)
     if not sources:
         raise root.error("sources", [], "the scenario lists no sources")
     names = [s.name for s in sources]
-    for i, s in enumerate(names):
-        if names.index(s) != i:
-            raise root.error(f"sources[{i}].name", s, "duplicate source name")
-    truth = root.table("truth", {})
-    truth_model = _model(truth, default="none", base=path.parent, mount=mount, site=site)
-    effects = tuple(_effect(t, mount, site) for t in truth.tables("effects", []))
+    repeated = duplicate(names)  # upper and lower case alike: a report or an option names it
+    if repeated is not None:
+        i, s = repeated
+        raise root.error(f"sources[{i}].name", s, "duplicate source name")
+    truth = _table(root, top, "truth")
+    truth_model = _model(truth, schema.TRUTH, base=path.parent, mount=mount, site=site)
+    effects = tuple(_effect(t, mount, site)
+                    for t in truth.tables("effects", schema.TRUTH["effects"].default))
     _check_effect_sources(effects, names, truth)
     _check_clock(effects, duration_s, truth)
     truth.finish()
-    sensors = (_sensors(root.table("structure_sensors"), mount)
-               if "structure_sensors" in root else None)
-    controller = _controller(root.table("controller", {}), site, epoch, duration_s, sources,
-                             receiver, mount, name, path.parent, camera)
+    sensors_t = _table(root, top, "structure_sensors")
+    sensors = None if sensors_t is None else _sensors(sensors_t, mount)
+    controller = _controller(_table(root, top, "controller"), site, epoch, duration_s,
+                             sources, receiver, mount, name, path.parent, camera)
+    for table, model in ((truth, truth_model), (root.table("controller", {}),
+                                                 controller.model)):
+        _check_correction(table, model, mount, controller.scheduler)
     if sensors is not None:
         if controller.method != "five_point":
             raise InputError(str(path), "structure_sensors", "(table)",
@@ -198,47 +224,48 @@ def load_scenario(path: str | Path) -> Scenario:
                     camera=camera, structure_sensors=sensors)
 
 
-def _site(t: Table) -> Site:
-    site = Site(
-        latitude_deg=t.number("latitude_deg", min=-90.0, max=90.0),
-        longitude_deg=t.number("longitude_deg", min=-180.0, max=360.0),
-        height_m=t.number("height_m", min=-500.0, max=9000.0),
-        name=t.string("name", ""),
-    )
+def _table(t: Table, section: Section, name: str) -> Table | None:
+    """The sub-table ``name`` of ``t`` as ``section`` declares it: required, optional with
+    every key at its default (``{}``), or absent (None)."""
+    key = section[name]
+    if key.default is None and name not in t:
+        t.raw(name, None)  # known here, for the unknown-key hint
+        return None
+    return t.table(name) if key.required else t.table(name, {})
+
+
+def _settings(t: Table, section: Section, settings: type):
+    """A settings dataclass made of every key of ``section`` (nothing checked between
+    them)."""
+    value = settings(**section.read_all(t))
     t.finish()
-    return site
+    return value
+
+
+def _site(t: Table) -> Site:
+    return _settings(t, schema.SITE, Site)
 
 
 def _epoch(t: Table) -> str:
-    text = t.string("start_utc")
-    from astropy.time import Time
-
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # ERFA's "dubious year": refused below, by name
-            epoch = Time(text, scale="utc")
-            iso, year = epoch.isot, epoch.ymdhms["year"]
-    except (ValueError, TypeError):
-        raise t.error("start_utc", text, "not an ISO UTC time",
-                      "write e.g. 1990-02-08T17:00:00") from None
-    if not 1900 <= year <= 2200:
-        raise t.error("start_utc", text, "year outside 1900..2200")
-    return iso
+    """``start_utc`` as astropy's ISO UTC time (checked as :mod:`antsim.schema.utc` says)."""
+    return utc_time(t, "start_utc", schema.CAMPAIGN.read(t, "start_utc"))
 
 
-def _axis(t: Table, default: AxisConfig) -> AxisConfig:
-    axis = AxisConfig(
-        speed_deg_s=t.number("speed_deg_s", default.speed_deg_s, gt=0.0, max=30.0),
-        accel_deg_s2=t.number("accel_deg_s2", default.accel_deg_s2, gt=0.0, max=30.0),
-        min_deg=t.number("min_deg", default.min_deg),
-        max_deg=t.number("max_deg", default.max_deg),
-    )
+def _duration_s(t: Table, epoch: str) -> float:
+    """``duration_h`` in seconds: the campaign ends where UTC is known."""
+    hours = schema.CAMPAIGN.read(t, "duration_h")
+    problem = end_problem(epoch, hours * 3600.0)
+    if problem:
+        raise t.error("duration_h", hours, problem)
+    return hours * 3600.0
+
+
+def _axis(t: Table, section: Section) -> AxisConfig:
+    axis = AxisConfig(**section.read_all(t))
     if axis.max_deg <= axis.min_deg:
         raise t.error("max_deg", axis.max_deg, f"must exceed min_deg = {axis.min_deg:g}")
     # the sky is computed to EPHEMERIS_MARGIN_S past the campaign: a slew begun before the
     # end must arrive within it (real antennas cross their whole range in minutes)
-    from controller.program.campaign import EPHEMERIS_MARGIN_S
-
     span = axis.max_deg - axis.min_deg
     slew_s = move_time_s(span, axis.speed_deg_s, axis.accel_deg_s2)
     if slew_s > EPHEMERIS_MARGIN_S:
@@ -251,33 +278,20 @@ def _axis(t: Table, default: AxisConfig) -> AxisConfig:
     return axis
 
 
-def _wrap_margin(t: Table, default: float) -> float:
-    """The cable-wrap look-ahead (s): within the hour the simulated sky reaches past the
-    campaign (``EPHEMERIS_MARGIN_S``), as a slew's arrival is (:func:`_axis`)."""
-    from controller.program.campaign import EPHEMERIS_MARGIN_S
-
-    value = t.number("wrap_margin_s", default, min=0.0)
-    if value > EPHEMERIS_MARGIN_S:
-        raise t.error("wrap_margin_s", value,
-                      f"must be <= {EPHEMERIS_MARGIN_S:g} s: the mount plans its cable wrap "
-                      "at most that far ahead of a slew's arrival")
-    return value
-
-
 def _mount(t: Table) -> MountConfig:
-    d = MountConfig()
-    kind = t.string("kind", d.kind, choices=("altaz", "equatorial"))
+    keys = schema.MOUNT
+    kind = keys.read(t, "kind")
     if kind == "equatorial":  # [mount.ha] and [mount.dec] name the axes
-        az = _axis(t.table("ha"), d.az)
-        el = _axis(t.table("dec"), d.el)
+        az = _axis(t.table("ha"), schema.MOUNT_HA)
+        el = _axis(t.table("dec"), schema.MOUNT_DEC)
         if not (-180.0 <= az.min_deg < 0.0 < az.max_deg <= 180.0):
             raise t.error("ha", [az.min_deg, az.max_deg],
                           "the hour-angle limits must lie within -180..180 deg around 0")
         if not (-90.0 <= el.min_deg < el.max_deg <= 90.0):
             raise t.error("dec", [el.min_deg, el.max_deg], "must lie within -90..90 deg")
     else:
-        az = _axis(t.table("az", {}), d.az)
-        el = _axis(t.table("el", {}), d.el)
+        az = _axis(t.table("az", {}), schema.MOUNT_AZ)
+        el = _axis(t.table("el", {}), schema.MOUNT_EL)
         if az.max_deg - az.min_deg < 360.0:
             raise t.error("az.max_deg", az.max_deg,
                           "the azimuth range must span at least 360 deg")
@@ -286,57 +300,53 @@ def _mount(t: Table) -> MountConfig:
         if el.max_deg > 90.0:
             raise t.error("el.max_deg", el.max_deg, "must be <= 90 deg")
     mount = MountConfig(kind=kind, az=az, el=el,
-                        settle_s=t.number("settle_s", d.settle_s, min=0.0, max=600.0),
-                        wrap_margin_s=_wrap_margin(t, d.wrap_margin_s),
-                        # a full turn of the feed box (720 deg) within the same hour
-                        feed_speed_deg_s=t.number("feed_speed_deg_s", d.feed_speed_deg_s,
-                                                  min=0.2, max=90.0))
+                        **keys.read_all(t, ("settle_s", "wrap_margin_s", "feed_speed_deg_s")))
     t.finish()
     return mount
 
 
 def _beam(t: Table) -> BeamConfig:
-    d = BeamConfig()
-    el = tuple(t.numbers("efficiency_el_deg", list(d.efficiency_el_deg), min_length=1))
-    eff = tuple(t.numbers("efficiency", list(d.efficiency), min_length=1))
+    keys = schema.BEAM
+    el = tuple(keys.read(t, "efficiency_el_deg"))
+    eff = tuple(keys.read(t, "efficiency"))
     if len(el) != len(eff):
         raise t.error("efficiency", list(eff), f"needs {len(el)} values, one per efficiency_el_deg")
     if any(b <= a for a, b in pairwise(el)):
         raise t.error("efficiency_el_deg", list(el), "must increase")
-    if any(not 0.0 < e <= 1.5 for e in eff):
-        raise t.error("efficiency", list(eff), "values must be in (0, 1.5]")
     harmonics = None
-    if "gain_harmonics" in t:  # Crane 1981: relative gain = Y00 + Y10 + Y11e + Y11o terms
-        h = t.table("gain_harmonics")
-        harmonics = tuple(h.number(n, 0.0, min=-2.0, max=2.0) for n in HARMONIC_NAMES)
-        h.finish()
-    beam = BeamConfig(
-        # 0.01' (0.6"): narrower than any radio telescope's beam
-        hpbw_arcmin=t.number("hpbw_arcmin", d.hpbw_arcmin, min=0.01, max=600.0),
-        efficiency_el_deg=el, efficiency=eff,
-        gain_k_per_jy=t.number("gain_k_per_jy", d.gain_k_per_jy, gt=0.0, max=100.0),
-        gain_harmonics=harmonics,
-    )
+    harmonics_t = _table(t, keys, "gain_harmonics")
+    if harmonics_t is not None:  # Crane 1981: relative gain = Y00 + Y10 + Y11e + Y11o terms
+        harmonics = tuple(schema.BEAM_GAIN_HARMONICS.read_all(harmonics_t).values())
+        harmonics_t.finish()
+    beam = BeamConfig(hpbw_arcmin=keys.read(t, "hpbw_arcmin"), efficiency_el_deg=el,
+                      efficiency=eff, gain_k_per_jy=keys.read(t, "gain_k_per_jy"),
+                      gain_harmonics=harmonics)
     t.finish()
     return beam
 
 
 def _receiver(t: Table) -> ReceiverConfig:
+    keys = schema.RECEIVER
     d = ReceiverConfig()
     channels = []
     for ct in t.tables("channels", [{"name": c.name, "tsys_k": c.tsys_k} for c in d.channels]):
-        channels.append(ChannelConfig(
-            ct.string("name"), ct.number("tsys_k", gt=0.0, max=1e5),
-            ct.number("gain_fluctuation", None, min=0.0, max=0.1, allow_none=True),
-            ct.number("gain_k_per_jy", None, gt=0.0, max=100.0, allow_none=True)))
+        channel = ChannelConfig(**schema.CHANNEL.read_all(ct))
+        # recordings name a scan's channels and their average (AVG) in one column
+        if channel.name.upper() == AVERAGE_CHANNEL:
+            raise ct.error("name", channel.name, "is the recordings' name of the channels' "
+                           "average", "name the channel otherwise (XR, XL, ...)")
+        if duplicate([c.name for c in channels] + [channel.name]) is not None:
+            raise ct.error("name", channel.name, "names two channels (upper and lower case "
+                           "alike): every scan would be recorded twice under it")
+        channels.append(channel)
         ct.finish()
     if not channels:
         raise t.error("channels", [], "the receiver needs at least one channel")
-    frequency_ghz = t.number("frequency_ghz", d.frequency_ghz, gt=0.0, max=1000.0)
+    frequency_ghz = keys.read(t, "frequency_ghz")
     # a band wider than twice its centre frequency would reach below 0 Hz
     widest = 2000.0 * frequency_ghz
-    if t.boolean("radiometer_noise", True):
-        bandwidth = t.number("bandwidth_mhz", d.bandwidth_mhz, gt=0.0)
+    if keys.read(t, "radiometer_noise"):
+        bandwidth = keys.read(t, "bandwidth_mhz")
         if bandwidth > widest:
             raise t.error("bandwidth_mhz", bandwidth,
                           f"must be <= {widest:g} (twice frequency_ghz: a wider band would "
@@ -347,46 +357,14 @@ def _receiver(t: Table) -> ReceiverConfig:
     else:
         bandwidth = NO_RADIOMETER_BANDWIDTH_MHZ
     rec = ReceiverConfig(
-        channels=tuple(channels),
-        frequency_ghz=frequency_ghz,
-        bandwidth_mhz=bandwidth,
-        # at least 0.01 s: a sample per 10 ms keeps an hour-long integration's arrays small
-        sample_interval_s=t.number("sample_interval_s", d.sample_interval_s, min=0.01,
-                                   max=60.0),
-        gain_fluctuation=t.number("gain_fluctuation", d.gain_fluctuation, min=0.0, max=0.1),
-        gain_timescale_s=t.number("gain_timescale_s", d.gain_timescale_s, gt=0.0,
-                                  max=MAX_TIMESCALE_S),
-    )
+        channels=tuple(channels), frequency_ghz=frequency_ghz, bandwidth_mhz=bandwidth,
+        **keys.read_all(t, ("sample_interval_s", "gain_fluctuation", "gain_timescale_s")))
     t.finish()
     return rec
 
 
-def _atmosphere(t: Table) -> AtmosphereConfig:
-    d = AtmosphereConfig()
-    atm = AtmosphereConfig(
-        zenith_opacity=t.number("zenith_opacity", d.zenith_opacity, min=0.0, max=5.0),
-        temperature_k=t.number("temperature_k", d.temperature_k, gt=0.0, max=400.0),
-    )
-    t.finish()
-    return atm
-
-
 def _weather(t: Table) -> WeatherConfig:
-    d = WeatherConfig()
-    w = WeatherConfig(
-        air_min_c=t.number("air_min_c", d.air_min_c, min=-90.0, max=60.0),
-        air_max_c=t.number("air_max_c", d.air_max_c, min=-90.0, max=60.0),
-        min_local_h=t.number("min_local_h", d.min_local_h, min=0.0, lt=24.0),
-        max_local_h=t.number("max_local_h", d.max_local_h, min=0.0, lt=24.0),
-        wander_rms_c=t.number("wander_rms_c", d.wander_rms_c, min=0.0, max=20.0),
-        wander_timescale_s=t.number("wander_timescale_s", d.wander_timescale_s, gt=0.0,
-                                    max=MAX_TIMESCALE_S),
-        pressure_hpa=t.number("pressure_hpa", d.pressure_hpa, min=100.0, max=1100.0),
-        relative_humidity=t.number("relative_humidity", d.relative_humidity, min=0.0, max=1.0),
-        wind_speed_m_s=t.number("wind_speed_m_s", d.wind_speed_m_s, min=0.0, max=60.0),
-        wind_day_m_s=t.number("wind_day_m_s", d.wind_day_m_s, min=0.0, max=60.0,
-                              allow_none=True),
-    )
+    w = WeatherConfig(**schema.WEATHER.read_all(t))
     if w.air_max_c < w.air_min_c:
         raise t.error("air_max_c", w.air_max_c, f"is below air_min_c = {w.air_min_c:g}")
     if w.min_local_h == w.max_local_h:
@@ -395,11 +373,12 @@ def _weather(t: Table) -> WeatherConfig:
     return w
 
 
-def _angle(t: Table, key: str, unit: str, lo: float, hi: float) -> float:
+def _angle(t: Table, key: str, unit: str) -> float:
     """An angle in degrees from ``key_deg`` (number) or ``key`` (sexagesimal string)."""
+    keys = schema.SOURCE
     if f"{key}_deg" in t:
-        return t.number(f"{key}_deg", min=lo, max=hi)
-    text = t.string(key)
+        return keys.read(t, f"{key}_deg")
+    text = keys.read(t, key)
     from astropy.coordinates import Angle
 
     try:
@@ -407,35 +386,35 @@ def _angle(t: Table, key: str, unit: str, lo: float, hi: float) -> float:
     except Exception:  # astropy raises several types for unparseable angles
         example = "03h16m29.6s" if unit == "hourangle" else "+41d19m52s"
         raise t.error(key, text, "not an angle", f"write e.g. {example}") from None
+    lo, hi = keys[key].min, keys[key].max
     if not lo <= value <= hi:
         raise t.error(key, text, f"must be within {lo:g}..{hi:g} deg")
     return float(value)
 
 
 def _source(t: Table) -> SourceConfig:
+    keys = schema.SOURCE
     src = SourceConfig(
-        name=t.string("name"),
-        ra_deg=_angle(t, "ra", "hourangle", 0.0, 360.0),
-        dec_deg=_angle(t, "dec", "deg", -90.0, 90.0),
-        frame=t.string("frame", "fk4", choices=("fk4", "fk5", "icrs")),
-        flux_jy=t.number("flux_jy", gt=0.0, max=1e7),
-        size_arcmin=t.number("size_arcmin", 0.0, min=0.0, max=600.0),
-        note=t.string("note", ""),
+        name=keys.read(t, "name"),
+        ra_deg=_angle(t, "ra", "hourangle"),
+        dec_deg=_angle(t, "dec", "deg"),
+        **keys.read_all(t, ("frame", "flux_jy", "size_arcmin", "note")),
     )
-    if not src.name.strip():
-        raise t.error("name", src.name, "must not be empty")
     t.finish()
     return src
 
 
-def _model(t: Table, default: str, base: Path, mount: MountConfig | None = None,
+def _model(t: Table, keys: Section, base: Path, mount: MountConfig | None = None,
            site: Site | None = None) -> PointingModel:
     """A pointing model from ``model`` (named, or a .mod/.json file) and ``terms``; on an
     equatorial mount from TPOINT's equatorial terms (:mod:`controller.pointing.equatorial`)."""
-    spec = t.string("model", default)
-    unit = t.string("units", "arcsec", choices=tuple(UNIT_ARCSEC))
-    scale = UNIT_ARCSEC[unit]
+    spec = keys.read(t, "model")
+    if not spec.strip():  # as a path, it would name the scenario's own directory
+        raise t.error("model", spec, "is empty",
+                      f"give a named model ({', '.join(sorted(NAMED_MODELS))}) or a file")
+    scale = UNIT_ARCSEC[keys.read(t, "units")]
     values_table = t.table("terms", {})
+    bounds = keys["terms"]
     values: dict[str, float] = {}
     equatorial = mount is not None and mount.kind == "equatorial"
     if equatorial:
@@ -444,15 +423,20 @@ def _model(t: Table, default: str, base: Path, mount: MountConfig | None = None,
             equatorial_model,
             equatorial_term,
         )
+    given: dict[str, str] = {}
     for key in values_table:
         try:
             term = (equatorial_term(key, site.latitude_deg) if equatorial else get_term(key))
-            # a coefficient within half a turn (the bound of model files, modelio)
-            values[term.name] = values_table.number(key, min=-MAX_VALUE_ARCSEC / scale,
-                                                    max=MAX_VALUE_ARCSEC / scale) * scale
         except TermError as err:
             raise values_table.error(key, values_table.raw(key), "not a pointing term",
                                      str(err)) from None
+        if term.name in given:
+            raise values_table.error(key, values_table.raw(key), f"gives the term "
+                                     f"{term.name} again (first as {given[term.name]})",
+                                     "give each term once")
+        given[term.name] = key
+        values[term.name] = values_table.number(key, min=bounds.min / scale,
+                                                max=bounds.max / scale) * scale
     values_table.finish()
     if equatorial:
         if spec not in EQUATORIAL_MODELS:
@@ -478,6 +462,70 @@ def _model(t: Table, default: str, base: Path, mount: MountConfig | None = None,
     return model.with_values(values) if values else model
 
 
+@dataclass(frozen=True)
+class Overcorrection:
+    """A pointing model that moves the pointing by more than :data:`MAX_CORRECTION_DEG`:
+    the term that moves it most where it moves it most, and what is wrong."""
+
+    term: str
+    value_arcsec: float
+    problem: str
+
+
+def overcorrection(model: PointingModel, mount: MountConfig,
+                   scheduler: SchedulerConfig) -> Overcorrection | None:
+    """Whether ``model`` is no telescope's pointing model: a correction on the sky larger
+    than :data:`MAX_CORRECTION_DEG` somewhere the scheduler observes (on an equatorial
+    mount, within the axes' limits); None when there is none."""
+    if not len(model):
+        return None
+    import numpy as np
+
+    if mount.kind == "equatorial":
+        axis1 = np.linspace(mount.az.min_deg, mount.az.max_deg, 37)
+        axis2 = np.linspace(max(mount.el.min_deg, -89.0), min(mount.el.max_deg, 89.0), 19)
+        names = ("hour angle", "declination")
+    else:  # every 10 deg of azimuth, 16 elevations: the bound is coarse, so is the grid
+        axis1 = np.arange(0.0, 360.0, 10.0)
+        axis2 = np.linspace(scheduler.elevation_min_deg, scheduler.elevation_max_deg, 16)
+        names = ("azimuth", "elevation")
+    a1, a2 = (np.radians(g).ravel() for g in np.meshgrid(axis1, axis2))
+    feed = np.zeros_like(a1) if model.needs_feed else None
+    d1, d2 = model.offset_rad(a1, a2, feed)
+    sky_deg = np.degrees(np.hypot(d1 * np.cos(a2), d2))
+    worst = int(np.argmax(sky_deg))
+    if not sky_deg[worst] > MAX_CORRECTION_DEG:
+        return None
+    # the term that moves it most there
+    basis1, basis2 = model.design_matrix(a1[worst:worst + 1], a2[worst:worst + 1],
+                                         None if feed is None else feed[:1])
+    coeff = np.asarray(model.values_arcsec, dtype=float)
+    share = np.hypot(basis1[0] * coeff * math.cos(a2[worst]), basis2[0] * coeff)
+    term = model.names[int(np.argmax(share))]
+    return Overcorrection(term, float(model[term]), (
+        f"moves the pointing by {sky_deg[worst]:.3g} deg at {names[0]} "
+        f"{np.degrees(a1[worst]):.0f}, {names[1]} {np.degrees(a2[worst]):.0f} deg (most of it "
+        f"{term} = {model[term]:g}\"): more than any telescope's pointing error "
+        f"({MAX_CORRECTION_DEG:g} deg)"))
+
+
+def _check_correction(t: Table, model: PointingModel, mount: MountConfig,
+                      scheduler: SchedulerConfig) -> None:
+    """The truth model or the model in use (``model``, of table ``t``) moves the pointing by
+    no more than any telescope's pointing error; the line names the term as the table gives
+    it (or the model, from a file or a name)."""
+    found = overcorrection(model, mount, scheduler)
+    if found is None:
+        return
+    terms = t.data.get("terms", {})
+    key = next((k for k in terms if k.upper() == found.term), None)
+    if key is not None:
+        raise InputError(t.where, f"{t.key('terms')}.{key}", terms[key], found.problem,
+                         "check the value and the table's units")
+    raise InputError(t.where, t.key("model"), t.data.get("model", model.name), found.problem,
+                     "check the model's values and their units")
+
+
 def thermal_terms_of(model: PointingModel) -> list[str]:
     """The model's terms in recorded quantities (structure temperatures, proxies): a truth
     model and the controller's model in use must be functions of the position alone."""
@@ -494,8 +542,8 @@ def _sensors(t: Table, mount: MountConfig) -> SensorConfig:
     if mount.kind != "altaz":
         raise t.error("names", "(table)", "structure sensors are modelled on an alt-az "
                       "antenna's dish, yoke and pedestal", "remove [structure_sensors]")
-    d = SensorConfig()
-    names = tuple(t.strings("names", list(d.names)))
+    keys = schema.STRUCTURE_SENSORS
+    names = tuple(keys.read(t, "names"))
     for i, name in enumerate(names):
         if name not in STRUCTURE_SENSORS:
             raise t.error("names", name, "unknown structure temperature sensor",
@@ -504,15 +552,8 @@ def _sensors(t: Table, mount: MountConfig) -> SensorConfig:
             raise t.error("names", name, "listed more than once")
     if not names:
         raise t.error("names", [], "lists no sensor", "remove [structure_sensors] instead")
-    config = SensorConfig(
-        names=names,
-        noise_k=t.number("noise_k", d.noise_k, min=0.0, max=10.0),
-        resolution_k=t.number("resolution_k", d.resolution_k, min=0.0, max=10.0),
-        lag_s=t.number("lag_s", d.lag_s, min=0.0, max=86400.0),
-        local_k=t.number("local_k", d.local_k, min=0.0, max=20.0),
-        local_timescale_s=t.number("local_timescale_s", d.local_timescale_s, min=60.0,
-                                   max=864000.0),
-    )
+    config = SensorConfig(names=names, **keys.read_all(
+        t, ("noise_k", "resolution_k", "lag_s", "local_k", "local_timescale_s")))
     t.finish()
     return config
 
@@ -557,8 +598,6 @@ def _effect(t: Table, mount: MountConfig | None = None, site: Site | None = None
 def _check_clock(effects, duration_s: float, truth: Table) -> None:
     """A clock error at most the hour the simulated sky reaches beyond the campaign (the
     world computes the sky at the true time of the antenna's clock)."""
-    from controller.program.campaign import EPHEMERIS_MARGIN_S
-
     for i, spec in enumerate(effects):
         if spec.name != "clock_error":
             continue
@@ -580,58 +619,58 @@ def _check_effect_sources(effects, names, truth: Table) -> None:
                              "unknown source", f"sources are {', '.join(names)}")
 
 
+def check_scan(scan: ScanConfig, sample_interval_s: float, error) -> None:
+    """The scan's settings against each other and the receiver's sampling; ``error(key,
+    value, problem, hint="")`` makes the line naming the key where it is written (a
+    scenario's ``[controller.scan]``, a plan's variant)."""
+    # the noise of an integration is the scatter of its samples: two at least
+    fewest = 2.0 * sample_interval_s
+    if scan.integration_s < fewest:
+        raise error("integration_s", scan.integration_s, f"must be >= {fewest:g}",
+                    f"two samples of receiver.sample_interval_s = {sample_interval_s:g} s")
+    samples = scan.integration_s / sample_interval_s
+    if samples > MAX_SAMPLES:
+        raise error("integration_s", scan.integration_s,
+                    f"holds {samples:.3g} samples of receiver.sample_interval_s = "
+                    f"{sample_interval_s:g} s; at most {MAX_SAMPLES:g}",
+                    "integrate less or sample less often")
+    if scan.step_arcmin > 1.2 * scan.hpbw_arcmin:
+        raise error("step_arcmin", scan.step_arcmin,
+                    f"the +-D points would lie outside the main beam (HPBW "
+                    f"{scan.hpbw_arcmin:g}')", f"use at most {1.2 * scan.hpbw_arcmin:.1f}'")
+    smallest = scan.hpbw_arcmin * MIN_STEP_BEAMS
+    if scan.step_arcmin < smallest:
+        raise error("step_arcmin", scan.step_arcmin,
+                    f"must be >= {smallest:.3g}: a step below {MIN_STEP_BEAMS:g} of the beam "
+                    f"(HPBW {scan.hpbw_arcmin:g}') changes the power by less than 3 parts "
+                    "in 10,000, which no scan measures")
+
+
 def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, receiver,
                 mount: MountConfig, scenario_name: str, base: Path,
                 camera: CameraConfig | None = None) -> ControllerConfig:
-    model = _model(t, default="none", base=base, mount=mount, site=site)
+    keys = schema.CONTROLLER
+    model = _model(t, keys, base=base, mount=mount, site=site)
     names = [s.name for s in sources]
-    scan_t = t.table("scan", {})
-    ds = ScanConfig()
-    scan = ScanConfig(
-        step_arcmin=scan_t.number("step_arcmin", ds.step_arcmin, gt=0.0),
-        # the noise of an integration is the scatter of its samples: two at least
-        integration_s=scan_t.number("integration_s", ds.integration_s,
-                                    min=2.0 * receiver.sample_interval_s, max=3600.0),
-        hpbw_arcmin=scan_t.number("hpbw_arcmin", ds.hpbw_arcmin, min=0.01, max=600.0),
-        estimator=scan_t.string("estimator", ds.estimator, choices=ESTIMATORS),
-        snr_min=scan_t.number("snr_min", ds.snr_min, min=0.0),
-        overhead_s=scan_t.number("overhead_s", ds.overhead_s, min=0.0, max=3600.0),
-        use_source_size=scan_t.boolean("use_source_size", ds.use_source_size),
-    )
-    samples = scan.integration_s / receiver.sample_interval_s
-    if samples > MAX_SAMPLES:
-        raise scan_t.error("integration_s", scan.integration_s,
-                           f"holds {samples:.3g} samples of receiver.sample_interval_s = "
-                           f"{receiver.sample_interval_s:g} s; at most {MAX_SAMPLES:g}",
-                           "integrate less or sample less often")
-    if scan.step_arcmin > 1.2 * scan.hpbw_arcmin:
-        raise scan_t.error("step_arcmin", scan.step_arcmin,
-                           f"the +-D points would lie outside the main beam (HPBW "
-                           f"{scan.hpbw_arcmin:g}')",
-                           f"use at most {1.2 * scan.hpbw_arcmin:.1f}'")
+    scan_t = _table(t, keys, "scan")
+    scan = ScanConfig(**schema.SCAN.read_all(scan_t))
+    check_scan(scan, receiver.sample_interval_s, scan_t.error)
     scan_t.finish()
-    sched_t = t.table("scheduler", {})
-    dsch = SchedulerConfig()
-    chosen = tuple(sched_t.strings("sources", list(dsch.sources)))
+    sched_t = _table(t, keys, "scheduler")
+    sched_keys = schema.SCHEDULER
+    chosen = tuple(sched_keys.read(sched_t, "sources"))
     for s in chosen:
         if s not in names:
             raise sched_t.error("sources", s, "unknown source", f"sources are {', '.join(names)}")
     sched = SchedulerConfig(
-        policy=sched_t.string("policy", dsch.policy, choices=("spread", "round_robin")),
-        elevation_min_deg=sched_t.number("elevation_min_deg", dsch.elevation_min_deg,
-                                         min=0.0, max=89.0),
-        elevation_max_deg=sched_t.number("elevation_max_deg", dsch.elevation_max_deg,
-                                         min=1.0, max=90.0),
-        min_revisit_s=sched_t.number("min_revisit_s", dsch.min_revisit_s, min=0.0),
-        slew_weight=sched_t.number("slew_weight", dsch.slew_weight, min=0.0),
-        window=sched_t.string("window", dsch.window, choices=("all", "day", "night")),
+        **sched_keys.read_all(sched_t, ("policy", "elevation_min_deg", "elevation_max_deg",
+                                        "min_revisit_s", "slew_weight", "window")),
         sources=chosen,
         hour_angle_limit_deg=(
-            sched_t.number("hour_angle_limit_deg",
-                           min(-mount.az.min_deg, mount.az.max_deg) - 2.0, gt=0.0, max=180.0)
+            sched_keys.read(sched_t, "hour_angle_limit_deg",
+                            default=min(-mount.az.min_deg, mount.az.max_deg) - 2.0)
             if mount.kind == "equatorial" else None),
-        declination_max_deg=sched_t.number("declination_max_deg", None, min=-90.0, max=90.0,
-                                           allow_none=True),
+        declination_max_deg=sched_keys.read(sched_t, "declination_max_deg"),
     )
     if sched.elevation_max_deg <= sched.elevation_min_deg:
         raise sched_t.error("elevation_max_deg", sched.elevation_max_deg,
@@ -644,36 +683,26 @@ def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, re
                          f"({mount.el.min_deg:g} deg)",
                          "use a smaller step or raise controller.scheduler.elevation_min_deg")
     sched_t.finish()
-    search_t = t.table("search", {})
-    dse = SearchConfig()
-    search = SearchConfig(
-        enabled=search_t.boolean("enabled", dse.enabled),
-        step_factor=search_t.number("step_factor", dse.step_factor, min=1.0, max=5.0),
-        update_gain=search_t.number("update_gain", dse.update_gain, min=0.0, max=1.0),
-        correction=search_t.string("correction", dse.correction, choices=("sky", "encoders")),
-        max_cross_offset_beams=(search_t.number("max_cross_offset_beams", gt=0.0, max=10.0)
-                                if "max_cross_offset_beams" in search_t else None),
-    )
-    search_t.finish()
-    refraction = t.string("refraction", "weather", choices=("weather", "standard", "none"))
+    search = _settings(_table(t, keys, "search"), schema.SEARCH, SearchConfig)
+    refraction = keys.read(t, "refraction")
     fit_terms, fit_name = _fit_spec(t, mount, site)
     fit_fixed = _fit_fixed(t, fit_terms)
-    method = t.string("method", "five_point", choices=("five_point", "optical"))
+    method = keys.read(t, "method")
     if method == "optical" and camera is None:
         raise t.error("method", method, "optical pointing needs a [camera] table")
     if camera is not None and method != "optical":
         raise t.error("method", method, "a scenario with a [camera] points optically",
                       'set controller.method = "optical"')
-    feed_angles = tuple(t.numbers("feed_angles_deg", []))
-    if any(not -360.0 <= f <= 360.0 for f in feed_angles):
-        raise t.error("feed_angles_deg", list(feed_angles), "angles must lie in -360..360 deg")
-    tipping = _tipping(t.table("tipping")) if "tipping" in t else None
-    sky = _sky(t.table("sky")) if "sky" in t else None
-    optical = _optical(t.table("optical")) if "optical" in t else (
-        OpticalConfig() if method == "optical" else None)
-    gain_curve = _gain_curve(t.table("gain_curve"), names) if "gain_curve" in t else None
+    feed_angles = tuple(keys.read(t, "feed_angles_deg"))
+    tipping_t, sky_t, optical_t, gain_t = (_table(t, keys, name) for name in
+                                           ("tipping", "sky", "optical", "gain_curve"))
+    tipping = None if tipping_t is None else _tipping(tipping_t)
+    sky = None if sky_t is None else _settings(sky_t, schema.SKY, SkyConfig)
+    optical = (_settings(optical_t, schema.OPTICAL, OpticalConfig) if optical_t is not None
+               else OpticalConfig() if method == "optical" else None)
+    gain_curve = None if gain_t is None else _gain_curve(gain_t, names)
     # what "night" means for the campaign's night window and its night fit (E)
-    night = t.number("night_sun_max_deg", NIGHT_SUN_MAX_DEG, min=-18.0, max=0.0)
+    night = keys.read(t, "night_sun_max_deg")
     t.finish()
     catalog = tuple(CatalogSource(s.name, s.ra_deg, s.dec_deg, s.frame, s.flux_jy,
                                   s.size_arcmin) for s in sources)
@@ -693,7 +722,7 @@ def _controller(t: Table, site: Site, epoch: str, duration_s: float, sources, re
 def _fit_spec(t: Table, mount: MountConfig | None = None,
               site: Site | None = None) -> tuple[tuple[str, ...], str]:
     """``fit_model``: a named model or a comma-separated list of terms (default: none)."""
-    spec = t.string("fit_model", "")
+    spec = schema.CONTROLLER.read(t, "fit_model")
     if not spec:
         return (), ""
     lookup = get_term
@@ -720,87 +749,56 @@ def _fit_fixed(t: Table, fit_terms: tuple[str, ...]) -> tuple[tuple[str, float],
     """``fit_fixed``: terms of ``fit_model`` held at a value (in the table's ``units``)."""
     if "fit_fixed" not in t:
         return ()
-    scale = UNIT_ARCSEC[t.string("units", "arcsec", choices=tuple(UNIT_ARCSEC))]
+    keys = schema.CONTROLLER
+    scale = UNIT_ARCSEC[keys.read(t, "units")]
+    bounds = keys["fit_fixed"]
     fixed_t = t.table("fit_fixed")
     out = []
+    given: dict[str, str] = {}
     for key in fixed_t:
         name = key.strip().upper()
         if name not in fit_terms:
             raise fixed_t.error(key, fixed_t.raw(key), "is not a term of controller.fit_model",
                                 f"its terms are {' '.join(fit_terms) or '(none given)'}")
-        out.append((name, fixed_t.number(key) * scale))
+        if name in given:
+            raise fixed_t.error(key, fixed_t.raw(key), f"holds the term {name} again (first "
+                                f"as {given[name]})", "give each term once")
+        given[name] = key
+        out.append((name, fixed_t.number(key, min=bounds.min / scale,
+                                         max=bounds.max / scale) * scale))
     fixed_t.finish()
     return tuple(out)
 
 
-def _camera(t: Table) -> CameraConfig:
-    d = CameraConfig()
-    cam = CameraConfig(
-        wavelength_um=t.number("wavelength_um", d.wavelength_um, min=0.2, max=30.0),
-        noise_arcsec=t.number("noise_arcsec", d.noise_arcsec, min=0.0, max=600.0),
-        field_arcmin=t.number("field_arcmin", d.field_arcmin, gt=0.0, max=600.0),
-    )
-    t.finish()
-    return cam
-
-
 def _stars(t: Table) -> tuple[SourceConfig, ...]:
     """``[stars]``: ``count`` synthetic bright stars above ``dec_min_deg`` (antsim.world.camera)."""
-    count = t.integer("count", min=1, max=5000)
-    dec_min = t.number("dec_min_deg", -30.0, min=-90.0, lt=90.0)
+    keys = schema.STARS
+    count = keys.read(t, "count")
+    dec_min = keys.read(t, "dec_min_deg")
     t.finish()
     return tuple(SourceConfig(name, ra, dec, "icrs", 1.0, 0.0, "synthetic bright star")
                  for name, ra, dec in synthetic_stars(count, dec_min))
 
 
-def _sky(t: Table) -> SkyConfig:
-    d = SkyConfig()
-    sky = SkyConfig(zenith_opacity=t.number("zenith_opacity", d.zenith_opacity, min=0.0, max=5.0),
-                    t_atm_k=t.number("t_atm_k", d.t_atm_k, gt=100.0, max=350.0))
-    t.finish()
-    return sky
-
-
 def _tipping(t: Table) -> TippingConfig:
-    d = TippingConfig()
-    els = tuple(t.numbers("elevations_deg", list(d.elevations_deg), min_length=3))
-    if any(not 5.0 <= e <= 90.0 for e in els):
-        raise t.error("elevations_deg", list(els), "elevations must lie in 5..90 deg")
-    if len(set(els)) < 3:
-        raise t.error("elevations_deg", list(els), "needs at least three different elevations")
-    tip = TippingConfig(
-        elevations_deg=els,
-        azimuth_deg=t.number("azimuth_deg", d.azimuth_deg, min=0.0, lt=360.0),
-        integration_s=t.number("integration_s", d.integration_s, gt=0.0, max=600.0),
-        interval_s=t.number("interval_h", d.interval_s / 3600.0, gt=0.0, max=1000.0) * 3600.0,
-        t_atm_k=t.number("t_atm_k", d.t_atm_k, gt=100.0, max=350.0),
-    )
+    tip = TippingConfig(**schema.TIPPING.read_all(t))
+    if len(set(tip.elevations_deg)) < 3:
+        raise t.error("elevations_deg", list(tip.elevations_deg),
+                      "needs at least three different elevations")
     t.finish()
     return tip
 
 
-def _optical(t: Table) -> OpticalConfig:
-    d = OpticalConfig()
-    opt = OpticalConfig(exposure_s=t.number("exposure_s", d.exposure_s, gt=0.0, max=600.0),
-                        overhead_s=t.number("overhead_s", d.overhead_s, min=0.0, max=3600.0))
-    t.finish()
-    return opt
-
-
 def _gain_curve(t: Table, names: list[str]) -> GainCurveConfig:
-    d = GainCurveConfig()
-    sources = tuple(t.strings("sources", list(d.sources)))
+    keys = schema.GAIN_CURVE
+    sources = tuple(keys.read(t, "sources"))
     for s in sources:
         if s not in names:
             raise t.error("sources", s, "unknown source", f"sources are {', '.join(names)}")
-    knots = tuple(t.numbers("knots_deg", list(d.knots_deg), min_length=2))
+    knots = tuple(keys.read(t, "knots_deg"))
     if any(b <= a for a, b in pairwise(knots)):
         raise t.error("knots_deg", list(knots), "must increase")
-    gc = GainCurveConfig(
-        kind=t.string("kind", d.kind, choices=("elevation", "harmonics")),
-        sources=sources, knots_deg=knots,
-        zenith_opacity=t.number("zenith_opacity", None, min=0.0, max=5.0, allow_none=True),
-        t_atm_k=t.number("t_atm_k", d.t_atm_k, gt=100.0, max=350.0),
-    )
+    gc = GainCurveConfig(sources=sources, knots_deg=knots,
+                         **keys.read_all(t, ("kind", "zenith_opacity", "t_atm_k")))
     t.finish()
     return gc

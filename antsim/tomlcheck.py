@@ -29,6 +29,9 @@ def load_toml(path: str | Path) -> Table:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise InputError(where, "TOML syntax", str(err).split("\n")[0], "not valid TOML") from None
+    except RecursionError:  # the reader recurses once per level of nested arrays and tables
+        raise InputError(where, "TOML syntax", "arrays or tables nested too deeply",
+                         "not valid TOML for antsim: nest a few levels at most") from None
     table = Table(data, where, "")
     table.text = text
     return table

@@ -3,8 +3,11 @@
 It drives an antenna only through :mod:`controller.protocol` and never imports ``antsim``.
 Each part imports only the parts listed before it (``tests/test_layout.py`` checks it):
 
-* :mod:`.errors`, :mod:`.units`, :mod:`.protocol`: bad input as one line, angle units and
-  Quantity at the boundary, the narrow interface an antenna implements;
+* :mod:`.errors`, :mod:`.units`, :mod:`.protocol`: bad input as one line (and text files
+  read bounded, written whole), angle units and Quantity at the boundary, the narrow
+  interface an antenna implements;
+* :mod:`.filekind`: what kind of file a user gave (recordings, CSV, TPOINT data, a model),
+  the one place that decides it; it imports only the errors;
 * :mod:`.wire`: the protocol over KATCP, an antenna reached over the network (``antsim
   serve`` or a real antenna's control unit); it imports only the base modules;
 * :mod:`.astro`: time, site, sources, the ephemeris, refraction, the Sun, mount frames, and
@@ -15,7 +18,8 @@ Each part imports only the parts listed before it (``tests/test_layout.py`` chec
 * :mod:`.scans`: the scan engine: source trajectories, five-point cross scans and their
   reduction, tipping scans, gain curves;
 * :mod:`.program`: the control program: its configuration, the scheduler, the campaign
-  loop (radio and optical), recordings.
+  loop (radio and optical), recordings, and :mod:`.program.inputs`, the front door every
+  command reads a user's file of pointing measurements through.
 """
 
 # astropy's IERS auto-download off before any astropy use

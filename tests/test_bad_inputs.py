@@ -70,12 +70,100 @@ def _snapshot(path: Path) -> dict[str, bytes]:
             if p.is_file() and p.name != ".antsim.lock"}
 
 
+def _lock_as(kind: str, precious_name: str = "precious.txt"):
+    """A setup: ``out`` holds ``precious.txt`` (or an earlier demo's page) and a lock file
+    that is a link to it (or a FIFO, a directory): the command must refuse it and leave the
+    file as it was (the snapshot of ``out`` holds it)."""
+
+    def setup(out: Path, base_run: Path) -> None:
+        out.mkdir()
+        precious = out / precious_name
+        precious.write_text("precious\n", encoding="utf-8")
+        lock = out / ".antsim.lock"
+        {"symlink": lambda: lock.symlink_to(precious),
+         "hardlink": lambda: os.link(precious, lock),
+         "fifo": lambda: os.mkfifo(lock),
+         "directory": lock.mkdir}[kind]()
+
+    return setup
+
+
+def _run_with(edit):
+    def setup(out: Path, base_run: Path) -> None:
+        shutil.copytree(base_run, out)
+        edit(out)
+
+    return setup
+
+
+def _foreign_row(out: Path) -> None:
+    """A complete row appended after the run's last one: its last row under the next scan
+    number, as another program might write it."""
+    path = out / "recordings.ecsv"
+    last = path.read_text(encoding="utf-8").splitlines()[-1]
+    scan, rest = last.split(" ", 1)
+    with path.open("a", encoding="utf-8") as fh:
+        fh.write(f"{int(scan) + 1} {rest}\n")
+
+
+def _recordings_as_link(out: Path) -> None:
+    elsewhere = out.parent / "elsewhere.ecsv"
+    (out / "recordings.ecsv").rename(elsewhere)
+    (out / "recordings.ecsv").symlink_to(elsewhere)
+
+
+def _dangling_report(out: Path, base_run: Path) -> None:
+    out.mkdir()
+    (out / "report.html").symlink_to(out.parent / "nowhere.html")
+
+
+def _links_to_precious(*names: str):
+    """A setup: ``out`` holds ``precious.txt`` and links to it named as outputs (a dangling
+    one where a name ends in "-dangling")."""
+
+    def setup(out: Path, base_run: Path) -> None:
+        out.mkdir()
+        precious = out / "precious.txt"
+        precious.write_text("precious\n", encoding="utf-8")
+        for name in names:
+            if name.endswith("-dangling"):
+                (out / name.removesuffix("-dangling")).symlink_to(out.parent / "nowhere")
+            else:
+                (out / name).symlink_to(precious)
+
+    return setup
+
+
+def _earlier_session(out: Path, base_run: Path) -> None:
+    out.mkdir()
+    (out / "requests.jsonl").write_text('{"request": "clock"}\n', encoding="utf-8")
+
+
+#: setups of the output directory beyond "run", "lock" and "no_permission"
+LINKED_SETUPS = {
+    **{f"lock_{kind}": _lock_as(kind) for kind in ("symlink", "hardlink", "fifo", "directory")},
+    "demo_lock_symlink": _lock_as("symlink", "demo.html"),
+    "run_foreign_row": _run_with(_foreign_row),
+    "run_recordings_link": _run_with(_recordings_as_link),
+    "dangling_report": _dangling_report,
+    "earlier_session": _earlier_session,
+    "diagnose_json_link": _links_to_precious("diagnose.json"),
+    "diagnose_figure_links": _links_to_precious("diagnose_residuals.png", "report.html"),
+    "requests_dangling_link": _links_to_precious("requests.jsonl-dangling"),
+    "recordings_fifo": lambda out, base_run: (out.mkdir(), os.mkfifo(out / "recordings.ecsv")),
+}
+
+
 def prepare(case: dict, tmp: Path, base_run: Path | None, monkeypatch,
             stack: ExitStack) -> tuple[list[str], Path]:
     """The command line of ``case`` and its output directory, set up as the case says."""
     out = tmp / "out"
     setup = case.get("setup")
-    if setup == "run":
+    for name, value in case.get("env", {}).items():
+        monkeypatch.setenv(name, value)
+    if setup in LINKED_SETUPS:
+        LINKED_SETUPS[setup](out, base_run)
+    elif setup == "run":
         shutil.copytree(base_run, out)
     elif setup == "lock":
         from antsim.outdir import DirectoryLock

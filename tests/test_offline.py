@@ -36,9 +36,9 @@ def test_cached_table_is_astropys_and_survives_damage(tmp_path):
     own = _astropy_own()
     assert own.startswith("IERS_Auto")
     assert _run(tmp_path) == own  # first use: astropy's loading, then written to the cache
-    (cache,) = tmp_path.glob("iers-auto-*.pickle")
+    (cache,) = tmp_path.glob("iers-auto-*.npz")
     assert cache.stat().st_size > 100_000
     assert _run(tmp_path) == own  # read back from the cache: the same numbers
-    cache.write_bytes(b"not a pickle")
+    cache.write_bytes(b"not a cache file")
     assert _run(tmp_path) == own  # damaged: rebuilt
     assert cache.stat().st_size > 100_000

@@ -495,6 +495,7 @@ def test_same_results_with_1_and_2_workers_and_dask(plan_out):
 def test_plan_page_numbers_are_the_json_numbers(plan_out):
     """report.html: the variants' and terms' numbers are plan.json's at plan.txt's precision
     (one source), plan.txt is on the page whole, every figure embedded byte for byte."""
+    from antsim.figures.html import format_number
     from antsim.plan.report import TERMS_HEADER, VARIANTS_HEADER
 
     _, out = plan_out
@@ -502,7 +503,7 @@ def test_plan_page_numbers_are_the_json_numbers(plan_out):
     page = read_page(out / "report.html")
 
     def f(x, spec):
-        return "\N{EN DASH}" if x is None else format(x, spec)
+        return "\N{EN DASH}" if x is None else format_number(x, spec)
 
     assert page.tables["The plan's variants"] == [list(VARIANTS_HEADER)] + [
         [p["name"], f(p["duration_h"], ".1f"), str(p["n_scans"]), str(p["n_monte_carlo"]),

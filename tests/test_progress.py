@@ -103,7 +103,7 @@ def test_plan_writes_lines_through_every_stage(fast_lines, repo_root, tmp_path, 
     assert main(["plan", str(plan), "--workers", "0", "--out", str(tmp_path / "out")]) == 0
     stages = {x.split(": ")[1].split(":")[0].split(",")[0]
               for x in _lines(capsys.readouterr().err, "plan")}
-    assert {"1 variants", "answering 1 questions", "figures"} <= stages, stages
+    assert {"1 variant", "answering 1 question", "figures"} <= stages, stages
     # its outputs say their units and sign
     doc = json.loads((tmp_path / "out" / "plan.json").read_text())
     assert doc["units"] == "arcsec"

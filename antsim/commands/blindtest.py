@@ -10,9 +10,8 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 
-from antsim.commands import check_processes
+from antsim.commands import MAX_CASES, MAX_SIMULATIONS, check_count, check_processes
 from controller.errors import InputError
 
 #: the scenario the effects are hidden in unless --scenario says otherwise
@@ -21,14 +20,15 @@ DEFAULT_SCENARIO = "ghigo1990"
 
 def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--n", type=int, default=100, metavar="N",
-                        help="number of cases (default 100)")
+                        help="number of cases (default 100, at most 10000)")
     parser.add_argument("--seed", type=int, default=1, metavar="S",
                         help="seed of the draws (default 1)")
     parser.add_argument("--scenario", metavar="SCENARIO", default=DEFAULT_SCENARIO,
                         help="scenario the effects are hidden in: a name or a TOML file "
                              f"(default: {DEFAULT_SCENARIO}, the 1990 run)")
     parser.add_argument("--sims", type=int, default=8, metavar="K",
-                        help="baseline simulations that predict the noise (default 8)")
+                        help="baseline simulations that predict the noise (default 8, at "
+                             "most 1000)")
     parser.add_argument("--jobs", type=int, default=1, metavar="J",
                         help="worker processes (default 1)")
     parser.add_argument("--cache", metavar="DIR", default=None,
@@ -45,15 +45,33 @@ def configure(parser: argparse.ArgumentParser) -> None:
                      "cases, false alarms on null cases, amplitude recovered within 3 sigma.")
 
 
+def _check_out_file(name: str) -> None:
+    """``--out FILE`` must name a file in a directory that exists."""
+    import os
+
+    if not name.strip():
+        raise InputError("command line", "--out", name, "is empty", "name a file")
+    if os.path.isdir(name):
+        raise InputError("command line", "--out", name, "is a directory", "name a file in it")
+    parent = os.path.dirname(os.path.abspath(name))
+    if not os.path.isdir(parent):
+        raise InputError("command line", "--out", name,
+                         f"cannot be written: {parent} is not a directory")
+
+
 def main(args: argparse.Namespace) -> int:
     from antsim.bundled import find
     from antsim.diagnose.blind import run_blindtest
     from antsim.progress import Progress
     from antsim.scenario import load_scenario
 
-    if args.n < 1:
-        raise InputError("command line", "--n", args.n, "must be at least 1")
+    check_count(args.n, "--n", 1, MAX_CASES, "each is a campaign simulated and diagnosed")
+    check_count(args.sims, "--sims", 2, MAX_SIMULATIONS, "each is a campaign simulated")
+    if args.seed < 0:
+        raise InputError("command line", "--seed", args.seed, "must be >= 0")
     check_processes(args.jobs, "--jobs")
+    if args.out is not None:
+        _check_out_file(args.out)  # before the cases, not after them
     scenario = load_scenario(find(args.scenario, field="--scenario"))
     with Progress("blindtest", args.progress) as shown:
         shown.stage("cases", total=args.n, unit="case")
@@ -69,9 +87,10 @@ def main(args: argparse.Namespace) -> int:
                                cache_dir=args.cache, use_cache=not args.no_cache,
                                jobs=args.jobs, progress=progress)
     doc = report.to_json()
-    if args.out:
-        Path(args.out).write_text(json.dumps(doc, indent=2, allow_nan=False) + "\n",
-                                  encoding="utf-8")
+    if args.out is not None:
+        from antsim.outdir import write_file
+
+        write_file(args.out, json.dumps(doc, indent=2, allow_nan=False) + "\n")
     if args.json:
         json.dump(doc, sys.stdout, indent=2, allow_nan=False)
         sys.stdout.write("\n")

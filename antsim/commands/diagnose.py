@@ -16,7 +16,7 @@ import os
 import sys
 from pathlib import Path
 
-from antsim.commands import check_processes
+from antsim.commands import MAX_SIMULATIONS, check_count, check_processes
 from controller.errors import InputError
 
 
@@ -48,9 +48,10 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "scenario_updated.toml and before/after plots into DIR")
     parser.add_argument("--resimulate", type=int, default=None, metavar="K",
                         help="with --out and --scenario: re-simulate the updated scenario K "
-                             "times and compare (default 4; 0 skips it)")
+                             "times and compare (default 4; 0 skips it; at most 1000)")
     parser.add_argument("--sims", type=int, default=8, metavar="K",
-                        help="simulations of the scenario that predict the noise (default 8)")
+                        help="simulations of the scenario that predict the noise (default 8, "
+                             "at most 1000)")
     parser.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1), metavar="J",
                         help="processes for the simulations (default: 2 on a machine with two "
                              "or more cores, else 1)")
@@ -100,17 +101,40 @@ def main(args: argparse.Namespace) -> int:
                          "is required (a recordings.ecsv or a TPOINT data file)",
                          "antsim diagnose --list alone prints the candidate library")
     check_processes(args.jobs, "--jobs")
-    if args.sims < 2:
-        raise InputError("command line", "--sims", args.sims, "must be at least 2")
-    if args.resimulate is not None and args.resimulate < 0:
-        raise InputError("command line", "--resimulate", args.resimulate, "must be >= 0")
+    check_count(args.sims, "--sims", 2, MAX_SIMULATIONS, "each is a campaign simulated")
+    if args.resimulate is not None:
+        check_count(args.resimulate, "--resimulate", 0, MAX_SIMULATIONS,
+                    "each is a campaign simulated")
+    if args.model is not None and not args.model.strip():  # not "no model": said so
+        raise InputError("command line", "--model", args.model, "is empty",
+                         "give a named model, a model file or T1,T2,...")
     if args.out is None:
         return _diagnose(args, None)
     from antsim.outdir import held_output_dir
 
     # held from the start: refused early
     with held_output_dir(args.out, "--out", "antsim diagnose") as out:
+        _refuse_links(out)
         return _diagnose(args, out)
+
+
+#: the files diagnose writes into --out (and its figures, diagnose*.png)
+OUTPUTS = ("diagnose.json", "diagnose.txt", "report.html", "model_updated.dat",
+           "model_updated.json", "scenario_updated.toml")
+
+
+def _refuse_links(out: Path) -> None:
+    """A symbolic link where diagnose writes one of its files would be written through
+    (its target overwritten): refused before anything runs."""
+    from fnmatch import fnmatch
+
+    links = sorted(p.name for p in out.iterdir() if p.is_symlink() and (
+        p.name in OUTPUTS or fnmatch(p.name, "diagnose*.png")))
+    if links:
+        raise InputError("command line", "--out", str(out),
+                         f"holds {' '.join(links)} as a symbolic link: diagnose writes its "
+                         "outputs there and does not write through a link",
+                         "remove the link, or write into another directory")
 
 
 def _diagnose(args: argparse.Namespace, out: Path | None) -> int:

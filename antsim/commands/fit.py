@@ -1,7 +1,8 @@
 """`antsim fit RECORDINGS`: fit a pointing model to recordings or a TPOINT data file.
 
-The file's format is detected by content: ECSV recordings from ``antsim run`` (read through
-:func:`controller.program.recordings.read_pointing_data`) or TPOINT pointing data. Bad input
+The file is read through the front door of every command's pointing data,
+:func:`controller.program.inputs.read_pointing_file`, which decides its kind by content
+(ECSV recordings from ``antsim run``, TPOINT pointing data, CSV measurements). Bad input
 (missing file, malformed line, unknown term) ends as one line on stderr and exit status 2.
 Recordings of an equatorial mount (metadata ``mount: equatorial``) are fitted in hour angle and
 declination with TPOINT's equatorial terms (default model ``crane11``).
@@ -11,12 +12,14 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 
 from controller.errors import InputError
 from controller.pointing.jackknife import BLOCK_S
 from controller.pointing.model import NAMED_MODELS
+from controller.pointing.modelio import MAX_VALUE_ARCSEC
 
 #: default model per input format: TPOINT users (and a CSV of one's own measurements) start
 #: from TPOINT's eight physical terms; antsim's own recordings come from the 45-ft, whose
@@ -69,7 +72,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
 
 
 def _terms_from_option(text: str) -> tuple[str, ...]:
-    from controller.pointing.terms import is_term_name
+    from controller.pointing.terms import is_term_name, term_refusal
 
     names = [t.strip().upper() for t in text.split(",")]
     if not text.strip() or any(not n for n in names):
@@ -77,10 +80,8 @@ def _terms_from_option(text: str) -> tuple[str, ...]:
                          "must be comma-separated term names with none empty")
     for name in names:
         if not is_term_name(name):
-            raise InputError("command line", "--terms", name, "unknown pointing term",
-                             "use TPOINT names (IA IE CA NPAE AN AW TF TX ...), harmonics "
-                             "such as HESA2, W1..W10, P1..P22 or thermal terms (TEDFB ...: "
-                             "docs/assumptions.md)")
+            problem, hint = term_refusal(name)
+            raise InputError("command line", "--terms", name, problem, hint)
     duplicates = sorted({n for n in names if names.count(n) > 1})
     if duplicates:
         raise InputError("command line", "--terms", ",".join(duplicates), "listed twice")
@@ -103,9 +104,16 @@ def _fixed_from_option(text: str | None, terms) -> dict[str, float]:
         if not sep or number is None:
             raise InputError("command line", "--fixed", item.strip(),
                              "must be TERM=ARCSEC, e.g. W5=66")
+        if not math.isfinite(number) or abs(number) > MAX_VALUE_ARCSEC:
+            raise InputError("command line", "--fixed", item.strip(),
+                             f"the value must be finite and within +-{MAX_VALUE_ARCSEC:g} "
+                             "arcsec (180 deg)")
         if name not in names:
             raise InputError("command line", "--fixed", name, "is not a term of the fit",
                              f"its terms are {' '.join(names)}")
+        if name in fixed:
+            raise InputError("command line", "--fixed", item.strip(),
+                             f"gives {name} a second value (first {fixed[name]:g})")
         fixed[name] = number
     return fixed
 
@@ -114,82 +122,36 @@ def _terms_from_model(spec: str) -> tuple[tuple[str, ...], str]:
     if spec in NAMED_MODELS:
         return NAMED_MODELS[spec], spec
     path = Path(spec)
-    if not path.is_file():
+    if spec.strip() and not path.is_file():  # an empty one: load_model says so
         raise InputError("command line", "--model", spec,
                          "is neither a named model nor an existing model file",
                          f"named models: {', '.join(sorted(NAMED_MODELS))}")
     from controller.pointing.modelio import load_model
 
-    return load_model(path).names, path.stem
+    return load_model(spec).names, path.stem
 
 
-def _read_data(path: Path, fmt: str, include_masked: bool, mount: str | None, say,
-               terms=(), table=None):
-    """The pointing data of a TPOINT file, recordings (``table``, read already) or a CSV
-    (``table`` too); a TPOINT reader's notes (how a file without a mount option was read)
-    go to ``say``. Thermal terms among ``terms`` read the recordings' structure
-    temperatures, or proxies (their site and times)."""
+def _pointing_data(file, include_masked: bool, terms=()):
+    """The pointing data of a file :func:`~controller.program.inputs.read_pointing_file`
+    read. Thermal terms among ``terms`` read the recordings' structure temperatures, or
+    proxies (their site and times)."""
     from controller.pointing.model import PointingModel
     from controller.pointing.proxies import PROXY_NAMES
 
     needed = PointingModel(list(terms)).regressors if terms else frozenset()
-    if fmt == "tpoint":
-        from controller.pointing.tpoint import read_tpoint
-
-        if needed:
-            raise InputError(str(path), "--terms", ",".join(terms),
-                             "thermal terms need recordings with structure temperatures or "
-                             "with times and a site (antsim's ECSV), not a TPOINT file")
-        data = read_tpoint(path, mount=mount)
-        for note in data.notes:
-            say(f"note: {note}")
-        return data.pointing_data(include_masked=include_masked)
-    if mount is not None:
-        raise InputError(str(path), "--mount", mount, "applies to TPOINT data files only",
-                         "recordings name their mount in their metadata")
-    if fmt == "csv":
-        from controller.program.csvdata import pointing_data
-
-        data = pointing_data(table)
-    else:
-        from controller.program.recordings import table_pointing_data
-
-        data = table_pointing_data(table, str(path), proxies=bool(needed & set(PROXY_NAMES)))
-    data = _with_times(data, fmt, table)
+    if needed and file.kind == "tpoint":
+        raise InputError(file.path, "--terms", ",".join(terms),
+                         "thermal terms need recordings with structure temperatures or "
+                         "with times and a site (antsim's ECSV), not a TPOINT file")
+    data = file.pointing_data(include_masked=include_masked,
+                              proxies=bool(needed & set(PROXY_NAMES)))
     missing = sorted(needed - set(data.aux or {}))
     if missing:
-        raise InputError(str(path), "--terms", ",".join(terms),
+        raise InputError(file.path, "--terms", ",".join(terms),
                          f"thermal terms read {', '.join(missing)}, which these recordings do "
                          "not have", "fit them to recordings of an antenna with structure "
                          "temperature sensors (columns temp_*)")
     return data
-
-
-def _with_times(data, fmt: str, table):
-    """``data`` with each observation's time (s) where the file has times, so that the honest
-    sigma clusters the observations in time blocks, as a run's fit.json does: recordings
-    (the rows read: the averaged polarization, good scans) and a CSV with a time column."""
-    import dataclasses
-
-    import numpy as np
-
-    if fmt == "csv":
-        times = table.columns.get("t_s")
-    elif "t_s" in table.colnames:
-        rows = np.asarray(table["polarization"]) == "AVG"
-        if "good" in table.colnames:
-            rows &= np.asarray(table["good"], dtype=bool)
-        else:
-            rows &= np.isfinite(np.asarray(table["xel_arcmin"], dtype=float))
-            rows &= np.isfinite(np.asarray(table["el_arcmin"], dtype=float))
-        times = np.asarray(table["t_s"], dtype=float)[rows]
-    else:
-        times = None
-    if times is None:
-        return data
-    if len(times) != len(data):  # the reader's selection of rows changed: keep them in step
-        raise RuntimeError(f"{len(times)} times for {len(data)} observations")
-    return dataclasses.replace(data, t_s=np.asarray(times, dtype=float))
 
 
 def _note(line: str) -> None:
@@ -198,48 +160,38 @@ def _note(line: str) -> None:
 
 def main(args: argparse.Namespace) -> int:
     from controller.pointing.fitting import fit_model
-    from controller.program.csvdata import input_format_and_text
+    from controller.program.inputs import read_pointing_file
 
     path = Path(args.recordings)
-    fmt, text = input_format_and_text(path)
-    if args.csv and fmt != "csv":
-        raise InputError("command line", "--csv", args.csv[0], f"{path} is not a CSV file")
-    if fmt == "mod":
-        raise InputError(str(path), "RECORDINGS", str(path),
-                         "is a TPOINT model (.mod) file, not pointing data",
-                         "pass a model file with --model")
-    table = None
-    if fmt == "csv":
-        from controller.program.csvdata import read_csv
-
-        table = read_csv(path, args.csv)
-    if fmt == "ecsv":
-        from controller.program.recordings import read_recordings, recording_notes
-
-        table = read_recordings(path, text=text)
-        for line in recording_notes(table, "fit"):
-            _note(f"{path}: {line}")
-    equatorial = (float(table.meta["site"]["latitude_deg"])
-                  if table is not None and table.meta.get("mount") == "equatorial" else None)
+    file = read_pointing_file(path, purpose="fit", csv_options=args.csv, mount=args.mount)
+    for line in file.notes:
+        _note(line)
+    equatorial = (float(file.meta["site"]["latitude_deg"])
+                  if file.mount == "equatorial" else None)
     if equatorial is not None:
         terms, model_name = _equatorial_terms(args, equatorial)
     elif args.terms is not None:
         terms, model_name = _terms_from_option(args.terms), "custom"
     else:
-        terms, model_name = _terms_from_model(args.model or DEFAULT_MODEL[fmt])
+        terms, model_name = _terms_from_model(
+            DEFAULT_MODEL[file.kind] if args.model is None else args.model)
     fixed = _fixed_from_option(args.fixed, terms)
-    target = Path(args.write_model) if args.write_model else None
-    if target is not None and (target.is_dir() or not target.parent.is_dir()):
+    target = Path(args.write_model) if args.write_model is not None else None
+    if target is not None and (not args.write_model.strip() or target.is_dir()
+                               or not target.parent.is_dir()):
+        raise InputError("command line", "--write-model", str(args.write_model),
+                         "is empty" if not args.write_model.strip() else "is a directory"
+                         if target.is_dir() else "its folder does not exist")
+    if target is not None and target.exists() and target.resolve() == path.resolve():
         raise InputError("command line", "--write-model", str(target),
-                         "is a directory" if target.is_dir() else "its folder does not exist")
+                         "is the pointing data being fitted: writing the model there would "
+                         "replace them", "give the model a file of its own")
     from antsim.blas import one_blas_thread
     from antsim.progress import Progress
 
     with Progress("fit", args.progress) as progress, one_blas_thread():
         progress.stage("reading")
-        data = _read_data(path, fmt, args.include_masked, args.mount,
-                          say=lambda text: progress.write(text, file=sys.stderr), terms=terms,
-                          table=table)
+        data = _pointing_data(file, args.include_masked, terms=terms)
         progress.stage(f"fitting {len(data)} observations")
         try:
             result = fit_model(data, terms, robust=not args.no_robust, name=model_name,
@@ -260,8 +212,7 @@ def main(args: argparse.Namespace) -> int:
         json.dump(result.to_json(), sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
-        kind = {"tpoint": "TPOINT data", "csv": "CSV measurements"}.get(fmt, "recordings")
-        print(f"{path} ({kind})")
+        print(f"{path} ({file.kind_name})")
         print(result.summary())
         if target is not None:
             print(f"wrote {target} (TPOINT's term names and signs)")
@@ -279,7 +230,7 @@ def _equatorial_terms(args: argparse.Namespace, latitude_deg: float):
             return equatorial_terms(names, latitude_deg), "custom"
         except TermError as err:
             raise InputError("command line", "--terms", args.terms, str(err)) from None
-    spec = args.model or "crane11"
+    spec = "crane11" if args.model is None else args.model
     if spec not in EQUATORIAL_MODELS:
         raise InputError("command line", "--model", spec,
                          "these recordings are from an equatorial mount",

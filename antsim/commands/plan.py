@@ -15,6 +15,7 @@ import sys
 from contextlib import nullcontext
 
 from antsim.commands import check_processes
+from antsim.outdir import write_file
 from controller.errors import InputError
 
 
@@ -33,14 +34,23 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="run the members on a Dask distributed scheduler, e.g. "
                              "tcp://127.0.0.1:8786 (pip install 'antsim[dask]')")
     parser.add_argument("--members", type=int, default=None,
-                        help="Monte Carlo members per variant (default: the plan's)")
+                        help="Monte Carlo members per variant (default: the plan's): fewer "
+                             "make the Monte Carlo columns noisier (their +- grows as "
+                             "1/sqrt(N)) and the members' share of the time smaller; the "
+                             "predictions and the answers do not depend on it, nor does "
+                             "their time")
     parser.add_argument("--no-answers", action="store_true",
-                        help="skip the plan's questions (duration, sources, coverage)")
+                        help="skip the plan's questions (how long, which sources, "
+                             "coverage): the tables of the variants alone, the quick look "
+                             "(the answers' long deterministic runs are most of the time)")
     parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                         help="a progress bar, or none (default: a bar on a terminal, a line "
                              "every few seconds to stderr off one)")
     parser.epilog = ("Results are the same for any --workers or --scheduler: member seeds "
-                     "derive from the plan seed and the member index.")
+                     "derive from the plan seed and the member index, and the answers' "
+                     "simulations are cut into the same tasks whatever the workers. The "
+                     "answers run on the same workers as the members, beside them with two "
+                     "workers or more; the answering stage counts its steps.")
 
 
 def main(args: argparse.Namespace) -> int:
@@ -78,9 +88,9 @@ def main(args: argparse.Namespace) -> int:
             from antsim.figures.plan import plan_figures
 
             progress.stage("figures")
-            (out / "plan.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+            write_file(out / "plan.json", json.dumps(doc, indent=2) + "\n")
             plan_text = result.text(timing=False)
-            (out / "plan.txt").write_text(plan_text, encoding="utf-8")
+            write_file(out / "plan.txt", plan_text)
             figures = plan_figures(doc, out)
             from antsim.plan.report import write_plan_report
 

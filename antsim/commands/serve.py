@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 
 from controller.errors import InputError
 
@@ -21,7 +22,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="random seed (default: the scenario's)")
     parser.add_argument("--out", default=None,
                         help="directory for truth.json and requests.jsonl (the log of "
-                             "every request)")
+                             "every request); one that holds either is refused")
 
 
 def main(args: argparse.Namespace) -> int:
@@ -30,7 +31,7 @@ def main(args: argparse.Namespace) -> int:
     from antsim.bundled import find
     from antsim.outdir import held_output_dir
     from antsim.scenario import load_scenario
-    from antsim.serve.app import serve
+    from antsim.serve.app import PRODUCTS, serve
     from antsim.serve.clock import parse_clock
 
     try:
@@ -46,5 +47,11 @@ def main(args: argparse.Namespace) -> int:
         return asyncio.run(serve(scenario, clock, host=args.host, port=args.port,
                                  seed=args.seed))
     with held_output_dir(args.out, "--out", "antsim serve") as out:
+        # as antsim run: an earlier session's log and truth, or a run's truth, are kept
+        present = [name for name in PRODUCTS if os.path.lexists(out / name)]
+        if present:
+            raise InputError("command line", "--out", str(out),
+                             f"already holds {' '.join(present)} of an earlier session or run",
+                             "serve into an empty or new directory")
         return asyncio.run(serve(scenario, clock, host=args.host, port=args.port,
                                  seed=args.seed, out=out))

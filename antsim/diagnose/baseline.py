@@ -14,8 +14,10 @@ deterministic) give the predicted systematic residual (their mean: thermal, redu
 structure effects the model does not describe but the scenario does) and the noise (their
 scatter, shrunk towards a running mean in time so that a few simulations suffice). The
 simulations are cached on disk, keyed by the scenario's text, the seeds, the terms and the
-software version. Without a scenario the noise is white with one level per axis, estimated
-from the data.
+software version; each file holds that key and a digest of its content, recomputed when it is
+read, so that a file antsim did not write (damaged, edited, renamed) is simulated again with a
+note rather than used (docs/caches.md). Without a scenario the noise is white with one level
+per axis, estimated from the data.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import hashlib
 import json
 import math
 import os
+import warnings
 import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -32,7 +35,7 @@ from zipfile import BadZipFile
 
 import numpy as np
 
-from controller.errors import InputError
+from controller.errors import InputError, Note
 from controller.pointing.model import NAMED_MODELS, PointingModel
 
 from .._version import __version__
@@ -42,7 +45,7 @@ from .problem import Prediction
 __all__ = ["BaselineSpec", "SimulatedBaseline", "resolve_baseline", "white_prediction"]
 
 #: bump when the cached simulation products change meaning
-CACHE_VERSION = 2
+CACHE_VERSION = 3
 #: two scans match when they observe the same source within this time (s)
 MATCH_TOLERANCE_S = 150.0
 #: prior weight (in scans' worth of degrees of freedom) of the running-mean noise level
@@ -318,6 +321,55 @@ def default_cache_dir() -> Path:
     return Path(base) / "antsim"
 
 
+#: a cached simulation larger than this (unpacked) is not one antsim wrote: a campaign of
+#: 200,000 scans takes 66 MB
+MAX_CACHE_BYTES = 256 * 2**20
+#: the arrays of a cached simulation, in the order of its digest
+_CACHED = ("t_s", "source", "res", "pol", "width", "az_rad", "el_rad")
+
+
+def _cached_arrays(prod: SimProducts) -> dict[str, np.ndarray]:
+    return {"t_s": prod.t_s, "source": prod.source.astype("U64"), "res": prod.res,
+            "pol": prod.pol, "width": prod.width, "az_rad": prod.az_rad,
+            "el_rad": prod.el_rad}
+
+
+def _digest(key: str, arrays: dict[str, np.ndarray]) -> str:
+    """SHA-256 of the inputs' key and every array (dtype, shape and bytes)."""
+    h = hashlib.sha256(key.encode())
+    for name in _CACHED:
+        a = np.ascontiguousarray(arrays[name])
+        h.update(f"{name} {a.dtype.str} {a.shape}".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def _why(err: Exception) -> str:
+    return str(err) if isinstance(err, ValueError) and str(err) else type(err).__name__
+
+
+def _read_cached(path: Path, key: str) -> SimProducts:
+    """A cached simulation's products, checked against what wrote them: the inputs' key and
+    the digest of the content, recomputed (ValueError saying what does not match). Data
+    only: ``allow_pickle=False``."""
+    with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
+        if not hasattr(z, "files"):
+            raise ValueError("not an archive of arrays")
+        size = sum(info.file_size for info in z.zip.infolist())
+        if size > MAX_CACHE_BYTES:  # read before its arrays are: no memory taken
+            raise ValueError(f"it unpacks to {size} bytes")
+        missing = [k for k in ("key", "digest", *_CACHED) if k not in z.files]
+        if missing:
+            raise ValueError(f"no {missing[0]}")
+        if str(z["key"][()]) != key:
+            raise ValueError("made from other inputs")
+        arrays = {k: z[k] for k in _CACHED}
+        if _digest(key, arrays) != str(z["digest"][()]):
+            raise ValueError("its digest does not match its content")
+    return SimProducts(arrays["t_s"], arrays["source"].astype(str), arrays["res"],
+                       arrays["pol"], arrays["width"], arrays["az_rad"], arrays["el_rad"])
+
+
 class SimulatedBaseline:
     """Simulations of the baseline scenario and the per-scan predictions they give."""
 
@@ -365,17 +417,25 @@ class SimulatedBaseline:
     def _load_or_run(self) -> list[SimProducts]:
         out: dict[int, SimProducts] = {}
         todo = []
+        refused: list[tuple[Path, str]] = []
         for seed in self.seeds:
-            path = self.cache_dir / f"baseline-{self._key(seed)}.npz"
+            key = self._key(seed)
+            path = self.cache_dir / f"baseline-{key}.npz"
             if self.use_cache and path.exists():
                 try:
-                    with np.load(path, allow_pickle=False) as z:
-                        out[seed] = SimProducts(z["t_s"], z["source"].astype(str), z["res"],
-                                                z["pol"], z["width"], z["az_rad"], z["el_rad"])
+                    out[seed] = _read_cached(path, key)
                     continue
-                except (OSError, KeyError, ValueError, EOFError, BadZipFile, zlib.error):
-                    pass  # a truncated or damaged cache is a miss: simulated again
+                except (OSError, KeyError, ValueError, EOFError, BadZipFile, zlib.error) as err:
+                    # not what antsim wrote for these inputs (a torn write, a disk error, an
+                    # edit): never used, simulated again and rewritten
+                    refused.append((path, _why(err)))
             todo.append(seed)
+        if refused:
+            path, why = refused[0]
+            more = f" and {len(refused) - 1} more" if len(refused) > 1 else ""
+            warnings.warn(Note(f"the cached baseline simulation {path}{more} was not written "
+                               f"by antsim for this scenario and seed ({why}); simulated "
+                               "again"), stacklevel=3)
         if not todo or self.scenario.controller.method != "five_point":
             from ..simulate.streaming import release_prestarted
 
@@ -407,15 +467,21 @@ class SimulatedBaseline:
         return [out[s] for s in self.seeds]
 
     def _save(self, seed: int, prod: SimProducts) -> None:
+        key = self._key(seed)
+        path = self.cache_dir / f"baseline-{key}.npz"
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        arrays = _cached_arrays(prod)
         try:
             self.cache_dir.mkdir(parents=True, exist_ok=True)
-            path = self.cache_dir / f"baseline-{self._key(seed)}.npz"
-            tmp = path.with_suffix(".tmp.npz")
-            np.savez(tmp, t_s=prod.t_s, source=prod.source.astype("U64"), res=prod.res,
-                     pol=prod.pol, width=prod.width, az_rad=prod.az_rad, el_rad=prod.el_rad)
+            # a new file of our own (no link followed), renamed over any old one
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL
+                         | getattr(os, "O_NOFOLLOW", 0), 0o644)
+            with os.fdopen(fd, "wb") as fh:
+                np.savez(fh, key=np.array(key), digest=np.array(_digest(key, arrays)),
+                         **arrays)
             os.replace(tmp, path)
         except OSError:
-            pass  # a read-only cache only costs time
+            tmp.unlink(missing_ok=True)  # a read-only or full cache only costs time
 
     # ------------------------------------------------------------------ prediction
     def matches(self, obs: Observations) -> np.ndarray:

@@ -288,7 +288,11 @@ def from_tpoint(path: str | Path, include_masked: bool = False,
     read)."""
     from controller.pointing.tpoint import read_tpoint
 
-    data = read_tpoint(path, mount=mount)
+    return _from_tpoint_data(read_tpoint(path, mount=mount), include_masked)
+
+
+def _from_tpoint_data(data, include_masked: bool = False) -> Observations:
+    """Observations of a TPOINT file read (:class:`controller.pointing.tpoint.TPointData`)."""
     pd = data.pointing_data(include_masked=include_masked)
     keep = np.ones(len(data), dtype=bool) if include_masked else ~data.masked
     rot = data.rotator_deg[keep] if data.has_rotator else None
@@ -301,69 +305,35 @@ def from_tpoint(path: str | Path, include_masked: bool = False,
         t_s=np.arange(n, dtype=float), az_rad=np.asarray(pd.az_rad), el_rad=np.asarray(pd.el_rad),
         xel_arcsec=np.asarray(pd.xel_arcsec), el_arcsec=np.asarray(pd.el_arcsec),
         good=np.ones(n, dtype=bool), rotator_deg=None if rot is None else np.asarray(rot, float),
-        meta=meta, kind="tpoint", path=str(path))
+        meta=meta, kind="tpoint", path=data.source)
 
 
 def load_observations(path: str | Path, mount: str | None = None,
                       csv_options: Sequence[str] = ()) -> Observations:
     """Recordings (``.ecsv``), TPOINT data or a CSV of one's own measurements
-    (:mod:`controller.program.csvdata`, with its ``--csv`` settings), detected by content;
-    InputError if none. ``mount="altaz"`` reads a TPOINT file's decimal records as Az/El
-    (``--mount altaz``)."""
-    from controller.program.csvdata import input_format_and_text
+    (:mod:`controller.program.csvdata`, with its ``--csv`` settings), read through the front
+    door of every command's pointing data
+    (:func:`controller.program.inputs.read_pointing_file`, which decides the kind and
+    checks the file); ``mount="altaz"`` reads a TPOINT file's decimal records as Az/El
+    (``--mount altaz``). ``meta["notes"]``: the reader's notes, a line each."""
+    from controller.program.inputs import read_pointing_file
 
-    path = Path(path)
-    if not path.exists():
-        raise InputError(str(path), "RECORDINGS", str(path), "no such file")
-    fmt, text = input_format_and_text(path)
-    if csv_options and fmt != "csv":
-        raise InputError("command line", "--csv", csv_options[0], f"{path} is not a CSV file")
-    if fmt == "csv":
-        if mount is not None:
-            raise InputError(str(path), "--mount", mount, "applies to TPOINT data files only")
-        return from_csv(path, csv_options)
-    if fmt == "mod":
-        raise InputError(str(path), "RECORDINGS", str(path),
-                         "is a TPOINT model (.mod) file, not pointing data",
-                         "pass a model with --model")
-    if fmt == "tpoint":
-        return from_tpoint(path, mount=mount)
-    if mount is not None:
-        raise InputError(str(path), "--mount", mount, "applies to TPOINT data files only",
-                         "recordings name their mount in their metadata")
-    from controller.astro.frames import MOUNT_KINDS
-    from controller.program.recordings import read_recordings, recording_notes
-
-    table = read_recordings(path, purpose="diagnose", text=text)
-    text = None  # 44 MB at 200,000 scans, let go before the observations are made
-    mount = table.meta.get("mount", "altaz")
-    if mount not in MOUNT_KINDS:
-        raise InputError(str(path), "mount", mount, "is not a mount diagnose knows",
-                         f"mounts: {', '.join(MOUNT_KINDS)}")
-    if mount == "equatorial":
-        for need in ("ha_deg", "dec_deg"):
-            if need not in table.colnames:
-                raise InputError(str(path), "columns", need,
-                                 "an equatorial mount's recordings need it")
-        site = table.meta.get("site")
-        if not isinstance(site, Mapping) or "latitude_deg" not in site:
-            raise InputError(str(path), "site.latitude_deg", "<missing>",
-                             "an equatorial mount's terms need the site's latitude")
-    cols = {name: np.asarray(table[name]) for name in table.colnames if name != "time"}
-    obs = from_columns(cols, dict(table.meta), path=str(path))
-    return replace(obs, meta={**obs.meta, "notes": recording_notes(table, "diagnose")})
+    file = read_pointing_file(path, purpose="diagnose", csv_options=csv_options, mount=mount)
+    if file.kind == "tpoint":
+        obs = _from_tpoint_data(file.tpoint)
+    elif file.kind == "csv":
+        obs = _from_csv_data(file.csv)
+    else:
+        table = file.recordings
+        cols = {name: np.asarray(table[name]) for name in table.colnames if name != "time"}
+        obs = from_columns(cols, dict(table.meta), path=file.path)
+    return replace(obs, meta={**obs.meta, "notes": list(file.notes)})
 
 
-def from_csv(path: Path, options: Sequence[str] = ()) -> Observations:
-    """Observations from a CSV of one's own measurements (one row per measurement: the
-    polarization average, every row good). Without a time column the times are all zero:
-    no time-dependent test runs (``has_time`` is false)."""
-    from controller.program.csvdata import read_csv
-
-    data = read_csv(path, options)
+def _from_csv_data(data) -> Observations:
+    """Observations of CSV measurements read (:class:`controller.program.csvdata.CsvData`)."""
     cols = dict(data.columns)
     n = len(data)
     cols.setdefault("t_s", np.zeros(n))
     cols["scan"] = np.arange(n)
-    obs = from_columns(cols, data.meta, path=str(path), kind="csv")
-    return replace(obs, meta={**obs.meta, "notes": list(data.notes)})
+    return from_columns(cols, data.meta, path=data.path, kind="csv")

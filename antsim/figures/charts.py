@@ -28,8 +28,8 @@ from .style import (
 
 __all__ = ["QuiverScale", "check_fit_data", "comparison_figure", "error_panels",
            "histogram_bin_arcsec", "histogram_edges", "histogram_figure", "nice_step",
-           "pointing_errors_figure", "quiver", "quiver_scale", "residual_quiver_figure",
-           "sky_axes", "spread_arcsec"]
+           "plain_log_ticks", "pointing_errors_figure", "quiver", "quiver_scale",
+           "residual_quiver_figure", "sky_axes", "spread_arcsec"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -46,6 +46,16 @@ def spread_arcsec(*values) -> float:
         return math.nan
     mad = 1.4826 * float(np.median(np.abs(v)))
     return mad if mad > 0 else rms(v)
+
+
+def plain_log_ticks(axis) -> None:
+    """Ticks of a log-scaled matplotlib ``axis`` at 1, 2 and 5 times the powers of ten,
+    labelled as plain numbers ("20", "0.5"; not matplotlib's "2x10^1"), no minor labels."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    axis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+    axis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{v:g}"))
+    axis.set_minor_formatter(NullFormatter())
 
 
 def nice_step(x: float) -> float:
@@ -341,12 +351,8 @@ def comparison_figure(values: Mapping[str, Mapping[str, float]], path: str | Pat
             ax.bar(x0[ok] - 0.4 + width * (k + 0.5), y[ok], width=width * 0.92,
                    color=SERIES_COLORS[k % len(SERIES_COLORS)], label=label)
         if log:
-            from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
-
             ax.set_yscale("log")
-            ax.yaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
-            ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{v:g}"))
-            ax.yaxis.set_minor_formatter(NullFormatter())
+            plain_log_ticks(ax.yaxis)
         ax.set_xticks(x0)
         ax.set_xticklabels(categories)
         ax.set_xlim(-0.6, len(categories) - 0.4)

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from antsim._version import __version__
+from antsim.outdir import write_file
 
 if TYPE_CHECKING:
     from antsim.figures.style import FigureFile
@@ -33,6 +34,7 @@ __all__ = [
     "Preformatted",
     "Section",
     "Table",
+    "format_number",
     "render_report",
     "software_versions",
     "write_report",
@@ -62,15 +64,18 @@ class Preformatted:
 
 @dataclass(frozen=True)
 class Table:
-    """A table: ``header`` and ``rows`` of cells. Strings are shown as given; numbers with
-    ``number_format``; None and non-finite numbers as a dash. ``highlight`` holds (row,
-    column) indices of cells to emphasise."""
+    """A table: ``header`` and ``rows`` of cells. Strings are shown as given (left-aligned);
+    numbers right-aligned with ``number_format`` (or their column's ``column_formats``),
+    never as a negative zero (:func:`format_number`); None and non-finite numbers as a dash.
+    ``highlight`` holds (row, column) indices of cells to emphasise."""
 
     header: Sequence[str]
     rows: Sequence[Sequence[Any]]
     caption: str = ""
     number_format: str = ".1f"
     highlight: frozenset[tuple[int, int]] = field(default_factory=frozenset)
+    #: a format per column for its numbers (None or missing: ``number_format``)
+    column_formats: Sequence[str | None] = ()
 
 
 @dataclass(frozen=True)
@@ -129,6 +134,16 @@ def _esc(text: Any) -> str:
     return html.escape(str(text), quote=True)
 
 
+def format_number(value: float, spec: str) -> str:
+    """``format(value, spec)`` without a negative zero: a value that rounds to zero is
+    printed as zero is ("-0.04" at ".1f" is "0.0", at "+.1f" "+0.0")."""
+    text = format(value, spec)
+    digits = text.strip()
+    if digits[:1] == "-" and digits.lstrip("+-").strip("0.") == "":
+        text = format(0.0, spec)
+    return text
+
+
 def _cell(value: Any, number_format: str) -> tuple[str, bool]:
     """(escaped text, is numeric) of one table cell."""
     if value is None:
@@ -140,10 +155,7 @@ def _cell(value: Any, number_format: str) -> tuple[str, bool]:
     if isinstance(value, float):
         if not math.isfinite(value):
             return "\N{EN DASH}", True
-        text = format(value, number_format)
-        if text.lstrip("+-").strip("0.") == "" and text[:1] == "-":  # no "-0.00"
-            text = format(0.0, number_format)
-        return _esc(text), True
+        return _esc(format_number(value, number_format)), True
     return _esc(value), False
 
 
@@ -161,7 +173,8 @@ def _render_table(table: Table) -> str:
                              f"header {len(table.header)}")
         cells = []
         for j, value in enumerate(row):
-            text, numeric = _cell(value, table.number_format)
+            spec = (table.column_formats[j] if j < len(table.column_formats) else None)
+            text, numeric = _cell(value, spec or table.number_format)
             classes = (["num"] if numeric else []) + (["warn"] if (i, j) in table.highlight
                                                       else [])
             cls = f' class="{" ".join(classes)}"' if classes else ""
@@ -248,5 +261,4 @@ def write_report(path: str | Path, title: str, sections: Sequence[Section], *,
     path = Path(path)
     text = render_report(title, sections, subtitle=subtitle, versions=versions)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text, encoding="utf-8")
-    return path
+    return write_file(path, text)

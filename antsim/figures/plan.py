@@ -11,9 +11,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from antsim.outdir import replacing
+
+from .charts import plain_log_ticks
 from .style import FigureFile
 
-__all__ = ["plan_figures"]
+__all__ = ["draw_duration", "plan_figures"]
 
 DPI = 100
 
@@ -79,39 +82,49 @@ def _duration_figure(answer: dict[str, Any], path: Path) -> FigureFile:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
+    one = answer["target_arcsec"]  # one target for every term, or None: each its own
+    goal = f"{one:g}\"" if one is not None else "their targets"
+    title = f"How long for {', '.join(answer['terms'])} to reach {goal}"
     with matplotlib.rc_context():
         matplotlib.rcdefaults()
         fig = Figure(figsize=(7.0, 4.2), dpi=DPI)
         FigureCanvasAgg(fig)
-        ax = fig.add_axes((0.11, 0.13, 0.85, 0.74))
-        curve = answer["curve"]
-        x = [c["count"] for c in curve]
-        one = answer["target_arcsec"]  # one target for every term, or None: each its own
-        for term in answer["terms"]:
-            per = 1.0 if one is not None else answer["targets_arcsec"][term]
-            ax.plot(x, [c["sigma_arcsec"][term] / per for c in curve], marker="o", ms=3,
-                    label=term)
-        ax.axhline(one if one is not None else 1.0, color="k", ls="--", lw=1,
-                   label=f"target {one:g}\"" if one is not None else "each term's target")
-        if answer["reached"]:
-            ax.axvline(answer["answer"]["count"], color="tab:red", lw=1,
-                       label=f"answer: {answer['answer']['count']} {answer['unit']}s")
-        if x and max(x) / max(min(x), 1) > 5:
-            ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel(f"{answer['unit']}s of '{answer['based_on']}'")
-        ax.set_ylabel("predicted sigma (arcsec)" if one is not None
-                      else "predicted sigma / the term's target")
-        ax.grid(True, alpha=0.35)
-        ax.legend(fontsize=8)
-        goal = f"{one:g}\"" if one is not None else "their targets"
-        title = f"How long for {', '.join(answer['terms'])} to reach {goal}"
+        draw_duration(fig.add_axes((0.11, 0.13, 0.85, 0.74)), answer)
         fig.suptitle(title, fontsize=11)
         path.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, format="png", dpi=DPI, metadata={"Software": "antsim"})
+        with replacing(path) as fh:  # whole or not at all; an error names the file
+            fig.savefig(fh, format="png", dpi=DPI, metadata={"Software": "antsim"})
     caption = (f"Predicted sigma against the number of {answer['unit']}s of "
                f"'{answer['based_on']}': " + (
                    f"the target is reached after {answer['answer']['count']} "
                    f"{answer['unit']}s." if answer["reached"] else
                    "the target is not reached within the range tried."))
     return FigureFile(path, title, caption)
+
+
+def draw_duration(ax, answer: dict[str, Any]) -> None:
+    """The curve of a duration answer on ``ax``: each term's predicted sigma (or its sigma
+    over its target) against the count, the target, the answer; log axes with plain ticks
+    (:func:`antsim.figures.charts.plain_log_ticks`)."""
+    curve = answer["curve"]
+    x = [c["count"] for c in curve]
+    one = answer["target_arcsec"]
+    for term in answer["terms"]:
+        per = 1.0 if one is not None else answer["targets_arcsec"][term]
+        ax.plot(x, [c["sigma_arcsec"][term] / per for c in curve], marker="o", ms=3,
+                label=term)
+    ax.axhline(one if one is not None else 1.0, color="k", ls="--", lw=1,
+               label=f"target {one:g}\"" if one is not None else "each term's target")
+    if answer["reached"]:
+        ax.axvline(answer["answer"]["count"], color="tab:red", lw=1,
+                   label=f"answer: {answer['answer']['count']} {answer['unit']}s")
+    if x and max(x) / max(min(x), 1) > 5:
+        ax.set_xscale("log")
+        plain_log_ticks(ax.xaxis)
+    ax.set_yscale("log")
+    plain_log_ticks(ax.yaxis)
+    ax.set_xlabel(f"{answer['unit']}s of '{answer['based_on']}'")
+    ax.set_ylabel("predicted sigma (arcsec)" if one is not None
+                  else "predicted sigma / the term's target")
+    ax.grid(True, alpha=0.35)
+    ax.legend(fontsize=8)

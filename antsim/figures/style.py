@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from antsim.outdir import replacing
 from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 
 __all__ = ["FIG_DPI", "SERIES_COLORS", "Canvas", "FigureFile", "binned_mean",
@@ -96,12 +97,14 @@ def _save(fig, path: Path, formats: Sequence[str]) -> tuple[Path, tuple[Path, ..
     if unknown:
         raise ValueError(f"unknown figure format(s) {sorted(unknown)}: use 'png' and/or 'svg'")
     png = path.with_suffix(".png")
-    fig.savefig(png, format="png", dpi=FIG_DPI, metadata=_PNG_METADATA,
-                pil_kwargs={"compress_level": _PNG_COMPRESS_LEVEL})
+    with replacing(png) as fh:  # whole or not at all; an error names the file
+        fig.savefig(fh, format="png", dpi=FIG_DPI, metadata=_PNG_METADATA,
+                    pil_kwargs={"compress_level": _PNG_COMPRESS_LEVEL})
     extra = []
     if "svg" in formats:
         svg = path.with_suffix(".svg")
-        fig.savefig(svg, format="svg", metadata=_SVG_METADATA)
+        with replacing(svg) as fh:
+            fig.savefig(fh, format="svg", metadata=_SVG_METADATA)
         extra.append(svg)
     return png, tuple(extra)
 

@@ -14,6 +14,7 @@ The Monte Carlo members, their shared schedule and the executors are the engines
 :mod:`antsim.simulate`; the figures are :mod:`antsim.figures.plan`.
 
 May import: :mod:`antsim.simulate`, :mod:`antsim.world`, :mod:`antsim.scenario`,
-:mod:`antsim.tomlcheck`, :mod:`antsim.figures` and :mod:`controller`; never another feature
+:mod:`antsim.schema`, :mod:`antsim.tomlcheck`, :mod:`antsim.figures` and :mod:`controller`;
+never another feature
 (runs, diagnosis, the server, the studies) or the command line.
 """

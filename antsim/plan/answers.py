@@ -1,18 +1,26 @@
 """Answers, not only tables: how long, which sources, and which terms a plan cannot separate.
 
-* :func:`answer_duration`: the smallest duration (hours, days or nights) of a variant's plan
-  that brings the predicted sigma of chosen terms to a target. The variant is simulated once
-  (deterministically) for ``max_days``; the scheduler is causal, so the first N hours of that
-  schedule are the N-hour campaign, and the prediction is evaluated on every prefix. The
-  systematic bias of the terms (the same in every campaign) is reported beside: it does not
-  shrink with time.
-* :func:`answer_sources`: the best source list for a variant's duration. Every subset of the
-  catalogue is ranked by a D-optimal proxy (each of the variant's scan slots shared among the
-  subset's sources visible then, within the revisit limit, weighted by the predicted noise of
-  scans of that source); the best few, and the list as planned, are then predicted exactly
-  from their own deterministic schedules. Criterion: the determinant of the predicted
-  covariance of the fitted terms, or the largest sigma of the chosen terms.
+* How long (:func:`duration_answer`): the smallest duration (hours, days or nights) of a
+  variant's plan that brings the predicted sigma of chosen terms to a target. The variant is
+  simulated once (deterministically) for ``max_days``; the scheduler is causal, so the first
+  N hours of that schedule are the N-hour campaign, and the prediction is evaluated on every
+  prefix (:func:`antsim.plan.fisher.predict_prefixes`: the sandwich of each prefix, and one
+  simulation of the robust fit's rejections for all of them). The systematic bias of the
+  terms (the same in every campaign) is reported beside: it does not shrink with time.
+* Coverage (:func:`coverage_answer`): from the same long run when a duration question asks
+  for it too (one simulation answers both).
+* Which sources (:func:`sources_shortlist`, :func:`sources_answer`): every subset of the
+  catalogue is ranked by a D-optimal proxy (each of the variant's scan slots shared among
+  the subset's sources visible then, within the revisit limit, weighted by the predicted
+  noise of scans of that source); the best few, and the list as planned, are then predicted
+  exactly from their own deterministic schedules. Criterion: the determinant of the
+  predicted covariance of the fitted terms, or the largest sigma of the chosen terms.
 * Separation: pairs of terms with |correlation| above the plan's level, per variant.
+
+Each deterministic run the answers need is a chain of tasks (:mod:`antsim.simulate.flow`) on
+the executor of the plan's members: its schedule, its noise model, the rejections' draws in
+parts. :class:`Questions` starts them (those that need no variant beside the members) and
+assembles the answers; every number is the same whatever the workers.
 """
 
 from __future__ import annotations
@@ -21,23 +29,37 @@ import itertools
 import math
 import uuid
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
+from antsim.figures.html import format_number
 from antsim.simulate.ensemble import Executor, Job, task_record
-from antsim.simulate.vectorized import quiet_scenario
+from antsim.simulate.flow import Chain, Flow, Handle, Task
+from antsim.simulate.vectorized import SharedSchedule, quiet_scenario
 from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 from controller.errors import InputError
 from controller.pointing.model import PointingModel
 
-from ..progress import Progress
-from .fisher import predict, task_noise, truth_vector
+from ..progress import span_words
+from .fisher import (
+    REJECTION_DRAWS,
+    NoiseModel,
+    Prediction,
+    RejectionDraws,
+    predict_prefixes,
+    rejection_design,
+    rejection_draws,
+    task_noise,
+    task_thermal,
+    truth_vector,
+    with_thermal,
+)
 from .planfile import CoverageQuestion, DurationQuestion, Plan, SourcesQuestion
 
-__all__ = ["answer_duration", "answer_questions", "answer_sources", "answers_text",
-           "coverage_answer", "reachable_cells"]
+__all__ = ["Questions", "answers_text", "coverage_answer", "duration_answer",
+           "duration_points", "reachable_cells", "sources_answer", "sources_shortlist"]
 
 #: thermal draws for the noise models of the answers' (longer) schedules
 N_THERMAL_ANSWERS = 128
@@ -45,108 +67,158 @@ N_THERMAL_ANSWERS = 128
 PERIOD_GAP_S = 3 * 3600.0
 #: largest catalogue whose subsets are all ranked (else greedy forward selection)
 MAX_EXHAUSTIVE = 12
+#: parts (tasks) the rejections' draws of a duration question are cut into: fixed, so that
+#: the answer is the same for any number of workers
+REJECTION_PARTS = 8
+#: the answers' long runs first: they are the longest chains of the plan
+LONG_RUN_PRIORITY = 2
 
 
-def answer_questions(plan: Plan, variants: list, executor: Executor,
-                     log: Callable[[str], None] | None = None,
-                     progress: Progress | None = None) -> dict[str, list]:
-    """Every question of the plan, answered. The deterministic runs the answers need (the
-    long campaigns of the duration questions, the candidate source lists) are all submitted
-    at once, so they run in parallel; ``progress`` counts their steps (a schedule, then a
-    noise model, per run)."""
-    out: dict[str, list] = {"duration": [], "sources": [], "coverage": [], "separation": []}
-    todo: list[Any] = []
-    # the coverage questions need only the long deterministic runs, submitted first
-    cover = [(q, duration_scenario(q, plan)) for q in plan.coverage]
-    recorded = [executor.submit(task_record, quiet_scenario(sc)) for _, sc in cover]
-    for q in plan.durations:
-        if log:
+@dataclass
+class Predicted:
+    """A deterministic run of an answer: its schedule, noise model, fitted terms, and the
+    predictions of the prefixes asked for (a list per entry of :func:`predicted_run`'s
+    ``ends_of``, a prediction per prefix)."""
+
+    scenario: Any
+    shared: SharedSchedule
+    noise: NoiseModel | None = None
+    terms: tuple[str, ...] = ()
+    predictions: list[list[Prediction]] = field(default_factory=list)
+
+
+def predicted_run(scenario, plan: Plan, executor: Executor, ends_of: list[Callable],
+                  parts: int, priority: int = 0) -> Chain:
+    """The chain of one deterministic run of ``scenario``: its schedule; when ``ends_of``
+    asks for predictions, its noise model (its thermal draws a task of their own beside
+    it) and, per entry, the predictions of the prefixes ``ends_of[i](scenario, shared,
+    noise)`` (the schedule's scan counts; None: all), the rejections' draws of each entry
+    in ``parts`` tasks. Three steps and ``parts`` per entry in all (one without
+    predictions)."""
+    span = span_words(scenario.duration_s)
+    quiet = quiet_scenario(scenario)
+    shared = yield Task(task_record, (quiet,), "answer", f"schedule{{s}} of {span}", priority)
+    run = Predicted(scenario, shared)
+    if not ends_of:
+        return run
+    terms, fit_name = scenario.controller.fit_spec()
+    job = executor.share(Job(f"answer:{uuid.uuid4().hex}", scenario, quiet, shared,
+                             tuple(terms), fit_name, plan.seed))
+    # the noise model and its thermal draws at once, two tasks (the longest of the plan)
+    (noise, _), thermal = yield [
+        Task(task_noise, (job, 0), "answer", f"noise model{{s}} of {span}", priority),
+        Task(task_thermal, (job, N_THERMAL_ANSWERS), "answer",
+             f"sampling{{s}} of the slow errors over {span}", priority)]
+    noise = with_thermal(noise, shared, thermal)
+    ends = [f(scenario, shared, noise) for f in ends_of]
+    designs = [rejection_design(shared, terms, noise, e) for e in ends]
+    cuts = np.array_split(np.arange(REJECTION_DRAWS), parts)
+    done = yield [Task(rejection_draws, (design, tuple(int(j) for j in cut)), "answer",
+                       "part{s} of the rejections' draws", priority)
+                  for design in designs for cut in cuts]
+    truth = truth_vector(scenario, terms)
+    for i, e in enumerate(ends):
+        draws = RejectionDraws.concat(done[i * parts:(i + 1) * parts])
+        run.predictions.append(predict_prefixes(shared, terms, noise, e, truth, draws))
+    run.noise, run.terms = noise, tuple(terms)
+    return run
+
+
+class Questions:
+    """The questions of ``plan`` as chains on a :class:`~antsim.simulate.flow.Flow` (the
+    long runs of the durations and coverage with :meth:`start`, the source lists, which need
+    their variant, with :meth:`start_after`); :meth:`answers` once the flow has run them.
+    ``steps``: the tasks of the chains started, for the progress."""
+
+    def __init__(self, plan: Plan, executor: Executor,
+                 log: Callable[[str], None] | None = None):
+        self.plan = plan
+        self.executor = executor
+        self.log = log or (lambda _message: None)
+        self.steps = 0
+        self._long: dict[tuple[int, float], tuple[Handle, list[DurationQuestion]]] = {}
+        self._sources: list[tuple[SourcesQuestion, dict[str, Any], list[Handle | None]]] = []
+
+    @property
+    def n_questions(self) -> int:
+        p = self.plan
+        return len(p.durations) + len(p.sources) + len(p.coverage)
+
+    def start(self, flow: Flow) -> None:
+        """The long deterministic runs: one per variant and length asked for, whichever
+        questions (how long, coverage) ask it."""
+        p = self.plan
+        runs: dict[tuple[int, float], list[DurationQuestion]] = {}
+        for q in [*p.durations, *p.coverage]:
+            runs.setdefault(_long_key(q, p), [])
+        for q in p.durations:
             goal = (f"{q.target_arcsec:g}\"" if q.target_arcsec is not None
                     else "their targets")
-            log(f"answering {q.key}: {', '.join(q.terms)} to {goal} "
-                f"({q.based_on}, up to {q.max_days:g} days)")
-        todo.append(("duration", q, [duration_scenario(q, plan)]))
-    for q in plan.sources:
-        if log:
-            log(f"answering {q.key}: the best source list for {q.based_on}")
-        vr = variants[plan.variant_index(q.based_on)]
-        short = sources_shortlist(q, vr)
-        todo.append(("sources", q, short))
-    scenarios = [sc for _, _, items in todo for sc in _scenarios(items)]
-    if progress is not None:
-        progress.stage(f"answering {len(todo) + len(cover)} questions: "
-                       f"{len(scenarios) + len(cover)} deterministic runs",
-                       total=2 * len(scenarios) + len(cover), unit="step")
-    prepared = iter(prepare(executor, scenarios, plan, progress))
-    if progress is not None:
-        progress.stage("answering: the predicted sigmas of every duration and source list")
-    for kind, q, items in todo:
-        if kind == "duration":
-            out["duration"].append(duration_answer(q, items[0], *next(prepared)))
-        else:
-            done = [next(prepared) if item["scenario"] is not None else None
-                    for item in items["candidates"]]
-            out["sources"].append(sources_answer(q, items, done))
-    for (q, sc), done in zip(cover, recorded, strict=True):
-        if log:
-            log(f"answering {q.key}: coverage below dec {q.dec_max_deg:g} deg ({q.based_on})")
-        out["coverage"].append(coverage_answer(q, sc, done.result()))
-        if progress is not None:
-            progress.advance()
-    for v in variants:
-        out["separation"].append({"variant": v.spec.name, "level": plan.separation_level,
-                                  "pairs": v.cannot_separate()})
-    return out
+            self.log(f"answering {q.key}: {', '.join(q.terms)} to {goal} "
+                     f"({q.based_on}, up to {q.max_days:g} days)")
+            runs[_long_key(q, p)].append(q)
+        for q in p.coverage:
+            self.log(f"answering {q.key}: coverage below dec {q.dec_max_deg:g} deg "
+                     f"({q.based_on}, up to {q.max_days:g} days)")
+        for key, durations in runs.items():
+            q0 = next(q for q in [*p.durations, *p.coverage] if _long_key(q, p) == key)
+            ends_of = [_ends_of(q) for q in durations]
+            chain = predicted_run(duration_scenario(q0, p), p, self.executor, ends_of,
+                                  REJECTION_PARTS, LONG_RUN_PRIORITY)
+            self._long[key] = (flow.start(chain), durations)
+            self.steps += 1 + (2 + REJECTION_PARTS * len(durations) if durations else 0)
+
+    def start_after(self, flow: Flow, variants: list) -> None:
+        """The candidate source lists of each sources question: each one's deterministic
+        run, noise model and prediction."""
+        for q in self.plan.sources:
+            self.log(f"answering {q.key}: the best source list for {q.based_on}")
+            short = sources_shortlist(q, variants[self.plan.variant_index(q.based_on)])
+            handles: list[Handle | None] = []
+            for item in short["candidates"]:
+                if item["scenario"] is None:
+                    handles.append(None)
+                    continue
+                handles.append(flow.start(predicted_run(item["scenario"], self.plan,
+                                                        self.executor, [_all_scans], 1)))
+                self.steps += 4
+            self._sources.append((q, short, handles))
+
+    def answers(self, variants: list) -> dict[str, list]:
+        """Every question of the plan, answered (the flow has run every chain)."""
+        p = self.plan
+        out: dict[str, list] = {"duration": [], "sources": [], "coverage": [],
+                                "separation": []}
+        for q in p.durations:
+            handle, durations = self._long[_long_key(q, p)]
+            run = handle.result
+            out["duration"].append(duration_answer(
+                q, run.scenario, run.shared, run.noise, run.terms,
+                run.predictions[durations.index(q)]))
+        for q in p.coverage:
+            run = self._long[_long_key(q, p)][0].result
+            out["coverage"].append(coverage_answer(q, run.scenario, run.shared))
+        for q, short, handles in self._sources:
+            out["sources"].append(sources_answer(q, short, [
+                None if h is None else h.result for h in handles]))
+        for v in variants:
+            out["separation"].append({"variant": v.spec.name, "level": p.separation_level,
+                                      "pairs": v.cannot_separate()})
+        return out
 
 
-def _scenarios(items: Any) -> list:
-    if isinstance(items, dict):
-        return [c["scenario"] for c in items["candidates"] if c["scenario"] is not None]
-    return list(items)
+def _long_key(q: DurationQuestion | CoverageQuestion, plan: Plan) -> tuple[int, float]:
+    return plan.variant_index(q.based_on), float(q.max_days)
 
 
-def prepare(executor: Executor, scenarios: list, plan: Plan,
-            progress: Progress | None = None) -> list[tuple]:
-    """(shared schedule, noise model, fitted terms) of each scenario's deterministic run,
-    computed in parallel on the executor; ``progress`` advances by one per step done."""
-    pending: dict[Any, tuple[str, int]] = {}
-    jobs: list[Any] = [None] * len(scenarios)
-    out: list[Any] = [None] * len(scenarios)
-    quiet = [quiet_scenario(sc) for sc in scenarios]
-    for i, q in enumerate(quiet):
-        pending[executor.submit(task_record, q)] = ("record", i)
-    token = uuid.uuid4().hex
-    while pending:
-        if progress is not None:
-            progress.detail(_running(pending.values(), scenarios))
-        done = next(iter(executor.as_completed(list(pending))))
-        kind, i = pending.pop(done)
-        if progress is not None:
-            progress.advance()
-        if kind == "record":
-            terms, fit_name = scenarios[i].controller.fit_spec()
-            job = Job(f"answer:{token}:{i}", scenarios[i], quiet[i], done.result(),
-                      tuple(terms), fit_name, plan.seed)
-            jobs[i] = job
-            pending[executor.submit(task_noise, executor.share(job), N_THERMAL_ANSWERS)] = \
-                ("noise", i)
-        else:
-            out[i] = (jobs[i].shared, done.result()[0], jobs[i].terms)
-    return out
+def _all_scans(scenario, shared: SharedSchedule, noise: NoiseModel) -> list[int | None]:
+    return [None]
 
 
-def _span(duration_s: float) -> str:
-    return (f"{duration_s / 86400.0:.3g}-day" if duration_s >= 2 * 86400.0
-            else f"{duration_s / 3600.0:.3g}-hour")
-
-
-def _running(pending, scenarios: list) -> str:
-    """What :func:`prepare` still waits for, in words (the longest schedules first)."""
-    steps = sorted(pending, key=lambda p: (p[0] != "record", -scenarios[p[1]].duration_s))
-    words = [f"{_span(scenarios[i].duration_s)} schedule" if kind == "record"
-             else "noise model" for kind, i in steps]
-    shown = ", ".join(words[:3]) + (f" and {len(words) - 3} more" if len(words) > 3 else "")
-    return f"running {shown}"
+def _ends_of(q: DurationQuestion) -> Callable:
+    """The prefixes (scan counts) of a duration question's long run, from its schedule."""
+    return lambda long, shared, noise: [end for _, end in
+                                        duration_points(q, long, shared, noise)]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -177,45 +249,51 @@ def duration_scenario(q: DurationQuestion | CoverageQuestion, plan: Plan):
     return replace(base, duration_s=span, controller=replace(base.controller, duration_s=span))
 
 
-def answer_duration(q: DurationQuestion, plan: Plan, executor: Executor) -> dict[str, Any]:
-    """The smallest duration of ``q.based_on``'s plan with sigma(terms) <= target."""
-    long = duration_scenario(q, plan)
-    return duration_answer(q, long, *prepare(executor, [long], plan)[0])
-
-
-def duration_answer(q: DurationQuestion, long, shared, noise, terms) -> dict[str, Any]:
-    """:func:`answer_duration` from the long run's schedule and noise model: per count, the
-    predicted sigma of each term; the first count at which every term reaches its target,
-    and each term's own first count."""
-    span = long.duration_s
+def duration_points(q: DurationQuestion, long, shared: SharedSchedule,
+                    noise: NoiseModel) -> list[tuple[int, int]]:
+    """(count, scans) of every prefix of the long run ``long`` that the question's curve
+    shows: each hour, 24-hour day, day or night of the schedule whose design has more scans
+    than the fit has terms."""
     t_s = shared.columns["t_s"].astype(float)
-    sun = shared.columns["sun_el_deg"].astype(float)
     if q.unit in ("hour", "run_day"):
         step = 3600.0 if q.unit == "hour" else 86400.0
-        counts = list(range(1, math.floor(span / step + 1e-9) + 1))
+        counts = list(range(1, math.floor(long.duration_s / step + 1e-9) + 1))
         ends = [int(np.searchsorted(t_s, k * step, side="right")) for k in counts]
     else:
-        ends = _periods(t_s, sun, q.unit, long.controller.night_sun_max_deg)
+        ends = _periods(t_s, shared.columns["sun_el_deg"].astype(float), q.unit,
+                        long.controller.night_sun_max_deg)
         counts = list(range(1, len(ends) + 1))
+    n_terms = len(long.controller.fit_spec()[0])
+    return [(count, end) for count, end in zip(counts, ends, strict=True)
+            if int(np.sum(noise.scans < end)) > n_terms]
+
+
+def duration_answer(q: DurationQuestion, long, shared: SharedSchedule, noise: NoiseModel,
+                    terms, predictions: list[Prediction]) -> dict[str, Any]:
+    """The smallest duration of ``q.based_on``'s plan with sigma(terms) <= target, from the
+    long run's schedule and the predictions of its prefixes (:func:`duration_points`): per
+    count, the predicted sigma of each term and its sampling error; the first count at which
+    every term reaches its target, and each term's own first count."""
+    t_s = shared.columns["t_s"].astype(float)
     names = PointingModel(list(terms)).names
-    truth = truth_vector(long, names)
     idx = [names.index(n) for n in q.terms]
     target = np.array(q.targets_arcsec)
     curve = []
     answer = None
     first: dict[str, int | None] = dict.fromkeys(q.terms)
-    for count, end in zip(counts, ends, strict=True):
-        n_design = int(np.sum(noise.scans < end))
-        if n_design <= len(terms):
-            continue
-        pred = predict(shared, terms, noise, n_scans=end, truth=truth)
+    points = duration_points(q, long, shared, noise)
+    for (count, end), pred in zip(points, predictions, strict=True):
         sig = pred.sigma_arcsec[idx]
         point = {"count": int(count), "campaign_h": float(t_s[end - 1] / 3600.0),
                  "scan_time_h": float(shared.scan_spans_s[:end].sum() / 3600.0),
                  "n_scans": int(end),
                  "sigma_arcsec": {n: float(s) for n, s in zip(q.terms, sig, strict=True)},
                  "bias_predicted_arcsec": {n: float(pred.bias_arcsec[j])
-                                           for n, j in zip(q.terms, idx, strict=True)}}
+                                           for n, j in zip(q.terms, idx, strict=True)},
+                 "sigma_error_arcsec": {n: float(pred.sigma_error_arcsec[j])
+                                        for n, j in zip(q.terms, idx, strict=True)},
+                 "bias_error_arcsec": {n: float(pred.bias_error_arcsec[j])
+                                       for n, j in zip(q.terms, idx, strict=True)}}
         curve.append(point)
         for n, s, g in zip(q.terms, sig, target, strict=True):
             if first[n] is None and s <= g:
@@ -313,15 +391,6 @@ def coverage_answer(q: CoverageQuestion, long, shared) -> dict[str, Any]:
 
 
 # ---------------------------------------------------------------------------------------------
-def answer_sources(q: SourcesQuestion, plan: Plan, vr, executor: Executor) -> dict[str, Any]:
-    """The best source list for the duration of variant ``vr`` (see the module docstring)."""
-    short = sources_shortlist(q, vr)
-    scenarios = _scenarios(short)
-    prepared = iter(prepare(executor, scenarios, plan))
-    done = [next(prepared) if c["scenario"] is not None else None for c in short["candidates"]]
-    return sources_answer(q, short, done)
-
-
 def sources_shortlist(q: SourcesQuestion, vr) -> dict[str, Any]:
     """The source lists worth predicting exactly: the best ``q.candidates`` by the proxy,
     and the list as planned (each with its scenario, or None and why if infeasible)."""
@@ -410,24 +479,28 @@ def sources_shortlist(q: SourcesQuestion, vr) -> dict[str, Any]:
                        for p, sub in candidates[:10]]}
 
 
-def sources_answer(q: SourcesQuestion, short: dict[str, Any], done: list) -> dict[str, Any]:
-    """:func:`answer_sources` from the candidates' deterministic runs and noise models."""
+def sources_answer(q: SourcesQuestion, short: dict[str, Any],
+                   runs: list[Predicted | None]) -> dict[str, Any]:
+    """The best of the candidates of :func:`sources_shortlist`, from their deterministic
+    runs' predictions (None: infeasible)."""
     terms = short["terms"]
     sel = [terms.index(n) for n in q.terms] if q.terms else None
     checked = []
-    for item, prep in zip(short["candidates"], done, strict=True):
-        if prep is None:
+    for item, run in zip(short["candidates"], runs, strict=True):
+        if run is None:
             checked.append({"sources": list(item["sources"]), "feasible": False,
                             "why": item["why"]})
             continue
-        sh, nm, _ = prep
-        pred = predict(sh, terms, nm)
+        pred = run.predictions[0][0]
         checked.append({"sources": list(item["sources"]), "feasible": True,
-                        "n_scans": int(sh.n_scans),
+                        "n_scans": int(run.shared.n_scans),
                         "score": float(_criterion(pred.covariance, sel, inverse=False)),
                         "proxy_score": item["proxy_score"],
                         "sigma_arcsec": {n: float(s) for n, s in
-                                         zip(terms, pred.sigma_arcsec, strict=True)}})
+                                         zip(terms, pred.sigma_arcsec, strict=True)},
+                        "sigma_error_arcsec": {n: float(s) for n, s in
+                                               zip(terms, pred.sigma_error_arcsec,
+                                                   strict=True)}})
 
     feasible = [c for c in checked if c["feasible"]]
     best = max(feasible, key=lambda c: c["score"]) if feasible else None
@@ -473,7 +546,8 @@ def answers_text(answers: dict[str, list]) -> list[str]:
         if a["reached"]:
             ans = a["answer"]
             sig = ", ".join(f"{n} {s:.1f}\"" for n, s in ans["sigma_arcsec"].items())
-            bias = ", ".join(f"{n} {b:+.1f}\"" for n, b in ans["bias_predicted_arcsec"].items())
+            bias = ", ".join(f"{n} {format_number(b, '+.1f')}\""
+                             for n, b in ans["bias_predicted_arcsec"].items())
             lines.append(
                 f"duration: {ans['count']} {_unit(unit, ans['count'])} of "
                 f"'{a['based_on']}' bring {terms} to {goal} or better "
@@ -523,7 +597,8 @@ def answers_text(answers: dict[str, list]) -> list[str]:
                      f"is {', '.join(best['sources'])} by {a['criterion']}: {sig}{versus}")
     for s in answers.get("separation", []):
         if s["pairs"]:
-            pairs = ", ".join(f"{p['terms'][0]}/{p['terms'][1]} ({p['r_predicted']:+.2f})"
+            pairs = ", ".join(f"{p['terms'][0]}/{p['terms'][1]} "
+                              f"({format_number(p['r_predicted'], '+.2f')})"
                               for p in s["pairs"])
             lines.append(f"separation: '{s['variant']}' cannot separate {pairs}")
     return lines + ([""] if lines else [])

@@ -29,7 +29,7 @@ absolute deviation of a LAD fit or 3x the rms. Which ones it rejects changes fro
 campaign, and each rejection moves the estimate: that adds scatter (with the deterministic
 residuals of the day's thermal errors, about 7% in sigma for the 24-hour run, up to 70% for
 W5 on a 3-hour day) and shifts the mean, both from the fitter's own stages run on draws of
-the predicted noise (:func:`_rejections`).
+the predicted noise (:func:`rejection_draws`).
 
 Deterministic errors (the mean thermal and sunset drift, source structure, the controller's
 refraction) are the same in every member: they bias the terms, predicted by least squares on
@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -52,7 +52,9 @@ from antsim.world.effects.tracking import TrackingJitter
 from controller.pointing.model import PointingModel
 from controller.pointing.thermal import sensor_aux, structure_sensor_names
 
-__all__ = ["NoiseModel", "Prediction", "noise_model", "predict", "task_noise", "truth_vector"]
+__all__ = ["NoiseModel", "Prediction", "RejectionDesign", "RejectionDraws", "noise_model",
+           "predict", "predict_prefixes", "rejection_design", "rejection_draws", "task_noise",
+           "task_thermal", "thermal_errors", "thermal_offsets", "truth_vector", "with_thermal"]
 
 #: nudge of the pointing for the linear response of the powers (arcsec)
 NUDGE_ARCSEC = 1.0
@@ -65,7 +67,7 @@ THERMAL_KEY = 1 << 40
 #: step of the gust start times integrated over (s)
 GUST_STEP_S = 1.0
 COMPONENTS = ("receiver", "jitter", "gusts", "thermal")
-#: draws of the predicted noise through the robust fitter (:func:`_rejections`): the
+#: draws of the predicted noise through the robust fitter (:func:`rejection_draws`): the
 #: rejection component's variance to sqrt(2 / 64) = 18%, a few percent of a sigma
 REJECTION_DRAWS = 64
 REJECTION_SEED = 1990
@@ -132,10 +134,22 @@ class Prediction:
     components: dict[str, np.ndarray]  # per-component covariance of the terms
     bias_arcsec: np.ndarray  # predicted mean of fitted minus true
     n_rejected: float  # expected observations the robust fit rejects
+    #: sampling (Monte Carlo) error of the covariance's diagonal (arcsec^2) and of the bias
+    #: (arcsec) from the prediction's two simulated parts: the thermal draws and the
+    #: rejections' draws (:func:`_rejection`)
+    variance_error: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    bias_error_arcsec: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def sigma_arcsec(self) -> np.ndarray:
         return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
+
+    @property
+    def sigma_error_arcsec(self) -> np.ndarray:
+        """Sampling error of each sigma: that of its variance over 2 sigma."""
+        sigma = self.sigma_arcsec
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(sigma > 0, self.variance_error / (2.0 * sigma), np.nan)
 
     def cannot_separate(self, level: float = 0.95) -> list[tuple[str, str, float]]:
         """Pairs of terms whose predicted correlation exceeds ``level`` in magnitude."""
@@ -431,17 +445,46 @@ def _thermal_draws(engine: MemberEngine, plan_seed: int, n_thermal: int,
                    response: np.ndarray, idx: np.ndarray) -> np.ndarray:
     """The offsets (draws, units) of ``n_thermal`` independent draws of the random slow
     errors alone (about their mean), through each scan's response; empty without them."""
-    n = idx.shape[0]
-    random_slow = [1 for kind, _, _ in engine._kinds if kind == "member"]
-    thermal = np.zeros((0, 2 * n))
-    if random_slow and n_thermal > 1:
-        seeds = [int(np.random.SeedSequence(int(plan_seed), spawn_key=(THERMAL_KEY, j))
-                     .generate_state(1, dtype=np.uint64)[0]) for j in range(n_thermal)]
-        errs = engine.slow_errors(seeds)  # (draws, integrations, 2)
-        errs = errs - errs.mean(axis=0)
-        e_units = np.einsum("uaid,ruaid->rua", response, errs[:, idx, :])  # (draws, n, 2)
-        thermal = np.concatenate([e_units[:, :, 0], e_units[:, :, 1]], axis=1)
-    return thermal
+    errors = thermal_errors(engine, plan_seed, n_thermal)
+    if errors is None:
+        return np.zeros((0, 2 * idx.shape[0]))
+    return thermal_offsets(errors, response, idx)
+
+
+def thermal_errors(engine: MemberEngine, plan_seed: int, n_thermal: int) -> np.ndarray | None:
+    """``n_thermal`` independent draws of the random slow errors alone at every integration
+    of ``engine``'s schedule, about their mean: (draws, integrations, 2) xel and el (arcsec);
+    None when the variant has none (or one draw is asked for)."""
+    if not any(kind == "member" for kind, _, _ in engine._kinds) or n_thermal <= 1:
+        return None
+    seeds = [int(np.random.SeedSequence(int(plan_seed), spawn_key=(THERMAL_KEY, j))
+                 .generate_state(1, dtype=np.uint64)[0]) for j in range(n_thermal)]
+    errs = engine.slow_errors(seeds)  # (draws, integrations, 2)
+    return errs - errs.mean(axis=0)
+
+
+def thermal_offsets(errors: np.ndarray, response: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """The offsets (draws, units) of slow errors ``errors`` (:func:`thermal_errors`) through
+    each design scan's response (its integrations ``idx``)."""
+    e_units = np.einsum("uaid,ruaid->rua", response, errors[:, idx, :])  # (draws, n, 2)
+    return np.concatenate([e_units[:, :, 0], e_units[:, :, 1]], axis=1)
+
+
+def task_thermal(job: Job, n_thermal: int) -> np.ndarray | None:
+    """:func:`thermal_errors` of a variant: a task for the executors, beside
+    :func:`task_noise` with no thermal draws of its own (the two halves of a long run's
+    noise model at once; :func:`with_thermal` joins them)."""
+    return thermal_errors(engine_for(job), job.plan_seed, n_thermal)
+
+
+def with_thermal(noise: NoiseModel, shared: SharedSchedule,
+                 errors: np.ndarray | None) -> NoiseModel:
+    """``noise`` (made without thermal draws) with the draws ``errors`` of
+    :func:`task_thermal`: the noise model :func:`noise_model` makes in one piece."""
+    if errors is None:
+        return noise
+    return replace(noise, thermal=thermal_offsets(errors, noise.response,
+                                                  shared.scan_int[noise.scans]))
 
 
 def engine_reduce(engine: MemberEngine, power, std, times):
@@ -452,26 +495,50 @@ def engine_reduce(engine: MemberEngine, power, std, times):
                           engine.scenario.controller.scan, engine.scan_widths, 0)
 
 
+# ---------------------------------------------------------------------------------------------
+# the prediction of a design, or of every prefix of a growing one
+# ---------------------------------------------------------------------------------------------
 def predict(shared: SharedSchedule, terms: Sequence[str], noise: NoiseModel,
             n_scans: int | None = None, truth: np.ndarray | None = None) -> Prediction:
     """Predicted covariance and bias of the fitted ``terms`` for the design's first
     ``n_scans`` scans (default all) of the schedule ``shared``: the sandwich of the
     least-squares fit with the predicted offset noise, plus the scatter the robust fit's
-    rejections add (see :func:`_rejections`)."""
-    sh = shared
+    rejections add (see :func:`rejection_draws`)."""
+    return predict_prefixes(shared, terms, noise, [n_scans], truth)[0]
+
+
+def predict_prefixes(shared: SharedSchedule, terms: Sequence[str], noise: NoiseModel,
+                     ends: Sequence[int | None], truth: np.ndarray | None = None,
+                     draws: RejectionDraws | None = None) -> list[Prediction]:
+    """:func:`predict` for the schedule's first ``ends[k]`` scans, for each k (ascending;
+    None: all), the growing designs of a duration question. ``draws``: the rejections'
+    draws of these designs (:func:`rejection_draws` of :func:`rejection_design`, which the
+    answers run on the workers, in parts); else they are drawn here. The same standard
+    normals for every row whatever the prefix (common random numbers): the predictions for
+    growing designs differ by the rows added, not by a new draw of the rejections."""
+    design = rejection_design(shared, terms, noise, ends)
+    if draws is None:
+        draws = rejection_draws(design, range(REJECTION_DRAWS))
+    return [_prediction(shared, terms, noise, design, k, draws, truth)
+            for k in range(len(design.sizes))]
+
+
+def _prediction(sh: SharedSchedule, terms: Sequence[str], noise: NoiseModel,
+                design: RejectionDesign, k: int, draws: RejectionDraws,
+                truth: np.ndarray | None) -> Prediction:
+    """The prediction of prefix ``k`` of ``design``: the sandwich of each noise component
+    over the pairs of its units, the rejections from ``draws``."""
     scans = noise.scans
-    keep_scan = np.ones(scans.size, bool) if n_scans is None else scans < n_scans
-    n = int(keep_scan.sum())
+    n = design.sizes[k]
+    keep_scan = np.arange(scans.size) < n
     unit_keep = np.concatenate([keep_scan, keep_scan])
-    a_full = _design(sh.columns, terms, scans, sh.sensor_lag_s)  # (2 n_all, m)
+    a_full = design.a
     a = a_full[unit_keep]
     m = len(terms)
-    ata = a.T @ a
-    b = np.linalg.pinv(ata)
+    b = np.linalg.pinv(a.T @ a)
     comps: dict[str, np.ndarray] = {}
     pk = unit_keep[noise.pairs[:, 0]] & unit_keep[noise.pairs[:, 1]]
     pairs = noise.pairs[pk]
-    unit_var = np.zeros(2 * scans.size)
     for c, values in noise.pair_cov.items():
         v = values[pk]
         au, av = a_full[pairs[:, 0]], a_full[pairs[:, 1]]
@@ -479,64 +546,115 @@ def predict(shared: SharedSchedule, terms: Sequence[str], noise: NoiseModel,
         off = pairs[:, 0] != pairs[:, 1]
         acc = acc + np.einsum("p,pi,pj->ij", v[off], av[off], au[off])
         comps[c] = b @ acc @ b
-        np.add.at(unit_var, pairs[~off, 0], v[~off])
+    thermal_error = np.zeros(m)
     if noise.n_thermal > 1:
         e = noise.thermal[:, unit_keep]  # (draws, 2n)
         comps["thermal"] = np.cov(e @ a @ b, rowvar=False).reshape(m, m)
-        unit_var += noise.thermal.var(axis=0, ddof=1)
+        # the sampling error of a variance from n_thermal Gaussian draws
+        thermal_error = np.diag(comps["thermal"]) * math.sqrt(2.0 / (noise.n_thermal - 1))
     else:
         comps["thermal"] = np.zeros((m, m))
-    unit_var = unit_var[unit_keep]
-    # the deterministic (noise-free) data and their least-squares fit
-    rows = scans[keep_scan]
-    cols = sh.columns
-    model = 60.0 * np.stack([cols["model_xel_arcmin"][rows] + cols["applied_xel_arcmin"][rows],
-                             cols["model_el_arcmin"][rows] + cols["applied_el_arcmin"][rows]],
-                            axis=1).astype(float)
-    y = -(noise.quiet_offsets[keep_scan] + model).T.reshape(-1)
-    coef = b @ (a.T @ y)
-    # the same standard normals for every row whatever n_scans (common random numbers): the
-    # predictions for growing designs (antsim.plan.answers) differ by the rows added, not by
-    # a new draw of the rejections' simulation
-    normals = np.random.default_rng(REJECTION_SEED).standard_normal(
-        (REJECTION_DRAWS, 2 * scans.size))[:, unit_keep]
-    rej = _rejections(a, y, unit_var, n, PointingModel(list(terms)).names, normals)
+    coef = b @ (a.T @ design.y0[unit_keep])  # least squares on the noise-free data
+    rej = _rejection(draws, k, m)
     comps["rejection"] = rej.covariance
-    shift = rej.mean_shift
     total = sum(comps.values())
     sd = np.sqrt(np.diag(b))
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = b / np.outer(sd, sd)
     truth = np.zeros(m) if truth is None else truth
-    return Prediction(names=PointingModel(list(terms)).names, covariance=total,
-                      design_correlation=corr,
+    return Prediction(names=design.names, covariance=total, design_correlation=corr,
                       sky_rms_arcsec=rej.sky_rms, n_scans=n, components=comps,
-                      bias_arcsec=coef - shift - truth, n_rejected=rej.n_rejected)
+                      bias_arcsec=coef - rej.mean_shift - truth, n_rejected=rej.n_rejected,
+                      variance_error=np.hypot(thermal_error, rej.variance_error),
+                      bias_error_arcsec=rej.shift_error)
+
+
+# ---------------------------------------------------------------------------------------------
+# the robust fit's rejections, simulated
+# ---------------------------------------------------------------------------------------------
+#: rows about the LAD of the design one prefix shorter in the first LP of the next
+#: (:func:`controller.pointing.robust.lad_fit`): the same optimum from LPs of a few hundred
+#: rows in place of a few thousand
+LAD_BAND_ROWS = 200
+
+
+@dataclass(frozen=True)
+class RejectionDesign:
+    """What the simulation of the rejections needs of a design and its prefixes (small and
+    picklable, for the workers): the design matrix ``a`` of every unit (the design's scans'
+    cross-elevation rows, then their elevation rows), the noise-free data ``y0`` and each
+    unit's predicted variance ``unit_var`` (arcsec^2) in that order, the terms' ``names``,
+    and the design scans of each prefix ``sizes`` (ascending)."""
+
+    a: np.ndarray
+    y0: np.ndarray
+    unit_var: np.ndarray
+    names: tuple[str, ...]
+    sizes: tuple[int, ...]
+
+    def rows(self, k: int) -> np.ndarray:
+        """The units of prefix ``k``: its scans' xel rows, then their el rows."""
+        n_all, n = self.a.shape[0] // 2, self.sizes[k]
+        return np.concatenate([np.arange(n), n_all + np.arange(n)])
+
+
+def rejection_design(shared: SharedSchedule, terms: Sequence[str], noise: NoiseModel,
+                     ends: Sequence[int | None]) -> RejectionDesign:
+    """The :class:`RejectionDesign` of the schedule's first ``ends[k]`` scans (None: all)."""
+    scans = noise.scans
+    cols = shared.columns
+    sizes = tuple(int(scans.size if end is None else np.sum(scans < end)) for end in ends)
+    if list(sizes) != sorted(sizes):
+        raise ValueError(f"prefixes must grow: {sizes}")
+    a = _design(cols, terms, scans, shared.sensor_lag_s)  # (2 n_all, m)
+    unit_var = np.zeros(2 * scans.size)
+    same = noise.pairs[:, 0] == noise.pairs[:, 1]
+    for values in noise.pair_cov.values():
+        np.add.at(unit_var, noise.pairs[same, 0], values[same])
+    if noise.n_thermal > 1:
+        unit_var += noise.thermal.var(axis=0, ddof=1)
+    model = 60.0 * np.stack([cols["model_xel_arcmin"][scans] + cols["applied_xel_arcmin"][scans],
+                             cols["model_el_arcmin"][scans] + cols["applied_el_arcmin"][scans]],
+                            axis=1).astype(float)
+    y0 = -(noise.quiet_offsets + model).T.reshape(-1)
+    return RejectionDesign(a, y0, unit_var, PointingModel(list(terms)).names, sizes)
 
 
 @dataclass
-class _Rejection:
-    covariance: np.ndarray  # of the robust estimate minus least squares on every row
-    mean_shift: np.ndarray  # mean of least squares on every row minus the robust estimate
-    n_rejected: float
-    sky_rms: float
+class RejectionDraws:
+    """The robust fit and least squares on every row of some draws of each prefix of a
+    design: coefficients ``lsq`` and ``robust`` (prefixes, draws, terms; NaN where the
+    fitter would fail: too few observations left), observations ``rejected`` and the used
+    ones' mean square residual ``sky_ms`` (prefixes, draws)."""
+
+    draws: np.ndarray
+    lsq: np.ndarray
+    robust: np.ndarray
+    rejected: np.ndarray
+    sky_ms: np.ndarray
+
+    @staticmethod
+    def concat(parts: Sequence[RejectionDraws]) -> RejectionDraws:
+        """Parts of the draws, in draw order (whatever order the parts came in)."""
+        parts = sorted(parts, key=lambda p: int(p.draws[0]) if p.draws.size else -1)
+        return RejectionDraws(np.concatenate([p.draws for p in parts]),
+                              *(np.concatenate([getattr(p, f) for p in parts], axis=1)
+                                for f in ("lsq", "robust", "rejected", "sky_ms")))
 
 
-def _rejections(a: np.ndarray, y0: np.ndarray, unit_var: np.ndarray, n: int,
-                names: Sequence[str], normals: np.ndarray) -> _Rejection:
-    """The robust fit's rejections, by simulation: one data set per row of ``normals``
-    (draws, rows), the noise-free data ``y0`` (xel rows, then el; arcsec) plus independent
-    Gaussian noise of each row's predicted variance ``unit_var``, fitted by the fitter's own
-    stages (:mod:`controller.pointing.robust`: LAD, 4x the mean absolute deviation, least
-    squares, 3x the rms, least squares) and by least squares on every row. The robust estimates'
-    covariance over the draws less least squares' is what the rejections add (negative
-    where rejecting the noisiest rows makes a term more precise: the rejections depend on
-    the noise, so their effect is not independent of least squares' estimate); their mean
-    difference shifts the bias. Also the mean number of observations rejected and the Sky
-    RMS of the used ones.
+def rejection_draws(design: RejectionDesign, draws: Sequence[int]) -> RejectionDraws:
+    """The robust fit's rejections, by simulation, for draws ``draws`` (of
+    :data:`REJECTION_DRAWS`, each the same whichever part computes it) of every prefix of
+    ``design``: the noise-free data plus independent Gaussian noise of each row's predicted
+    variance, fitted by the fitter's own stages (:mod:`controller.pointing.robust`: LAD, 4x
+    the mean absolute deviation, least squares, 3x the rms, least squares) and by least
+    squares on every row. A task for the workers (module level, picklable by reference).
+
+    Each draw is fitted prefix after prefix; its LAD starts from its LAD of the prefix
+    before (:data:`LAD_BAND_ROWS`), which finds the same exact optimum from small LPs.
 
     Simulated rather than modelled: truncated-normal moments of the least-squares residuals
-    (this function's model until issue 25) miss the first stage, whose LAD fit passes through
+    (this function's earlier model) miss the first stage, whose LAD fit passes through
     M observations and leaves the large deterministic residuals of a heated day larger and
     more variable than least squares does. On the 3-hour daytime run (33 observations, ten
     terms) that model predicted 0.30 rejections against the members' 0.90 and W5's sigma
@@ -556,26 +674,70 @@ def _rejections(a: np.ndarray, y0: np.ndarray, unit_var: np.ndarray, n: int,
         reject_beyond_rms,
     )
 
-    a_f = np.asfortranarray(a)
-    ys = y0 + np.sqrt(np.clip(unit_var, 0.0, None)) * normals
-    every = ys @ (a @ np.linalg.pinv(a.T @ a))  # least squares on every row, each draw
-    fits, rejected, sky = [], [], []
-    for y, lsq in zip(ys, every, strict=True):
-        eq = Equations(tuple(names), n, a_f, y, a_f, y, 1e-9 * float(np.abs(y).max()))
-        try:
-            used = reject_beyond_mad(eq, lad_fit(eq), LAD_FACTOR)
-            used = reject_beyond_rms(eq, least_squares_fit(eq, used).coeffs, used, RMS_FACTOR)
-        except ValueError:
-            continue  # too few left: the fitter would fail this member too
-        robust = least_squares_fit(eq, used).coeffs
-        fits.append((lsq, robust))
-        rejected.append(n - int(used.sum()))
-        res = y - a @ robust
-        sky.append(float(np.mean(res[:n][used] ** 2 + res[n:][used] ** 2)))
-    m = a.shape[1]
-    if len(fits) < 2:
-        return _Rejection(np.zeros((m, m)), np.zeros(m), 0.0, float("nan"))
-    lsq, rob = (np.array(x).reshape(len(fits), m) for x in zip(*fits, strict=True))
+    draws = np.asarray(draws, dtype=np.int64)
+    n_pre, n_d, m = len(design.sizes), draws.size, design.a.shape[1]
+    normals = np.random.default_rng(REJECTION_SEED).standard_normal(
+        (REJECTION_DRAWS, design.a.shape[0]))[draws]
+    sd = np.sqrt(np.clip(design.unit_var, 0.0, None))
+    out = RejectionDraws(draws, np.full((n_pre, n_d, m), np.nan),
+                         np.full((n_pre, n_d, m), np.nan), np.zeros((n_pre, n_d)),
+                         np.full((n_pre, n_d), np.nan))
+    prefixes = []
+    for k, n in enumerate(design.sizes):
+        rows = design.rows(k)
+        a = design.a[rows]
+        ys = design.y0[rows] + sd[rows] * normals[:, rows]
+        out.lsq[k] = ys @ (a @ np.linalg.pinv(a.T @ a))  # least squares on every row
+        prefixes.append((n, a, np.asfortranarray(a), ys))
+    for j in range(n_d):
+        centre = None
+        for k, (n, a, a_f, ys) in enumerate(prefixes):
+            y = ys[j]
+            eq = Equations(design.names, n, a_f, y, a_f, y, 1e-9 * float(np.abs(y).max()))
+            lad = lad_fit(eq, centre, LAD_BAND_ROWS)
+            centre = lad
+            try:
+                used = reject_beyond_mad(eq, lad, LAD_FACTOR)
+                used = reject_beyond_rms(eq, least_squares_fit(eq, used).coeffs, used,
+                                         RMS_FACTOR)
+            except ValueError:
+                continue  # too few left: the fitter would fail this member too (robust NaN)
+            robust = least_squares_fit(eq, used).coeffs
+            out.robust[k, j] = robust
+            out.rejected[k, j] = n - int(used.sum())
+            res = y - a @ robust
+            out.sky_ms[k, j] = float(np.mean(res[:n][used] ** 2 + res[n:][used] ** 2))
+    return out
+
+
+@dataclass
+class _Rejection:
+    covariance: np.ndarray  # of the robust estimate minus least squares on every row
+    mean_shift: np.ndarray  # mean of least squares on every row minus the robust estimate
+    n_rejected: float
+    sky_rms: float
+    variance_error: np.ndarray  # sampling error of the covariance's diagonal
+    shift_error: np.ndarray  # sampling error of the mean shift
+
+
+def _rejection(draws: RejectionDraws, k: int, m: int) -> _Rejection:
+    """What the rejections of prefix ``k`` add: the robust estimates' covariance over the
+    draws less least squares' (negative where rejecting the noisiest rows makes a term more
+    precise: the rejections depend on the noise, so their effect is not independent of
+    least squares' estimate); their mean difference, which shifts the bias; the mean number
+    of observations rejected and the Sky RMS of the used ones. With the sampling errors of
+    the first two from the draws: the diagonal is the mean of x_i = (robust_i - mean)^2 -
+    (lsq_i - mean)^2 (times D / (D - 1)), whose standard error is std(x) sqrt(D) / (D - 1);
+    the shift's is std(lsq_i - robust_i) / sqrt(D)."""
+    ok = np.isfinite(draws.robust[k]).all(axis=1)
+    lsq, rob = draws.lsq[k][ok], draws.robust[k][ok]
+    d = len(lsq)
+    if d < 2:
+        return _Rejection(np.zeros((m, m)), np.zeros(m), 0.0, float("nan"), np.zeros(m),
+                          np.zeros(m))
     cov = (np.cov(rob, rowvar=False) - np.cov(lsq, rowvar=False)).reshape(m, m)
-    return _Rejection(cov, (lsq - rob).mean(axis=0), float(np.mean(rejected)),
-                      math.sqrt(float(np.mean(sky))))
+    x = (rob - rob.mean(axis=0)) ** 2 - (lsq - lsq.mean(axis=0)) ** 2
+    return _Rejection(cov, (lsq - rob).mean(axis=0), float(np.mean(draws.rejected[k][ok])),
+                      math.sqrt(float(np.mean(draws.sky_ms[k][ok]))),
+                      x.std(axis=0, ddof=1) * math.sqrt(d) / (d - 1),
+                      (lsq - rob).std(axis=0, ddof=1) / math.sqrt(d))

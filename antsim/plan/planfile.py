@@ -34,8 +34,10 @@ A plan is TOML (see ``scenarios/plans/ghigo1990_whatif.toml``)::
     dec_step_deg = 10.0
     max_days = 10
 
-Every bad value is one :class:`~controller.errors.InputError` line naming the file, the key
-and the value (exit status 2 through the command line), as for scenarios.
+Every key is declared once in :mod:`antsim.schema.plan` (a variant's as the scenario's key of
+the same name; ``docs/scenarios.md`` lists them) and read through it. Every bad value is one
+:class:`~controller.errors.InputError` line naming the file, the key and the value (exit
+status 2 through the command line), as for scenarios.
 """
 
 from __future__ import annotations
@@ -51,16 +53,16 @@ from controller.pointing.terms import TermError, get_term
 from controller.scans.config import SkyConfig
 
 from ..bundled import find
-from ..scenario import ESTIMATORS, Scenario, load_scenario
+from ..scenario import PlanNotScenarioError, Scenario, check_scan, load_scenario, overcorrection
+from ..schema import plan as schema
+from ..schema.keys import duplicate
+from ..schema.plan import MAX_MEMBERS, UNITS, WINDOWS
+from ..schema.utc import end_problem
 from ..tomlcheck import Table, load_toml
 
-__all__ = ["CoverageQuestion", "DurationQuestion", "Plan", "SourcesQuestion", "VariantSpec",
-           "load_plan", "make_variant"]
+__all__ = ["MAX_MEMBERS", "UNITS", "WINDOWS", "CoverageQuestion", "DurationQuestion", "Plan",
+           "SourcesQuestion", "VariantSpec", "load_plan", "make_variant"]
 
-WINDOWS = ("all", "day", "night")
-UNITS = ("hour", "day", "night", "run_day")
-#: most members a plan may ask for per variant
-MAX_MEMBERS = 100_000
 
 
 @dataclass(frozen=True)
@@ -173,14 +175,17 @@ def load_plan(path: str | Path) -> Plan:
     """Read and validate a plan file; raises InputError on the first bad value."""
     path = Path(path)
     root = load_toml(path)
-    name = root.string("name")
-    description = root.string("description", "")
-    base = load_scenario(find(root.string("scenario"), "scenario", str(path), "scenario",
-                              relative_to=path.parent))
-    seed = root.integer("seed", base.seed, min=0)
-    members = root.integer("members", 200, min=2, max=MAX_MEMBERS)
-    block = root.integer("block_members", 0, min=0, max=4096)
-    level = root.number("separation_level", 0.95, gt=0.0, lt=1.0)
+    if "variants" not in root and "site" in root:
+        raise root.error("site", "[site]", "this file is a scenario, not a plan",
+                         "antsim run runs a scenario; a plan names one as its scenario")
+    keys = schema.ROOT
+    name = keys.read(root, "name")
+    description = keys.read(root, "description")
+    base = _load_base(keys.read(root, "scenario"), path, "scenario")
+    seed = keys.read(root, "seed", default=base.seed)
+    members = keys.read(root, "members")
+    block = keys.read(root, "block_members")
+    level = keys.read(root, "separation_level")
     specs = []
     for i, t in enumerate(root.tables("variants")):
         specs.append(_variant(t, f"variants[{i}]"))
@@ -188,9 +193,10 @@ def load_plan(path: str | Path) -> Plan:
         raise root.error("variants", [], "the plan lists no variants",
                          "add [[variants]] tables, e.g. name = \"as run\"")
     names = [v.name for v in specs]
-    for i, n in enumerate(names):
-        if names.index(n) != i:
-            raise InputError(str(path), f"variants[{i}].name", n, "duplicate variant name")
+    repeated = duplicate(names)  # upper and lower case alike, as a report shows them
+    if repeated is not None:
+        i, n = repeated
+        raise InputError(str(path), f"variants[{i}].name", n, "duplicate variant name")
     scenarios = tuple(make_variant(_variant_base(v, path, base), v, str(path))
                       for v in specs)
     answers = root.table("answers", {})
@@ -212,8 +218,17 @@ def _variant_base(spec: VariantSpec, path: Path, base: Scenario) -> Scenario:
     """The scenario a variant changes: the plan's, or its own ``scenario``."""
     if spec.scenario is None:
         return base
-    return load_scenario(find(spec.scenario, "scenario", str(path), f"{spec.key}.scenario",
-                              relative_to=path.parent))
+    return _load_base(spec.scenario, path, f"{spec.key}.scenario")
+
+
+def _load_base(text: str, plan: Path, key: str) -> Scenario:
+    """The scenario that ``key`` of the plan file ``plan`` names (a plan named there is
+    refused by name: it would be read as a scenario without a site)."""
+    try:
+        return load_scenario(find(text, "scenario", str(plan), key, relative_to=plan.parent))
+    except PlanNotScenarioError:
+        raise InputError(str(plan), key, text, "names a plan, not a scenario",
+                         "a plan's scenario is a scenario file or the name of one") from None
 
 
 def _terms(t: Table, key: str, default: Any = None, fitted: tuple[str, ...] = (),
@@ -241,58 +256,29 @@ def _fitted_names(scenario: Scenario) -> tuple[str, ...]:
 
 
 def _variant(t: Table, key: str) -> VariantSpec:
-    name = t.string("name")
-    if not name.strip():
-        raise t.error("name", name, "must not be empty")
+    keys = schema.VARIANT
+    name = keys.read(t, "name")
     if "duration_h" in t and "duration_days" in t:
         raise t.error("duration_days", t.raw("duration_days"),
                       "give duration_h or duration_days, not both")
-    duration = None
-    if "duration_h" in t:
-        duration = t.number("duration_h", gt=0.0, max=24.0 * 366)
-    elif "duration_days" in t:
-        duration = 24.0 * t.number("duration_days", gt=0.0, max=366.0)
-    start = t.string("start_utc", None)
-    if start is not None:
-        _check_time(t, "start_utc", start)
-    sources = t.strings("sources", None) if "sources" in t else None
+    duration = keys.read(t, "duration_h")
+    if "duration_days" in t:
+        duration = keys["duration_days"].scale * keys.read(t, "duration_days")
+    else:
+        t.raw("duration_days", None)
+    start = keys.read(t, "start_utc")
+    sources = keys.read(t, "sources")
     if sources is not None and not sources:
         raise t.error("sources", sources, "lists no sources")
-    spec = VariantSpec(
-        name=name, description=t.string("description", ""),
-        window=t.string("window", None, choices=WINDOWS) if "window" in t else None,
-        duration_h=duration, start_utc=start,
-        sources=tuple(sources) if sources is not None else None,
-        elevation_min_deg=t.number("elevation_min_deg", None, min=0.0, max=89.0,
-                                   allow_none=True),
-        elevation_max_deg=t.number("elevation_max_deg", None, min=1.0, max=90.0,
-                                   allow_none=True),
-        step_arcmin=t.number("step_arcmin", None, gt=0.0, allow_none=True),
-        integration_s=t.number("integration_s", None, gt=0.0, max=3600.0, allow_none=True),
-        estimator=t.string("estimator", None, choices=ESTIMATORS) if "estimator" in t
-        else None,
-        model=t.string("model", None),
-        fit_model=t.string("fit_model", None),
-        members=t.integer("members", None, min=2, max=MAX_MEMBERS) if "members" in t
-        else None,
-        scenario=t.string("scenario", None),
-        tipping=t.boolean("tipping") if "tipping" in t else None,
-        key=key,
-    )
+    values = keys.read_all(t, ("description", "window", "elevation_min_deg",
+                               "elevation_max_deg", "step_arcmin", "integration_s",
+                               "estimator", "model", "fit_model", "members", "scenario",
+                               "tipping"))
+    spec = VariantSpec(name=name, duration_h=duration, start_utc=start,
+                       sources=tuple(sources) if sources is not None else None, key=key,
+                       **values)
     t.finish()
     return spec
-
-
-def _check_time(t: Table, key: str, text: str) -> None:
-    from astropy.time import Time
-
-    try:
-        year = Time(text, scale="utc").datetime.year
-    except (ValueError, TypeError):
-        raise t.error(key, text, "not an ISO UTC time", "write e.g. 1990-02-08T17:00:00") \
-            from None
-    if not 1900 <= year <= 2200:
-        raise t.error(key, text, "year outside 1900..2200")
 
 
 def _scenario_for(t: Table, key: str, names: list[str], scenarios) -> Scenario:
@@ -306,18 +292,17 @@ def _scenario_for(t: Table, key: str, names: list[str], scenarios) -> Scenario:
 def _duration(t: Table, key: str, names: list[str], scenarios) -> DurationQuestion:
     scenario = _scenario_for(t, "based_on", names, scenarios)
     fitted = _fitted_names(scenario)
-    terms = _terms(t, "terms", fitted=fitted)
+    terms = _terms(t, "terms", fitted=fitted, raw=schema.DURATION.read(t, "terms"))
     if not terms:
         raise t.error("terms", [], "name at least one term", "e.g. terms = [\"W4\"]")
     for term in terms:
         if term not in fitted:
             raise t.error("terms", term, "is not fitted by this plan",
                           f"fitted terms are {' '.join(fitted)}")
-    q = DurationQuestion(based_on=t.string("based_on"), terms=terms,
+    keys = schema.DURATION
+    q = DurationQuestion(based_on=keys.read(t, "based_on"), terms=terms,
                          targets_arcsec=_targets(t, terms, fitted),
-                         unit=t.string("unit", "day", choices=UNITS),
-                         max_days=t.number("max_days", 10.0, gt=0.0, max=366.0),
-                         note=t.string("note", ""), key=key)
+                         **keys.read_all(t, ("unit", "max_days", "note")), key=key)
     t.finish()
     return q
 
@@ -329,17 +314,25 @@ def _targets(t: Table, terms: tuple[str, ...], fitted: tuple[str, ...]) -> tuple
         raise t.error("target_arcsec", t.raw("target_arcsec", None),
                       "give target_arcsec (one for every term) or targets_arcsec (one per "
                       "term), not both or neither")
+    keys = schema.DURATION
     if "target_arcsec" in t:
-        return (t.number("target_arcsec", gt=0.0),) * len(terms)
+        return (keys.read(t, "target_arcsec"),) * len(terms)
     table = t.table("targets_arcsec")
-    given = {_terms(table, k, fitted=fitted, raw=[k])[0]: k for k in table}
+    given: dict[str, str] = {}
+    for k in table:
+        term = _terms(table, k, fitted=fitted, raw=[k])[0]
+        if term in given:
+            raise table.error(k, table.raw(k), f"gives the term {term} again (first as "
+                              f"{given[term]})", "give each term once")
+        given[term] = k
     missing = [n for n in terms if n not in given]
     extra = [k for n, k in given.items() if n not in terms]
     if missing or extra:
         raise t.error("targets_arcsec", sorted(table.keys()),
                       f"must name exactly the terms {' '.join(terms)}",
                       f"missing {' '.join(missing) or '-'}, not in terms {' '.join(extra) or '-'}")
-    out = tuple(table.number(given[n], gt=0.0) for n in terms)
+    bounds = keys["targets_arcsec"]
+    out = tuple(table.number(given[n], gt=bounds.gt) for n in terms)
     table.finish()
     return out
 
@@ -349,13 +342,7 @@ def _coverage(t: Table, key: str, names: list[str], scenarios) -> CoverageQuesti
     if scenario.mount.kind != "equatorial":
         raise t.error("based_on", t.string("based_on"), "coverage is asked of hour angle and "
                       "declination cells: the variant's mount must be equatorial")
-    q = CoverageQuestion(based_on=t.string("based_on"),
-                         dec_max_deg=t.number("dec_max_deg", min=-90.0, max=90.0),
-                         ha_step_h=t.number("ha_step_h", 1.0, gt=0.0, max=12.0),
-                         dec_step_deg=t.number("dec_step_deg", 10.0, gt=0.0, max=90.0),
-                         min_scans=t.integer("min_scans", 1, min=1, max=1000),
-                         max_days=t.number("max_days", 10.0, gt=0.0, max=366.0),
-                         note=t.string("note", ""), key=key)
+    q = CoverageQuestion(**schema.COVERAGE.read_all(t), key=key)
     t.finish()
     return q
 
@@ -369,15 +356,17 @@ def _sources(t: Table, key: str, names: list[str], scenarios) -> SourcesQuestion
                       f"({', '.join(thermal)}); the source lists are ranked on positions "
                       "alone, without the structure temperatures those terms read",
                       "ask it of a variant that fits the position terms only")
-    terms = _terms(t, "terms", fitted=fitted)
+    terms = _terms(t, "terms", fitted=fitted, raw=schema.SOURCES.read(t, "terms"))
     for term in terms:
         if term not in fitted:
             raise t.error("terms", term, "is not fitted by this plan",
                           f"fitted terms are {' '.join(fitted)}")
+    keys = schema.SOURCES
     n_sources = len(scenario.sources)
-    q = SourcesQuestion(based_on=t.string("based_on"), terms=terms,
-                        min_sources=t.integer("min_sources", 2, min=1, max=n_sources),
-                        candidates=t.integer("candidates", 3, min=1, max=20), key=key)
+    q = SourcesQuestion(based_on=keys.read(t, "based_on"), terms=terms,
+                        min_sources=t.integer("min_sources", keys["min_sources"].default,
+                                              min=int(keys["min_sources"].min), max=n_sources),
+                        candidates=keys.read(t, "candidates"), key=key)
     t.finish()
     return q
 
@@ -396,6 +385,10 @@ def make_variant(base: Scenario, spec: VariantSpec, where: str = "plan") -> Scen
     if spec.duration_h is not None or spec.start_utc is not None:
         duration = base.duration_s if spec.duration_h is None else spec.duration_h * 3600.0
         epoch = base.epoch_utc if spec.start_utc is None else _iso(spec.start_utc)
+        problem = end_problem(epoch, duration)
+        if problem:
+            raise err("start_utc" if spec.duration_h is None else "duration_h",
+                      spec.start_utc if spec.duration_h is None else spec.duration_h, problem)
         scenario = replace(scenario, duration_s=duration, epoch_utc=epoch,
                            controller=replace(scenario.controller, duration_s=duration,
                                               epoch_utc=epoch))
@@ -418,15 +411,13 @@ def make_variant(base: Scenario, spec: VariantSpec, where: str = "plan") -> Scen
                   f"must exceed elevation_min_deg = {sched.elevation_min_deg:g}")
     scan = c.scan
     if spec.step_arcmin is not None:
-        if spec.step_arcmin > 1.2 * scan.hpbw_arcmin:
-            raise err("step_arcmin", spec.step_arcmin,
-                      f"the +-D points would lie outside the main beam (HPBW "
-                      f"{scan.hpbw_arcmin:g}')", f"use at most {1.2 * scan.hpbw_arcmin:.1f}'")
         scan = replace(scan, step_arcmin=spec.step_arcmin)
     if spec.integration_s is not None:
         scan = replace(scan, integration_s=spec.integration_s)
     if spec.estimator is not None:
         scan = replace(scan, estimator=spec.estimator)
+    # the scenario's own checks of a scan, on the variant's (its keys are the scenario's)
+    check_scan(scan, base.receiver.sample_interval_s, err)
     lowest = sched.elevation_min_deg - 4.0 * scan.step_arcmin / 60.0
     if lowest < base.mount.el.min_deg:
         raise err("elevation_min_deg", sched.elevation_min_deg,
@@ -442,15 +433,24 @@ def make_variant(base: Scenario, spec: VariantSpec, where: str = "plan") -> Scen
                   "add [controller.tipping] to the scenario")
     if spec.model is not None:
         controller = replace(controller, model=_model(spec, base, where, err))
+        found = overcorrection(controller.model, base.mount, sched)
+        if found is not None:
+            raise err("model", spec.model, found.problem, "check the model's values and units")
     if spec.fit_model is not None:
         controller = replace(controller, fit_terms=_fit_terms(spec.fit_model, err),
                              fit_model_name=spec.fit_model if spec.fit_model in NAMED_MODELS
                              else "custom")
     scenario = replace(scenario, controller=controller)
-    from antsim.simulate.runner import check_scenario
+    from antsim.simulate.runner import NoScanError, check_scenario
 
     try:
         check_scenario(scenario)
+    except NoScanError as e:
+        raise InputError(where, spec.key or "variant", spec.name, "the controller schedules "
+                         f"no scan in this variant: {e.field.split('.')[-1]} = {e.value!r}: "
+                         f"{e.problem.removeprefix('the controller can schedule no scan: ')}",
+                         "lengthen it, widen its window or elevation limits, or give it "
+                         "sources that are up") from None
     except InputError as e:
         if e.field == "controller.scheduler.sources" or spec.elevation_min_deg is None:
             field = "sources"
@@ -470,6 +470,9 @@ def _iso(text: str) -> str:
 
 def _model(spec: VariantSpec, base: Scenario, where: str, err) -> PointingModel:
     text = spec.model
+    if not text.strip():  # as a path, it would name the plan's own directory
+        raise err("model", text, "is empty", "give scenario, none, truth, a named model or a "
+                  "model file")
     if text == "scenario":
         return base.controller.model
     if text == "truth":

@@ -13,7 +13,16 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from antsim.figures.html import Block, Figure, Paragraph, Preformatted, Section, Table, write_report
+from antsim.figures.html import (
+    Block,
+    Figure,
+    Paragraph,
+    Preformatted,
+    Section,
+    Table,
+    format_number,
+    write_report,
+)
 
 from .answers import answers_text
 
@@ -31,23 +40,35 @@ TERMS_HEADER = ("term", "truth (\")", "sigma predicted (\")", "sigma Monte Carlo
 
 
 def _f(x: float | None, spec: str) -> str | None:
-    return None if x is None else format(x, spec)
+    return None if x is None else format_number(x, spec)
+
+
+def _num(x: float | None) -> float | None:
+    return None if x is None else float(x)
+
+
+#: the numbers' formats of each table's columns (plan.txt's precision)
+VARIANTS_FORMATS = (None, ".1f", None, None, ".1f", ".1f")
+TERMS_FORMATS = (None, "+.1f", ".2f", ".2f", "+.1f", "+.1f")
 
 
 def variants_table(doc: Mapping[str, Any]) -> Table:
-    rows = [[p["name"], _f(p["duration_h"], ".1f"), p["n_scans"], p["n_monte_carlo"],
-             _f(p["sky_rms_fisher_arcsec"], ".1f"), _f(p["sky_rms_mc_arcsec"], ".1f")]
+    """The variants, a row each; numbers as numbers (right-aligned, no negative zero)."""
+    rows = [[p["name"], _num(p["duration_h"]), p["n_scans"], p["n_monte_carlo"],
+             _num(p["sky_rms_fisher_arcsec"]), _num(p["sky_rms_mc_arcsec"])]
             for p in doc["plans"]]
-    return Table(VARIANTS_HEADER, rows, caption="The plan's variants")
+    return Table(VARIANTS_HEADER, rows, caption="The plan's variants",
+                 column_formats=VARIANTS_FORMATS)
 
 
 def terms_table(variant: Mapping[str, Any]) -> Table:
     """The sigma and bias of each term of one variant, as ``plan.txt`` prints them."""
-    rows = [[name, _f(t["truth_arcsec"], "+.1f"), _f(t["sigma_fisher_arcsec"], ".2f"),
-             _f(t["sigma_mc_arcsec"], ".2f"), _f(t["bias_arcsec"], "+.1f"),
-             _f(t["bias_predicted_arcsec"], "+.1f")]
+    rows = [[name, _num(t["truth_arcsec"]), _num(t["sigma_fisher_arcsec"]),
+             _num(t["sigma_mc_arcsec"]), _num(t["bias_arcsec"]),
+             _num(t["bias_predicted_arcsec"])]
             for name, t in variant["terms"].items()]
-    return Table(TERMS_HEADER, rows, caption=f"{variant['name']}: the fitted terms (arcsec)")
+    return Table(TERMS_HEADER, rows, caption=f"{variant['name']}: the fitted terms (arcsec)",
+                 column_formats=TERMS_FORMATS)
 
 
 def write_plan_report(doc: Mapping[str, Any], text: str, figures: Sequence[FigureFile],

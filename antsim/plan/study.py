@@ -1,9 +1,11 @@
 """Running a plan: the deterministic run, the prediction and the Monte Carlo of every variant.
 
-:func:`run_plan` submits, per variant, the deterministic run; then its noise model and its
-members in blocks; members whose schedule cannot be shared are simulated in full as the
-blocks report them. It returns a :class:`PlanResult` whose :meth:`~PlanResult.to_json` is the
-``antsim plan --json`` document and :meth:`~PlanResult.text` the printed tables.
+:func:`run_plan` runs, per variant, the deterministic run; then its noise model and its
+members in blocks; members whose schedule cannot be shared in full; then its prediction; and
+the plan's questions (:mod:`antsim.plan.answers`), all as chains of tasks on one executor
+(:mod:`antsim.simulate.flow`). It returns a :class:`PlanResult` whose
+:meth:`~PlanResult.to_json` is the ``antsim plan --json`` document and
+:meth:`~PlanResult.text` the printed tables.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from antsim.figures.html import format_number
 from antsim.simulate.ensemble import (
     Executor,
     Job,
@@ -25,16 +28,20 @@ from antsim.simulate.ensemble import (
     task_full,
     task_record,
 )
+from antsim.simulate.flow import Chain, Flow, Task, running_words
 from antsim.simulate.vectorized import MemberResults, SharedSchedule, quiet_scenario
 from controller.errors import InputError
 from controller.pointing.signs import UNITS, sign_convention
 
-from ..progress import Progress, progress_for
+from ..progress import Progress, progress_for, span_words
 from ..scenario import Scenario
 from .fisher import (
+    REJECTION_DRAWS,
     NoiseModel,
     Prediction,
-    predict,
+    predict_prefixes,
+    rejection_design,
+    rejection_draws,
     task_noise,
     terms_without_lever_arm,
     truth_vector,
@@ -116,11 +123,13 @@ class VariantResult:
         for j, name in enumerate(self.terms):
             terms[name] = {
                 "sigma_fisher_arcsec": _num(pred.sigma_arcsec[j]),
+                "sigma_fisher_error_arcsec": _num(pred.sigma_error_arcsec[j]),
                 "sigma_mc_arcsec": _num(sigma_mc[j]),
                 "bias_arcsec": _num(bias[j]),
                 "sigma_mc_error_arcsec": _num(sigma_mc[j] / math.sqrt(2.0 * max(n - 1, 1))),
                 "bias_error_arcsec": _num(sigma_mc[j] / math.sqrt(max(n, 1))),
                 "bias_predicted_arcsec": _num(pred.bias_arcsec[j]),
+                "bias_predicted_error_arcsec": _num(pred.bias_error_arcsec[j]),
                 "truth_arcsec": _num(self.truth[j]),
                 "mean_arcsec": _num(self.results.values[ok, j].mean() if n else math.nan),
                 "sigma_tpoint_mean_arcsec": _num(np.mean(self.results.sigma_tpoint[ok, j])
@@ -254,39 +263,36 @@ def _ratio(a: float | None, b: float | None) -> float | None:
 
 
 def _f(x: float | None, spec: str) -> str:
-    """``format(x, spec)``, or a dash as wide for a missing value."""
+    """``format(x, spec)`` without a negative zero, or a dash as wide for a missing value."""
     if x is None or not math.isfinite(x):
         width = "".join(ch for ch in spec.split(".")[0] if ch.isdigit())
         return f"{'-':>{int(width) if width else 1}}"
-    return format(x, spec)
+    return format_number(x, spec)
 
 
 # ---------------------------------------------------------------------------------------------
-
-
-
 def run_plan(plan: Plan, workers: int | None = None, scheduler: str | None = None,
              members: int | None = None, progress: Progress | bool | None = None,
              executor: Executor | None = None, answers: bool = True,
              log: Callable[[str], None] | None = None) -> PlanResult:
     """Predictions and Monte Carlo of every variant of ``plan`` (and its answers).
     ``progress``: the command's :class:`~antsim.progress.Progress`, or whether to show one
-    (None: a bar on a terminal, lines off one)."""
+    (None: a bar on a terminal, lines off one).
+
+    The variants' members and the answers' own runs share the executor: with two workers
+    or more, the answers that need no variant (how long, coverage: long deterministic runs)
+    start with the members, the source lists once the variants are done; the stage after
+    the members counts the answers' steps."""
     t0 = time.perf_counter()
     shown, owned = progress_for(progress, "plan")
     own = executor is None
     try:
         if own:
-            shown.stage(f"starting {workers if workers is not None else 'the'} workers"
-                        if scheduler is None else f"connecting to {scheduler}")
+            shown.stage(_starting(workers) if scheduler is None
+                        else f"connecting to {scheduler}")
         executor = executor or make_executor(workers, scheduler)
-        variants = _run_variants(plan, executor, members, shown)
-        result = PlanResult(plan, variants, engine=executor.description)
-        if answers and (plan.durations or plan.sources or plan.coverage):
-            from .answers import answer_questions
-
-            result.answers = answer_questions(plan, variants, executor, log=log,
-                                              progress=shown)
+        result = _run(plan, executor, members, shown, answers, log)
+        result.engine = executor.description
     finally:
         if own and executor is not None:
             executor.close()
@@ -296,14 +302,79 @@ def run_plan(plan: Plan, workers: int | None = None, scheduler: str | None = Non
     return result
 
 
-def _result(done, plan: Plan, v: int):
-    """A task's result; a variant's scenario refused while it runs is named as the plan's
-    variant (the base scenario's file and key alone would not say which variant)."""
-    try:
-        return done.result()
-    except InputError as err:
-        raise InputError(plan.path, f"variants[{v}]", plan.variants[v].name,
-                         f"{err.field} = {err.value!r}: {err.problem}", err.hint) from None
+def _starting(workers: int | None) -> str:
+    if workers is None:
+        return "starting the workers"
+    if workers == 0:
+        return "working in this process"
+    return f"starting {workers} worker{'s' if workers != 1 else ''}"
+
+
+class _Count:
+    """What the flow's tasks done add to the progress: members (their blocks and members
+    simulated in full) while the variants run, the answers' steps after."""
+
+    def __init__(self, progress: Progress):
+        self.progress = progress
+        self.answer_steps = 0
+        self.answering = False
+
+    def __call__(self, task: Task, value: Any) -> None:
+        if task.kind == "block":
+            self.progress.advance(len(task.args[1]) - len(value[1]))
+        elif task.kind == "full":
+            self.progress.advance(1)
+        elif task.kind == "answer":
+            self.answer_steps += 1
+            if self.answering:
+                self.progress.advance(1)
+
+
+def _run(plan: Plan, executor: Executor, members: int | None, progress: Progress,
+         answers: bool, log: Callable[[str], None] | None) -> PlanResult:
+    n_var = len(plan.variants)
+    counts = [members or spec.members or plan.members for spec in plan.variants]
+    count = _Count(progress)
+    flow = Flow(executor, on_done=count)
+    questions = None
+    if answers and (plan.durations or plan.sources or plan.coverage):
+        from .answers import Questions
+
+        questions = Questions(plan, executor, log)
+    # beside the members when there are workers to share (one worker gains nothing)
+    early = questions is not None and executor.workers >= 2
+    beside = " (and the answers' long runs)" if early else ""
+    progress.stage(f"{n_var} variant{'s' if n_var != 1 else ''}: schedules, noise models and "
+                   f"members{beside}", total=sum(counts), unit="members")
+    if early:
+        questions.start(flow)  # first: their long runs are the longest chains
+    token = uuid.uuid4().hex
+    handles = [flow.start(_variant(plan, v, counts[v], token, executor)) for v in range(n_var)]
+
+    def tick() -> None:
+        progress.detail(running_words(flow.running()))
+
+    flow.run(until=handles, tick=tick)
+    result = PlanResult(plan, [h.result for h in handles])
+    if questions is not None:
+        if not early:
+            questions.start(flow)
+        questions.start_after(flow, result.variants)
+        n_q = questions.n_questions
+        progress.stage(f"answering {n_q} question{'s' if n_q != 1 else ''}",
+                       total=questions.steps, unit="steps")
+        count.answering = True
+        progress.set(count.answer_steps)
+        flow.run(tick=tick)
+        result.answers = questions.answers(result.variants)
+    return result
+
+
+def _named(err: InputError, plan: Plan, v: int) -> InputError:
+    """A variant's scenario refused while it runs, named as the plan's variant (the base
+    scenario's file and key alone would not say which variant)."""
+    return InputError(plan.path, f"variants[{v}]", plan.variants[v].name,
+                      f"{err.field} = {err.value!r}: {err.problem}", err.hint)
 
 
 def _refuse_undetermined(plan: Plan, v: int, shared: SharedSchedule,
@@ -324,68 +395,45 @@ def _refuse_undetermined(plan: Plan, v: int, shared: SharedSchedule,
                      "give the variant a fit_model without it")
 
 
-def _run_variants(plan: Plan, executor: Executor, members: int | None,
-                  progress: Progress) -> list[VariantResult]:
-    n_var = len(plan.variants)
-    counts = [members or spec.members or plan.members for spec in plan.variants]
-    progress.stage(f"{n_var} variants: schedules, noise models and members",
-                   total=sum(counts), unit="member")
-    token = uuid.uuid4().hex
-    quiet = [quiet_scenario(s) for s in plan.scenarios]
-    pending: dict[Any, tuple[str, int, Any]] = {}
-    for v in range(n_var):
-        pending[executor.submit(task_record, quiet[v])] = ("record", v, None)
-    jobs: list[Any] = [None] * n_var
-    shared: list[SharedSchedule | None] = [None] * n_var
-    noise: list[Any] = [None] * n_var
-    parts: list[list[MemberResults]] = [[] for _ in range(n_var)]
-    while pending:
-        kinds = [kind for kind, _, _ in pending.values()]
-        progress.detail(", ".join(f"{kinds.count(k)} {word} to go" for k, word in
-                                  (("record", "schedules"), ("noise", "noise models"))
-                                  if k in kinds))
-        done = next(iter(executor.as_completed(list(pending))))
-        kind, v, extra = pending.pop(done)
-        value = _result(done, plan, v)
-        if kind == "record":
-            if value.n_scans == 0:
-                raise InputError(plan.path, f"variants[{v}]", plan.variants[v].name,
-                                 "the controller schedules no scan in this variant",
-                                 "lengthen it, widen its window or elevation limits, or "
-                                 "give it sources that are up")
-            shared[v] = value
-            terms, fit_name = plan.scenarios[v].controller.fit_spec()
-            _refuse_undetermined(plan, v, value, terms)
-            job = Job(f"{token}:{v}", plan.scenarios[v], quiet[v], value, tuple(terms),
-                      fit_name, plan.seed)
-            jobs[v] = executor.share(job)
-            pending[executor.submit(task_noise, jobs[v], N_THERMAL)] = ("noise", v, None)
-            size = block_size(plan.scenarios[v].duration_s, plan.block_members)
-            for start in range(0, counts[v], size):
-                block = tuple(range(start, min(counts[v], start + size)))
-                pending[executor.submit(task_block, jobs[v], block)] = ("block", v, block)
-        elif kind == "noise":
-            noise[v] = value
-        elif kind == "block":
-            results, diverged = value
-            parts[v].append(results)
-            progress.advance(len(extra) - len(diverged))
-            for m in diverged:
-                pending[executor.submit(task_full, jobs[v], m)] = ("full", v, m)
-        else:
-            parts[v].append(value)
-            progress.advance(1)
-    progress.stage("predictions (Fisher)")
-    out = []
-    for v, spec in enumerate(plan.variants):
-        nm, unshareable = noise[v]
-        terms, _ = plan.scenarios[v].controller.fit_spec()
-        truth = truth_vector(plan.scenarios[v], terms)
-        pred = predict(shared[v], terms, nm, truth=truth)
-        out.append(VariantResult(spec=spec, scenario=plan.scenarios[v], shared=shared[v],
-                                 noise=nm, prediction=pred,
-                                 results=MemberResults.concat(parts[v]), truth=truth,
-                                 unshareable=unshareable, n_requested=counts[v],
-                                 level=plan.separation_level))
-    return out
-
+def _variant(plan: Plan, v: int, count: int, token: str, executor: Executor) -> Chain:
+    """The chain of variant ``v``: its deterministic run; its noise model and its members in
+    blocks; members whose schedule cannot be shared in full; its prediction."""
+    scenario = plan.scenarios[v]
+    span = span_words(scenario.duration_s)
+    quiet = quiet_scenario(scenario)
+    try:
+        shared = yield Task(task_record, (quiet,), "variant", f"schedule{{s}} of {span}", 1)
+    except InputError as err:
+        raise _named(err, plan, v) from None
+    if shared.n_scans == 0:
+        raise InputError(plan.path, f"variants[{v}]", plan.variants[v].name,
+                         "the controller schedules no scan in this variant",
+                         "lengthen it, widen its window or elevation limits, or "
+                         "give it sources that are up")
+    terms, fit_name = scenario.controller.fit_spec()
+    _refuse_undetermined(plan, v, shared, terms)
+    job = executor.share(Job(f"{token}:{v}", scenario, quiet, shared, tuple(terms), fit_name,
+                             plan.seed))
+    size = block_size(scenario.duration_s, plan.block_members)
+    blocks = [tuple(range(start, min(count, start + size))) for start in range(0, count, size)]
+    try:
+        done = yield [Task(task_noise, (job, N_THERMAL), "variant",
+                           f"noise model{{s}} of {span}", 1),
+                      *(Task(task_block, (job, b), "block", "block{s} of members")
+                        for b in blocks)]
+        (noise, unshareable), blocks_done = done[0], done[1:]
+        parts = [results for results, _ in blocks_done]
+        diverged = [m for _, members_out in blocks_done for m in members_out]
+        parts += yield [Task(task_full, (job, m), "full", "member{s} simulated in full")
+                        for m in diverged]
+    except InputError as err:
+        raise _named(err, plan, v) from None
+    truth = truth_vector(scenario, terms)
+    design = rejection_design(shared, terms, noise, [None])
+    draws = yield Task(rejection_draws, (design, range(REJECTION_DRAWS)), "variant",
+                       "simulation{s} of the robust fit's rejections")
+    pred = predict_prefixes(shared, terms, noise, [None], truth, draws)[0]
+    return VariantResult(spec=plan.variants[v], scenario=scenario, shared=shared, noise=noise,
+                         prediction=pred, results=MemberResults.concat(parts), truth=truth,
+                         unshareable=unshareable, n_requested=count,
+                         level=plan.separation_level)

@@ -15,6 +15,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from antsim.documents import Reference, reference_for
+from antsim.outdir import write_file
 from antsim.progress import Progress
 from antsim.simulate.runner import RunResult
 from controller.astro.sun import NIGHT_SUN_MAX_DEG
@@ -192,10 +193,9 @@ def write_outputs(result: RunResult, report: bool = True,
     fits = run_fits(result)
     doc = {k: (v.to_json() if v is not None else None) for k, v in fits.items()}
     fit_a = fits.get("A")
-    (out / "fit_variants.json").write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+    write_file(out / "fit_variants.json", json.dumps(doc, indent=2) + "\n")
     if fit_a is not None:
-        (out / "fit.json").write_text(json.dumps(fit_a.to_json(), indent=2) + "\n",
-                                      encoding="utf-8")
+        write_file(out / "fit.json", json.dumps(fit_a.to_json(), indent=2) + "\n")
         caption = f"{result.scenario.name} seed {result.seed}: fit A"
         write_model_file(TPointModel.from_fit(fit_a, caption=caption), out / "model.dat")
         written += ["fit.json"]
@@ -208,14 +208,13 @@ def write_outputs(result: RunResult, report: bool = True,
              f"model in use {result.model.name}")
     reference = reference_for(result.scenario.name)
     in_use = pointing_in_use(result.rows, result.model)
-    (out / "fit.txt").write_text(
-        fit_tables(fits, title, result.scenario.controller.night_sun_max_deg, reference,
-                   points_per_source(result.rows, fit_a), in_use),
-        encoding="utf-8")
+    write_file(out / "fit.txt",
+               fit_tables(fits, title, result.scenario.controller.night_sun_max_deg, reference,
+                          points_per_source(result.rows, fit_a), in_use))
     written += ["fit.txt"] + (["model.dat"] if fit_a is not None else [])
     if result.calibration is not None:
-        (out / "gaincurve.json").write_text(
-            json.dumps(result.calibration.to_json(), indent=2) + "\n", encoding="utf-8")
+        write_file(out / "gaincurve.json",
+                   json.dumps(result.calibration.to_json(), indent=2) + "\n")
         written += ["gaincurve.json"]
     good = sum(1 for r in result.rows if r["polarization"] == "AVG" and r["good"])
     summary = (f"{result.scenario.name}: {result.n_scans} {what} ({good} good) in "

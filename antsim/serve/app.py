@@ -22,15 +22,18 @@ from typing import TYPE_CHECKING
 
 from controller.errors import InputError
 
+from ..outdir import write_file
 from .clock import ClockSpec
 from .device import AntennaDevice, RequestLog
 
 if TYPE_CHECKING:
     from ..scenario import Scenario
 
-__all__ = ["LOOPBACK", "serve"]
+__all__ = ["LOOPBACK", "PRODUCTS", "serve"]
 
 LOOPBACK = ("127.0.0.1", "::1", "localhost")
+#: the files a session writes into its --out (a directory holding either is refused)
+PRODUCTS = ("truth.json", "requests.jsonl")
 #: wall time between status lines while requests come (s)
 STATUS_EVERY_S = 30.0
 
@@ -50,23 +53,31 @@ async def serve(scenario: Scenario, clock: ClockSpec, host: str = "127.0.0.1", p
                 seed: int | None = None, out: Path | None = None,
                 say: Callable[[str], None] = _say,
                 started: Callable[[AntennaDevice], None] | None = None) -> int:
-    """Serve ``scenario`` until stopped; returns the exit status (0)."""
-    log = None
-    if out is not None:
-        out.mkdir(parents=True, exist_ok=True)
-        log = RequestLog(out / "requests.jsonl")
+    """Serve ``scenario`` until stopped; returns the exit status (0). The outputs are made
+    once the server listens: a port in use leaves ``out`` as it was."""
+    device = AntennaDevice(host, port, scenario, seed, clock, say=say)
     try:
-        device = AntennaDevice(host, port, scenario, seed, clock, log=log, say=say)
+        await device.start()
+    except OSError as err:
+        raise _bind_error(err, host, port) from None
+    try:
         if out is not None:
+            # both or neither: a session that cannot start leaves nothing to refuse the next
+            out.mkdir(parents=True, exist_ok=True)
             _write_truth(device, out)
-        try:
-            await device.start()
-        except OSError as err:
-            raise _bind_error(err, host, port) from None
+            try:
+                device.log = RequestLog(out / "requests.jsonl")
+            except BaseException:
+                (out / "truth.json").unlink(missing_ok=True)
+                raise
         return await _run(device, host, out, say, started)
+    except BaseException:
+        if device.server is not None and device.server.is_serving():
+            await device.stop()
+        raise
     finally:
-        if log is not None:
-            log.close()
+        if device.log is not None:
+            device.log.close()
 
 
 async def _run(device: AntennaDevice, host: str, out: Path | None,
@@ -109,7 +120,9 @@ async def _run(device: AntennaDevice, host: str, out: Path | None,
     wrote = ""
     if out is not None:
         _write_truth(device, out)
-        wrote = f"; wrote {out / 'truth.json'} and {out / 'requests.jsonl'}"
+        wrote = f"; wrote {out / 'truth.json'}" + (
+            f" and {out / 'requests.jsonl'}" if device.log is not None
+            else f" ({out / 'requests.jsonl'} holds the requests logged before it failed)")
     say(f"stopped ({why[0]}) after {device.requests} requests ({device.serving_s:.2f} s "
         f"serving them) at clock "
         f"{device.antenna.clock_s():.1f} s{wrote}")
@@ -140,7 +153,7 @@ async def _status(device: AntennaDevice, say: Callable[[str], None],
 
 def _write_truth(device: AntennaDevice, out: Path) -> None:
     text = json.dumps(device.world.truth(), indent=2) + "\n"
-    (out / "truth.json").write_text(text, encoding="utf-8")
+    write_file(out / "truth.json", text)
 
 
 def _bind_error(err: OSError, host: str, port: int) -> InputError:

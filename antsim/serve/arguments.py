@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["ArgumentError", "at_most", "integer", "number", "numbers", "quoted"]
+__all__ = ["ArgumentError", "at_most", "integer", "number", "numbers", "quoted", "within"]
 
 
 class ArgumentError(ValueError):
@@ -33,6 +33,16 @@ def number(args: tuple[bytes, ...], i: int, name: str) -> float:
     if not math.isfinite(value):
         raise ArgumentError(f"argument {i + 1} ({name}) {quoted(args[i])} is not a finite "
                             "number")
+    return value
+
+
+def within(args: tuple[bytes, ...], i: int, name: str, low: float, high: float,
+           unit: str = "") -> float:
+    """Argument ``i`` (called ``name``) as a finite float in ``low..high``."""
+    value = number(args, i, name)
+    if not low <= value <= high:
+        raise ArgumentError(f"argument {i + 1} ({name}) {quoted(args[i])}: must lie within "
+                            f"{low:g}..{high:g}{' ' + unit if unit else ''}")
     return value
 
 

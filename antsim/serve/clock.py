@@ -39,6 +39,11 @@ class ClockSpec:
         return math.isinf(self.factor)
 
 
+#: the accelerations a real-time clock may have: below, a minute of simulation takes more
+#: than a day; above, a 24-hour campaign passes in a tenth of a second
+MIN_FACTOR, MAX_FACTOR = 1e-3, 1e6
+
+
 def parse_clock(text: str) -> ClockSpec:
     """A clock specification; raises ValueError saying what is accepted."""
     spec = text.strip().lower()
@@ -51,10 +56,10 @@ def parse_clock(text: str) -> ClockSpec:
             factor = float(spec[1:])
         except ValueError:
             factor = math.nan
-        if math.isfinite(factor) and factor > 0:
+        if MIN_FACTOR <= factor <= MAX_FACTOR:
             return ClockSpec(f"x{factor:g}", factor)
-    raise ValueError("use virtual, realtime, or xK with K a positive number (x10: ten "
-                     "simulated seconds per second)")
+    raise ValueError(f"use virtual, realtime, or xK with K a positive number within "
+                     f"{MIN_FACTOR:g}..{MAX_FACTOR:g} (x10: ten simulated seconds per second)")
 
 
 class _Clock:
@@ -68,11 +73,14 @@ class _Clock:
         """Bring simulated time up to the clock's present (real-time clocks)."""
 
     def check_room(self, seconds: float, what: str) -> None:
-        """Refuse a command that would run past the end of the simulation."""
-        if self.env.now + seconds > self.end_s:
-            raise OutOfTimeError(f"{what} would end at {self.env.now + seconds:.1f} s, after "
-                                 f"the end of the simulation ({self.end_s:.1f} s: the "
-                                 "scenario's duration plus an hour's margin)")
+        """Refuse a command that would run past the end of the simulation; ``what`` names
+        the command (and the argument that sets its time)."""
+        end = self.env.now + seconds
+        if end > self.end_s:
+            shown = f"{end:.1f}" if abs(end) < 1e9 else f"{end:.6g}"
+            raise OutOfTimeError(f"{what} would end at {shown} s, after the end of the "
+                                 f"simulation ({self.end_s:.1f} s: the scenario's duration "
+                                 "plus an hour's margin)")
 
 
 class OutOfTimeError(RuntimeError):

@@ -21,6 +21,8 @@ __all__ = ["ProgramTrack", "TableError"]
 
 #: at most this many points in one table (a day at 1 s)
 MAX_POINTS = 86400
+#: azimuths (or hour angles) lie within two turns either way: modulo 360, or on a cable wrap
+AZ_LIMIT_DEG = 720.0
 
 
 class TableError(ValueError):
@@ -30,25 +32,27 @@ class TableError(ValueError):
 class ProgramTrack:
     """A :data:`controller.protocol.Trajectory` given by a table of points."""
 
-    def __init__(self, t_s, az_deg, el_deg):
+    def __init__(self, t_s, az_deg, el_deg, times_s: tuple[float, float] | None = None):
         self.t_s = np.empty(0)
         self.az_deg = np.empty(0)
         self.el_deg = np.empty(0)
         self._wrapped = np.empty(0, dtype=bool)
-        self.add(t_s, az_deg, el_deg)
+        self.add(t_s, az_deg, el_deg, times_s)
 
     @classmethod
-    def from_numbers(cls, values: list[float], track: ProgramTrack | None = None
-                     ) -> ProgramTrack:
-        """A table (or ``track`` with points added) from flat triplets t, az, el."""
+    def from_numbers(cls, values: list[float], track: ProgramTrack | None = None,
+                     times_s: tuple[float, float] | None = None) -> ProgramTrack:
+        """A table (or ``track`` with points added) from flat triplets t, az, el; with
+        ``times_s`` (first, last) the times must lie within it."""
         t, az, el = _triplets(values)
         if track is None:
-            return cls(t, az, el)
-        track.add(t, az, el)
+            return cls(t, az, el, times_s)
+        track.add(t, az, el, times_s)
         return track
 
-    def add(self, t_s, az_deg, el_deg) -> None:
-        """Add points (arrays of equal length); raises :class:`TableError`."""
+    def add(self, t_s, az_deg, el_deg, times_s: tuple[float, float] | None = None) -> None:
+        """Add points (arrays of equal length), times within ``times_s`` (first, last; None:
+        any); raises :class:`TableError`."""
         t = np.asarray(t_s, dtype=float).ravel()
         az = np.asarray(az_deg, dtype=float).ravel()
         el = np.asarray(el_deg, dtype=float).ravel()
@@ -66,6 +70,14 @@ class ProgramTrack:
             i = int(np.argmax(np.abs(el) > 90.0))
             raise TableError(f"point {i + 1}: elevation {float(el[i])!r} deg is outside "
                              "-90..90")
+        if np.any(np.abs(az) > AZ_LIMIT_DEG):
+            i = int(np.argmax(np.abs(az) > AZ_LIMIT_DEG))
+            raise TableError(f"point {i + 1}: azimuth {float(az[i])!r} deg is outside "
+                             f"-{AZ_LIMIT_DEG:g}..{AZ_LIMIT_DEG:g}")
+        if times_s is not None and np.any((t < times_s[0]) | (t > times_s[1])):
+            i = int(np.argmax((t < times_s[0]) | (t > times_s[1])))
+            raise TableError(f"point {i + 1}: time {float(t[i])!r} s is outside "
+                             f"{times_s[0]:g}..{times_s[1]:g} s (a day around the simulation)")
         if t.size > 1 and np.any(np.diff(t) <= 0.0):
             i = int(np.argmax(np.diff(t) <= 0.0))
             raise TableError(f"point {i + 2}: time {float(t[i + 1])!r} s does not follow "

@@ -41,7 +41,8 @@ def add_sensors(sensors: aiokatcp.SensorSet, altaz: bool,
         S(float, "offset.el", "offset of the second axis from the program track", "deg"),
         S(MountMode, "mount.mode", "parked, slewing, moving (to an offset or feed angle, "
           "and settling) or tracking"),
-        S(bool, "mount.on-target", "tracking the program track, settled"),
+        S(bool, "mount.on-target", "tracking the program track, settled, within the "
+          "mount's limits"),
         S(float, "feed.angle", "feed box angle", "deg"),
         S(float, "weather.air-temperature", "air temperature", "degC"),
         S(float, "weather.pressure", "air pressure", "hPa"),
@@ -78,11 +79,15 @@ def update_sensors(sensors: aiokatcp.SensorSet, world, busy: str | None, control
         mode = MountMode.TRACKING
     else:
         mode = MountMode.PARKED
+    limits = world.scenario.mount
+    # a track that leaves the limits (a table that sets below them) is not on target
+    inside = (limits.az.min_deg <= az <= limits.az.max_deg
+              and limits.el.min_deg <= el <= limits.el.max_deg)
     values = {
         "clock.seconds": float(antenna.clock_s()), "clock.utc": utc,
         "encoder.az": az, "encoder.el": el,
         "offset.az": mount.offset_deg[0], "offset.el": mount.offset_deg[1],
-        "mount.mode": mode, "mount.on-target": mode is MountMode.TRACKING,
+        "mount.mode": mode, "mount.on-target": mode is MountMode.TRACKING and inside,
         "feed.angle": antenna.feed_angle_deg(),
         "weather.air-temperature": w.temperature_c, "weather.pressure": w.pressure_hpa,
         "weather.relative-humidity": w.relative_humidity,

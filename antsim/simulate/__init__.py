@@ -7,7 +7,9 @@
 * :mod:`.vectorized`: members on a shared schedule, vectorized across members, and members
   simulated in full;
 * :mod:`.streaming`: the quiet run in a second process, its schedule streamed to the members;
-* :mod:`.ensemble`: tasks and executors (this process, a local process pool, Dask).
+* :mod:`.ensemble`: tasks and executors (this process, a local process pool, Dask);
+* :mod:`.flow`: several chains of tasks on one executor at once (each a generator of the
+  tasks it needs next), the longest chains' tasks first.
 
 ``antsim run``, ``antsim plan``, ``antsim diagnose`` and the demo use them; none of those
 features imports another.

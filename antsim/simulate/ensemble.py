@@ -166,7 +166,7 @@ class PoolExecutor(Executor):
         import multiprocessing
 
         self.workers = workers
-        self.description = f"local process pool of {workers} workers"
+        self.description = f"local process pool of {workers} worker{'s' if workers != 1 else ''}"
         with single_threaded():
             self._pool = ProcessPoolExecutor(max_workers=workers,
                                              mp_context=multiprocessing.get_context("spawn"))
@@ -200,7 +200,8 @@ class DaskExecutor(Executor):
                              "give its address, e.g. tcp://127.0.0.1:8786") from None
         info = self._client.scheduler_info()
         self.workers = max(1, sum(w.get("nthreads", 1) for w in info["workers"].values()))
-        self.description = f"Dask scheduler {address} ({self.workers} worker threads)"
+        self.description = (f"Dask scheduler {address} ({self.workers} worker "
+                            f"thread{'s' if self.workers != 1 else ''})")
 
     def share(self, obj: Any) -> Any:
         return self._client.scatter(obj, broadcast=True, hash=False)

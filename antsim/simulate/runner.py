@@ -16,17 +16,25 @@ from pathlib import Path
 import simpy
 
 from antsim._version import __version__
+from antsim.outdir import write_file
 from antsim.progress import Progress, progress_for
 from antsim.scenario import Scenario
 from antsim.world.world import World
 from controller.astro.earth import UtcLabeller
+from controller.errors import InputError
 from controller.pointing.legacy import w_terms_marker
 from controller.pointing.model import PointingModel
 from controller.program.campaign import ControlProgram
 from controller.program.recordings import RecordingWriter, recording_columns
 from controller.protocol import Antenna
 
-__all__ = ["RunResult", "check_scenario", "recording_meta", "run_campaign", "simulate"]
+__all__ = ["NoScanError", "RunResult", "check_scenario", "recording_meta", "run_campaign",
+           "simulate"]
+
+
+class NoScanError(InputError):
+    """A scenario whose controller can schedule no scan at all (its window, elevation,
+    hour-angle and declination limits never let a source be observed)."""
 
 
 @dataclass
@@ -129,8 +137,6 @@ def simulate(scenario: Scenario, seed: int | None = None, model: PointingModel |
         program_class = OpticalPointingProgram
     program = program_class(scenario.controller, antenna, sink=collect, progress=progress)
     if program.scan_duration_s > scenario.duration_s:
-        from controller.errors import InputError
-
         raise InputError(scenario.path, "campaign.duration_h", scenario.duration_s / 3600.0,
                          f"is shorter than one observation ({program.scan_duration_s:g} s)",
                          "lengthen the campaign or shorten controller.scan.integration_s")
@@ -144,11 +150,12 @@ def simulate(scenario: Scenario, seed: int | None = None, model: PointingModel |
 
 def check_scenario(scenario: Scenario, observer=None, targets=None) -> None:
     """Checks that need the sky, made before anything runs or is written: a catalogue source
-    that never rises above the elevation limit at this site, or a source the scheduler is told
-    to observe that is never inside the elevation window during the campaign."""
-    from controller.errors import InputError
+    that never rises above the elevation limit at this site, a source the scheduler is told
+    to observe that is never inside the elevation window during the campaign, or limits
+    (window, elevations, hour angle, declination) that let no source be observed at any time
+    (:class:`NoScanError`)."""
     from controller.program.campaign import plan_targets
-    from controller.program.observer import never_rises, never_visible
+    from controller.program.observer import never_rises, never_visible, why_unschedulable
 
     if observer is None:
         observer, targets = plan_targets(scenario.controller)
@@ -171,6 +178,11 @@ def check_scenario(scenario: Scenario, observer=None, targets=None) -> None:
                              f"never between {sched.elevation_min_deg:g} and "
                              f"{sched.elevation_max_deg:g} deg elevation during the campaign",
                              "remove it or lengthen the campaign")
+    key, why = why_unschedulable(observer, targets, sched, scenario.duration_s)
+    if why:
+        raise NoScanError(scenario.path, f"controller.scheduler.{key}", getattr(sched, key),
+                          f"the controller can schedule no scan: {why}",
+                          "widen the scheduler's limits, or move or lengthen the campaign")
 
 
 def run_campaign(scenario: Scenario, out_dir: str | Path, seed: int | None = None,
@@ -202,6 +214,13 @@ def run_campaign(scenario: Scenario, out_dir: str | Path, seed: int | None = Non
         try:
             result = simulate(scenario, seed, model, sink=writer.write_scan, progress=progress,
                               antenna=antenna)
+            writer.check_replayed()  # rows this run would not write: refused, kept
+            if not result.rows and writer.existing_rows == 0:
+                raise NoScanError(scenario.path, "campaign.duration_h",
+                                  scenario.duration_s / 3600.0, "the controller made no scan "
+                                  "in the campaign: no source was within its limits when it "
+                                  "looked", "widen the scheduler's limits, or move or "
+                                  "lengthen the campaign")
         except BaseException:
             # a file with a header and no scan would only block the next plain run
             if writer.rows_written == 0 and writer.existing_rows == 0:
@@ -212,8 +231,7 @@ def run_campaign(scenario: Scenario, out_dir: str | Path, seed: int | None = Non
                 shown.close()
     result.out_dir = out
     if antenna is None:
-        (out / "truth.json").write_text(json.dumps(result.truth, indent=2) + "\n",
-                                        encoding="utf-8")
+        write_file(out / "truth.json", json.dumps(result.truth, indent=2) + "\n")
     return result
 
 

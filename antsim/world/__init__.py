@@ -9,8 +9,9 @@ control program drives.
   behind one interface), :mod:`.beam`, :mod:`.receiver`, :mod:`.atmosphere`, :mod:`.camera`.
 
 May import: :mod:`controller` (the protocol it implements, astronomy, and the pointing terms
-that express the truth in the controller's vocabulary), :mod:`antsim.tomlcheck`, and
+that express the truth in the controller's vocabulary), :mod:`antsim.tomlcheck`,
+:mod:`antsim.schema.keys` (the effects declare their parameters with it) and
 :mod:`antsim.scenario` (the type the world is built from); never the run, figures, plans,
-diagnosis or the command line. The parts' settings are defined beside them and read by
-:mod:`antsim.scenario`.
+diagnosis or the command line. The parts' settings are defined beside them, declared key by
+key in :mod:`antsim.schema.scenario` and read by :mod:`antsim.scenario`.
 """

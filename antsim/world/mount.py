@@ -178,17 +178,22 @@ class Mount:
         self.on_track = True
         return slew_s + c.settle_s
 
-    def set_offset(self, d_az_deg: float, d_el_deg: float):
-        """simpy process: move to a new offset from the trajectory and settle."""
-        c = self.config
+    def offset_move_s(self, d_az_deg: float, d_el_deg: float) -> float:
+        """Time to move from the present offset to (``d_az_deg``, ``d_el_deg``) and settle
+        (s), without moving."""
         old_az, old_el = self.offset_deg
         t_az, t_el = self._axis_times(d_az_deg - old_az, d_el_deg - old_el)
+        return float(max(t_az, t_el)) + self.config.settle_s
+
+    def set_offset(self, d_az_deg: float, d_el_deg: float):
+        """simpy process: move to a new offset from the trajectory and settle."""
+        old_az, old_el = self.offset_deg
+        duration = self.offset_move_s(d_az_deg, d_el_deg)
         if d_az_deg != old_az:
             self.approach = (math.copysign(1.0, d_az_deg - old_az), self.approach[1])
         if d_el_deg != old_el:
             self.approach = (self.approach[0], math.copysign(1.0, d_el_deg - old_el))
         self.offset_deg = (d_az_deg, d_el_deg)
         self.moves += 1
-        duration = float(max(t_az, t_el)) + c.settle_s
         yield self.env.timeout(duration)
         return duration

@@ -468,10 +468,14 @@ class SimulatedAntenna:
             raise AntennaError(f"feed angle must be a finite number of degrees, not {angle_deg!r}")
         return self.env.process(self._turn_feed(angle))
 
-    def _turn_feed(self, angle_deg: float):
+    def feed_turn_s(self, angle_deg: float) -> float:
+        """Time to turn the feed box to ``angle_deg`` and settle (s), without turning."""
         cfg = self.world.scenario.mount
         speed = getattr(cfg, "feed_speed_deg_s", 2.0)
-        duration = abs(angle_deg - self._feed_angle_deg) / speed + cfg.settle_s
+        return abs(angle_deg - self._feed_angle_deg) / speed + cfg.settle_s
+
+    def _turn_feed(self, angle_deg: float):
+        duration = self.feed_turn_s(angle_deg)
         yield self.env.timeout(duration)
         self._feed_angle_deg = angle_deg
         return duration

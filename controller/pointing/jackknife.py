@@ -68,9 +68,9 @@ class JackknifeResult:
         """``sigma * sqrt(dof / (dof - 2))``: the standard deviation of a t variable with
         ``dof`` degrees of freedom in units of sigma, so that (error / this) has unit spread.
         Infinite where dof <= 2 (the t distribution then has no finite variance)."""
-        with np.errstate(invalid="ignore", divide="ignore"):
+        with np.errstate(invalid="ignore", divide="ignore"):  # 0 x inf: NaN, said so
             factor = np.where(self.dof > 2.0, np.sqrt(self.dof / (self.dof - 2.0)), np.inf)
-        return np.where(np.isfinite(self.sigma), self.sigma * factor, np.nan)
+            return np.where(np.isfinite(self.sigma), self.sigma * factor, np.nan)
 
 
 @dataclass(frozen=True)

@@ -172,10 +172,13 @@ class Equations:
 # ---------------------------------------------------------------------------------------------
 # the stages of the 1990 report
 # ---------------------------------------------------------------------------------------------
-def lad_fit(eq: Equations) -> np.ndarray:
+def lad_fit(eq: Equations, centre: np.ndarray | None = None,
+            band_rows: int | None = None) -> np.ndarray:
     """Stage 1: least-absolute-deviation coefficients of every observation (0 for terms the
-    data cannot determine)."""
-    return _lad_stage(eq).coeffs
+    data cannot determine). ``centre``: an estimate of them, one per term, where the search
+    starts, with ``band_rows`` rows about it in the first LP (:func:`solvers._lad_dense`:
+    the same optimum, found sooner from a close centre)."""
+    return _lad_stage(eq, centre=centre, band_rows=band_rows).coeffs
 
 
 @dataclass(frozen=True)
@@ -189,11 +192,12 @@ class _LadFit:
 
 
 def _lad_stage(eq: Equations, prior: _LadFit | None = None,
-               centre: np.ndarray | None = None) -> _LadFit:
+               centre: np.ndarray | None = None, band_rows: int | None = None) -> _LadFit:
     """:func:`lad_fit`; ``prior``: that of the same design (``eq.a_w``) fitted to other data,
     whose rank analysis is this one's and whose blocks of unchanged data are not solved
     again; ``centre``: an estimate of the coefficients, one per term (the LAD of a larger
-    set of observations), where the LAD's search starts (:func:`solvers._lad_dense`)."""
+    set of observations), where the LAD's search starts, ``band_rows`` rows about it in the
+    first LP (:func:`solvers._lad_dense`)."""
     rank = prior.rank if prior is not None else _independent_columns(eq.a_w, eq.names)
     coeffs = np.zeros(len(eq.names))
     blocks: list[_LadBlock | None] = []
@@ -201,7 +205,7 @@ def _lad_stage(eq: Equations, prior: _LadFit | None = None,
         k = list(rank.kept)
         coeffs[k], blocks = _lad_blocks(eq.a_w[:, k], eq.y_w, eq.n,
                                         None if prior is None else prior.blocks,
-                                        None if centre is None else centre[k])
+                                        None if centre is None else centre[k], band_rows)
     return _LadFit(coeffs, rank, blocks)
 
 

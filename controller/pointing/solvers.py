@@ -216,26 +216,33 @@ def _lad_full(a: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 
 def _lad_dense(a: np.ndarray, y: np.ndarray, rng: np.random.Generator,
-               centre: np.ndarray | None = None) -> np.ndarray:
+               centre: np.ndarray | None = None, band_rows: int | None = None) -> np.ndarray:
     """Exact LAD coefficients for a full-column-rank ``a`` (rows x p). ``centre``: an
     estimate of them (the LAD of a related problem: diagnose's fit variants centre a day or
     night window's on the fit of every scan), tried first as the band's centre in place of a
     subsample's LAD; where it proves too far off (:data:`_LAD_CENTRE_TRIES` bands), the
-    subsample's as without it. Either way the exact optimum, the rows kept in the last LP
-    (and so the rounding of the result: ~1e-13 relative) depending on the centre."""
+    subsample's as without it. ``band_rows``: the first band's rows about the centre
+    (default :data:`_LAD_BAND_ROWS`); given, a problem of more than twice as many rows
+    starts from the centre too, however small (the plan's growing designs: each LAD centred
+    on the one of the design a night shorter). Either way the exact optimum, the rows kept in
+    the last LP (and so the rounding of the result: ~1e-13 relative) depending on the
+    centre."""
     n, p = a.shape
-    if n <= max(2 * _LAD_DIRECT_ROWS, 40 * p):
+    direct = n <= max(2 * _LAD_DIRECT_ROWS, 40 * p)
+    band = int(max(_LAD_BAND_ROWS if band_rows is None else band_rows, 40 * p))
+    if direct and (centre is None or band_rows is None or n <= 2 * band):
         return _lad_full(a, y)
     if centre is not None:
         try:
             chol = scipy.linalg.cholesky(np.einsum("ij,ik->jk", a, a), lower=False)
         except np.linalg.LinAlgError:
             chol = None
-        band = int(max(_LAD_BAND_ROWS, 40 * p))
         found = None if chol is None else _lad_band(
             a, y, centre, chol, band, min(n // 2, band << _LAD_CENTRE_TRIES))
         if found is not None:
             return found
+    if direct:  # a small problem whose centre was too far off
+        return _lad_full(a, y)
     # A subsample of m rows gives coefficients good to ~sqrt(p/m) of the residual scale, so
     # the rows whose residual sign is then uncertain number ~kappa sqrt(p/m) n, with kappa ~4
     # found on correlated, misfitted designs (tpoint8 on Ghigo-type errors). Choose m so that
@@ -333,7 +340,8 @@ def _lad(a: np.ndarray, y: np.ndarray, n_xel: int | None = None) -> np.ndarray:
 
 def _lad_blocks(a: np.ndarray, y: np.ndarray, n_xel: int | None = None,
                 prior: Sequence[_LadBlock | None] | None = None,
-                centre: np.ndarray | None = None) -> tuple[np.ndarray, list[_LadBlock | None]]:
+                centre: np.ndarray | None = None, band_rows: int | None = None
+                ) -> tuple[np.ndarray, list[_LadBlock | None]]:
     """Exact LAD fit of ``y ~ a @ c``, and its blocks.
 
     When the first ``n_xel`` rows (cross-elevation) and the rest (elevation) involve disjoint
@@ -343,7 +351,8 @@ def _lad_blocks(a: np.ndarray, y: np.ndarray, n_xel: int | None = None,
     other data (diagnose's fit variants before and after removing a finding's signal): a
     block whose rows, columns, data and generator state are that fit's is its solution, the
     generator left where its solve left it (the same bytes as solving it again).
-    ``centre``: an estimate of the coefficients (:func:`_lad_dense`).
+    ``centre``, ``band_rows``: an estimate of the coefficients and the band about it
+    (:func:`_lad_dense`).
     """
     p = a.shape[1]
     nonzero_rows = (a != 0).any(axis=1)
@@ -367,7 +376,7 @@ def _lad_blocks(a: np.ndarray, y: np.ndarray, n_xel: int | None = None,
         old = prior[i] if prior is not None and i < len(prior) else None
         if old is None or not old.solves(rows, cols, y_block, block_centre, state_in):
             block_coeffs = _lad_dense(np.ascontiguousarray(a[np.ix_(rows, cols)]), y_block, rng,
-                                      block_centre)
+                                      block_centre, band_rows)
             old = _LadBlock(rows, cols, y_block, block_centre, state_in,
                             rng.bit_generator.state, block_coeffs)
         rng.bit_generator.state = old.state_out

@@ -10,10 +10,15 @@ position. Azimuth arguments are North-based (N = 0, E = 90 deg) everywhere in th
 
 Two facts fix the signs (both are tested):
 
-* TPOINT evaluates its basic terms with its own South-based azimuth ``A_S = A_N - 180 deg``.
-  Only then does a fit of ``examples/mmt_20210821_k_and_e.dat`` reproduce
-  TPOINT's published AN = +2.495" and AW = -10.335" (with North-based azimuth both flip).
-  The harmonic generator has its own azimuth and result signs (below).
+* TPOINT's basic terms are evaluated here at ``A_S = A_N - 180 deg``, where ``A_N`` is
+  antsim's azimuth of TPOINT data (a file's azimuth + 180 deg, :mod:`.tpoint`): a fit of
+  ``examples/mmt_20210821_k_and_e.dat`` then reproduces TPOINT's published AN = +2.495" and
+  AW = -10.335". TPOINT itself writes its terms in ``A_T = 180 deg - (the file's
+  azimuth)``, South = 0, East = 90, its azimuth corrections growing with ``A_T``: the
+  formulas below are TPOINT's, turned to ``A_S = 180 deg - A_T`` (TPOINT routine tptPterms,
+  note 8 and terms 31-35). The harmonic generator's azimuth below is ``A_T`` itself. On
+  North-based data (CSV, recordings) AN, AW, ACEC, ACES and the harmonics odd in A
+  therefore carry the sign opposite to TPOINT's (docs/assumptions.md, "TPOINT's azimuth").
 * Ghigo (1990) and katpoint write the opposite quantity, "indicated minus true", which is
   minus the TPOINT correction. Their basis functions are therefore negated here, so that a
   fitted coefficient equals the number those sources print.
@@ -39,7 +44,8 @@ S: left-right on the sky = dA cos E, Z: zenith distance) + one or two factors, e
 are TPOINT's own, fixed by TPOINT's FAUTO fit of ``examples/auxtel_20200315.dat``
 (22 terms, ten of them harmonics with results A, E and S and arguments up to 7A; tested):
 
-* the azimuth of a harmonic is ``A_H = 180 deg - A_S = -A_N`` (mod 360 deg), not ``A_S``;
+* the azimuth of a harmonic is ``A_H = 180 deg - A_S = -A_N`` (mod 360 deg), not ``A_S``:
+  TPOINT's own ``A_T``;
 * an ``A`` or ``S`` result is minus the harmonic, as TPOINT's IA and CA are: ``HACA2`` is
   dA = -c cos 2A_H, ``HSCA5CE8`` is dA cos E = -c cos 5A_H cos 8E;
 * an ``E`` result is plus it (``HESA2`` is dE = +c sin 2A_H = -c sin 2A_N) and a ``Z`` result
@@ -96,6 +102,8 @@ __all__ = [
     "GHIGO_EQUIVALENTS",
     "GHIGO_TILT",
     "KATPOINT_EQUIVALENTS",
+    "KNOWN_TERMS",
+    "NOT_ESTABLISHED",
     "WRIGHT_EQUIVALENTS",
     "Regressor",
     "Term",
@@ -108,6 +116,7 @@ __all__ = [
     "get_term",
     "harmonic_factors",
     "is_term_name",
+    "term_refusal",
 ]
 
 # A term is a sum of components; each component is sign * product of factors, landing in
@@ -215,6 +224,8 @@ _FUNCTIONS = {
     "cot": lambda x: 1.0 / np.tan(x),
     "lin": lambda x: x,
     "csc": lambda x: 1.0 / np.sin(x),
+    # the powers of TPOINT's polynomial terms (PEE2 ...): x ** n, n = 2..9
+    **{f"pow{n}": (lambda x, n=n: x**n) for n in range(2, 10)},
 }
 
 
@@ -298,7 +309,8 @@ def basis_parts(terms: Sequence[Term], az_rad: np.ndarray, el_rad: np.ndarray, f
 
 _MATH = {"sin": math.sin, "cos": math.cos, "tan": math.tan,
          "sec": lambda x: 1.0 / math.cos(x), "cot": lambda x: 1.0 / math.tan(x),
-         "lin": lambda x: x, "csc": lambda x: 1.0 / math.sin(x)}
+         "lin": lambda x: x, "csc": lambda x: 1.0 / math.sin(x),
+         **{f"pow{n}": (lambda x, n=n: x**n) for n in range(2, 10)}}
 
 
 def _argument_scalar(arg, az: float, el: float, feed=None) -> float:
@@ -390,14 +402,28 @@ def _tpoint_terms() -> dict[str, Term]:
            ("E", -1, (COS_E,))),
         _t("TX", "tube flexure / refraction error, cot E law: dE = -TX cot E",
            ("E", -1, (COT_E,))),
+        # TPOINT defines ACEC and ACES as its harmonics HACA and HASA (tptPterms, terms 34
+        # and 35: dAz = ACES sin Az, dAz = ACEC cos Az in its own azimuth A_H): written
+        # with A_S = 180 deg - A_H, ACEC = +cos A_S, ACES = -sin A_S (tested equal to HACA,
+        # HASA column by column)
         _t("ACEC", "azimuth centering error, cos component: dA = +ACEC cos A",
            ("A", 1, (COS_AS,))),
-        _t("ACES", "azimuth centering error, sin component: dA = +ACES sin A",
-           ("A", 1, (SIN_AS,))),
+        _t("ACES", "azimuth centering error, sin component: dA = -ACES sin A",
+           ("A", -1, (SIN_AS,))),
         _t("ECEC", "elevation centering error, cos component: dE = +ECEC cos E",
            ("E", 1, (COS_E,))),
         _t("ECES", "elevation centering error, sin component: dE = +ECES sin E",
            ("E", 1, (SIN_E,))),
+        # TPOINT's Nasmyth rotator displacements (P. T. Wallace, TPOINT routine tptPterms,
+        # revision of 14 November 2006, terms 38 and 39): left-right on the sky
+        # NRX cos E and elevation -NRX sin E; left-right NRY sin E and elevation +NRY cos E.
+        # Functions of the elevation only: the image at a Nasmyth focus turns with the
+        # elevation, so a displacement of the rotator's axis draws this circle on the sky.
+        # Left-right is minus dA cos E here (as CA's), elevation as it is (as IE's).
+        _t("NRX", "Nasmyth rotator displacement: dA cos E = -NRX cos E, dE = -NRX sin E",
+           ("S", -1, (COS_E,)), ("E", -1, (SIN_E,))),
+        _t("NRY", "Nasmyth rotator displacement: dA cos E = -NRY sin E, dE = +NRY cos E",
+           ("S", -1, (SIN_E,)), ("E", 1, (COS_E,))),
     ]
     return {t.name: t for t in terms}
 
@@ -441,6 +467,35 @@ def _harmonic(name: str) -> Term | None:
     if any(a == "A" for _, a, _ in raw):
         desc += ", A_H = -A_N"
     return _t(name, f"harmonic: {words[result]}{name} {desc}", (axis, sign, factors))
+
+
+# ---------------------------------------------------------------------------------------------
+# TPOINT polynomial terms
+# ---------------------------------------------------------------------------------------------
+_POLYNOMIAL = re.compile(r"^P([AESZ])([AEZ])(\d?)(?:([AEZ])(\d?))?$")
+
+
+def _polynomial(name: str) -> Term | None:
+    """TPOINT's polynomial terms: ``P`` + result letter (as the harmonics': A, E, S, Z) +
+    one or two factors, each a coordinate (E elevation, Z zenith distance, radians) and its
+    power 1..9 (1 if left out): ``PEE1`` is dE = +PEE1 E, an elevation scale error (the
+    coefficient is the error at E = 1 rad), ``PSE2`` dA cos E = -PSE2 E^2. The result signs
+    are the harmonics' (TPOINT's dA and dA cos E results minus, dE plus, dZ = -dE), as in
+    RTS2's TPOINT terms PHH and PDD (dH = PHH H, dDec = PDD Dec). Polynomials in the
+    azimuth (``PAA1``) are refused (:func:`term_refusal`)."""
+    m = _POLYNOMIAL.match(name)
+    if not m:
+        return None
+    result, a1, n1, a2, n2 = m.groups()
+    raw = [(a1, int(n1 or 1))] + ([(a2, int(n2 or 1))] if a2 else [])
+    if any(a == "A" for a, _ in raw) or any(n == 0 for _, n in raw):
+        return None
+    factors = tuple(("lin" if n == 1 else f"pow{n}", a, 1) for a, n in raw)
+    axis, sign = _HARMONIC_RESULT[result]
+    words = {"A": "dA = ", "E": "dE = ", "S": "dA cos E = ", "Z": "dZ = "}
+    power = " * ".join(a if n == 1 else f"{a}^{n}" for a, n in raw)
+    return _t(name, f"polynomial: {words[result]}{'-' if result in 'AS' else '+'}{name} "
+              f"{power} (radians)", (axis, sign, factors), kind="scale")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -637,15 +692,40 @@ def get_term(name: str) -> Term:
         return _FIXED[key]
     if key in _REGISTERED:
         return _REGISTERED[key]
-    term = _harmonic(key)
+    term = _harmonic(key) or _polynomial(key)
     if term is None:
-        raise TermError(
-            f"unknown pointing term {name!r}: use a TPOINT name (IA IE CA NPAE AN AW TF TX "
-            "ACEC ACES ECEC ECES), a harmonic such as HESA2 or HSCA2CE, W1..W10, P1..P22, "
-            "A1..A7, B1..B7, or a thermal term (TEDFB TSDRL TEYFB TSYRL TNPNS TWPEW, "
-            "proxies TESUN TEFACE TSSIDE TNSUN TWSUN TEAIR)"
-        )
+        problem, hint = term_refusal(key)
+        raise TermError(f"{problem} {name!r}: {hint}" if problem == "unknown pointing term"
+                        else f"{problem}; {hint}")
     return term
+
+
+#: the terms any unknown name is told about
+KNOWN_TERMS = ("a TPOINT name (IA IE CA NPAE AN AW TF TX ACEC ACES ECEC ECES NRX NRY), a "
+               "harmonic such as HESA2 or HSCA2CE, a polynomial such as PEE1, W1..W10, "
+               "P1..P22, A1..A7, B1..B7, or a thermal term (TEDFB TSDRL TEYFB TSYRL TNPNS "
+               "TWPEW, proxies TESUN TEFACE TSSIDE TNSUN TWSUN TEAIR)")
+
+#: TPOINT terms antsim knows of but cannot define from public documents, and why
+NOT_ESTABLISHED: dict[str, str] = {
+    "TX10": "is TPOINT's variant of TX, whose definition no public TPOINT document "
+            "establishes (docs/assumptions.md)",
+}
+
+
+def term_refusal(name: str) -> tuple[str, str]:
+    """(problem, hint) for a name :func:`get_term` does not know: TPOINT terms whose
+    definition public documents do not establish are said to be so."""
+    key = name.strip().upper()
+    if key in NOT_ESTABLISHED:
+        return f"{key} {NOT_ESTABLISHED[key]}", "fit TX (dE = -TX cot E) instead"
+    m = _POLYNOMIAL.match(key)
+    if m and "A" in (m.group(2), m.group(4)):
+        return (f"{key} is a TPOINT polynomial in the azimuth, whose value depends on the "
+                "range TPOINT takes the azimuth in, which no public TPOINT document "
+                "establishes", "use harmonics (HACA, HASA, ...) or katpoint's P12 (dA = P12 A, "
+                "North-based)")
+    return "unknown pointing term", f"use {KNOWN_TERMS}"
 
 
 def is_term_name(name: str) -> bool:

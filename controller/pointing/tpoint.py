@@ -15,10 +15,17 @@ Pointing data (TPOINT's ``INDAT`` input), as in ``examples/*.dat``::
     ; 357.56 17.95 357.49 18.04 masked observation: read, flagged, not fitted by default
     END
 
-Azimuth in these files counts from SOUTH (S = 0, E = 90) as TPOINT does; the reader converts
-it to this package's North-based azimuth (N = 0, E = 90) and the writer converts back. That is
-the only place the conversion happens. "obs" is the true (catalogue, observed) position and
-"raw" the indicated (encoder) one, so the pointing error "indicated minus true" is raw - obs.
+The azimuth: TPOINT writes its terms in its own azimuth, South = 0, East = 90, the mirror
+image of the North-based one (A_T = 180 deg - A_N), and reads a file's azimuth North-based
+(N = 0, E = 90). The reader adds 180 deg to a file's azimuth (and the writer takes it off):
+that sum is antsim's azimuth of TPOINT data, the azimuth in which the terms of
+:mod:`.terms` reproduce TPOINT's own fits (docs/assumptions.md, "TPOINT's azimuth"). For a
+file in TPOINT's convention it is the true azimuth + 180 deg: a direction read from it as a
+North-based azimuth (diagnose's exact tilt, its "towards the north" groups) is half a turn
+off (docs/inputs.md, "The azimuth of a TPOINT file"; tested end to end in
+tests/end_to_end/test_tpoint_azimuth.py). This is the only place the conversion happens.
+"obs" is the true (catalogue, observed) position and "raw" the indicated (encoder) one, so
+the pointing error "indicated minus true" is raw - obs.
 
 Sexagesimal records: TPOINT's original record format (the JCMT's ``.pnt`` files, "TPOINT input
 version 1") gives catalogue and telescope RA/Dec as ``h m s  +d m s  h m s  +d m s`` followed
@@ -52,17 +59,19 @@ from typing import Literal
 
 import numpy as np
 
-from controller.errors import InputError, read_text_file
+from controller.errors import InputError, read_text_file, write_text_file
+from controller.filekind import tpoint_or_mod
 from controller.units import RAD_PER_DEG
 
 from .legacy import W_TERMS, W_TERMS_COMMENT, names_w_terms, relabel_reconstructed
 from .model import PointingModel
-from .terms import TermError, get_term
+from .terms import TermError, get_term, term_refusal
 
 __all__ = [
     "RunParameters",
     "TPointData",
     "TPointModel",
+    "caption_problem",
     "format_mod",
     "format_tpoint",
     "parse_mod",
@@ -225,9 +234,9 @@ class TPointData:
 
     ``coordinates`` says what the four position columns hold:
 
-    * ``"azel"`` (decimal records in an ``: ALTAZ`` file): azimuth North-based (converted
-      from the file's South-based azimuth) and elevation, degrees; ``rotator_deg`` holds the
-      fifth column when present (NaN where absent);
+    * ``"azel"`` (decimal records in an ``: ALTAZ`` file): antsim's azimuth of TPOINT data
+      (the file's + 180 deg: the module docstring says what it is) and elevation, degrees;
+      ``rotator_deg`` holds the fifth column when present (NaN where absent);
     * ``"radec"`` (sexagesimal records): right ascension (hours converted to degrees) and
       declination, with ``lst_hours`` the sidereal time (NaN if absent);
     * ``"decimal"`` (decimal records in a file whose options name another mount, such as
@@ -283,6 +292,8 @@ class TPointData:
             raise ValueError("alt-az data need the ALTAZ option")
         if "\n" in caption or not caption.strip():
             raise ValueError("the caption must be one non-empty line")
+        if caption_problem(caption):
+            raise ValueError(f"caption {caption!r} {caption_problem(caption)}")
         cols = [np.array(v, dtype=float).reshape(-1)
                 for v in (az_obs_deg, el_obs_deg, az_raw_deg, el_raw_deg)]
         n = cols[0].size
@@ -364,16 +375,33 @@ class TPointData:
                 "only decimal Az/El records (': ALTAZ', or --mount altaz) can be fitted",
             )
         keep = np.ones(len(self), dtype=bool) if include_masked else ~self.masked
+        if len(self) and not keep.any():
+            raise InputError(self.source, "observations", 0,
+                             f"every one of the {len(self)} observations is masked (';')",
+                             "--include-masked fits them too")
+        unread = np.flatnonzero(keep & ~np.isfinite(self.lat_obs_deg))
+        if unread.size:
+            i = int(unread[0])
+            raise InputError(f"{self.source}:{self.line_numbers[i]}", "observation",
+                             " ".join(self.extra_fields[i]) if self.extra_fields else "",
+                             "is a masked record whose fields are not an observation: "
+                             "--include-masked cannot fit it",
+                             "unmask only records of four or five numbers")
         az_obs = self.lon_obs_deg[keep]
         el_obs = self.lat_obs_deg[keep]
         d_az = (self.lon_raw_deg[keep] - az_obs + 180.0) % 360.0 - 180.0
         d_el = self.lat_raw_deg[keep] - el_obs
         el_rad = el_obs * RAD_PER_DEG
+        rotator = self.rotator_deg[keep]
         return PointingData(
             az_rad=az_obs * RAD_PER_DEG,
             el_rad=el_rad,
             xel_arcsec=d_az * 3600.0 * np.cos(el_rad),
             el_arcsec=d_el * 3600.0,
+            # the rotator column (ROTNL/ROTNR files) is the angle terms with a feed-angle
+            # factor read (HSCF, HECF, ...); TPOINT's NRX and NRY need only the elevation
+            feed_rad=(rotator * RAD_PER_DEG if rotator.size and np.isfinite(rotator).all()
+                      else None),
         )
 
 
@@ -398,6 +426,9 @@ def _decimal_record(tokens: list[str], where: str
         if not -360.0 <= value <= 720.0:
             raise InputError(where, name, value, "azimuth must lie within -360..720 deg")
     rotator = values[4] if len(values) == 5 else math.nan
+    if not -360.0 <= rotator <= 720.0 and len(values) == 5:
+        raise InputError(where, "rotator", rotator, "a rotator angle must lie within "
+                         "-360..720 deg")
     return (values[0], values[1], values[2], values[3], rotator, math.nan), ()
 
 
@@ -474,7 +505,13 @@ def _coordinates(kind: str | None, options: list[str], rows: np.ndarray, mount: 
 
 def parse_tpoint(text: str, source: str = "<string>", mount: str | None = None) -> TPointData:
     """Parse the text of a TPOINT pointing data file; ``source`` names it in errors.
-    ``mount="altaz"`` reads decimal records as Az/El whatever the options say."""
+    ``mount="altaz"`` reads decimal records as Az/El whatever the options say.
+
+    As TPOINT reads it: ``!`` starts a comment anywhere; on a record, a ``;`` after the
+    fields starts a comment (``... ; [0026] AT_O_...``); a ``;`` in front masks the record,
+    which is kept as masked whatever its fields hold (``; nan nan nan nan``: NaN, never
+    fitted). Refused: a file whose first line is not a caption, two mount options that
+    contradict each other, and an observation repeated exactly (it would count twice)."""
     if mount is not None and mount not in MOUNTS:
         raise InputError(source, "--mount", mount, f"must be one of {', '.join(MOUNTS)}")
     text = text.removeprefix("\ufeff")
@@ -482,12 +519,13 @@ def parse_tpoint(text: str, source: str = "<string>", mount: str | None = None) 
     options: list[str] = []
     comments: list[str] = []
     run: RunParameters | None = None
-    rows: list[tuple[float, float, float, float, float, float]] = []
+    rows: list[tuple[float, ...]] = []
     extras: list[tuple[str, ...]] = []
     masked: list[bool] = []
     line_numbers: list[int] = []
     kind: str | None = None
     has_end = False
+    mount_line: tuple[str, int] | None = None
 
     for line_no, raw_line in enumerate(text.splitlines(), start=1):
         where = f"{source}:{line_no}"
@@ -498,6 +536,7 @@ def parse_tpoint(text: str, source: str = "<string>", mount: str | None = None) 
             continue
         if caption is None:
             if stripped:
+                _check_caption(stripped, where)
                 caption = stripped
             continue
         content = _strip_comment(raw_line)
@@ -510,10 +549,17 @@ def parse_tpoint(text: str, source: str = "<string>", mount: str | None = None) 
             if run is not None:
                 raise InputError(where, "option", option,
                                  "option records must come before the run-parameters record")
+            word = option.split()[0].upper()
+            if word in _MOUNT_OPTIONS:
+                if mount_line is not None and mount_line[0] != word:
+                    raise InputError(where, "option", option,
+                                     f"contradicts ': {mount_line[0]}' on line "
+                                     f"{mount_line[1]}: a file's records are of one mount")
+                mount_line = (word, line_no)
             options.append(option.upper())
             continue
         if run is None:
-            run = _parse_run(content, where)
+            run = _parse_run(_strip_record_comment(content), where)
             continue
         if content.upper() == "END":
             has_end = True
@@ -524,21 +570,31 @@ def parse_tpoint(text: str, source: str = "<string>", mount: str | None = None) 
             if not content:
                 raise InputError(where, "observation", raw_line.strip(),
                                  "a ';' (masked observation) line needs an observation")
+        content = _strip_record_comment(content)
+        if content.upper() == "END" and not is_masked:
+            has_end = True
+            break
         tokens = content.split()
         record = _classify_record(tokens)
-        if record == "bad":
-            raise InputError(
-                where, "observation", content,
-                f"has {len(tokens)} fields; expected 4 or 5 decimal-degree fields "
-                "(A_obs E_obs A_raw E_raw [rotator]) or a sexagesimal RA/Dec record",
-            )
-        if kind is None:
-            kind = record
-        elif kind != record:
-            raise InputError(where, "observation", content,
-                             f"is a {record} record in a file of {kind} records")
-        row, extra = (_decimal_record(tokens, where) if record == "decimal"
-                      else _sexagesimal_record(tokens, where, content))
+        try:
+            if record == "bad":
+                raise InputError(
+                    where, "observation", content,
+                    f"has {len(tokens)} fields; expected 4 or 5 decimal-degree fields "
+                    "(A_obs E_obs A_raw E_raw [rotator]) or a sexagesimal RA/Dec record",
+                )
+            if kind is not None and kind != record:
+                raise InputError(where, "observation", content,
+                                 f"is a {record} record in a file of {kind} records")
+            row, extra = (_decimal_record(tokens, where) if record == "decimal"
+                          else _sexagesimal_record(tokens, where, content))
+        except InputError:
+            if not is_masked:
+                raise
+            # masked whatever its fields: kept, flagged, never fitted
+            row, extra = (math.nan,) * 6, tuple(tokens)
+        else:
+            kind = kind or record
         rows.append(row)
         extras.append(extra)
         masked.append(is_masked)
@@ -550,14 +606,18 @@ def parse_tpoint(text: str, source: str = "<string>", mount: str | None = None) 
         raise InputError(source, "run parameters", "",
                          "no run-parameters record (latitude d m s ...) after the caption")
     table = np.array(rows, dtype=float).reshape(-1, 6)
-    coordinates, notes = _coordinates(kind, options, table, mount, source)
+    masked_arr = np.array(masked, dtype=bool)
+    lines_arr = np.array(line_numbers, dtype=int)
+    _refuse_repeats(table, masked_arr, lines_arr, text, source)
+    coordinates, notes = _coordinates(kind, options,
+                                      table[np.isfinite(table[:, :4]).all(axis=1)], mount,
+                                      source)
     if coordinates == "azel":
-        # South-based (TPOINT) to North-based azimuth: the only place this happens.
+        # TPOINT's file azimuth plus 180 deg: antsim's azimuth of TPOINT data, the only
+        # place this happens (the module docstring says what it is and is not)
         table[:, 0] = (table[:, 0] + 180.0) % 360.0
         table[:, 2] = (table[:, 2] + 180.0) % 360.0
     arrays = [np.ascontiguousarray(table[:, i]) for i in range(6)]
-    masked_arr = np.array(masked, dtype=bool)
-    lines_arr = np.array(line_numbers, dtype=int)
     for a in (*arrays, masked_arr, lines_arr):
         a.setflags(write=False)
     return TPointData(
@@ -567,6 +627,52 @@ def parse_tpoint(text: str, source: str = "<string>", mount: str | None = None) 
         masked=masked_arr, line_numbers=lines_arr, extra_fields=tuple(extras),
         source=source, has_end=has_end, comments=tuple(comments), notes=notes,
     )
+
+
+def _strip_record_comment(content: str) -> str:
+    """A record's fields: what comes before a ``;`` that follows them (a comment, as TPOINT
+    reads it: ``... 314.46 ; [0026] AT_O_20200315_000026``)."""
+    return content.split(";", 1)[0].strip()
+
+
+def caption_problem(line: str) -> str | None:
+    """Why ``line`` cannot be a TPOINT data file's caption (free text), or None: an option
+    record, or three or more numbers (a run-parameters record or an observation), means the
+    caption is missing and TPOINT would take that record for it and misread what follows."""
+    tokens = line.split()
+    if line.strip().startswith(":"):
+        return "is an option record: the caption line (free text) is missing before it"
+    if len(tokens) >= 3 and all(_NUMBER.match(t) for t in tokens):
+        return ("is a record of numbers: the caption line (free text) is missing before "
+                "it")
+    return None
+
+
+def _check_caption(line: str, where: str) -> None:
+    problem = caption_problem(line)
+    if problem:
+        raise InputError(where, "caption", line, problem,
+                         "a TPOINT data file starts with a caption, then its options")
+
+
+def _refuse_repeats(table: np.ndarray, masked: np.ndarray, lines: np.ndarray, text: str,
+                    source: str) -> None:
+    """InputError for the first observation (not masked) that repeats an earlier one in
+    every field: a line given twice would count one star twice in the fit."""
+    keep = np.flatnonzero(~masked & np.isfinite(table[:, :4]).all(axis=1))
+    if keep.size < 2:
+        return
+    rows = np.nan_to_num(table[keep], nan=np.inf)  # no rotator, no LST: equal, as NaN is not
+    _, first, inverse = np.unique(rows, axis=0, return_index=True, return_inverse=True)
+    repeated = np.flatnonzero(first[inverse.reshape(-1)] != np.arange(keep.size))
+    if repeated.size:
+        i = int(repeated[0])
+        j = int(first[inverse.reshape(-1)[i]])
+        line = int(lines[keep[i]])
+        raise InputError(f"{source}:{line}", "observation",
+                         text.splitlines()[line - 1].strip(),
+                         f"repeats line {int(lines[keep[j]])} exactly",
+                         "give each observation once: a repeated line counts one star twice")
 
 
 def _read_text(path: str | Path) -> str:
@@ -588,6 +694,10 @@ def format_tpoint(data: TPointData, decimals: int = 7) -> str:
     n = len(data)
     for i in range(n):
         prefix = "; " if data.masked[i] else ""
+        if not math.isfinite(data.lat_obs_deg[i]):  # a masked record that is no observation
+            lines.append(prefix + " ".join(data.extra_fields[i] if data.extra_fields
+                                           else ("nan",) * 4))
+            continue
         if data.coordinates == "radec":
             fields = [
                 _format_sexagesimal(data.lon_obs_deg[i] / 15.0, 3, signed=False),
@@ -616,7 +726,7 @@ def format_tpoint(data: TPointData, decimals: int = 7) -> str:
 
 def write_tpoint(data: TPointData, path: str | Path, decimals: int = 7) -> None:
     """Write ``data`` as a TPOINT pointing data file."""
-    Path(path).write_text(format_tpoint(data, decimals), encoding="utf-8")
+    write_text_file(path, format_tpoint(data, decimals))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -795,9 +905,8 @@ def parse_mod(text: str, source: str = "<string>") -> TPointModel:
         try:
             get_term(name)
         except TermError:
-            raise InputError(where, "term", name, "unknown pointing term",
-                             "use TPOINT names (IA IE CA NPAE AN AW TF TX ...), harmonics "
-                             "such as HESA2, W1..W10 or P1..P22") from None
+            problem, hint = term_refusal(name)
+            raise InputError(where, "term", name, problem, hint) from None
         if name in seen:
             raise InputError(where, "term", name, f"already given on line {seen[name]}")
         if not 1 <= len(rest) <= 2:
@@ -861,42 +970,18 @@ def format_mod(model: PointingModel) -> str:
 
 
 def write_mod(model: PointingModel, path: str | Path) -> None:
-    """Write ``model`` (a :class:`TPointModel` or any PointingModel) as a ``.mod`` file."""
-    Path(path).write_text(format_mod(model), encoding="utf-8")
+    """Write ``model`` (a :class:`TPointModel` or any PointingModel) as a ``.mod`` file,
+    whole or not at all (:func:`~controller.errors.write_text_file`)."""
+    write_text_file(path, format_mod(model))
 
 
 # ---------------------------------------------------------------------------------------------
-# Format detection
+# Format detection (controller.filekind decides; this is its answer for one file on disk)
 # ---------------------------------------------------------------------------------------------
 def sniff_format(path: str | Path) -> Format:
-    """``"ecsv"``, ``"tpoint"`` (pointing data) or ``"mod"`` (model), judged by content.
-
-    ECSV files start with ``# %ECSV``. Otherwise the record after the caption decides: an
-    option (``:``) or a run-parameters record of numbers means pointing data; a word followed
-    by numbers (the model parameters record) or a term line means a model file.
-    """
+    """``"ecsv"``, ``"tpoint"`` (pointing data) or ``"mod"`` (model), judged by content
+    (:func:`controller.filekind.file_kind` without the CSV and JSON kinds)."""
     text = _read_text(path)
     if text.startswith("# %ECSV"):
         return "ecsv"
-    caption_seen = False
-    second: str | None = None
-    for line in text.splitlines():
-        stripped = line.strip()
-        if not stripped or stripped.startswith("!"):
-            continue
-        if not caption_seen:
-            caption_seen = True
-            continue
-        second = _strip_comment(stripped)
-        if second:
-            break
-    if not second:
-        raise InputError(str(path), "file", str(path),
-                         "is too short to be TPOINT data, a .mod model or ECSV recordings")
-    tokens = second.split()
-    if second.startswith(":") or all(_NUMBER.match(t) for t in tokens):
-        return "tpoint"
-    if re.fullmatch(r"[A-Za-z&=]\S*", tokens[0]):
-        return "mod"
-    raise InputError(str(path), "file", str(path),
-                     "is neither TPOINT pointing data, a TPOINT .mod model nor ECSV recordings")
+    return tpoint_or_mod(path, text)

@@ -36,11 +36,12 @@ from typing import Any
 import numpy as np
 
 from controller.errors import InputError, read_text_file
+from controller.filekind import looks_like_csv
 from controller.pointing.thermal import STRUCTURE_SENSORS, sensor_aux, structure_sensor_names
 
 from .tablecheck import ColumnRule, check_range, first_repeat, unit_factor
 
-__all__ = ["CSV_COLUMNS", "SIGNS", "CsvData", "input_format", "looks_like_csv", "parse_settings",
+__all__ = ["CSV_COLUMNS", "SIGNS", "CsvData", "looks_like_csv", "parse_settings",
            "pointing_data", "read_csv"]
 
 #: the ``sign`` setting: factor turning the file's offsets into "indicated minus true"
@@ -104,20 +105,6 @@ class CsvData:
         return int(self.columns["az_deg"].size)
 
 
-def looks_like_csv(path: str | Path, text: str | None = None) -> bool:
-    """Whether a file is CSV pointing data: a ``.csv`` name, or a first line (after ``#``
-    lines) of comma-separated names that include an azimuth column."""
-    if str(path).lower().endswith(".csv"):
-        return True
-    text = read_text_file(path) if text is None else text
-    for line in text.splitlines():
-        if not line.strip() or line.lstrip().startswith("#"):
-            continue
-        names = [n.strip().lower() for n in line.split(",")]
-        return len(names) >= 4 and any(n == "az" or n.startswith("az_") for n in names)
-    return False
-
-
 def parse_settings(lines: Sequence[str], where: str) -> dict[str, str]:
     """Settings ``key: value`` (or ``key = value``) from header lines or ``--csv`` options."""
     out: dict[str, str] = {}
@@ -172,14 +159,20 @@ def _units_setting(text: str, where: str) -> dict[str, str]:
         name, _, unit = item.partition("=")
         if not unit:
             raise InputError(where, "units", item, "expected name=unit, e.g. d_el=arcsec")
-        out[name.strip().lower()] = UNIT_SUFFIXES.get(unit.strip().lower(), unit.strip())
+        key = name.strip().lower()
+        if key in out:
+            raise InputError(where, "units", item, f"gives the unit of {key} twice")
+        out[key] = UNIT_SUFFIXES.get(unit.strip().lower(), unit.strip())
     return out
 
 
-def read_csv(path: str | Path, options: Sequence[str] = ()) -> CsvData:
-    """Read CSV pointing data (see the module); ``options``: settings from the command line."""
+def read_csv(path: str | Path, options: Sequence[str] = (), text: str | None = None
+             ) -> CsvData:
+    """Read CSV pointing data (see the module); ``options``: settings from the command line;
+    ``text``: the file's, when the caller has read it (:func:`read_text_file`)."""
     where = str(path)
-    text = read_text_file(path)
+    if text is None:
+        text = read_text_file(path)
     raw_lines = text.splitlines()
     header_settings: list[str] = []
     names_at = None
@@ -280,6 +273,14 @@ def read_csv(path: str | Path, options: Sequence[str] = ()) -> CsvData:
             raise InputError(f"{where}:{lines[row]}", "row", ",".join(rows[row]),
                              f"repeats line {lines[first]} (same time and position)",
                              "give each measurement once")
+    else:  # no time to tell two measurements apart: a row equal in every column is one twice
+        repeat = first_repeat([np.asarray(c) for c in columns.values()])
+        if repeat is not None:
+            first, row = repeat
+            raise InputError(f"{where}:{lines[row]}", "row", ",".join(rows[row]),
+                             f"repeats line {lines[first]} in every column",
+                             "give each measurement once, or add a time column that tells "
+                             "them apart")
     meta["sign_convention"] = ("offsets: indicated minus true (converted from the file's "
                                f"{sign_text})")
     notes = [f"no column {n}: {what}" for n, what in (
@@ -347,30 +348,6 @@ def _site_meta(settings: Mapping[str, str], where: str) -> dict[str, Any]:
     return {"site": site} if site else {}
 
 
-def input_format(path: str | Path, text: str | None = None) -> str:
-    """``"csv"``, ``"ecsv"``, ``"tpoint"`` (pointing data) or ``"mod"`` (a model), judged by
-    the name (``.csv``) and content (:func:`controller.pointing.tpoint.sniff_format`);
-    ``text``: the file's, when the caller has read it (:func:`read_text_file`)."""
-    from controller.pointing.tpoint import sniff_format
-
-    if text is None:
-        text = read_text_file(path)
-    if text.startswith("# %ECSV"):  # sniff_format's first test, without reading it again
-        return "ecsv"
-    if looks_like_csv(path, text):
-        return "csv"
-    return sniff_format(path)
-
-
-def input_format_and_text(path: str | Path) -> tuple[str, str | None]:
-    """:func:`input_format` of ``path`` and, for an ECSV file, its text (read once, for the
-    format and the recordings: 44 MB at 200,000 scans; None for the other formats, whose
-    readers read the file themselves)."""
-    text = read_text_file(path)
-    fmt = input_format(path, text)
-    return fmt, (text if fmt == "ecsv" else None)
-
-
 def pointing_data(data: CsvData):
     """The measurements as :class:`~controller.pointing.data.PointingData` (total pointing
     error, indicated minus true, arcsec)."""
@@ -380,4 +357,4 @@ def pointing_data(data: CsvData):
     sensors = structure_sensor_names(list(c))
     return PointingData(az_rad=np.radians(c["az_deg"]), el_rad=np.radians(c["el_deg"]),
                         xel_arcsec=60.0 * c["xel_arcmin"], el_arcsec=60.0 * c["el_arcmin"],
-                        aux=sensor_aux(c, sensors) if sensors else None)
+                        aux=sensor_aux(c, sensors) if sensors else None, t_s=c.get("t_s"))

@@ -19,7 +19,7 @@ from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 
 from .config import SchedulerConfig
 
-__all__ = ["Observer", "Target", "never_rises", "never_visible"]
+__all__ = ["Observer", "Target", "never_rises", "never_visible", "why_unschedulable"]
 
 
 @dataclass(frozen=True)
@@ -81,6 +81,64 @@ def never_visible(observer: Observer, targets: Sequence[Target], config: Schedul
         if not inside.any():
             missing.append(tg)
     return missing
+
+
+#: times checked together by :func:`why_unschedulable` (two hours at its 300-s step)
+CHECK_BLOCK = 24
+
+
+def why_unschedulable(observer: Observer, targets: Sequence[Target], config: SchedulerConfig,
+                      duration_s: float, step_s: float = 300.0) -> tuple[str, str]:
+    """Why the scheduler's constraints (window, elevations, hour angle, declination) let no
+    target be observed at any time of the campaign, checked every ``step_s``: (the
+    :class:`SchedulerConfig` field to blame, the reason), or ("", "") when some target may
+    be observed at some time."""
+    times = np.arange(0.0, duration_s + step_s, step_s)
+    times = times[times <= duration_s]
+    sun = observer.sun_el_deg(times)
+    if config.window == "day":
+        window = sun > DAY_SUN_MIN_DEG
+        if not window.any():
+            return "window", (f"the Sun is never above {DAY_SUN_MIN_DEG:g} deg during the "
+                              f"campaign (highest {sun.max():.1f} deg)")
+    elif config.window == "night":
+        window = sun < observer.night_sun_max_deg
+        if not window.any():
+            return "window", (f"the Sun is never below night_sun_max_deg = "
+                              f"{observer.night_sun_max_deg:g} deg during the campaign (lowest "
+                              f"{sun.min():.1f} deg)")
+    else:
+        window = np.ones(times.size, dtype=bool)
+    index = np.array([tg.index for tg in targets])[:, None]
+    lowest_dec = math.inf
+    # (target, time) at once, two hours at a time: most campaigns can observe in the first
+    for start in range(0, times.size, CHECK_BLOCK):
+        grid, open_ = times[None, start:start + CHECK_BLOCK], window[start:start + CHECK_BLOCK]
+        _, el = observer.ephemeris.altaz_rad(index, grid)
+        el_deg = np.degrees(el)
+        ok = open_ & (el_deg >= config.elevation_min_deg) & (el_deg <= config.elevation_max_deg)
+        if config.hour_angle_limit_deg is not None or config.declination_max_deg is not None:
+            ha, dec = observer.ephemeris.hadec_rad(index, grid)
+            dec_deg = np.degrees(dec)
+            lowest_dec = min(lowest_dec, float(dec_deg.min()))
+            if config.hour_angle_limit_deg is not None:
+                ok &= np.abs(np.degrees(ha)) <= config.hour_angle_limit_deg
+            if config.declination_max_deg is not None:
+                ok &= dec_deg <= config.declination_max_deg
+        if ok.any():
+            return "", ""
+    if config.declination_max_deg is not None and lowest_dec > config.declination_max_deg:
+        return "declination_max_deg", (f"no source lies at or below it (the southernmost at "
+                                       f"{lowest_dec:+.1f} deg)")
+    limits = [f"between {config.elevation_min_deg:g} and {config.elevation_max_deg:g} deg "
+              "elevation"]
+    if config.hour_angle_limit_deg is not None:
+        limits.append(f"within +-{config.hour_angle_limit_deg:g} deg of hour angle")
+    if config.declination_max_deg is not None:
+        limits.append(f"at or below {config.declination_max_deg:g} deg of declination")
+    when = "" if config.window == "all" else f" by {config.window}"
+    return ("window" if config.window != "all" else "elevation_min_deg",
+            f"no source is {' and '.join(limits)}{when} at any time of the campaign")
 
 
 def never_rises(observer: Observer, targets: Sequence[Target], latitude_deg: float,

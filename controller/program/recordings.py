@@ -88,7 +88,7 @@ COLUMNS: tuple[Column, ...] = (
     Column("scan", "int64", None, "scan number in the campaign"),
     Column("time", "str", None, "UTC at the middle of the scan (ISO)"),
     Column("t_s", "float64", "s", "seconds since the campaign epoch (antenna clock)",
-           finite=True),
+           -1e9, 1e9, finite=True),
     Column("source", "str", None, "source name"),
     Column("polarization", "str", None, "XR, XL or AVG (mean of XR and XL powers)"),
     Column("az_deg", "float64", "deg", "observed azimuth of the source (N=0, E=90)",
@@ -297,6 +297,18 @@ class RecordingWriter:
                                  "the scans written before them are kept") from None
             self.rows_written += len(fresh)
 
+    def check_replayed(self) -> None:
+        """After the whole campaign: every row found on resuming was one the run wrote again
+        (the run is deterministic); a row beyond them was not written by this run (appended
+        by hand or by another program) and is an InputError naming it. The file is kept."""
+        if self._cursor < len(self._existing):
+            raise InputError(str(self.path), f"row {self._cursor + 1}",
+                             self._existing[self._cursor].strip(),
+                             f"was not written by this run: the campaign ends after row "
+                             f"{self._cursor}, the file holds {len(self._existing)} rows",
+                             "the file is kept as it is; remove the rows after row "
+                             f"{self._cursor}, or run without --resume into a new directory")
+
     def discard(self) -> None:
         """Close and remove the file: for a run that failed before its first scan."""
         self.close()
@@ -373,12 +385,92 @@ def _yaml_header(lines: Iterable[str]) -> dict:
     import yaml
 
     text = "\n".join(line[2:] if line.startswith("# ") else line[1:] for line in lines)
+    _refuse_aliases(text, None)
     try:
         return yaml.load(text, Loader=yaml.SafeLoader)
     except yaml.YAMLError:
         from astropy.io.misc.yaml import load
 
         return load(text)
+
+
+#: the largest header the readers take (bytes): antsim writes about 10 kB
+MAX_HEADER_BYTES = 4 << 20
+
+
+def _refuse_aliases(header: str, where: str | None) -> None:
+    """InputError for a YAML anchor or alias (``&a``, ``*a``) in a header: a recordings
+    header holds plain data, and an alias makes a small file a structure of gigabytes (an
+    "alias bomb") once expanded. ``where``: the file (its line is named), or None."""
+    if "&" not in header and "*" not in header:
+        return
+    import yaml
+
+    try:
+        for event in yaml.parse(header, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
+            if isinstance(event, yaml.AliasEvent):
+                token = f"*{event.anchor}"
+            elif getattr(event, "anchor", None):
+                token = f"&{event.anchor}"
+            else:
+                continue
+            line = event.start_mark.line + 2  # the header's first line is the file's second
+            raise InputError(f"{where}:{line}" if where else "ECSV header", "header", token,
+                             "is a YAML anchor or alias: a recordings header holds plain "
+                             "data, never a reference expanded on reading")
+    except yaml.YAMLError:
+        return  # malformed: the reader says what is wrong
+
+
+def _header_text(text: str, where: str) -> str:
+    """The YAML of an ECSV file's header (its ``#`` lines after ``# %ECSV``), bounded and
+    without anchors or aliases; one InputError line otherwise."""
+    end = 0
+    while text.startswith("#", end):
+        nl = text.find("\n", end)
+        end = len(text) if nl < 0 else nl + 1
+        if end > MAX_HEADER_BYTES:
+            raise InputError(where, "header", f"{end} bytes so far",
+                             f"is larger than {MAX_HEADER_BYTES >> 20} MiB: not a recordings "
+                             "header")
+    lines = text[:end].splitlines()[1:]
+    header = "\n".join(line[2:] if line.startswith("# ") else line[1:] for line in lines)
+    _refuse_aliases(header, where)
+    _refuse_repeated_keys(header, where)
+    return header
+
+
+def _refuse_repeated_keys(header: str, where: str) -> None:
+    """InputError for a key given twice in one mapping of the header (``site`` twice in
+    ``meta``, ``unit`` twice in a column): YAML readers keep one of the two silently."""
+    import yaml
+
+    try:
+        root = yaml.compose(header, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
+    except yaml.YAMLError:
+        return  # malformed: the reader says what is wrong
+    stack = [root] if root is not None else []
+    while stack:
+        node = stack.pop()
+        if isinstance(node, yaml.MappingNode):
+            pairs = node.value
+        elif isinstance(node, yaml.SequenceNode) and node.tag.endswith(":omap"):
+            pairs = [p for item in node.value if isinstance(item, yaml.MappingNode)
+                     for p in item.value]  # an ordered map: one pair a list item
+        else:
+            if isinstance(node, yaml.SequenceNode):
+                stack.extend(node.value)
+            continue
+        seen: dict[str, int] = {}
+        for key, value in pairs:
+            if isinstance(key, yaml.ScalarNode):
+                line = key.start_mark.line + 2  # the header's first line is the file's second
+                if key.value in seen:
+                    raise InputError(f"{where}:{line}", "header", key.value,
+                                     f"is a key given twice (first on line {seen[key.value]}):"
+                                     " readers would keep one of them silently")
+                seen[key.value] = line
+            stack.append(value)
 
 
 def _fast_table(text: str, end: int):
@@ -476,6 +568,7 @@ def read_recordings(path: str | Path, purpose: str = "fit", text: str | None = N
         text = read_text_file(path)
     if not text.startswith("# %ECSV"):
         raise InputError(where, "format", text[:20], "not an ECSV file (no '# %ECSV' line)")
+    _header_text(text, where)  # bounded, no YAML references: before any parser expands one
     end = text.rfind("\n") + 1  # a torn last line is left out
     parsed = _fast_table(text, end)
     if parsed is not None:
@@ -516,9 +609,17 @@ def read_recordings(path: str | Path, purpose: str = "fit", text: str | None = N
             check_range(np.asarray(table[name], dtype=float),
                         ColumnRule(name, rule.unit, rule.lo, rule.hi, finite=True), where,
                         lines, rows=good)
+    polarization = np.asarray(table["polarization"]).astype(str)
+    average = np.char.upper(np.char.strip(polarization)) == "AVG"
+    variant = np.flatnonzero(average & (polarization != "AVG"))
+    if variant.size:  # read as another channel, these rows would silently drop out
+        i = int(variant[0])
+        raise InputError(f"{where}:{lines[i]}", "polarization", polarization[i],
+                         f"is the polarization average written otherwise ({variant.size} "
+                         f"of {int(average.sum())} average rows): the readers take the "
+                         "rows written 'AVG'", "write it AVG (case matters)")
     keys = [np.asarray(table["scan"] if "scan" in table.colnames else table["t_s"]
-                       if "t_s" in table.colnames else table["az_deg"]),
-            np.asarray(table["polarization"]).astype(str)]
+                       if "t_s" in table.colnames else table["az_deg"]), polarization]
     repeat = first_repeat(keys)
     if repeat is not None:
         first, row = repeat
@@ -527,6 +628,15 @@ def read_recordings(path: str | Path, purpose: str = "fit", text: str | None = N
         raise InputError(f"{where}:{lines[row]}", f"{key}, polarization",
                          f"{table[key][row]} {table['polarization'][row]}",
                          f"repeats line {lines[first]}", "record each scan and polarization once")
+    if "scan" in table.colnames and "t_s" in table.colnames:  # a scan copied under another
+        repeat = first_repeat([np.asarray(table["t_s"], dtype=float), polarization])
+        if repeat is not None:
+            first, row = repeat
+            raise InputError(f"{where}:{lines[row]}", "t_s, polarization",
+                             f"{table['t_s'][row]} {table['polarization'][row]}",
+                             f"repeats line {lines[first]} (scan {table['scan'][first]}) "
+                             f"under scan {table['scan'][row]}: one measurement twice",
+                             "record each scan once")
     model = table.meta.get("model")
     if isinstance(model, dict) and isinstance(model.get("terms_arcsec"), dict) \
             and names_w_terms(model["terms_arcsec"]) and W_TERMS_KEY not in model:
@@ -572,8 +682,36 @@ def _check_column(table, column: Column, where: str, lines: list[int]) -> None:
         table[column.name].unit = column.unit
 
 
+def _number(value) -> bool:
+    return not isinstance(value, bool) and isinstance(value, int | float)
+
+
+def _check_model_meta(model, mount: str, where: str) -> None:
+    """``meta.model``: the model in use, a mapping whose ``terms_arcsec`` maps known term
+    names to finite coefficients (arcsec); a term the readers do not know or a value that is
+    no number would be left out of the model in use silently."""
+    from controller.pointing.equatorial import is_equatorial_term
+    from controller.pointing.terms import is_term_name
+
+    if not isinstance(model, dict):
+        raise InputError(where, "meta.model", model, "must be a mapping (name, terms_arcsec)")
+    terms = model.get("terms_arcsec", {})
+    if not isinstance(terms, dict):
+        raise InputError(where, "meta.model.terms_arcsec", terms,
+                         "must be a mapping of term names to arcsec")
+    known = is_equatorial_term if mount == "equatorial" else is_term_name
+    for name, value in terms.items():
+        if not known(str(name)):
+            raise InputError(where, f"meta.model.terms_arcsec.{name}", value,
+                             "is not a pointing term antsim knows")
+        if not _number(value) or not math.isfinite(value) or abs(value) > 648000.0:
+            raise InputError(where, f"meta.model.terms_arcsec.{name}", value,
+                             "must be a finite number within +-648000 arcsec")
+
+
 def _check_meta(meta, where: str) -> None:
-    """The metadata readers use: the site (numbers within range), mount and epoch."""
+    """The metadata readers use: the site (numbers within range), mount, epoch, the model in
+    use and the structure sensors' response time."""
     site = meta.get("site")
     if site is not None:
         if not isinstance(site, dict):
@@ -594,6 +732,17 @@ def _check_meta(meta, where: str) -> None:
     if mount == "equatorial" and not isinstance((site or {}).get("latitude_deg"), int | float):
         raise InputError(where, "meta.site.latitude_deg", "<missing>",
                          "an equatorial mount's recordings need the site latitude")
+    if meta.get("model") is not None:
+        _check_model_meta(meta["model"], mount, where)
+    sensors = meta.get("structure_sensors")
+    if sensors is not None:
+        if not isinstance(sensors, dict):
+            raise InputError(where, "meta.structure_sensors", sensors,
+                             "must be a mapping (lag_s, ...)")
+        lag = sensors.get("lag_s", 0.0)
+        if not _number(lag) or not 0.0 <= lag <= 1e6:
+            raise InputError(where, "meta.structure_sensors.lag_s", lag,
+                             "must be a number of seconds within 0..1e+06")
     for key in ("duration_s", "beam_hpbw_arcmin"):
         value = meta.get(key)
         if value is not None and (isinstance(value, bool) or not isinstance(value, int | float)
@@ -601,12 +750,18 @@ def _check_meta(meta, where: str) -> None:
             raise InputError(where, f"meta.{key}", value, "must be a positive number")
     epoch = meta.get("epoch_utc")
     if epoch is not None:
+        import warnings
+
         from astropy.time import Time
 
         try:
-            Time(str(epoch), scale="utc")
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # ERFA's "dubious year": refused below
+                year = Time(str(epoch), scale="utc").ymdhms["year"]
         except ValueError:
             raise InputError(where, "meta.epoch_utc", epoch, "not an ISO UTC time") from None
+        if not 1900 <= year <= 2200:
+            raise InputError(where, "meta.epoch_utc", epoch, "year outside 1900..2200")
 
 
 def total_errors_arcsec(table) -> tuple[np.ndarray, np.ndarray]:
@@ -632,8 +787,9 @@ def read_pointing_data(path: str | Path, polarization: str = "AVG", good_only: b
 
 
 def table_pointing_data(table, where: str, polarization: str = "AVG", good_only: bool = True,
-                        proxies: bool = False):
-    """:func:`read_pointing_data` of a table :func:`read_recordings` returned."""
+                        proxies: bool = False, with_times: bool = False):
+    """:func:`read_pointing_data` of a table :func:`read_recordings` returned; with
+    ``with_times`` the observations carry their times (the honest sigma's time blocks)."""
     from controller.pointing.data import PointingData
     from controller.pointing.thermal import sensor_aux, structure_sensor_names
 
@@ -676,4 +832,6 @@ def table_pointing_data(table, where: str, polarization: str = "AVG", good_only:
         feed_rad=(np.radians(np.asarray(sel["feed_angle_deg"], dtype=float))
                   if "feed_angle_deg" in sel.colnames else None),
         aux=aux or None,
+        t_s=(np.asarray(sel["t_s"], dtype=float) if with_times and "t_s" in sel.colnames
+             else None),
     )

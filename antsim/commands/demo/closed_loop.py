@@ -9,6 +9,8 @@ import math
 from pathlib import Path
 from typing import Any
 
+from antsim.outdir import write_file
+
 from .campaign import YOURS, Campaign, honest_words, pulls, run_campaign_like_antsim_run
 from .story import Story, edit_scenario
 
@@ -41,7 +43,7 @@ def tell(story: Story, base_text: str, scenario_path: Path, out: Path, first: Ca
     text = edit_scenario(base_text, "duration_h = 24.0", f"duration_h = {HOURS:g}",
                          str(scenario_path))
     scen_path = out / f"{DIRECTORY}.toml"
-    scen_path.write_text(text, encoding="utf-8")
+    write_file(scen_path, text)
     story.say(ch, (
         "A model is only worth something if it points the telescope. The controller now adds "
         "the fitted model to every command, and we observe again: a new night's noise "

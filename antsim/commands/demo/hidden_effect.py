@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from antsim.bundled import shown
+from antsim.outdir import write_file
 
 from .campaign import YOURS, run_campaign_like_antsim_run
 from .story import Story
@@ -80,7 +81,7 @@ def tell(story: Story, base_text: str, scenario_path: Path, out: Path, model_pat
     block = (f"\n# demo chapter 5: the hidden effect, an uneven azimuth track\n"
              f"[[truth.effects]]\neffect = \"terms\"\n{HIDDEN_TERM} = {HIDDEN_ARCSEC:g}\n")
     scen_path = out / f"{DIRECTORY}.toml"
-    scen_path.write_text(base_text.rstrip("\n") + "\n" + block, encoding="utf-8")
+    write_file(scen_path, base_text.rstrip("\n") + "\n" + block)
     run_dir = out / DIRECTORY
     story.say(ch, (
         "Real antennas have more faults than any model lists. We now observe a third time "

@@ -10,6 +10,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from antsim.outdir import write_file
+
 from . import closed_loop, cold_start, first_campaign, hidden_effect, the_fit
 from .story import Story
 
@@ -53,8 +55,7 @@ def run_demo(out: Path, scenario_path: Path,
     numbers["html"] = str(path)
     numbers["chapters"] = [c.title for c in story.chapters]
     numbers["commands"] = list(story.commands)
-    (out / "demo.json").write_text(json.dumps(numbers, indent=2, default=str) + "\n",
-                                   encoding="utf-8")
+    write_file(out / "demo.json", json.dumps(numbers, indent=2, default=str) + "\n")
     echo(f"\nwrote {path} ({len(story.chapters)} chapters) and demo.json in "
          f"{numbers['wall_s']:.1f} s")
     return numbers

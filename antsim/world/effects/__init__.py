@@ -11,7 +11,7 @@ torsion). :data:`EFFECTS` names them as scenarios do.
 
 from __future__ import annotations
 
-from .base import Effect, Param, PointingState
+from .base import Effect, Key, PointingState
 from .drifts import TemperatureDrift
 from .dynamics import Backlash, ClockError, ServoLag
 from .equatorial import EQUATORIAL_HARMONIC_EFFECTS
@@ -28,7 +28,7 @@ from .steps import Step
 from .thermal import SunsetDrift, ThermalEffect
 from .tracking import TrackingJitter
 
-__all__ = ["EFFECTS", "Effect", "GeometricEffect", "Param", "PointingState"]
+__all__ = ["EFFECTS", "Effect", "GeometricEffect", "Key", "PointingState"]
 
 #: effect name (as written in scenarios) -> class
 EFFECTS: dict[str, type[Effect]] = {

@@ -13,15 +13,20 @@ effects that change the world itself (clock, source structure, beam width) do it
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from functools import cache
+from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from antsim.schema.keys import REQUIRED, Key, read_key
+
 if TYPE_CHECKING:
     from antsim.tomlcheck import Table
 
-__all__ = ["BLOCK_FIELDS", "Effect", "Param", "PointingState"]
+__all__ = ["BLOCK_FIELDS", "REQUIRED", "Effect", "Key", "PointingState"]
 
 
 @dataclass
@@ -49,21 +54,7 @@ BLOCK_FIELDS = ("t_s", "az_rad", "el_rad", "az_rate_rad_s", "el_rate_rad_s", "ap
                 "approach_el", "feed_angle_rad")
 
 
-@dataclass(frozen=True)
-class Param:
-    """A numeric effect parameter with its default, bounds and meaning (units in the name).
-    Where ``min``/``max`` are not given, :data:`NAME_BOUNDS` bounds the magnitude by the
-    unit the name ends in."""
-
-    default: float | None
-    doc: str
-    min: float | None = None
-    max: float | None = None
-    kind: str = "number"  # "number", "string", "table" (name -> number)
-    choices: tuple[str, ...] | None = None  # the values a string may take
-
-
-#: the largest magnitude of a parameter whose spec gives no bound, by the unit its name
+#: the largest magnitude of a parameter whose key gives no bound, by the unit its name
 #: ends in (first match): beyond these a value means nothing physical and would only break
 #: the simulation (a pointing error of 10^300", a time past the ephemeris, 10^9 gusts)
 NAME_BOUNDS: tuple[tuple[str, float], ...] = (
@@ -85,6 +76,19 @@ def name_bound(name: str) -> float | None:
     return next((bound for suffix, bound in NAME_BOUNDS if name.endswith(suffix)), None)
 
 
+@cache
+def _bounded_keys(cls: type[Effect]) -> Mapping[str, Key]:
+    """:meth:`Effect.keys`, made once per class (read only: it is shared)."""
+    out = {}
+    for name, key in cls.PARAMS.items():
+        bound = name_bound(name)
+        if key.kind == "number" and bound is not None:
+            key = replace(key, min=-bound if key.min is None else key.min,
+                          max=bound if key.max is None else key.max)
+        out[name] = key
+    return MappingProxyType(out)
+
+
 def _instant(value):
     """One instant's field of a block: a number where it is one value (a member block's
     (1,) rows), else the array (members,)."""
@@ -100,7 +104,9 @@ class Effect:
     #: a plain explanation of the physical cause
     explanation: ClassVar[str] = ""
     per_sample: ClassVar[bool] = False
-    PARAMS: ClassVar[dict[str, Param]] = {}
+    #: the parameters a scenario gives, as declared settings (antsim.schema.keys);
+    #: :meth:`keys` adds the bounds :data:`NAME_BOUNDS` gives
+    PARAMS: ClassVar[dict[str, Key]] = {}
 
     def __init__(self, **params: Any):
         unknown = set(params) - set(self.PARAMS)
@@ -109,35 +115,27 @@ class Effect:
         values = {}
         for key, spec in self.PARAMS.items():
             value = params.get(key, spec.default)
-            if value is None and spec.default is None and key not in params:
+            if value is REQUIRED:
                 raise TypeError(f"{self.name}: parameter {key!r} is required")
             values[key] = value
         self.p = values
 
     # ------------------------------------------------------------------ configuration
     @classmethod
+    def keys(cls) -> Mapping[str, Key]:
+        """:data:`PARAMS` as the scenario reads them: a number whose key gives no bound on
+        a side is bounded there by the unit its name ends in (:data:`NAME_BOUNDS`)."""
+        return _bounded_keys(cls)
+
+    @classmethod
     def from_table(cls, table: Table) -> Effect:
         """Build from a scenario table; every bad value is an InputError naming the key."""
         params: dict[str, Any] = {}
-        for key, spec in cls.PARAMS.items():
-            if spec.kind == "string":
-                params[key] = table.string(key, spec.default, choices=spec.choices)
-            elif spec.kind == "table":
-                sub = table.table(key, spec.default if spec.default is not None else {})
-                bound = name_bound(key)
-                params[key] = {k: sub.number(k, min=None if bound is None else -bound,
-                                             max=bound) for k in sub}
-            else:
-                bound = name_bound(key)
-                lo = spec.min if spec.min is not None or bound is None else -bound
-                hi = spec.max if spec.max is not None or bound is None else bound
-                params[key] = table.number(key, spec.default, min=lo, max=hi,
-                                           allow_none=spec.default is None)
-                if params[key] is None and key in table:
-                    raise table.error(key, None, "must be a number")
-            if spec.default is None and key not in table and spec.kind == "number":
-                raise table.error(key, "<missing>", "required parameter is missing",
-                                  spec.doc)
+        for name, key in cls.keys().items():
+            if key.required and name not in table:
+                raise table.error(name, "<missing>", "required parameter is missing",
+                                  key.doc)
+            params[name] = read_key(table, name, key)
         table.finish()
         return cls(**params)
 

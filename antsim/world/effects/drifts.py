@@ -16,7 +16,7 @@ import numpy as np
 
 from controller.units import RAD_PER_ARCSEC
 
-from .base import Effect, Param, PointingState
+from .base import Effect, Key, PointingState
 from .thermal import campaign_grid_s, relax
 
 __all__ = ["TemperatureDrift", "structure_temperature_c"]
@@ -39,11 +39,11 @@ class TemperatureDrift(Effect):
         "the structure expands and contracts with its temperature, which follows the air "
         "temperature with a lag; the beam tips in elevation in proportion"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "arcsec_per_k": Param(0.0, "elevation error per kelvin of structure temperature"),
-        "tau_s": Param(3600.0, "time constant of the structure temperature (s; 0: none)",
-                       min=0.0),
-        "reference_c": Param(0.0, "structure temperature of zero error (C)"),
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "arcsec_per_k": Key(0.0, "elevation error per kelvin of structure temperature"),
+        "tau_s": Key(3600.0, "time constant of the structure temperature (s; 0: none)",
+                     min=0.0),
+        "reference_c": Key(0.0, "structure temperature of zero error (C)"),
     }
 
     def start(self, world, rng: np.random.Generator) -> None:

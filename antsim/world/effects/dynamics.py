@@ -8,7 +8,7 @@ import numpy as np
 
 from controller.units import RAD_PER_ARCSEC
 
-from .base import Effect, Param, PointingState
+from .base import Effect, Key, PointingState
 
 __all__ = ["Backlash", "ClockError", "ServoLag"]
 
@@ -26,9 +26,9 @@ class ClockError(Effect):
         "the control computer's clock is wrong, so sources are tracked where they were (or "
         "will be) a few seconds away: the error follows each source's apparent motion"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "offset_s": Param(0.0, "clock reading minus true time (s)"),
-        "drift_s_per_day": Param(0.0, "clock rate error (s per day)"),
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "offset_s": Key(0.0, "clock reading minus true time (s)"),
+        "drift_s_per_day": Key(0.0, "clock rate error (s per day)"),
     }
 
     def start(self, world, rng: np.random.Generator) -> None:
@@ -44,8 +44,8 @@ class ServoLag(Effect):
         "the servo loop follows a moving command with a lag, so the pointing trails by an "
         "amount proportional to the axis speed"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "lag_s": Param(0.0, "servo following lag (s)"),
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "lag_s": Key(0.0, "servo following lag (s)"),
     }
 
     def pointing_error(self, state: PointingState) -> tuple[float, float]:
@@ -64,9 +64,9 @@ class Backlash(Effect):
         "play in the gears: the axis settles on one side or the other of the dead band "
         "depending on the direction it last moved"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "az_arcsec": Param(0.0, "azimuth dead band, full width (arcsec of azimuth)", min=0.0),
-        "el_arcsec": Param(0.0, "elevation dead band, full width (arcsec)", min=0.0),
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "az_arcsec": Key(0.0, "azimuth dead band, full width (arcsec of azimuth)", min=0.0),
+        "el_arcsec": Key(0.0, "elevation dead band, full width (arcsec)", min=0.0),
     }
 
     def pointing_error(self, state: PointingState) -> tuple[float, float]:

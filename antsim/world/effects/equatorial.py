@@ -45,7 +45,7 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
-from .base import Effect, Param
+from .base import Effect, Key
 from .harmonics import HarmonicEffect
 
 __all__ = ["EQUATORIAL_HARMONIC_EFFECTS", "EquatorialHarmonicEffect", "PolarTorsion"]
@@ -88,11 +88,11 @@ class PolarTorsion(EquatorialHarmonicEffect):
         "polar axis, proportional to cos(dec + psi) sin H, winds up the hour-angle drive, so "
         "the dish turns further towards the horizon than the encoder reads"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "amplitude_arcsec": Param(0.0, "hour-angle windup at the largest torque, W (arcsec "
-                                       "of hour angle)"),
-        "phase_deg": Param(0.0, "direction psi of the dish's centre of mass from the "
-                                "boresight towards the dish's north (deg)"),
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "amplitude_arcsec": Key(0.0, "hour-angle windup at the largest torque, W (arcsec "
+                                     "of hour angle)"),
+        "phase_deg": Key(0.0, "direction psi of the dish's centre of mass from the "
+                              "boresight towards the dish's north (deg)"),
     }
 
 

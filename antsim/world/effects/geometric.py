@@ -7,7 +7,7 @@ from typing import Any, ClassVar
 from controller.pointing.model import PointingModel
 from controller.pointing.terms import TermError, get_term
 
-from .base import Effect, Param, PointingState
+from .base import Effect, Key, PointingState, name_bound
 
 __all__ = ["GeometricEffect", "TermsEffect"]
 
@@ -51,7 +51,11 @@ class TermsEffect(GeometricEffect):
 
     name: ClassVar[str] = "terms"
     explanation: ClassVar[str] = "additional geometric terms given by their TPOINT names"
-    PARAMS: ClassVar[dict[str, Param]] = {}
+    PARAMS: ClassVar[dict[str, Key]] = {}
+    #: each term's value, by the term's name (any number of them)
+    TERM: ClassVar[Key] = Key(0.0, "the value of a pointing term, by its name (TPOINT's, or "
+                              "the mount's equatorial terms)", min=-name_bound("_arcsec"),
+                              max=name_bound("_arcsec"), unit="arcsec")
 
     def __init__(self, terms_arcsec: dict[str, float] | None = None, **named: Any):
         values = dict(terms_arcsec or {})
@@ -90,7 +94,10 @@ class TermsEffect(GeometricEffect):
                 lookup(key)
             except TermError as err:
                 raise table.error(key, table.raw(key), "not a pointing term", str(err)) from None
-            values[key.upper()] = table.number(key)
+            if key.upper() in values:
+                raise table.error(key, table.raw(key), f"gives the term {key.upper()} again",
+                                  "give each term once")
+            values[key.upper()] = table.number(key, min=cls.TERM.min, max=cls.TERM.max)
         if not values:
             raise table.error("effect", "terms", "lists no terms", "add e.g. HESA2 = 6.0 (arcsec)")
         table.finish()

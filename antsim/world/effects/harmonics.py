@@ -45,7 +45,7 @@ from typing import Any, ClassVar
 from controller.pointing.model import PointingModel
 from controller.units import RAD_PER_ARCSEC
 
-from .base import Effect, Param, PointingState
+from .base import Effect, Key, PointingState
 
 __all__ = [
     "HARMONIC_EFFECTS",
@@ -69,9 +69,9 @@ class HarmonicEffect(Effect):
     #: TPOINT coefficient of (sin_term, cos_term) per unit of the correction's sine and cosine
     #: parts, a cos(phi) and a sin(phi) (see the module docstring; tested against the terms)
     signs: ClassVar[tuple[float, float]] = (1.0, 1.0)
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "amplitude_arcsec": Param(0.0, "amplitude of the harmonic (arcsec)"),
-        "phase_deg": Param(0.0, "phase: the correction is a sin(nX + phase), X = A_S or E"),
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "amplitude_arcsec": Key(0.0, "amplitude of the harmonic (arcsec)"),
+        "phase_deg": Key(0.0, "phase: the correction is a sin(nX + phase), X = A_S or E"),
     }
 
     def __init__(self, **params: Any):
@@ -189,24 +189,17 @@ class FeedOffset(Effect):
         "fixed direction relative to the feed: a collimation error that turns with the feed "
         "angle"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "offset_arcsec": Param(0.0, "beam displacement on the sky (arcsec)", min=0.0),
-        "angle_deg": Param(0.0, "direction C7 relative to the feed angle (deg)"),
-        "form": Param("rigid", "'rigid' (a displaced feed) or 'fomalont' (C6, C7, D6, D7)",
-                      kind="string"),
-        "el_offset_arcsec": Param(0.0, "form 'fomalont': elevation amplitude D6 (arcsec)",
-                                  min=0.0),
-        "el_angle_deg": Param(0.0, "form 'fomalont': elevation phase D7 (deg)"),
-    }
     FORMS: ClassVar[tuple[str, ...]] = ("rigid", "fomalont")
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "offset_arcsec": Key(0.0, "beam displacement on the sky (arcsec)", min=0.0),
+        "angle_deg": Key(0.0, "direction C7 relative to the feed angle (deg)"),
+        "form": Key("rigid", "'rigid' (a displaced feed) or 'fomalont' (C6, C7, D6, D7)",
+                    kind="string", choices=FORMS),
+        "el_offset_arcsec": Key(0.0, "form 'fomalont': elevation amplitude D6 (arcsec)",
+                                min=0.0),
+        "el_angle_deg": Key(0.0, "form 'fomalont': elevation phase D7 (deg)"),
+    }
     FEED_TERMS: ClassVar[tuple[str, ...]] = ("HSCF", "HSSF", "HECF", "HESF")
-
-    @classmethod
-    def from_table(cls, table) -> FeedOffset:
-        form = table.data.get("form", "rigid")
-        if form not in cls.FORMS:
-            raise table.error("form", form, f"must be one of {', '.join(cls.FORMS)}")
-        return super().from_table(table)
 
     def _fomalont(self) -> tuple[float, float, float, float]:
         """(C6, C7, D6, D7), arcsec and radians, whatever the form."""

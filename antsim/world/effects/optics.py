@@ -9,7 +9,7 @@ import numpy as np
 
 from controller.units import RAD_PER_ARCMIN, RAD_PER_ARCSEC
 
-from .base import Effect, Param, PointingState
+from .base import Effect, Key, PointingState
 
 __all__ = ["BeamWidthError", "ExactTiltCollimation", "PolarizationSquint", "RefractionAnomaly",
            "SourceStructure", "TiltedSky"]
@@ -24,9 +24,9 @@ class PolarizationSquint(Effect):
         "an offset feed makes the right- and left-circular beams point to opposite sides of "
         "the axis; XR and XL then disagree by a constant amount"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "separation_arcsec": Param(0.0, "XR beam minus XL beam separation (arcsec)"),
-        "angle_deg": Param(0.0, "direction of the separation, 0 = +xel, 90 = +el"),
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "separation_arcsec": Key(0.0, "XR beam minus XL beam separation (arcsec)"),
+        "angle_deg": Key(0.0, "direction of the separation, 0 = +xel, 90 = +el"),
     }
 
     def beam_offset(self, channel: str, state: PointingState) -> tuple[float, float]:
@@ -44,8 +44,8 @@ class BeamWidthError(Effect):
         "the beam is wider (or narrower) than the reduction assumes, so every measured "
         "offset is scaled by the same factor"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "scale": Param(1.0, "true HPBW / nominal HPBW", min=0.5, max=2.0),
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "scale": Key(1.0, "true HPBW / nominal HPBW", min=0.5, max=2.0, unit="1"),
     }
 
     def start(self, world, rng: np.random.Generator) -> None:
@@ -62,11 +62,11 @@ class SourceStructure(Effect):
         "down by theta_b^2/(theta_b^2+theta_s^2) and its centroid may lie off the "
         "catalogue position"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "source": Param("", "name of the source", kind="string"),
-        "size_arcmin": Param(0.0, "Gaussian FWHM of the source (arcmin)", min=0.0, max=60.0),
-        "xel_arcsec": Param(0.0, "centroid offset from the catalogue, cross-elevation"),
-        "el_arcsec": Param(0.0, "centroid offset from the catalogue, elevation"),
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "source": Key("", "name of the source", kind="string"),
+        "size_arcmin": Key(0.0, "Gaussian FWHM of the source (arcmin)", min=0.0, max=60.0),
+        "xel_arcsec": Key(0.0, "centroid offset from the catalogue, cross-elevation"),
+        "el_arcsec": Key(0.0, "centroid offset from the catalogue, elevation"),
     }
 
     def start(self, world, rng: np.random.Generator) -> None:
@@ -87,8 +87,9 @@ class RefractionAnomaly(Effect):
         "the refraction the controller corrects differs from the refraction present (wrong "
         "humidity or pressure, or an inadequate formula): a cot E residual in elevation"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "scale": Param(1.0, "true refraction / formula refraction", min=0.0, max=3.0),
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "scale": Key(1.0, "true refraction / formula refraction", min=0.0, max=3.0,
+                     unit="1"),
     }
 
     def start(self, world, rng: np.random.Generator) -> None:
@@ -111,13 +112,13 @@ class ExactTiltCollimation(Effect):
         "a large tilt of the azimuth axis or a large collimation error: the small-angle "
         "model fails near the zenith and near azimuth 90 deg"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "tilt_arcmin": Param(0.0, "tilt of the azimuth axis (arcmin)", min=0.0),
-        "tilt_az_deg": Param(0.0, "azimuth towards which the axis tilts (deg, N = 0)"),
-        "collimation_arcmin": Param(0.0, "collimation error (arcmin)"),
-        "linear_part": Param(1.0, "1: the whole error; 0: only what the small-angle terms "
-                             "(AN, AW, CA) leave, when a scenario's linear terms carry them",
-                             min=0.0, max=1.0),
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "tilt_arcmin": Key(0.0, "tilt of the azimuth axis (arcmin)", min=0.0),
+        "tilt_az_deg": Key(0.0, "azimuth towards which the axis tilts (deg, N = 0)"),
+        "collimation_arcmin": Key(0.0, "collimation error (arcmin)"),
+        "linear_part": Key(1.0, "1: the whole error; 0: only what the small-angle terms "
+                           "(AN, AW, CA) leave, when a scenario's linear terms carry them",
+                           min=0.0, max=1.0, unit="1"),
     }
 
     def coefficients(self) -> dict[str, float]:

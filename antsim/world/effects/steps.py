@@ -17,7 +17,7 @@ import numpy as np
 
 from controller.units import RAD_PER_ARCSEC
 
-from .base import Effect, Param, PointingState
+from .base import REQUIRED, Effect, Key, PointingState
 
 __all__ = ["Step"]
 
@@ -30,10 +30,10 @@ class Step(Effect):
         "the pointing changed at one instant and stayed changed: an encoder slipped, the "
         "subreflector or the feed was moved, or the mount was re-levelled"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "t_s": Param(None, "time of the change, seconds after the campaign's start", min=0.0),
-        "az_arcsec": Param(0.0, "change of the azimuth zero point (arcsec of azimuth)"),
-        "el_arcsec": Param(0.0, "change of the elevation zero point (arcsec)"),
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "t_s": Key(REQUIRED, "time of the change, seconds after the campaign's start", min=0.0),
+        "az_arcsec": Key(0.0, "change of the azimuth zero point (arcsec of azimuth)"),
+        "el_arcsec": Key(0.0, "change of the elevation zero point (arcsec)"),
     }
 
     def pointing_error(self, state: PointingState) -> tuple[float, float]:

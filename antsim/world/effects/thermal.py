@@ -45,7 +45,7 @@ import numpy as np
 
 from controller.units import RAD_PER_ARCSEC
 
-from .base import Effect, Param, PointingState
+from .base import Effect, Key, PointingState
 
 __all__ = ["SUNSET_SHAPES", "OUProcess", "SunsetDrift", "ThermalEffect", "interp_rows",
            "ou_series", "relax", "since_sunset", "sunset_level", "transient_level"]
@@ -264,33 +264,33 @@ class ThermalEffect(Effect):
         "differences bend the dish and its support, lag the Sun by an hour or more, and "
         "relax after sunset"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "el_arcsec_per_k": Param(6.5, "elevation error per kelvin of front-back gradient"),
-        "xel_arcsec_per_k": Param(3.0, "cross-elevation error per kelvin of left-right gradient"),
-        "solar_gradient_k": Param(6.0, "front-back gradient under full overhead Sun (K)",
-                                  min=0.0),
-        "lateral_gradient_k": Param(3.0, "rms left-right gradient under full Sun (K)", min=0.0),
-        "gradient_tau_s": Param(5400.0, "time constant of the gradients (s)", min=60.0),
-        "cloud_modulation": Param(0.3, "rms relative modulation of the insolation (clouds)",
-                                  min=0.0, max=1.0),
-        "cloud_timescale_s": Param(1800.0, "correlation time of the modulation (s)", min=60.0),
-        "lateral_timescale_s": Param(3600.0, "correlation time of the lateral forcing (s)",
-                                     min=60.0),
-        "bulk_arcsec_per_k": Param(0.0, "elevation error per kelvin of bulk temperature"),
-        "bulk_tau_s": Param(7200.0, "time constant of the bulk structure temperature (s)",
-                            min=60.0),
-        "reference_c": Param(0.0, "bulk temperature of zero bulk error (C)"),
-        "dish_gradient_k": Param(0.0, "dish gradient with the Sun face-on, full sun (K)",
-                                 min=0.0),
-        "dish_tau_s": Param(600.0, "time constant of the dish gradients (s)", min=1.0),
-        "dish_arcsec_per_k": Param(6.5, "pointing error per kelvin of dish gradient"),
-        "dish_xel_factor": Param(1.0, "cross-elevation error per kelvin of the dish's "
-                                 "left-right gradient over dish_arcsec_per_k", min=0.0,
-                                 max=10.0),
-        "pedestal_gradient_k": Param(0.0, "pedestal gradient under full sun (K)", min=0.0),
-        "pedestal_tau_s": Param(5400.0, "time constant of the pedestal gradient (s)",
-                                min=60.0),
-        "tilt_arcsec_per_k": Param(3.0, "azimuth-axis tilt per kelvin of pedestal gradient"),
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "el_arcsec_per_k": Key(6.5, "elevation error per kelvin of front-back gradient"),
+        "xel_arcsec_per_k": Key(3.0, "cross-elevation error per kelvin of left-right gradient"),
+        "solar_gradient_k": Key(6.0, "front-back gradient under full overhead Sun (K)",
+                                min=0.0),
+        "lateral_gradient_k": Key(3.0, "rms left-right gradient under full Sun (K)", min=0.0),
+        "gradient_tau_s": Key(5400.0, "time constant of the gradients (s)", min=60.0),
+        "cloud_modulation": Key(0.3, "rms relative modulation of the insolation (clouds)",
+                                min=0.0, max=1.0, unit="1"),
+        "cloud_timescale_s": Key(1800.0, "correlation time of the modulation (s)", min=60.0),
+        "lateral_timescale_s": Key(3600.0, "correlation time of the lateral forcing (s)",
+                                   min=60.0),
+        "bulk_arcsec_per_k": Key(0.0, "elevation error per kelvin of bulk temperature"),
+        "bulk_tau_s": Key(7200.0, "time constant of the bulk structure temperature (s)",
+                          min=60.0),
+        "reference_c": Key(0.0, "bulk temperature of zero bulk error (C)"),
+        "dish_gradient_k": Key(0.0, "dish gradient with the Sun face-on, full sun (K)",
+                               min=0.0),
+        "dish_tau_s": Key(600.0, "time constant of the dish gradients (s)", min=1.0),
+        "dish_arcsec_per_k": Key(6.5, "pointing error per kelvin of dish gradient"),
+        "dish_xel_factor": Key(1.0, "cross-elevation error per kelvin of the dish's "
+                               "left-right gradient over dish_arcsec_per_k", min=0.0,
+                               max=10.0, unit="1"),
+        "pedestal_gradient_k": Key(0.0, "pedestal gradient under full sun (K)", min=0.0),
+        "pedestal_tau_s": Key(5400.0, "time constant of the pedestal gradient (s)",
+                              min=60.0),
+        "tilt_arcsec_per_k": Key(3.0, "azimuth-axis tilt per kelvin of pedestal gradient"),
     }
 
     def start(self, world, rng: np.random.Generator) -> None:
@@ -535,14 +535,14 @@ class SunsetDrift(Effect):
         "after sunset the structure cools and relaxes from its daytime shape with a time "
         "constant of hours, so the elevation error drifts systematically"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "amplitude_arcsec": Param(60.0, "total elevation change after sunset (arcsec)"),
-        "tau_s": Param(5400.0, "time constant of the drift (s)", min=60.0),
-        "nights": Param(0.0, "after the first this many sunsets of the campaign only "
-                             "(0: every night)", min=0.0, max=1000.0),
-        "shape": Param("relaxation", "relaxation (a lasting change, back after sunrise) or "
-                       "transient (a change at sunset that dies away)", kind="string",
-                       choices=SUNSET_SHAPES),
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "amplitude_arcsec": Key(60.0, "total elevation change after sunset (arcsec)"),
+        "tau_s": Key(5400.0, "time constant of the drift (s)", min=60.0),
+        "nights": Key(0.0, "after the first this many sunsets of the campaign only "
+                           "(0: every night)", min=0.0, max=1000.0, unit="1"),
+        "shape": Key("relaxation", "relaxation (a lasting change, back after sunrise) or "
+                     "transient (a change at sunset that dies away)", kind="string",
+                     choices=SUNSET_SHAPES),
     }
 
     def start(self, world, rng: np.random.Generator) -> None:

@@ -9,7 +9,7 @@ import numpy as np
 
 from controller.units import RAD_PER_ARCSEC
 
-from .base import Effect, Param
+from .base import Effect, Key
 from .thermal import OUProcess
 
 __all__ = ["TrackingJitter"]
@@ -40,19 +40,19 @@ class TrackingJitter(Effect):
         "wind buffeting and servo noise move the beam randomly on time scales of seconds "
         "to minutes"
     )
-    PARAMS: ClassVar[dict[str, Param]] = {
-        "xel_rms_arcsec": Param(5.0, "rms of the cross-elevation wander (arcsec)", min=0.0),
-        "el_rms_arcsec": Param(5.0, "rms of the elevation wander (arcsec)", min=0.0),
-        "timescale_s": Param(60.0, "correlation time of the wander (s)", min=1e-3),
-        "wind_ref_m_s": Param(10.0, "wind speed that doubles the rms (m/s)", min=0.1),
-        "gust_rate_per_h": Param(0.0, "mean number of gusts per hour", min=0.0, max=3600.0),
-        "gust_arcsec": Param(60.0, "rms beam displacement of a gust per axis (arcsec)",
-                             min=0.0),
-        "gust_duration_s": Param(30.0, "duration of a gust (s)", min=1.0),
-        "day_xel_factor": Param(1.0, "cross-elevation rms by day (Sun above the horizon) over "
-                                "xel_rms_arcsec", min=0.0, max=100.0),
-        "day_el_factor": Param(1.0, "elevation rms by day (Sun above the horizon) over "
-                               "el_rms_arcsec", min=0.0, max=100.0),
+    PARAMS: ClassVar[dict[str, Key]] = {
+        "xel_rms_arcsec": Key(5.0, "rms of the cross-elevation wander (arcsec)", min=0.0),
+        "el_rms_arcsec": Key(5.0, "rms of the elevation wander (arcsec)", min=0.0),
+        "timescale_s": Key(60.0, "correlation time of the wander (s)", min=1e-3),
+        "wind_ref_m_s": Key(10.0, "wind speed that doubles the rms (m/s)", min=0.1),
+        "gust_rate_per_h": Key(0.0, "mean number of gusts per hour", min=0.0, max=3600.0),
+        "gust_arcsec": Key(60.0, "rms beam displacement of a gust per axis (arcsec)",
+                           min=0.0),
+        "gust_duration_s": Key(30.0, "duration of a gust (s)", min=1.0),
+        "day_xel_factor": Key(1.0, "cross-elevation rms by day (Sun above the horizon) over "
+                              "xel_rms_arcsec", min=0.0, max=100.0, unit="1"),
+        "day_el_factor": Key(1.0, "elevation rms by day (Sun above the horizon) over "
+                             "el_rms_arcsec", min=0.0, max=100.0, unit="1"),
     }
     #: step of the table of day (Sun up) and night over the campaign (s)
     DAY_TABLE_STEP_S: ClassVar[float] = 60.0

@@ -1,1 +1,1 @@
-"""Tests of antsim/commands."""
+"""Tests of antsim.commands."""

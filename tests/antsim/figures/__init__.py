@@ -1,1 +1,1 @@
-"""Tests of antsim/figures."""
+"""Tests of antsim.figures, a file per module."""

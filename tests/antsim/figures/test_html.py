@@ -1,11 +1,14 @@
-"""antsim/figures/html.py: a page stays readable on a narrow screen: a table wider than the
-window scrolls in its own box, the page does not."""
+"""antsim/figures/html.py: a page stays readable on a narrow screen (a table wider than the
+window scrolls in its own box, the page does not); numbers in tables are right-aligned and
+never a negative zero."""
 
 from __future__ import annotations
 
 import re
 
-from antsim.figures.html import Section, Table, render_report
+import pytest
+
+from antsim.figures.html import Section, Table, _render_table, format_number, render_report
 from tests.test_report import needs_chromium, run_chromium
 
 #: a coefficient table as a run's report has it: a term and 12 columns of numbers
@@ -42,3 +45,17 @@ def test_a_wide_table_does_not_widen_the_page_at_800_px(tmp_path):
                                                    proc.stdout).groups())
     assert table_w > window_w  # the test shows something: the table does not fit
     assert page_w <= window_w
+
+
+@pytest.mark.parametrize(("value", "spec", "text"), [
+    (-0.04, ".1f", "0.0"), (-0.04, "+.1f", "+0.0"), (-0.004, "+9.2f", "    +0.00"),
+    (-0.06, "+.1f", "-0.1"), (0.04, "+.1f", "+0.0"), (-12.5, ".2f", "-12.50"),
+    (-0.0, "g", "0")])
+def test_a_number_that_rounds_to_zero_is_printed_as_zero(value, spec, text):
+    assert format_number(value, spec) == text
+
+
+def test_table_numbers_take_their_columns_format_and_are_right_aligned():
+    html = _render_table(Table(("name", "bias", "sigma"), [["W5", -0.04, 2.9213]],
+                               column_formats=(None, "+.1f", ".2f")))
+    assert '<td>W5</td><td class="num">+0.0</td><td class="num">2.92</td>' in html

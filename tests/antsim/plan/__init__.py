@@ -1,0 +1,1 @@
+"""Tests of antsim/plan, a file per module."""

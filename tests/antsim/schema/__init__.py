@@ -1,0 +1,1 @@
+"""Tests of antsim.schema: the declared keys of scenario and plan files."""

@@ -1,0 +1,1 @@
+"""Tests of antsim.simulate, a file per module: the engines every feature shares."""

@@ -1,0 +1,1 @@
+"""Tests of controller.pointing, a file per module."""

@@ -1,0 +1,1 @@
+"""Tests of controller.program, a file per module."""
