@@ -34,7 +34,7 @@ from .candidates.base import DISTINGUISH_R, Candidate, TestResult, p_value
 from .candidates.library import CANDIDATES
 from .candidates.terms import HarmonicFamilyCandidate, TermsCandidate
 from .crossval import STABLE_FRACTION, Choice, Plan, Validation, validate
-from .decide import ALPHA, MAX_FINDINGS, Design, Option, Pick, sigma_from_p
+from .decide import ALPHA, MAX_FINDINGS, Design, Option, Pick, parameter_bound, sigma_from_p
 from .physics import signature_words, tell_apart
 from .problem import Problem, term_columns
 
@@ -495,10 +495,12 @@ def _refusals(problem: Problem, design: Design, choice: Choice, alpha: float
                                      f"scans (a finding needs "
                                      f"{100 * STABLE_FRACTION:.0f}%)", o.candidate.name))
     chosen = {design.options[p.option].candidate.name for p in path.picks}
+    room = parameter_bound(design.u) - design.m \
+        - sum(design.options[p.option].q for p in path.picks)
     for pick in path.last:
         o = design.options[pick.option]
         if o.candidate.name in chosen or pick.r_model <= DISTINGUISH_R \
-                or pick.log_p < math.log(alpha):
+                or pick.log_p < math.log(alpha) or pick.dof > room:
             continue
         alone = _two_sided(math.log(max(pick.p_local, 1e-320)))
         if alone < HINT_SIGMA:
