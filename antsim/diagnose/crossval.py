@@ -14,9 +14,11 @@ asked of the whole decision, repeated:
   decided again; a kept finding is chosen in a resample when its candidate, or one the data
   cannot tell from it, is among the resample's findings. Below ``STABLE_FRACTION`` it is
   reported as unstable, not as a finding.
-* **Alternatives.** A candidate significant in the same round whose model predicts every
-  left-out scan as well (the paired difference of leave-one-scan-out losses within its
-  standard error) is the same finding's alternative.
+* **Alternatives.** A candidate significant in the same round that the data cannot tell
+  from a finding (their fitted signatures correlated above 0.95, or its model predicting
+  every left-out scan as well: the paired difference of leave-one-scan-out losses within
+  its standard error) is the same finding's alternative, and a resample that chooses it
+  chooses the finding.
 * **Held out (outer folds).** :func:`nested` repeats all of it (:func:`choose`: decision,
   inner folds, resamples) on the training scans of each of the outer folds and predicts
   the held-out ones with the first k findings of each, k = 0 (the base model) up to all:
@@ -40,6 +42,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .candidates.base import DISTINGUISH_R
 from .candidates.terms import TermsCandidate
 from .decide import Design, Path, decide
 from .linalg import heldout_lstsq, lstsq
@@ -251,14 +254,17 @@ def _inner(design: Design, train: np.ndarray, k_inner: int) -> np.ndarray:
 @dataclass
 class Alternative:
     """A candidate the data cannot tell from a finding: its option (index into the design's
-    options) and the leave-one-scan-out losses of the two models (sums, units of the noise)
-    and, without a noise prediction, their held-out Sky RMS (arcsec)."""
+    options), the correlation of their fitted signatures, the leave-one-scan-out losses of
+    the two models (sums, units of the noise) and, without a noise prediction, their
+    held-out Sky RMS (arcsec); its design columns (those its test kept)."""
 
     option: int
+    correlation: float
     loss: float
     loss_finding: float
     sky_rms: float = float("nan")
     sky_rms_finding: float = float("nan")
+    cols: tuple[int, ...] = ()
 
 
 @dataclass
@@ -308,9 +314,9 @@ def _prefix_losses(design: Design, counts: np.ndarray, path: Path, test: np.ndar
     for k in range(kmax + 1):
         j = min(k, len(path.picks))
         if j not in done:
-            options = path.options[:j]
-            coef = design.fit(counts, path.active, path.scale, options)
-            w, r = design.residuals(coef, options)
+            cols = path.cols(j)
+            coef = design.fit(counts, path.active, path.scale, cols)
+            w, r = design.residuals(coef, cols)
             done[j] = (float(design.scan_losses(w)[test].sum()),
                        (float((r[:u][test] ** 2).sum()), float((r[u:][test] ** 2).sum())))
         loss[k], raw2[k] = done[j]
@@ -325,17 +331,17 @@ def _kept(inner: np.ndarray) -> int:
     return k
 
 
-def _loo(design: Design, counts: np.ndarray, path: Path, options: list[int],
+def _loo(design: Design, counts: np.ndarray, path: Path, cols: list[int],
          base: list[int] | None = None) -> tuple[np.ndarray, np.ndarray] | None:
     """Leave-one-scan-out held-out residuals (each scan's two rows together) of the base
-    (its columns ``base``, default all) and ``options`` over the scans ``path`` keeps
-    (weights ``counts``): (whitened loss per scan, squared raw residual per scan, arcsec^2
-    without a noise prediction, else NaN); None where a scan alone determines a term."""
+    (its columns ``base``, default all) and the design's columns ``cols`` over the scans
+    ``path`` keeps (weights ``counts``): (whitened loss per scan, squared raw residual per
+    scan, arcsec^2 without a noise prediction, else NaN); None where a scan alone
+    determines a term."""
     sw = design.row_weights(counts, path.active, path.scale)
     scans = np.flatnonzero(path.active & (counts > 0))
     u = design.u
     rows = np.concatenate([scans, scans + u])
-    cols = design.columns(options)
     a = design.a[rows] if base is None else design.a[rows][:, base]
     c = np.hstack([a, design.x[rows][:, cols]]) * sw[rows, None]
     q = orthonormal(c)
@@ -357,28 +363,32 @@ def _loo(design: Design, counts: np.ndarray, path: Path, options: list[int],
 
 def _alternatives(design: Design, counts: np.ndarray, path: Path, j: int
                   ) -> list[Alternative]:
-    """The options significant in pick ``j``'s round whose model (the first j findings and
-    it) predicts each left-out scan as well as the pick's: the paired difference of the
-    two models' losses within its standard error."""
+    """The options significant in pick ``j``'s round that the data cannot tell from it:
+    their fitted signatures correlated above DISTINGUISH_R with the pick's ("cannot
+    reliably be distinguished", TPOINT's level), or their model (the first j findings and
+    it) predicting each left-out scan as well as the pick's (the paired difference of the
+    two models' losses within its standard error)."""
     pick = path.picks[j]
-    before = path.options[:j]
-    mine = _loo(design, counts, path, [*before, pick.option])
-    if mine is None or j >= len(path.rounds):
+    before = path.cols(j)
+    mine = _loo(design, counts, path, [*before, *pick.cols])
+    if j >= len(path.rounds):
         return []
     out = []
-    for other in path.rounds[j]:
+    for other, r in path.rounds[j]:
         if other.option == pick.option:
             continue
-        theirs = _loo(design, counts, path, [*before, other.option])
-        if theirs is None:
-            continue
-        d = theirs[0] - mine[0]
-        if d.size < 3:
-            continue
-        se = float(np.std(d, ddof=1)) / math.sqrt(d.size)
-        if float(np.mean(d)) <= se:
-            out.append(Alternative(other.option, float(theirs[0].sum()), float(mine[0].sum()),
-                                   _rms(theirs[1]), _rms(mine[1])))
+        theirs = _loo(design, counts, path, [*before, *other.cols])
+        equal = False
+        if theirs is not None and mine is not None and theirs[0].size >= 3:
+            d = theirs[0] - mine[0]
+            se = float(np.std(d, ddof=1)) / math.sqrt(d.size)
+            equal = float(np.mean(d)) <= se
+        if equal or r > DISTINGUISH_R:
+            out.append(Alternative(other.option, r,
+                                   float(theirs[0].sum()) if theirs else math.nan,
+                                   float(mine[0].sum()) if mine else math.nan,
+                                   _rms(theirs[1]) if theirs else math.nan,
+                                   _rms(mine[1]) if mine else math.nan, other.cols))
     return out
 
 

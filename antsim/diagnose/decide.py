@@ -224,6 +224,10 @@ class Design:
             out += range(s.start, s.stop)
         return out
 
+    def positions(self, option: int, cols: tuple[int, ...]) -> list[int]:
+        """The places of design columns ``cols`` among option ``option``'s own."""
+        return [c - self.options[option].cols.start for c in cols]
+
     # ------------------------------------------------------------------ fits
     def row_weights(self, counts: np.ndarray, active: np.ndarray, scale: np.ndarray
                     ) -> np.ndarray:
@@ -233,21 +237,19 @@ class Design:
         return np.concatenate([s / scale[0], s / scale[1]])
 
     def fit(self, counts: np.ndarray, active: np.ndarray, scale: np.ndarray,
-            options: list[int] | tuple[int, ...]) -> np.ndarray:
-        """Coefficients of the base and ``options`` fitted to the scans ``active`` (weighted
-        by ``counts`` and the noise ``scale``); a pseudo-inverse where they are dependent."""
+            cols: list[int]) -> np.ndarray:
+        """Coefficients of the base and the design's columns ``cols`` fitted to the scans
+        ``active`` (weighted by ``counts`` and the noise ``scale``); a pseudo-inverse where
+        they are dependent."""
         sw = self.row_weights(counts, active, scale)
         idx = np.flatnonzero(sw)
-        cols = self.columns(options)
         c = np.hstack([self.a[idx], self.x[idx][:, cols]]) * sw[idx, None]
         coef, *_ = np.linalg.lstsq(c, self.z[idx] * sw[idx], rcond=1e-10)
         return coef
 
-    def residuals(self, coef: np.ndarray, options: list[int] | tuple[int, ...]
-                  ) -> tuple[np.ndarray, np.ndarray]:
-        """(whitened, raw) residual rows (2u each) of the base and ``options`` at ``coef``
-        (the whitened ones at unit noise scale)."""
-        cols = self.columns(options)
+    def residuals(self, coef: np.ndarray, cols: list[int]) -> tuple[np.ndarray, np.ndarray]:
+        """(whitened, raw) residual rows (2u each) of the base and the design's columns
+        ``cols`` at ``coef`` (the whitened ones at unit noise scale)."""
         m = self.m
         w = self.z - self.a @ coef[:m]
         r = self.y - self.a_raw @ coef[:m]
@@ -273,6 +275,7 @@ class Tested:
     dof: int
     p: float
     r_model: float = 0.0
+    cols: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -288,6 +291,8 @@ class Pick:
     log_p: float
     p_local: float = 1.0
     r_model: float = 0.0
+    #: the option's design columns the test kept (those the model does not absorb)
+    cols: tuple[int, ...] = ()
 
     @property
     def significance(self) -> float:
@@ -305,13 +310,19 @@ class Path:
     stop: str
     active: np.ndarray
     scale: np.ndarray
-    rounds: list[list[Pick]] = field(default_factory=list)
+    #: per round, each option significant at the family's level by itself with the
+    #: correlation of its fitted signature with the round's pick's
+    rounds: list[list[tuple[Pick, float]]] = field(default_factory=list)
     #: the last round's test of each candidate (its best option), most significant first
     last: list[Pick] = field(default_factory=list)
 
     @property
     def options(self) -> list[int]:
         return [p.option for p in self.picks]
+
+    def cols(self, k: int | None = None) -> list[int]:
+        """The design columns of the first ``k`` picks (all by default), in order."""
+        return [c for p in self.picks[:k] for c in p.cols]
 
 
 @dataclass
@@ -350,37 +361,42 @@ def decide(design: Design, counts: np.ndarray, alpha: float = ALPHA,
     by the rule of the module docstring."""
     d = design
     counts = np.asarray(counts, dtype=float)
-    accepted: list[int] = []
     picks: list[Pick] = []
-    rounds: list[list[Pick]] = []
+    rounds: list[list[tuple[Pick, float]]] = []
     last: list[Pick] = []
-    active, scale = _reject(d, counts, accepted, np.ones(2))
+    active, scale = _reject(d, counts, [], np.ones(2))
     stop = "no further candidate is significant"
     while True:
         if len(picks) >= max_findings:
             stop = f"the limit of {max_findings} findings"
             break
-        rnd = _round(d, counts, active, scale, accepted)
+        cols = [c for p in picks for c in p.cols]
+        rnd = _round(d, counts, active, scale, cols, {d.options[p.option].candidate.name
+                                                      for p in picks})
         if rnd is None:
-            stop = "the base model's terms are not independent on these scans"
+            stop = "the model's terms are not independent on these scans"
             break
         groups = _group_picks(d, rnd)
         ranked = _candidates(groups)
         last = [pick for _, pick in ranked]
         significant = [pick for _, pick in ranked if pick.log_p < math.log(alpha)]
-        rounds.append([p for _, picks in groups for p in picks if p.log_p < math.log(alpha)])
         if not significant:
+            rounds.append([])
             break
         pick = _simpler(d, rnd, significant[0], significant, alpha)
+        rounds.append([(p, 1.0 if p.option == pick.option else
+                        signature_r(d, rnd, pick.option, p.option))
+                       for _, options in groups for p in options
+                       if p.log_p < math.log(alpha)])
         bound = parameter_bound(float(np.sum(counts[active])))
         if rnd.m + pick.dof > bound:
             stop = (f"the next finding would exceed the {bound} parameters these scans carry "
                     f"(a fifth of the numbers fitted)")
             break
         picks.append(pick)
-        accepted.append(pick.option)
-        active, scale = _reject(d, counts, accepted, scale)
-        if not d.white and _matches_noise(d, counts, active, scale, accepted):
+        cols = [c for p in picks for c in p.cols]
+        active, scale = _reject(d, counts, cols, scale)
+        if not d.white and _matches_noise(d, counts, active, scale, cols):
             stop = "the residuals match the predicted noise"
             break
     return Path(picks, stop, active, scale, rounds, last)
@@ -388,14 +404,15 @@ def decide(design: Design, counts: np.ndarray, alpha: float = ALPHA,
 
 def _reject(d: Design, counts: np.ndarray, accepted: list[int], scale: np.ndarray,
             iterations: int = 2) -> tuple[np.ndarray, np.ndarray]:
-    """The scans of ``counts`` a model of the base and ``accepted`` keeps (residual within
+    """The scans of ``counts`` a model of the base and the design's columns ``accepted``
+    keeps (residual within
     OUTLIER_Z of the noise on both axes, from every scan of the set) and, without a noise
     prediction, each axis' noise scale re-estimated from the kept scans
     (:meth:`.problem.Problem.update_outliers`' rule)."""
     live = counts > 0
     active = live.copy()
     scale = scale.copy()
-    m = d.m + sum(d.options[j].q for j in accepted)
+    m = d.m + len(accepted)
     u = d.u
     for _ in range(iterations):
         coef = d.fit(counts, active, scale, accepted)
@@ -422,7 +439,7 @@ def _rescale(d: Design, counts: np.ndarray, active: np.ndarray, scale: np.ndarra
     w, _ = d.residuals(coef, accepted)
     c = np.where(active, counts, 0.0)
     n = float(c.sum())
-    m = d.m + sum(d.options[j].q for j in accepted)
+    m = d.m + len(accepted)
     factor = 2.0 * n / max(2.0 * n - m, 1.0)
     out = scale.copy()
     u = d.u
@@ -442,7 +459,7 @@ def _matches_noise(d: Design, counts: np.ndarray, active: np.ndarray, scale: np.
     w, _ = d.residuals(coef, accepted)
     c = np.where(active, counts, 0.0)
     n = float(c.sum())
-    m = d.m + sum(d.options[j].q for j in accepted)
+    m = d.m + len(accepted)
     u = d.u
     for axis in range(2):
         chi2 = float(c @ w[axis * u:(axis + 1) * u] ** 2)
@@ -452,14 +469,14 @@ def _matches_noise(d: Design, counts: np.ndarray, active: np.ndarray, scale: np.
 
 
 def _round(d: Design, counts: np.ndarray, active: np.ndarray, scale: np.ndarray,
-           accepted: list[int]) -> _Round | None:
-    """Every option not in the model tested against it (None where the model's own columns
-    are dependent on these scans)."""
+           accepted: list[int], taken: set[str]) -> _Round | None:
+    """Every option of a candidate not in the model (``taken``: their names; ``accepted``:
+    the model's design columns) tested against it (None where the model's own columns are
+    dependent on these scans)."""
     sw = d.row_weights(counts, active, scale)
     idx = np.flatnonzero(sw)
     w = sw[idx, None]
-    acc = d.columns(accepted)
-    model = np.hstack([d.a[idx], d.x[idx][:, acc]]) * w
+    model = np.hstack([d.a[idx], d.x[idx][:, accepted]]) * w
     x = d.x[idx] * w
     z = d.z[idx] * sw[idx]
     q, r = economic_qr(model)
@@ -475,10 +492,9 @@ def _round(d: Design, counts: np.ndarray, active: np.ndarray, scale: np.ndarray,
     chi2_now = float(zp @ zp)
     n_eff = float(np.sum(np.where(active, counts, 0.0)))
     m = model.shape[1]
-    taken = set(accepted)
     tests: dict[int, Tested] = {}
     for j, o in enumerate(d.options):
-        if j in taken or any(d.options[a].candidate is o.candidate for a in accepted):
+        if o.candidate.name in taken:
             continue
         cols = np.arange(o.cols.start, o.cols.stop)[ok[o.cols]]
         if not cols.size:
@@ -494,7 +510,7 @@ def _round(d: Design, counts: np.ndarray, active: np.ndarray, scale: np.ndarray,
         r2 = 1.0 - float(np.min(left2[cols] / full2[cols]))
         tests[j] = Tested(j, dchi2, int(cols.size),
                           _p_value(d.white, dchi2, int(cols.size), chi2_now, n_eff, m),
-                          math.sqrt(min(max(r2, 0.0), 1.0)))
+                          math.sqrt(min(max(r2, 0.0), 1.0)), tuple(int(c) for c in cols))
     return _Round(xp, zp, tests, chi2_now, n_eff, m)
 
 
@@ -559,7 +575,8 @@ def _group_picks(d: Design, rnd: _Round) -> list[tuple[int, list[Pick]]]:
         trials = _trials(d, rnd, group, tested[0])
         out.append((g, [Pick(t.option, t.delta_chi2, t.dof, trials,
                              _log_p_family(t.p, trials, d.n_family, t.delta_chi2, t.dof,
-                                           d.white), t.p, t.r_model) for t in tested]))
+                                           d.white), t.p, t.r_model, t.cols)
+                        for t in tested]))
     return out
 
 
@@ -571,10 +588,16 @@ def _candidates(groups: list[tuple[int, list[Pick]]]) -> list[tuple[int, Pick]]:
     return out
 
 
+def _kept(d: Design, rnd: _Round, j: int) -> list[int] | slice:
+    """Option ``j``'s columns its test kept this round (all of them where it was not
+    tested)."""
+    t = rnd.tests.get(j)
+    return list(t.cols) if t is not None else d.options[j].cols
+
+
 def _fitted(d: Design, rnd: _Round, j: int) -> np.ndarray:
     """Option ``j``'s fitted signature off the model (weighted rows)."""
-    o = d.options[j]
-    xs = rnd.xp[:, o.cols]
+    xs = rnd.xp[:, _kept(d, rnd, j)]
     coef, *_ = np.linalg.lstsq(xs, rnd.zp, rcond=1e-10)
     return xs @ coef
 
@@ -583,7 +606,7 @@ def signature_r(d: Design, rnd: _Round, a: int, b: int) -> float:
     """How much of option ``a``'s fitted signature option ``b``'s columns reproduce (off the
     model): the correlation of the two."""
     sa = _fitted(d, rnd, a)
-    xb = rnd.xp[:, d.options[b].cols]
+    xb = rnd.xp[:, _kept(d, rnd, b)]
     beta, *_ = np.linalg.lstsq(xb, sa, rcond=1e-10)
     den = float(np.linalg.norm(sa))
     return float(np.linalg.norm(xb @ beta)) / den if den > 0 else 0.0

@@ -98,12 +98,13 @@ def _static(candidate: Candidate) -> bool:
 
 
 def tell_apart(obs: Observations, base_terms: Sequence[str],
-               models: Sequence[Sequence[tuple[Candidate, Any]]],
+               models: Sequence[Sequence[tuple[Candidate, Any, Sequence[int] | None]]],
                coefs: Sequence[np.ndarray]) -> str:
     """What observation would tell two models apart: ``models`` the two models' candidate
-    shapes beyond the base terms, ``coefs`` their fitted coefficients (the base terms' first,
-    then each shape's columns in order), both fitted to ``obs``."""
-    a, b = ({c for c, _ in model} for model in models)
+    shapes beyond the base terms (candidate, shape, the places of the columns fitted among
+    the shape's own: None for all), ``coefs`` their fitted coefficients (the base terms'
+    first, then each shape's columns in order), both fitted to ``obs``."""
+    a, b = ({c for c, _, _ in model} for model in models)
     differ = a ^ b
     words = []
     if any(not c.static and "time" in c.needs for c in differ):
@@ -122,7 +123,9 @@ def tell_apart(obs: Observations, base_terms: Sequence[str],
         out = []
         for where in (data, sky):
             cols = [term_columns(list(base_terms), where)]
-            cols += [option_columns(c, where, theta) for c, theta in model]
+            cols += [option_columns(c, where, theta)[:, slice(None) if keep is None
+                                                         else list(keep)]
+                     for c, theta, keep in model]
             out.append(np.column_stack(cols) @ coef)
         preds.append(out)
     here = _apart(preds[0][0] - preds[1][0])

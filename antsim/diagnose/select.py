@@ -432,24 +432,29 @@ def _accept(problem: Problem, perp, r: TestResult, pick: Pick,
 
 def _alternatives(problem: Problem, design: Design, choice: Choice, j: int, r: TestResult,
                   results: list[TestResult], perp, z_perp: np.ndarray) -> list[Alternative]:
-    """The decision's alternatives of pick ``j`` (:func:`.crossval._alternatives`: they
-    predict each left-out scan as well), each tested on every scan, with its physics and
-    what would tell it from the finding."""
+    """The decision's alternatives of pick ``j`` (:func:`.crossval._alternatives`: the data
+    cannot tell them from it), each tested on every scan, with its physics and what would
+    tell it from the finding."""
     out = []
     path = choice.path
-    before = path.options[:j]
-    mine = [*before, path.picks[j].option]
-    corr_of = _Correlations(problem, perp)
+    pick = path.picks[j]
+    before = path.cols(j)
+    mine = [*before, *pick.cols]
+    ones = np.ones(design.u)
     for a in choice.alternatives[j] if j < len(choice.alternatives) else []:
         option = design.options[a.option]
         res = _result_for(problem, option, results, perp, z_perp)
         if res is None:
             continue
-        theirs = [*before, a.option]
-        models = [[(design.options[o].candidate, design.options[o].theta) for o in m]
-                  for m in (mine, theirs)]
-        coefs = [design.fit(np.ones(design.u), path.active, path.scale, m)
-                 for m in (mine, theirs)]
+        models = [[(design.options[p.option].candidate, design.options[p.option].theta,
+                    design.positions(p.option, p.cols)) for p in path.picks[:j]]
+                  for _ in range(2)]
+        models[0].append((design.options[pick.option].candidate,
+                          design.options[pick.option].theta,
+                          design.positions(pick.option, pick.cols)))
+        models[1].append((option.candidate, option.theta, design.positions(a.option, a.cols)))
+        coefs = [design.fit(ones, path.active, path.scale, cols)
+                 for cols in (mine, [*before, *a.cols])]
         apart = tell_apart(problem.obs, problem.base_terms, models, coefs)
         held = ""
         if math.isfinite(a.sky_rms):
@@ -460,9 +465,12 @@ def _alternatives(problem: Problem, design: Design, choice: Choice, j: int, r: T
         if not sibling:
             what += (", consistent with " + "; ".join(option.candidate.mechanisms)
                      if option.candidate.harmonic else f": {option.candidate.title}")
-        reason = (f"{option.label} [{' '.join(option.names)}] ({what}) predicts the left-out "
-                  f"scans as well{held}; to tell them apart: {apart}")
-        out.append(Alternative(res, corr_of(r, res), reason, sibling=sibling, tell_apart=apart,
+        how = ("cannot reliably be distinguished from it (r = "
+               f"{a.correlation:.2f})" if a.correlation > DISTINGUISH_R else
+               "predicts the left-out scans as well")
+        reason = (f"{option.label} [{' '.join(option.names)}] ({what}) {how}{held}; to tell "
+                  f"them apart: {apart}")
+        out.append(Alternative(res, a.correlation, reason, sibling=sibling, tell_apart=apart,
                                heldout=(a.sky_rms, a.sky_rms_finding)))
     return out
 
@@ -496,7 +504,7 @@ def _refusals(problem: Problem, design: Design, choice: Choice, alpha: float
                                      f"{100 * STABLE_FRACTION:.0f}%)", o.candidate.name))
     chosen = {design.options[p.option].candidate.name for p in path.picks}
     room = parameter_bound(design.u) - design.m \
-        - sum(design.options[p.option].q for p in path.picks)
+        - sum(len(p.cols) for p in path.picks)
     for pick in path.last:
         o = design.options[pick.option]
         if o.candidate.name in chosen or pick.r_model <= DISTINGUISH_R \

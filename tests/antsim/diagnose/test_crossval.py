@@ -31,10 +31,11 @@ def test_the_held_out_figures_are_each_folds_model_predicting_its_held_out_stars
     for k, want in ((0, nst.at(0)), (None, nst.final)):
         sq, n = 0.0, 0
         for f, choice in enumerate(nst.choices):
-            options = choice.options if k is None else choice.options[:k]
+            picks = [choice.path.picks[j] for j in choice.findings]
+            picks = picks if k is None else picks[:k]
             cols = np.column_stack([base] + [
-                option_columns(d.options[o].candidate, obs, d.options[o].theta)
-                for o in options])
+                option_columns(d.options[p.option].candidate, obs, d.options[p.option].theta)
+                [:, d.positions(p.option, p.cols)] for p in picks])
             train = (nst.folds.labels != f) & choice.path.active
             test = (nst.folds.labels == f) & d.kept0
             w = np.concatenate([train / choice.path.scale[0], train / choice.path.scale[1]])

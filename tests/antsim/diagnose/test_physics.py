@@ -49,12 +49,12 @@ def test_what_tells_two_models_apart():
     for n in (3, 4):
         x = term_columns([*base, *family.order_terms(n)], obs)
         coefs.append(np.linalg.lstsq(x, y, rcond=None)[0])
-        models.append([(family, n)])
+        models.append([(family, n, None)])
     words = tell_apart(obs, base, models, coefs)
     el = float(words.split("elevation ")[1].split(" deg")[0])
     assert words.startswith("observations near azimuth") and el < 40.0, words
     apart, here = (float(v.split('"')[0]) for v in words.split("predict ")[1].split("most "))
     assert apart > 2.0 * here
-    timed = tell_apart(obs, base, [[(candidate("sunset_drift"), 3600.0)], [(family, 3)]],
-                       coefs)
+    timed = tell_apart(obs, base, [[(candidate("sunset_drift"), 3600.0, None)],
+                                   [(family, 3, None)]], coefs)
     assert timed.startswith("a second night")
