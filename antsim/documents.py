@@ -2,9 +2,9 @@
 
 F. Ghigo, *Pointing Calibration of the ESSCO 45-ft Antenna at Green Bank*, NRAO EDIR 288
 (June 1990), and its Appendix A, E. B. Fomalont, *45-Foot Pointing and Efficiency* (memo of
-8 March 1973); the text is ``../shared/seeds/000_c7536a5bdad225e0.txt``. Each constant names
-its table or section; ``docs/facts.md`` lists where each is used and which test checks it.
-A run's report finds its document by the scenario's name (:func:`reference_for`).
+8 March 1973), which is not in this repository. Each constant names its table or section;
+``docs/facts.md`` lists where each is used and which test checks it. A run's report finds
+its document by the scenario's name (:func:`reference_for`).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Proof of ``antsim diagnose``: the blind harness and the issue's other figures.
+"""Proof of ``antsim diagnose``: the blind harness and its other figures.
 
     python benchmarks/blind.py [--n 120] [--seed 1] [--jobs 2] [--out FILE.json]
     python benchmarks/blind.py --n 100 --seed 2 --null-fraction 1   # false alarms only
@@ -102,7 +102,7 @@ def fomalont(args) -> None:
     print(f"named {named}/{args.seeds}; time constant within 30% in {ok_tau}/{args.seeds}")
 
 
-#: held-out-style TPOINT cases (issue 24): label -> TPOINT terms of a unit effect, and the
+#: held-out-style TPOINT cases: label -> TPOINT terms of a unit effect, and the
 #: names diagnose may give it (the data cannot tell the elevation-only ones apart)
 TPOINT_CASES = {
     "none": {},
@@ -118,7 +118,7 @@ TPOINT_CASES = {
 
 
 def tpoint(args) -> None:
-    """Held-out-style TPOINT files (issue 24): a 1990 campaign's positions and what its own
+    """Held-out-style TPOINT files: a 1990 campaign's positions and what its own
     ten-term fit leaves (simulated, seeds 5000+, without the solar heating, whose daily
     pattern an eight-term TPOINT file of one day would rightly call physics: receiver
     noise, wind, reduction) on an eight-term TPOINT geometry, written and read as TPOINT
@@ -198,7 +198,7 @@ def _residuals(obs, terms) -> np.ndarray:
 
 
 def changes(args) -> None:
-    """Issue 24's changes in time on the 24-hour 1990 campaign, many seeds: a 45" step in
+    """Changes in time on the 24-hour 1990 campaign, many seeds: a 45" step in
     either axis at a random time, the 70" transient after sunset that dies away over 1.4 h
     (its matched-filter significance printed), a temperature-driven drift (which must not be
     called a step) and nothing at all."""
@@ -312,11 +312,12 @@ def _finding_pool(base: list[str]) -> dict[str, tuple[str, ...]]:
     """Every linear finding the library can make beyond ``base`` (its harmonic effects and
     each order of its harmonic families), and, more generously than the library, every
     sin/cos pair of TPOINT's harmonic generator for dE, dA and dA cos E against A or E up
-    to 9 cycles per turn, and the two effects DESIGN's signature table gives two orders
+    to 9 cycles per turn, and the two effects docs/physics.md's signature table gives two orders
     (azimuth encoder runout 1A and 2A, azimuth track unevenness 2A and 3A) as one finding
     each: label -> terms."""
     from antsim.diagnose.candidates.library import CANDIDATES
     from antsim.diagnose.candidates.terms import HarmonicFamilyCandidate, TermsCandidate
+    from controller.pointing.model import PointingModel
 
     pool: dict[str, tuple[str, ...]] = {}
     seen: set[tuple[str, ...]] = set()
@@ -328,10 +329,13 @@ def _finding_pool(base: list[str]) -> dict[str, tuple[str, ...]]:
             pool[label] = terms
 
     for c in CANDIDATES:
+        if "altaz" not in getattr(c, "mounts", ("altaz",)):
+            continue  # an equatorial mount's terms
         if isinstance(c, HarmonicFamilyCandidate):
             for n in c.orders:
                 add(c.label(n), c.order_terms(n))
-        elif isinstance(c, TermsCandidate) and c.kind == "offsets":
+        elif isinstance(c, TermsCandidate) and c.kind == "offsets" \
+                and not PointingModel(list(c.terms)).regressors:  # no recorded temperatures
             add(c.name, c.terms)
     add("az_runout_1a_2a", ("HASA", "HACA", "HASA2", "HACA2"))
     add("az_track_2a_3a", ("HESA2", "HECA2", "HESA3", "HECA3"))

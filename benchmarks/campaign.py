@@ -6,7 +6,7 @@ Prints the 24-hour campaign of ``scenarios/ghigo1990.toml`` (target: at most 1 s
 86,400 times faster than real time), a 30-day campaign (cost should grow linearly with the
 duration: its cost per day against the 24-hour one, and the wall time per simulated day in
 each third of it), and the whole ``antsim run`` command with Python start-up (no target: the
-3 s target for it was withdrawn with the output process that met it, issue 29).
+3 s target for it was withdrawn with the output process that met it).
 """
 
 from __future__ import annotations

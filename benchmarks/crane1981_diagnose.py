@@ -1,4 +1,4 @@
-"""Crane (1981)'s open question as a diagnose case (issue 23 item 5), with its figures.
+"""Crane (1981)'s open question as a diagnose case, with its figures.
 
     python benchmarks/crane1981_diagnose.py [--seeds 6] [--nulls 4] [--sims 8] [--jobs 2]
 

@@ -14,7 +14,7 @@ Run it as a fresh process: the first figures are one-time costs of a process.
   many calls; the machine's cost of one ``np.sin`` on 15 values is printed for scale);
 - accuracy: the largest angular separation (arcsec) from exact per-point astropy
   (ICRS -> AltAz, pressure 0) over N random times x all sources for the 1990 day, a 30-day
-  span and a 2021 southern site (DESIGN target 0.1"), and for the Sun (target ~1").
+  span and a 2021 southern site (target 0.1", docs/layout.md), and for the Sun (target ~1").
 """
 
 from __future__ import annotations

@@ -13,7 +13,7 @@ fit (:mod:`controller.scans.reduction`) and prints, per estimator:
 - the bias (arcmin) and the fraction of scans flagged (any flag) or undefined (NaN offset);
 - for LSQ, PASS/FAIL per cell: std within 1.15 of its own (linear-in-time) bound;
 - Clark's efficiency (CRB / std)^2 at the highest S/N, and linearized for both readings of
-  its baseline, next to the DESIGN's 0.67, 0.27, 0.10.
+  its baseline, next to docs/physics.md's 0.67, 0.27, 0.10.
 
 A ratio from N trials carries a relative sampling error of about 1/sqrt(2N) (1.1% at 4000).
 Nothing is written unless --save is given. One batch per estimator: vectorized, no loop over
@@ -49,7 +49,8 @@ AMPLITUDE_K = 1.0
 BASELINE_K = 30.0
 TIMES_S = np.arange(OFFSETS_N.size) * 20.0  # 15 s integrations + 5 s moves, in n order
 LSQ_TARGET = 1.15  # std / own bound
-DESIGN_CLARK_EFFICIENCY = {1.0: 0.67, 2.0: 0.27, 3.0: 0.10}
+#: Clark's efficiency at offsets of 1', 2', 3' (docs/physics.md, Scan reduction)
+QUOTED_CLARK_EFFICIENCY = {1.0: 0.67, 2.0: 0.27, 3.0: 0.10}
 
 
 def simulate_clean() -> np.ndarray:
@@ -164,9 +165,9 @@ def main(argv: list[str] | None = None) -> int:
             }
             print(f"clark efficiency (CRB_constant / std)^2: Monte Carlo at S/N {SNRS[top]:g};")
             print("linearized for the straight-line baseline (used) and the mean of +-4D:")
-            print(f"{'offset':>7} {'MC line':>8} {'lin line':>9} {'lin mean':>9} {'DESIGN':>7}")
+            print(f"{'offset':>7} {'MC line':>8} {'lin line':>9} {'lin mean':>9} {'quoted':>7}")
             for i, offset in enumerate(TRUE_OFFSETS_ARCMIN):
-                design = DESIGN_CLARK_EFFICIENCY.get(float(offset))
+                design = QUOTED_CLARK_EFFICIENCY.get(float(offset))
                 print(
                     f"{offset:6.1f}' {efficiency[i]:8.3f} {linear['line'][i]:9.3f}"
                     f" {linear['mean'][i]:9.3f} {'' if design is None else f'{design:.2f}':>7}"

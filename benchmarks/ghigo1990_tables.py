@@ -15,7 +15,7 @@ A-F, then prints:
 * Table 1: per source the mean points in fit A beside the report's, the hours the source is
   inside the scheduler's window, and both as scans per visible hour.
 
-Criteria (issue 22): Table 3 values within 3 sigma of the truth, our standard errors within
+Criteria: Table 3 values within 3 sigma of the truth, our standard errors within
 25% of the report's term by term; Table 2 within 30% (fit A); Table 1 within 30% each, or
 the reason why not (docs/facts.md).
 """

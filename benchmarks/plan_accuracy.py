@@ -7,7 +7,7 @@ Runs the plan's variants (no answers) with ``--members`` Monte Carlo campaigns e
 per variant and term: the predicted sigma, the Monte Carlo sigma with its sampling error
 (sigma / sqrt(2 (N - 1))), their ratio, the Monte Carlo bias with its error (sigma / sqrt(N))
 beside the predicted bias, and the mean of the fitter's own sigmas (TPOINT's, which is
-sqrt(2)-inflated for isotropic errors, and the cluster-robust "honest" one). The issue's
+sqrt(2)-inflated for isotropic errors, and the cluster-robust "honest" one). The
 criterion: |MC / predicted - 1| <= 15% for every W term of every variant with >= 200 members.
 """
 

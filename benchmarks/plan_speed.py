@@ -45,7 +45,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 REFERENCE = ROOT / "benchmarks" / "data" / "ghigo1990_whatif_plan.json"
-#: the issue's target: the whole command on two cores
+#: the target: the whole command on two cores
 TARGET_S = 60.0
 #: standard errors of the difference allowed
 K_SIGMA = 3.0

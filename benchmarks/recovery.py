@@ -8,7 +8,7 @@ For seeds FIRST..FIRST+N-1 (default 1..200) of the scenario (default
 bias (mean of fitted - true), the seed-to-seed standard deviation, the mean of TPOINT's sigma
 and of the honest (cluster-robust) sigma, the spread of the pulls (fitted - true)/sigma and
 the fraction within 3 sigma, for both sigma
-definitions. Targets (issue 4): pull spread within 0.85..1.15 and >= 99% within 3 sigma.
+definitions. Targets: pull spread within 0.85..1.15 and >= 99% within 3 sigma.
 
 It runs three cases. (1) The scenario as calibrated. The thermal distortion of a sunny day is
 nearly the same every day, so it shifts some W's identically in every seed: the fitted W's
@@ -24,7 +24,7 @@ observatory's thermal model carries no scan's measurement noise, and the mean of
 the seed-to-seed spread does not (W6 and W10 then spread by 0.84 for an error bar 16% too
 large; with 64, 0.90-0.91).
 
-Then the two ways an observatory has (issue 25). (4) The scenario with structure temperature
+Then the two ways an observatory has. (4) The scenario with structure temperature
 sensors (default ``scenarios/ghigo1990_sensors.toml``: the same world, noise and seeds, plus
 thermometers with noise, resolution, lag and a partial view): fit T, fit A with the thermal
 terms the data support in the sensors' temperatures, corrected for their response time: the

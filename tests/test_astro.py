@@ -8,7 +8,7 @@ ICRS step keeps the FK4 position's obstime at B1950; astropy's one-step FK4 -> A
 takes the AltAz obstime for its intermediate FK4NoETerms frame instead (astropy issue #10456),
 which moves the 1990 sources by 0.11-0.19" (pinned by a test below).
 
-Tolerances: 0.1 arcsec for positions (DESIGN section 3) with a 1 mas regression guard (both
+Tolerances: 0.1 arcsec for positions (docs/layout.md) with a 1 mas regression guard (both
 sides use the same ERFA routines; measured agreement is a few micro-arcseconds); 1 arcsec for
 the Sun (it only drives thermal models and day/night splits). Random times come from seeded
 numpy Generators.
@@ -42,7 +42,7 @@ from controller.astro.sun import sunrise_times_s, sunset_times_s
 ARCSEC_PER_RAD = 180.0 / math.pi * 3600.0
 DAY_S = 86400.0
 EPOCH_1990 = "1990-02-08T00:00:00"
-#: DESIGN section 3: the vectorized ephemeris must match exact astropy to 0.1"
+#: docs/layout.md's conventions: the vectorized ephemeris must match exact astropy to 0.1"
 POSITION_TOLERANCE_ARCSEC = 0.1
 #: regression guard: astropy and this module run the same ERFA code; measured ~2e-6"
 REGRESSION_TOLERANCE_ARCSEC = 0.001
@@ -389,7 +389,7 @@ def test_refraction_matches_astropy(frequency_ghz, obswl):
 
 
 def test_refraction_matches_design_figures():
-    """DESIGN 5: 5.3' at 10 deg, 2.6' at 20 deg, 0.97' at 45 deg (10 C, 50 % RH), figures of
+    """docs/physics.md: 5.3' at 10 deg, 2.6' at 20 deg, 0.97' at 45 deg (10 C, 50 % RH), figures of
     the VLBI Field System model. Pressure assumed: standard atmosphere at 800 m (921 hPa).
     Tolerance 2 %: a different model and an unstated pressure (2 % is 18 hPa)."""
     pressure = standard_pressure_hpa(GREEN_BANK_45FT.height_m)

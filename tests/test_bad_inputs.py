@@ -255,7 +255,7 @@ def test_the_base_files_are_good_input(base_run, capsys):
 
 
 def test_the_suite_covers_every_kind_of_input():
-    """At least 150 cases, spread over every kind of input (issue 28)."""
+    """At least 150 cases, spread over every kind of input."""
     kinds: dict[str, int] = {}
     for name in CASES:
         kinds[name.split("/")[0]] = kinds.get(name.split("/")[0], 0) + 1

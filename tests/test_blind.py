@@ -6,9 +6,9 @@ alarm on the null cases and the amplitude recovered within 3 sigma in at least 7
 cases.
 
 Why 8 baseline simulations and seed 8. The baseline's noise comes from its simulations; with
-4 of them (this test until issue 25) diagnose raised false alarms on 4 of 60 null cases of
+4 of them (this test until the recalibration) diagnose raised false alarms on 4 of 60 null cases of
 this 11-hour harness (seed 11, ``null_fraction`` 1), and on 5 of the same 60 with the scenario
-before issue 25's recalibration: 7.5% of 120, not the 0.5% its tests are set to. With 8, 1 of
+before the thermal recalibration: 7.5% of 120, not the 0.5% its tests are set to. With 8, 1 of
 60 (1.7%; the 24-hour benchmark: 1 of 100, docs/results/blind_nulls.txt). At that rate the
 2-4 null cases of a 10-case seed all pass with probability 93-97%: seed 7 drew one of the few,
 a null case named az_runout_2a at 3.1 sigma with 4 or 8 simulations alike (the afternoon's

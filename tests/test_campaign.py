@@ -109,7 +109,7 @@ def test_azimuth_steps_follow_the_sky_elevation_up_to_the_zenith(ghigo, estimato
 def test_extended_sources_and_the_width_the_reduction_assumes(ghigo, estimator, use_size):
     # a source of Gaussian FWHM s seen with the 11' beam is a Gaussian of width
     # sqrt(11^2 + s^2): Clark's method with the beam's width shrinks its offsets by
-    # 11^2/(11^2 + s^2) (0.91 for Cas A and Tau A, DESIGN section 5); with the width the
+    # 11^2/(11^2 + s^2) (0.91 for Cas A and Tau A, docs/physics.md); with the width the
     # catalogued size gives (use_source_size) both estimators are exact. 1' and 1.5' are
     # injected: the shrinkage is then 0.09-0.2', the tolerance of 0.005' (0.3") holds the
     # second-order geometry (measured 0.003' at most for Clark)

@@ -55,7 +55,7 @@ def _night_deg(band: int) -> float:
 
 
 def test_points_and_rms_per_point_are_table4s(runs):
-    # within 20% (the issue's bar), all data and night (the Sun below the horizon): measured
+    # within 20%, all data and night (the Sun below the horizon): measured
     # 396/400, 332/353, 174/182 points; RA rms 18.3/18.2, 20.9/20.7, 25.1/22.4"; Dec rms
     # 11.8/11.9, 11.0/11.0, 10.6/10.8"; night 164/172 and 149/139 points, RA 18.6/18.2 and
     # 17.4/17.4", Dec 9.1/9.3 and 8.8/9.0"

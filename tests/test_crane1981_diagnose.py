@@ -1,4 +1,4 @@
-"""Crane (1981)'s open question as a diagnose case (issue 23 item 5): "the rms error in right
+"""Crane (1981)'s open question as a diagnose case: "the rms error in right
 ascension is twice as large ... as if the pointing equation used does not describe the
 pointing" (summary item 3).
 

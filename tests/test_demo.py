@@ -34,7 +34,7 @@ def demo(tmp_path_factory):
     with contextlib.redirect_stdout(buf):
         status = main(["demo", "--out", str(out)])
     wall = time.perf_counter() - t0
-    print(f"\nantsim demo: {wall:.1f} s wall time (the issue asks for under 120 s)")
+    print(f"\nantsim demo: {wall:.1f} s wall time (the target: under 120 s)")
     assert status == 0
     return out, buf.getvalue(), json.loads((out / "demo.json").read_text()), wall
 

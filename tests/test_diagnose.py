@@ -137,12 +137,13 @@ def test_library_covers_the_signature_table_and_the_non_harmonic_effects():
 def test_harmonic_effect_amplitude_and_phase_round_trip():
     e = AzimuthTrack2A(amplitude_arcsec=6.0, phase_deg=30.0)
     coeff = e.coefficients()
-    # TPOINT's HESA2 is dE = c sin 2A_H with A_H = 180 deg - A_S: minus sin 2A_S
+    # TPOINT's HESA2 is dE = c sin 2A_T with A_T = 180 deg - A_N: minus sin 2(A_N - 180 deg)
     assert coeff["HESA2"] == pytest.approx(-6.0 * math.cos(math.radians(30.0)))
     assert coeff["HECA2"] == pytest.approx(6.0 * math.sin(math.radians(30.0)))
     amp, phase = AzimuthTrack2A.amplitude_phase(coeff["HESA2"], coeff["HECA2"])
     assert (amp, phase) == pytest.approx((6.0, 30.0))
-    # the effect's error is minus its correction a sin(2 A_S + phase) (indicated - true)
+    # the effect's error is minus its correction a sin(2 (A_N - 180 deg) + phase) (indicated
+    # minus true)
     from antsim.world.effects.base import PointingState
 
     st = PointingState(t_s=0.0, az_rad=0.4, el_rad=0.7)
@@ -163,9 +164,9 @@ HARMONIC_PHYSICS = {
 @pytest.mark.parametrize("name", sorted(HARMONIC_PHYSICS))
 @pytest.mark.parametrize("phase_deg", [0.0, 30.0, 135.0, 250.0])
 def test_harmonic_effects_are_the_documented_sinusoid(name, phase_deg):
-    """The error of every harmonic effect is minus a sin(nX + phase), X the South-based
-    azimuth A_S = A_N - 180 deg or the elevation, in dA or dE: whatever the term library's
-    sign convention, and the inverse amplitude_phase gives the parameters back."""
+    """The error of every harmonic effect is minus a sin(nX + phase), X the azimuth counted
+    from South through West, A_N - 180 deg, or the elevation, in dA or dE: whatever the term
+    library's sign convention, and the inverse amplitude_phase gives the parameters back."""
     from antsim.world.effects.base import PointingState
 
     axis, n, arg = HARMONIC_PHYSICS[name]
@@ -293,7 +294,7 @@ def test_a_term_the_model_mimics_is_judged_by_what_the_model_cannot_absorb():
     """sin E on top of IE, TF (cos E) and TX (cot E) over 15-85 deg: r = 1.00 with the model,
     but the part those terms cannot absorb (0.32 per arcsec of HESE over these 160 stars)
     is 25 sigma for 40" in 0.5" noise: accepted, with its correlation in TPOINT's words and
-    the separation in sigma (issue 24: it used to be refused). Without a noise prediction
+    the separation in sigma (it used to be refused). Without a noise prediction
     the F test takes the noise from the residuals, which still hold the effect (1.1" instead
     of 0.5" in elevation before it is fitted): 13 sigma, hence the bound of 10."""
     d = diagnose(synthetic(extra={"HESE": 40.0}, noise_arcsec=0.5))
@@ -313,7 +314,7 @@ def test_a_term_the_model_mimics_is_judged_by_what_the_model_cannot_absorb():
     assert doc["separations"][0]["sigma"] == pytest.approx(sp.sigma, abs=0.01)
 
 
-#: held-out style TPOINT cases (issue 24): effects of elevation alone that IE, TF and TX nearly
+#: held-out style TPOINT cases: effects of elevation alone that IE, TF and TX nearly
 #: mimic (r = 1.00), and an azimuth runout once per turn that was named as the elevation nod
 #: of the same order; 160 stars, 1" noise, seed 3 (8-12 sigma separated)
 HELD_OUT_STYLE = [({"HECE2": 30.0}, "el_eccentricity_2e"),

@@ -94,9 +94,10 @@ def _lagged_problem(cand, tau_s: float, n: int = 3000):
 
 
 def _bounded_search(cand, problem, perp, z_perp, best, log_lo: float, log_hi: float):
-    """The search the thermal candidates made before issue 28p (the reference the grid-started
-    one is tested against): scipy's bounded Brent search in log theta between the bounds, to
-    XATOL_LOG_THETA, its best test or ``best`` if that fits better; and its number of tests."""
+    """The search the thermal candidates made before they started on a grid (the reference
+    the grid-started one is tested against): scipy's bounded Brent search in log theta
+    between the bounds, to XATOL_LOG_THETA, its best test or ``best`` if that fits better;
+    and its number of tests."""
     import math
 
     from scipy import optimize

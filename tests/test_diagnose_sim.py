@@ -4,7 +4,7 @@ issue asks), its noise predicted by 4 baseline simulations (cached in pytest's c
 directory, keyed by the code), effects hidden in recordings of fixed seeds.
 
 Tolerances: amplitudes within 3 sigma of the hidden value; the after-sunset time constant
-within 30% (the issue's figure); the re-simulation's scan-by-scan test must pass (p > 0.01)
+within 30%; the re-simulation's scan-by-scan test must pass (p > 0.01)
 after and fail (p < 1e-3) before.
 """
 
@@ -130,7 +130,7 @@ def test_diagnose_command_with_a_scenario(short, cache, tmp_path, capsys):
     assert np.isfinite(f["significance"])
 
 
-#: a step of 45" at an unknown time (issue 24's held-out case, once named temperature_drift),
+#: a step of 45" at an unknown time (a held-out case, once named temperature_drift),
 #: in either axis: 7-11 sigma on the 24-hour campaign, 6-8 here
 STEPS = [("el", 16200.0, 15), ("az", 21600.0, 16)]
 
@@ -154,7 +154,7 @@ def test_a_step_is_named_a_step_and_located(short, baseline, axis, t_s, seed):
 
 def test_a_transient_after_sunset_is_found(short, baseline):
     """100" at sunset dying away over 1.4 h: about 6 sigma of matched filter on the 11-hour
-    campaign (the issue's 70", about 4.4 sigma, is found on 11 of 16 seeds of the 24-hour
+    campaign (the benchmark's 70", about 4.4 sigma, is found on 11 of 16 seeds of the 24-hour
     one: benchmarks/blind.py --changes); named, with its amplitude within 3 sigma."""
     hidden = {"amplitude_arcsec": 100.0, "tau_s": 5040.0, "shape": "transient"}
     d = diagnose(recordings(short, 17, "sunset_drift", hidden), short, sim_baseline=baseline)

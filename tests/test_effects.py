@@ -197,15 +197,15 @@ SMOKE = {
     "refraction_anomaly": ({"scale": 1.05}, None),
     "exact_tilt_collimation": ({"tilt_arcmin": 1.0, "tilt_az_deg": 30.0,
                                 "collimation_arcmin": 0.5}, None),
-    # issue 5's effects for diagnosis (antsim/world/effects/harmonics.py, drifts.py)
+    # the effects for diagnosis (antsim/world/effects/harmonics.py, drifts.py)
     **{name: ({"amplitude_arcsec": 6.0, "phase_deg": 30.0}, None)
        for name in ("az_track_2a", "az_track_3a", "az_runout_1a", "az_runout_2a", "el_nod_1a",
                     "el_eccentricity", "el_eccentricity_2e")},
     "feed_offset": ({"offset_arcsec": 10.0, "angle_deg": 45.0}, None),
     "temperature_drift": ({"arcsec_per_k": 2.0, "tau_s": 3600.0, "reference_c": 5.0}, None),
-    # issue 24's change at one instant (antsim/world/effects/steps.py)
+    # a change at one instant (antsim/world/effects/steps.py)
     "step": ({"t_s": 3600.0, "az_arcsec": 20.0, "el_arcsec": -30.0}, None),
-    # issue 23's equatorial effect (antsim/world/effects/equatorial.py), run on the 140-ft
+    # the equatorial effect (antsim/world/effects/equatorial.py), run on the 140-ft
     "polar_torsion": ({"amplitude_arcsec": 30.0, "phase_deg": 315.0}, None),
 }
 #: the effects of an equatorial mount: smoke-tested in the 140-ft's 4990 MHz scenario cut to
@@ -449,11 +449,12 @@ def test_tracking_jitter_is_larger_by_day_by_its_day_factors(quiet):
 def _linear_tilt_model(tilt_arcsec: float, tilt_az_deg: float, collimation_arcsec: float):
     """Small-angle equivalent of a tilt towards azimuth phi and a collimation c: to first
     order the encoders read dE = t cos(A - phi), dA = t tan E sin(A - phi) - c sec E
-    (indicated - true), which in TPOINT's terms (DESIGN section 5 table; signs as in
-    tests/test_world.py) is AN = -t cos phi, AW = +t sin phi, CA = -c."""
+    (indicated - true), which in TPOINT's terms (docs/physics.md's signature table; signs as in
+    tests/test_world.py: TPOINT's AN > 0 is the pole north of the zenith, AW > 0 west of it)
+    is AN = t cos phi, AW = -t sin phi, CA = -c."""
     phi = math.radians(tilt_az_deg)
-    return PointingModel(["AN", "AW", "CA"], [-tilt_arcsec * math.cos(phi),
-                                              tilt_arcsec * math.sin(phi),
+    return PointingModel(["AN", "AW", "CA"], [tilt_arcsec * math.cos(phi),
+                                              -tilt_arcsec * math.sin(phi),
                                               -collimation_arcsec])
 
 

@@ -580,7 +580,7 @@ def test_result_is_immutable_json_clean_and_inputs_untouched():
         result.n_used = 3  # type: ignore[misc]
     doc = result.to_json()
     text = json.dumps(doc, allow_nan=False)
-    # DESIGN section 4's schema, extended (never changed) by the honest error bars
+    # docs/contract.md's schema, extended (never changed) by the honest error bars
     # (and by w_terms: which definition the W terms follow, controller/pointing/legacy.py;
     # sign_convention: the sign of the coefficients in words)
     assert doc["sign_convention"].startswith("W1..W10 (Ghigo 1990, NRAO EDIR 288, section "

@@ -19,7 +19,8 @@ ROOT = Path(__file__).resolve().parents[1]
 
 #: the features: what a user asks for, each one command's work. They share the engines
 #: (:mod:`antsim.simulate`), the figures and pages (:mod:`antsim.figures`) and everything below.
-FEATURES = ("antsim.run", "antsim.serve", "antsim.plan", "antsim.diagnose", "antsim.studies")
+FEATURES = ("antsim.run", "antsim.fit", "antsim.serve", "antsim.plan", "antsim.diagnose",
+            "antsim.studies")
 #: everything that sits above the figures: the features and the command line
 FEATURES_UP = ("antsim.figures", *FEATURES, "antsim.commands", "antsim.cli")
 #: the teaching walk-through (``antsim demo``), a command: its chapters, one module each, and
@@ -28,6 +29,13 @@ DEMO = "antsim.commands.demo"
 DEMO_CHAPTERS = tuple(f"{DEMO}.{name}" for name in (
     "cold_start", "first_campaign", "the_fit", "closed_loop", "hidden_effect"))
 DEMO_SHARED = (f"{DEMO}.story", f"{DEMO}.campaign")
+
+#: the Python API (notebooks), at the command line's level: it may import every feature;
+#: only ``antsim``'s own lazy ``__getattr__`` imports it
+API = "antsim.api"
+BELOW_API = ("controller", "antsim.tomlcheck", "antsim.documents", "antsim.progress",
+             "antsim.bundled", "antsim.outdir", "antsim.options", "antsim.blas",
+             "antsim.world", "antsim.scenario", "antsim.simulate", *FEATURES_UP)
 
 #: (importer prefix, forbidden prefixes, why): no module under the importer imports a module
 #: under a forbidden prefix. Prefixes are dotted module names; "a.b" covers a.b and a.b.*.
@@ -87,6 +95,10 @@ RULES: tuple[tuple[str, tuple[str, ...], str], ...] = (
                        "controller.astro", "controller.pointing", "controller.scans",
                        "controller.program"),
      "output directories and their lock are a base of every command that writes"),
+    ("antsim.options", ("antsim.world", "antsim.simulate", "antsim.scenario", *FEATURES_UP,
+                        "controller.astro", "controller.pointing", "controller.scans",
+                        "controller.program"),
+     "the limits of a user's counts are a base of every command and of the Python API"),
     ("antsim.world", ("antsim.simulate", *FEATURES_UP),
      "the simulated world knows nothing of what is done with it"),
     ("antsim.scenario", ("antsim.world.world", "antsim.simulate", *FEATURES_UP),
@@ -104,6 +116,9 @@ RULES: tuple[tuple[str, tuple[str, ...], str], ...] = (
        "a feature imports the engines and the parts below them, never another feature nor "
        "the command line: what two features share belongs below both")
       for feature in FEATURES),
+    *((below, (API,), "the Python API sits at the command line's level: no feature, engine "
+       "or command imports it")
+      for below in BELOW_API),
     *((chapter, (*(c for c in DEMO_CHAPTERS if c != chapter), f"{DEMO}.walkthrough"),
        "a chapter of the walk-through never imports another: what it needs of an earlier "
        "one the walk-through hands it, and what two share is in the demo's shared modules")
@@ -246,6 +261,18 @@ def test_the_demos_rules_name_its_modules(graph):
         {*DEMO_CHAPTERS, *DEMO_SHARED, f"{DEMO}.walkthrough"}, "a new demo module: rule it"
 
 
+def test_the_api_is_imported_by_antsim_alone(graph):
+    """The rule on the API holds something: the API is there, imports the features the
+    commands run, and only ``antsim`` (its lazy ``__getattr__``) imports it."""
+    api = {m for m in graph if m == API or m.startswith(API + ".")}
+    assert API in graph and f"{API}.campaign" in graph
+    uses = {t for m in api for t in graph[m]}
+    assert {"antsim.run.outputs", "antsim.fit.fitfile", "antsim.diagnose.request",
+            "antsim.plan.outputs"} <= uses
+    importers = {m for m, edges in graph.items() if m not in api and set(edges) & api}
+    assert importers == {"antsim"}
+
+
 def test_a_chapter_importing_another_is_caught(tmp_path):
     root = _fake_tree(tmp_path, {
         "antsim/__init__.py": "",
@@ -291,7 +318,7 @@ def test_a_bad_import_and_a_circle_are_caught(tmp_path):
     """The checker on a small tree with one import of each kind this test forbids: the
     program importing the simulation (in a function), the scan engine importing the control
     program (type-only), the command line importing a command (it must find them by name), and
-    a circle through a relative import; and the two rules of issue 26's pieces: the wire
+    a circle through a relative import; and the two rules of the wire's pieces: the wire
     client importing the server, the server importing the run."""
     root = _fake_tree(tmp_path, {
         "controller/__init__.py": "",

@@ -1,4 +1,4 @@
-"""Files written before antsim followed the 1990 report's W1..W10 (issue 22).
+"""Files written before antsim followed the 1990 report's W1..W10.
 
 The reconstruction used until then put the same ten functions under other names (its
 definitions, from the docs/assumptions.md of that time, are written out below). Files that
@@ -36,7 +36,7 @@ _AZ, _EL = np.meshgrid(np.radians(np.arange(0.0, 360.0, 20.0)),
 AZ, EL = _AZ.ravel(), _EL.ravel()
 
 #: the reconstruction's W terms, indicated minus true (dA, dE) per unit coefficient, as
-#: docs/assumptions.md wrote them before issue 22:
+#: docs/assumptions.md wrote them before the report was at hand:
 #:     dA = W1 + W2 sec E + W3 tan E + W9 sin A tan E + W10 cos A tan E
 #:     dE = W4 cos E + W5 cot E + W6 + W7 cos A + W8 sin A
 RECONSTRUCTION = {

@@ -1,4 +1,4 @@
-"""Issue 4 end to end: the 1990 tables, the run's fit files, and the closed loop."""
+"""The 1990 run end to end: its tables, the run's fit files, and the closed loop."""
 
 from __future__ import annotations
 
@@ -44,7 +44,7 @@ def test_table2_of_the_1990_report_is_reproduced(campaign):
     _, fits = campaign
     a, b, c, d, e, f = (fits[k] for k in "ABCDEF")
     # Ghigo (1990) Table 2, fit A: 23" in cross-elevation, 38" in elevation; the scenario's
-    # physics was calibrated to land within 30% (issue 4), seed 1 is not tuned separately
+    # physics was calibrated to land within 30%, seed 1 is not tuned separately
     assert a.xel_rms_arcsec == pytest.approx(23.0, rel=0.30)
     assert a.el_rms_arcsec == pytest.approx(38.0, rel=0.30)
     # the report's orderings: night elevation rms below day, XL worse than XR, the
@@ -66,8 +66,8 @@ def test_table3_of_the_1990_report_is_reproduced(ghigo, campaign):
     0.80-0.97 times the report's, as docs/results.md says; W6, W9, W10, the terms that cannot
     reliably be distinguished, 0.90, 0.87, 0.90).
 
-    With the Sun on the antenna (report section IV; since issue 25 the heating, not the wind,
-    makes the day's excess) "fit A within 3 sigma of the truth" is not the physics: fit A
+    With the Sun on the antenna (report section IV; since the thermal recalibration the
+    heating makes the day's excess) "fit A within 3 sigma of the truth" is not the physics: fit A
     fits the day and the night mixed with no thermal term, so every campaign shares the
     heating's shift of W1, +33" against a TPOINT sigma of ~9.5" (within 3 sigma in 30% of
     200 seeds, docs/results/recovery.txt). Seed 1's W1 is 3.6 sigma off and its W3 3.1. Fit
@@ -220,7 +220,7 @@ def sky_rms_of_pointing(rows) -> float:
 
 def test_closed_loop_second_campaign_points_well(ghigo, campaign, tmp_path):
     """The model fitted from one campaign, used in the next through its model.dat, leaves
-    pointing errors close to the first fit's residuals (issue 4: at most 1.3 times); the
+    pointing errors close to the first fit's residuals (at most 1.3 times); the
     second run says so in one line, in fit.txt and in its report."""
     _, fits = campaign
     first = fits["A"]

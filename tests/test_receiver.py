@@ -151,7 +151,7 @@ def test_noise_free_power_on_and_off_source_is_the_formula(scenarios, index, wha
         if index == 0:
             assert np.mean(eff) < 0.97  # on the sloping part of the curve (0.96)
         if index == 2:
-            assert peak == pytest.approx(0.91, abs=0.005)  # DESIGN: about 0.91 at 11'
+            assert peak == pytest.approx(0.91, abs=0.005)  # docs/physics.md: about 0.91 at 11'
 
 
 def test_noisy_power_on_and_off_source_within_the_modeled_noise(scenarios):
@@ -283,7 +283,7 @@ def test_scatter_of_integration_means_matches_the_noise_model(repeated, name):
                               + 1.0 / (receiver.bandwidth_mhz * 1e6 * TAU_S))
             assert not lo < np.var(means[:, c], ddof=1) / naive < hi
     if name == "radiometer only":
-        # DESIGN section 5: radiometer noise is only ~1 mK in 15 s
+        # docs/physics.md: radiometer noise is only ~1 mK in 15 s
         assert math.sqrt(_var_mean(receiver, 0, _system_k(world)[0], 15)) == pytest.approx(
             1.0e-3, rel=0.1)
 

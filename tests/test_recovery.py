@@ -43,7 +43,7 @@ def test_honest_sigma_matches_the_scatter_over_seeds(pulls):
     """120 pooled pulls (12 seeds x 10 terms; the terms of one seed are correlated, so the
     effective number is nearer 60): a sample spread then has a relative standard error of
     about 1/sqrt(120) = 9%, and 0.75..1.25 is a ~3-sigma band around 1. Measured: 0.79, with
-    100% within 3 sigma, since issue 25's recalibration of the jitter (0.83 before; 0.87 with
+    100% within 3 sigma, since the thermal recalibration of the jitter (0.83 before; 0.87 with
     one block grid instead of four; 0.98 and 97.5% before the jackknife replayed the fit's
     rejection and the azimuth steps followed the sky elevation; the 200-seed benchmark:
     per-term spreads 0.91-1.00, docs/results/recovery.txt)."""
@@ -56,7 +56,7 @@ def test_honest_sigma_matches_the_scatter_over_seeds(pulls):
 def test_tpoint_sigma_is_conservative(pulls):
     """TPOINT's sigma (Sky RMS times the unscaled error) overstates the scatter, because the
     Sky RMS is sqrt(2) times the per-axis scatter: its pooled spread stays well below 1
-    (measured 0.67 pooled since issue 25's recalibration, 0.72 before; the benchmark:
+    (measured 0.67 pooled since the thermal recalibration, 0.72 before; the benchmark:
     0.62-0.89 per term). The test would fail if the two sigmas were the same."""
     tpoint, honest = pulls
     assert float(np.sqrt(np.mean(tpoint**2))) < 0.85

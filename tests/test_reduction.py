@@ -61,7 +61,7 @@ def test_crb_constant_baseline_closed_form_at_zero_offset():
     # The closed form neglects the +-4D points, where dg/da is 2e-8 of its value at +-D:
     # their share of the information is ~1e-15, below double rounding.
     np.testing.assert_allclose(bound, closed, rtol=1e-12)
-    # DESIGN section 5 quotes 6.77'/SNR (three significant figures).
+    # docs/physics.md quotes 6.77'/SNR (three significant figures).
     assert abs(bound[0] * snr[0] - 6.77) < 0.005
 
 
@@ -172,7 +172,7 @@ def test_clark_is_biased_by_a_time_drift_and_lsq_is_not():
     # Drift d = 1% of A per integration. Clark's line through the +-4D powers (times 0 and
     # 4 steps) predicts 1.5 d at n = -1 (time 1 step, true d) and 2.5 d at n = +1 (true 3 d):
     # B(+-1) = B +- d/2, so a = (s^2/2D) ln[(B + d/2)/(B - d/2)]; the mean reading leaves
-    # +-d: twice that (the DESIGN's ~0.1' per 1%).
+    # +-d: twice that (docs/physics.md's ~0.1' per 1%).
     d = 0.01
     powers = scan(0.0, drift_k_per_s=d / 20.0)
     side = math.exp(-(STEP**2) / (2 * S**2))
@@ -449,7 +449,7 @@ def test_formal_errors_equal_the_bounds_of_each_model():
 
 def test_clark_efficiency_falls_with_offset_as_the_design_says():
     # Efficiency (CRB / sigma)^2 from Clark's linearized variance (its formal sigma on
-    # noise-free powers). DESIGN section 5: 0.67, 0.27, 0.10 at 1', 2', 3'. The mean-of-
+    # noise-free powers). docs/physics.md: 0.67, 0.27, 0.10 at 1', 2', 3'. The mean-of-
     # +-4D baseline reproduces them to the quoted two digits; the straight line (the
     # default) costs 1/17 of the information at zero offset and gives 0.64, 0.26, 0.096.
     offsets = np.array([0.0, 1.0, 2.0, 3.0])

@@ -258,7 +258,7 @@ def test_diagnose_names_the_thermal_effect_in_the_sensors_terms(sunny_day, tmp_p
     assert first["effect"] == "thermal" and {"TEDFB", "TSDRL"} <= set(first["terms"])
     assert "structure temperature sensors see it" in first["explanation"]
     s = diag.summary
-    # seed 1: 38.9" -> 33.6" in sample, 39.6" -> 34.9" held out (before issue 25's
+    # seed 1: 38.9" -> 33.6" in sample, 39.6" -> 34.9" held out (before the thermal
     # recalibration 42.9" -> 38.0", 43.6" -> 39.9"); 5% is beyond the held-out Sky RMS's own
     # noise on the same scans
     assert s["sky_rms_after_arcsec"] < 0.95 * s["sky_rms_before_arcsec"]

@@ -629,7 +629,7 @@ def test_node_client_scans_a_source_and_finds_what_its_model_misses(tmp_path, re
     deliberately put 4' off in elevation zero (W1) and 3' in azimuth zero (W6; the report's
     section II), runs one cross scan and prints the offsets: they must be the injected truth
     minus its model, scaled by 0.91 (Cas A's 3.46' size shrinks measured offsets by 11^2 /
-    (11^2 + 3.46^2), DESIGN section 5). Tolerance 0.5': the solar heating of the hour (about
+    (11^2 + 3.46^2), docs/physics.md). Tolerance 0.5': the solar heating of the hour (about
     0.3', not in the truth's geometry) and the client's ephemeris (no nutation or aberration,
     about 0.3')."""
     from controller.pointing.model import PointingModel

@@ -75,12 +75,13 @@ def test_equivalent_coefficients_give_the_same_offsets():
 
 
 # ---------------------------------------------------------------------------------------------
-# harmonic generator: TPOINT's harmonic azimuth is A_H = 180 deg - A_S = -A_N, and dA and
-# dA cos E results are minus the harmonic (dE plus it, dZ = -dE). Written out here with the
-# North-based azimuth, independently of the code's factor tables.
+# harmonic generator: TPOINT's harmonic azimuth is its own, A_T = 180 deg - A_N (South = 0,
+# East = 90), and dA and dA cos E results are minus the harmonic (dA_N = -dA_T; dE plus it,
+# dZ = -dE). Written out here with the North-based azimuth, independently of the code's
+# factor tables.
 # ---------------------------------------------------------------------------------------------
 def _h(az):
-    return -az  # A_H = pi - A_S = pi - (A_N - pi) = -A_N (mod 2 pi)
+    return math.pi - az  # A_T = 180 deg - A_N
 
 
 HARMONICS = {
@@ -110,17 +111,14 @@ def test_harmonic_generator_formulas(name):
     np.testing.assert_allclose(got_el, want_el, rtol=0, atol=1e-12)
 
 
-def test_harmonic_azimuth_against_north_and_south_based_azimuth():
-    """sin kA_H = -sin kA_N, cos kA_H = +cos kA_N; against A_S = A_N - 180 the odd
-    multiples of the cosine and the even ones of the sine change sign."""
-    a_s = GRID_AZ - math.pi
+def test_harmonic_azimuth_against_the_north_based_azimuth():
+    """sin kA_T = -(-1)^k sin kA_N and cos kA_T = (-1)^k cos kA_N: the odd multiples of the
+    cosine and the even ones of the sine are the negatives of those of A_N."""
     for k in (1, 2, 3, 4):
         _, s = _basis(f"HESA{k}")
         _, c = _basis(f"HECA{k}")
-        np.testing.assert_allclose(s, -np.sin(k * GRID_AZ), atol=1e-12)
-        np.testing.assert_allclose(c, np.cos(k * GRID_AZ), atol=1e-12)
-        np.testing.assert_allclose(s, (-1) ** (k + 1) * np.sin(k * a_s), atol=1e-12)
-        np.testing.assert_allclose(c, (-1) ** k * np.cos(k * a_s), atol=1e-12)
+        np.testing.assert_allclose(s, (-1) ** (k + 1) * np.sin(k * GRID_AZ), atol=1e-12)
+        np.testing.assert_allclose(c, (-1) ** k * np.cos(k * GRID_AZ), atol=1e-12)
 
 
 def test_feed_harmonics_follow_the_same_result_signs():
@@ -141,20 +139,24 @@ def test_basis_columns_are_the_plain_expressions_bit_for_bit():
     """A harmonic's sine and cosine share one argument, a column is a column of zeros plus
     each component in order (a lone -0.0 becomes +0.0), a left-right one is over cos E (the
     caller's when given): each the bits of the expression it stands for."""
-    az = np.concatenate([[0.0], GRID_AZ])  # sin(-0.0) is -0.0
+    az = np.concatenate([[0.0], GRID_AZ])
     el = np.concatenate([[0.3], GRID_EL])
     two = Term("TWO", "two components on one axis and one on the sky", (
-        ("A", 1.0, (("sin", "AH", 2),)), ("A", -0.5, (("cos", "AH", 2), ("tan", "E", 1))),
+        ("A", 1.0, (("sin", "AT", 2),)), ("A", -0.5, (("cos", "AT", 2), ("tan", "E", 1))),
         ("S", 2.0, (("cos", "E", 3),))))
-    b_az, b_el = evaluate_basis([get_term("HESA2"), get_term("HECA2"), two], az, el)
+    lone = get_term("W3")  # dE = -1.0 * sin A_N: -0.0 at A_N = 0
+    b_az, b_el = evaluate_basis([get_term("HESA2"), get_term("HECA2"), two, lone], az, el)
     zeros = np.zeros(az.size)
-    assert b_el[:, 0].tobytes() == (zeros + np.sin(2 * -az)).tobytes()
-    assert not np.signbit(b_el[0, 0])
-    assert b_el[:, 1].tobytes() == (zeros + np.cos(2 * -az)).tobytes()
-    plain = (zeros + 1.0 * np.sin(2 * -az) + -0.5 * (np.cos(2 * -az) * np.tan(el))
+    assert np.signbit(-1.0 * np.sin(az[0])) and not np.signbit(b_el[0, 3])
+    assert b_el[:, 3].tobytes() == (zeros + -1.0 * np.sin(az)).tobytes()
+    a_t = math.pi - az
+    assert b_el[:, 0].tobytes() == (zeros + np.sin(2 * a_t)).tobytes()
+    assert b_el[:, 1].tobytes() == (zeros + np.cos(2 * a_t)).tobytes()
+    plain = (zeros + 1.0 * np.sin(2 * a_t) + -0.5 * (np.cos(2 * a_t) * np.tan(el))
              + 2.0 * np.cos(3 * el) * (1.0 / np.cos(el)))
     assert b_az[:, 2].tobytes() == plain.tobytes()
     assert b_az[:, :2].tobytes() == np.zeros((az.size, 2)).tobytes()
+    assert b_az[:, 3].tobytes() == zeros.tobytes()
     assert b_el[:, 2].tobytes() == zeros.tobytes()
 
 
@@ -195,8 +197,9 @@ TPOINT_AUXTEL = {
 def test_auxtel_refit_reproduces_tpoint_harmonic_signs():
     """A plain least-squares refit of the AuxTel file with TPOINT's 22 FAUTO terms, at the
     observed position as TPOINT does (the MMT acceptance test), gives the sign of every one of
-    TPOINT's coefficients. With the harmonics at A_S and every result +c f, six of the ten
-    small harmonics (HACA2, HASA7, HESA2, HSCE3, HSSE8, HSCE8) came out with the wrong sign."""
+    TPOINT's coefficients. With the harmonics at the file's azimuth less 180 deg and every
+    result +c f, six of the ten small harmonics (HACA2, HASA7, HESA2, HSCE3, HSSE8, HSCE8)
+    came out with the wrong sign."""
     path = REAL / "auxtel_20200315.dat"
     from controller.pointing.fitting import fit_model
     from controller.pointing.tpoint import read_tpoint
@@ -388,18 +391,70 @@ def test_w_terms_are_the_equations_of_the_report(name):
 
 
 def _tpoint_written_out(a, e):
-    """TPOINT's basic alt-az corrections (true = raw + correction), as in its documentation,
-    with its South-based azimuth A_S = A_N - 180 deg (docs/assumptions.md): per unit
-    coefficient, (dA, dE) of IA, IE, CA, NPAE, AN, AW, TF, TX."""
-    a_s = a - math.pi
-    zero = 0 * a
-    return {
-        "IA": (-1 + zero, zero), "IE": (zero, 1 + zero),
-        "CA": (-1 / np.cos(e) + zero, zero), "NPAE": (-np.tan(e) + zero, zero),
-        "AN": (-np.sin(a_s) * np.tan(e), -np.cos(a_s) + 0 * e),
-        "AW": (-np.cos(a_s) * np.tan(e), np.sin(a_s) + 0 * e),
-        "TF": (zero, -np.cos(e) + zero), "TX": (zero, -1 / np.tan(e) + zero),
+    """TPOINT's alt-az corrections (true = raw + correction) as TPOINT's routine tptPterms
+    (P. T. Wallace, revision of 14 November 2006) writes them, in its azimuth A_T = 180 deg -
+    A_N (South = 0, East = 90, note 8), turned to the North-based azimuth: dA_N = -dA_T, and a
+    change in zenith distance is minus one in elevation. Per unit coefficient, (dA_N, dE)."""
+    t = math.pi - a  # A_T
+    zero = 0 * a + 0 * e
+    in_a_t = {  # (dA_T, dE), tptPterms' "in altazimuth spherical coordinates"
+        "IA": (1 + zero, zero),  # term 14: dAz = +IA
+        "IE": (zero, 1 + zero),  # 13: dEl = +IE
+        "CA": (1 / np.cos(e) + zero, zero),  # 26: dAz = +CA/cos(El)
+        "NPAE": (np.tan(e) + zero, zero),  # 33: dAz = +NPAE*tan(El)
+        "AN": (np.sin(t) * np.tan(e), np.cos(t) + zero),  # 31: pole north of the zenith
+        "AW": (-np.cos(t) * np.tan(e), np.sin(t) + zero),  # 32: pole west of the zenith
+        "TF": (zero, -np.cos(e) + zero),  # 10: dZd = +TF*cos(El)
+        "TX": (zero, -1 / np.tan(e) + zero),  # 11: dZd = +TX*tan(ZD)
+        "ACES": (np.sin(t) + zero, zero),  # 34: dAz = +ACES*sin(Az)
+        "ACEC": (np.cos(t) + zero, zero),  # 35: dAz = +ACEC*cos(Az)
+        "ECES": (zero, np.sin(e) + zero),  # 36: dEl = +ECES*sin(El)
+        "ECEC": (zero, np.cos(e) + zero),  # 37: dEl = +ECEC*cos(El)
+        "NRX": (1 + zero, -np.sin(e) + zero),  # 38: dAz = +NRX, dEl = -NRX*sin(El)
+        "NRY": (np.tan(e) + zero, np.cos(e) + zero),  # 39: dAz = +NRY*tan(El), +NRY*cos(El)
     }
+    return {name: (-d_a, d_e) for name, (d_a, d_e) in in_a_t.items()}
+
+
+@pytest.mark.parametrize("name", sorted(_tpoint_written_out(GRID_AZ, GRID_EL)))
+def test_tpoint_terms_are_tptpterms_formulas_at_tpoints_azimuth(name):
+    """Every TPOINT term of the library is tptPterms' formula at A_T = 180 deg - A_N."""
+    want_az, want_el = _tpoint_written_out(GRID_AZ, GRID_EL)[name]
+    got_az, got_el = _basis(name)
+    assert np.abs(want_az).max() + np.abs(want_el).max() > 0.5
+    np.testing.assert_allclose(got_az, want_az, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(got_el, want_el, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize(("basic", "harmonic"), [("ACES", "HASA"), ("ACEC", "HACA")])
+def test_azimuth_centering_terms_are_tpoints_harmonics(basic, harmonic):
+    """TPOINT's ACES and ACEC are the harmonics HASA and HACA (both at A_T)."""
+    for got, want in zip(_basis(basic), _basis(harmonic), strict=True):
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+
+
+def test_a_tilted_pole_gives_tpoints_an_and_aw():
+    """TPOINT's meaning, from a rotation: a mount whose azimuth axis's pole leans 1e-6 rad
+    towards North (AN > 0) or towards West (AW > 0) reads, at the true direction, encoder
+    positions whose error (indicated minus true) is minus the term's correction; to first
+    order in the tilt (at 1e-6 rad, the second order is within tau^2 tan^2 E < 1.4e-10 rad,
+    tan 85 deg = 11.4)."""
+    tau = 1e-6
+    a, e = GRID_AZ, GRID_EL
+    v = np.stack([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])  # N, E, up
+    for name, towards in (("AN", 0.0), ("AW", 1.5 * math.pi)):
+        pole = np.array([math.sin(tau) * math.cos(towards), math.sin(tau) * math.sin(towards),
+                         math.cos(tau)])
+        axis = np.cross(pole, [0.0, 0.0, 1.0]) / math.sin(tau)  # turns the pole to the zenith
+        k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]],
+                      [-axis[1], axis[0], 0.0]])
+        mount = (np.eye(3) + math.sin(tau) * k + (1.0 - math.cos(tau)) * k @ k) @ v
+        d_az = (np.arctan2(mount[1], mount[0]) - a + math.pi) % (2 * math.pi) - math.pi
+        d_el = np.arcsin(mount[2]) - e
+        corr_az, corr_el = _basis(name)
+        np.testing.assert_allclose(d_az, -tau * corr_az, rtol=0, atol=2e-10)
+        np.testing.assert_allclose(d_el, -tau * corr_el, rtol=0, atol=2e-10)
+        assert np.abs(d_el).max() > 0.9 * tau
 
 
 @pytest.mark.parametrize(("w", "tpoint", "sign"), [
@@ -419,7 +474,7 @@ def test_w_terms_against_tpoint_written_out(w, tpoint, sign):
 
 def test_tied_pairs_are_tpoints_azimuth_axis_tilt():
     """Section II ties W2 = W8 (elevation axis misalignment) and W3 = -W7 (azimuth axis): an
-    AN tilt is W2 = W8 = -AN and an AW tilt W3 = -W7 = AW, checked against TPOINT's AN and AW
+    AN tilt is W2 = W8 = AN and an AW tilt W3 = -W7 = -AW, checked against TPOINT's AN and AW
     written out and against the library's table."""
     tp = _tpoint_written_out(GRID_AZ, GRID_EL)
     cos_e = np.cos(GRID_EL)
@@ -430,15 +485,15 @@ def test_tied_pairs_are_tpoints_azimuth_axis_tilt():
         np.testing.assert_allclose(xel, -tp[tpoint][0] * cos_e, atol=1e-12)
         np.testing.assert_allclose(el, -tp[tpoint][1], atol=1e-12)
         assert np.abs(el).max() > 0.9 and np.abs(xel).max() > 0.5
-    assert GHIGO_TILT == {"AN": (("W2", -1.0), ("W8", -1.0)), "AW": (("W3", 1.0), ("W7", -1.0))}
+    assert GHIGO_TILT == {"AN": (("W2", 1.0), ("W8", 1.0)), "AW": (("W3", -1.0), ("W7", 1.0))}
 
 
 def test_independent_tilt_terms_are_tpoint_harmonics():
     """Fitted independently (as the report fits ten), W2 and W3 are dE cos A / sin A and W7,
-    W8 dA cos E ~ cos A sin E / sin A sin E: TPOINT's harmonics with its A_H = -A_N and
-    result signs (dE plus, dA cos E minus)."""
-    for w, (h, sign) in {"W2": ("HECA", -1.0), "W3": ("HESA", 1.0),
-                         "W7": ("HSCASE", 1.0), "W8": ("HSSASE", -1.0)}.items():
+    W8 dA cos E ~ cos A sin E / sin A sin E: TPOINT's harmonics with its A_T = 180 deg - A_N
+    and result signs (dE plus, dA cos E minus)."""
+    for w, (h, sign) in {"W2": ("HECA", 1.0), "W3": ("HESA", -1.0),
+                         "W7": ("HSCASE", -1.0), "W8": ("HSSASE", 1.0)}.items():
         want_az, want_el = HARMONICS_REPORT[h](GRID_AZ, GRID_EL)
         xel, el = REPORT_W[w](GRID_AZ, GRID_EL)
         np.testing.assert_allclose(-want_az * np.cos(GRID_EL) / sign, xel, atol=1e-12)
@@ -446,7 +501,7 @@ def test_independent_tilt_terms_are_tpoint_harmonics():
         assert GHIGO_EQUIVALENTS[w] == (h, sign)
 
 
-#: TPOINT's once-per-turn harmonics written out (corrections, A_H = -A_N)
+#: TPOINT's once-per-turn harmonics written out (corrections, A_T = 180 deg - A_N)
 HARMONICS_REPORT = {
     "HECA": HARMONICS["HECA"],
     "HESA": lambda a, e: (0 * a, np.sin(_h(a)) + 0 * e),

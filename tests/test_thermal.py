@@ -210,7 +210,7 @@ def _heated_campaign(seed: int) -> tuple[dict[str, np.ndarray], np.ndarray]:
 
 
 def test_fit_t_takes_the_sensor_family_whole_so_weak_terms_bias_no_w():
-    """Pre-test bias (issue 25): a weak pair term (TWPEW, 3"/K of a pedestal difference
+    """Pre-test bias: a weak pair term (TWPEW, 3"/K of a pedestal difference
     that is 1 K on average by day) that term-by-term selection leaves out goes into the W's
     of its pattern in every campaign alike. Fit T tests the six pair terms as one group:
     over 30 campaigns (fixed seeds) each W's mean error stays within 3/sqrt(30) = 0.55 of

@@ -61,12 +61,13 @@ def test_mmt_file_parses():
     assert not data.has_end  # the MMT file simply stops
     assert not data.has_rotator and not data.masked.any()
     assert data.comments[0] == "MMT Pointing Data from 08/21/2021"
-    # first record "192.3860283 77.3468410111111 -167.2778909 77.3475476", South-based
-    assert data.az_obs_deg[0] == pytest.approx(12.3860283, abs=1e-9)
-    assert data.az_raw_deg[0] == pytest.approx(12.7221091, abs=1e-9)
+    # first record "192.3860283 77.3468410111111 -167.2778909 77.3475476": azimuths as the
+    # file gives them (TPOINT reads them North-based), within 0..360 deg
+    assert data.az_obs_deg[0] == pytest.approx(192.3860283, abs=1e-9)
+    assert data.az_raw_deg[0] == pytest.approx(192.7221091, abs=1e-9)
     assert data.el_obs_deg[0] == pytest.approx(77.3468410111111, abs=1e-12)
     assert data.line_numbers[0] == 21 and data.line_numbers[-1] == 100
-    # the last record crosses the wrap (231.97 vs -127.70 South-based): a 0.33 deg error
+    # the last record crosses the wrap (231.97 vs -127.70): a 0.33 deg error
     points = data.pointing_data()
     assert len(points) == 80
     assert np.abs(points.xel_arcsec).max() < 1300.0
@@ -86,7 +87,7 @@ def test_auxtel_file_parses_with_rotator_and_end():
     assert data.has_end and data.has_rotator
     assert data.rotator_deg[0] == pytest.approx(314.4605341)
     assert data.rotator_deg[-1] == pytest.approx(287.9991321)
-    assert data.az_obs_deg[6] == pytest.approx(198.8692942)  # "018.8692942" South-based
+    assert data.az_obs_deg[6] == pytest.approx(18.8692942)  # "018.8692942", as written
 
 
 def test_masked_lines_comments_and_end():
@@ -127,13 +128,14 @@ def test_sexagesimal_equatorial_records_parse_but_do_not_fit(tmp_path):
 def test_equatorial_decimal_records_parse_but_do_not_fit():
     data = read_tpoint(DATA / "equat_decimal.dat")
     assert data.coordinates == "decimal" and data.mount == "EQUAT"
-    assert data.lon_obs_deg[1] == 190.0  # not converted: not South-based azimuth
+    assert data.lon_obs_deg[1] == 190.0  # as written
     with pytest.raises(InputError, match="not supported by the alt-az term set"):
         data.pointing_data()
-    # the user may say otherwise (--mount altaz): then the records are South-based Az/El
+    # the user may say otherwise (--mount altaz): then the records are Az/El, the azimuth
+    # North-based as written
     forced = read_tpoint(DATA / "equat_decimal.dat", mount="altaz")
     assert forced.coordinates == "azel" and forced.notes == ()
-    assert forced.lon_obs_deg[1] == 10.0
+    assert forced.lon_obs_deg[1] == 190.0
     assert len(forced.pointing_data()) == 2
 
 

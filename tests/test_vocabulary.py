@@ -61,13 +61,14 @@ def test_the_reports_tied_pairs_are_the_azimuth_axis_tilt():
     # W2 = W8 and W3 = -W7 (the report's ties, section II) are AN and AW
     model = PointingModel(["W6", "W2", "W3", "W7", "W8"], [700.0, -12.0, 30.0, -30.0, -12.0])
     back = parse_mod(format_mod(in_tpoint_terms(TPointModel.from_model(model))))
-    assert back.as_dict() == {"IA": 700.0, "AN": 12.0, "AW": 30.0}
+    assert back.as_dict() == {"IA": 700.0, "AN": -12.0, "AW": -30.0}
     np.testing.assert_allclose(_sky_arcsec(back), _sky_arcsec(model), rtol=0, atol=1e-9)
-    # untied (as fits leave them) they are harmonics: W2 = -HECA, W3 = HESA, W7 = HSCASE,
-    # W8 = -HSSASE
+    # untied (as fits leave them) they are harmonics: W2 = HECA, W3 = -HESA, W7 = -HSCASE,
+    # W8 = HSSASE
     untied = PointingModel(["W2", "W3", "W7", "W8"], [-12.0, 30.0, -29.0, -11.0])
     back = parse_mod(format_mod(in_tpoint_terms(TPointModel.from_model(untied))))
-    assert back.as_dict() == {"HECA": 12.0, "HESA": 30.0, "HSCASE": -29.0, "HSSASE": 11.0}
+    assert back.as_dict() == {"HECA": -12.0, "HESA": -30.0, "HSCASE": 29.0, "HSSASE": -11.0}
+    np.testing.assert_allclose(_sky_arcsec(back), _sky_arcsec(untied), rtol=0, atol=1e-9)
 
 
 def test_terms_without_a_twin_or_whose_twin_is_taken_keep_their_names():

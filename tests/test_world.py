@@ -1,4 +1,4 @@
-"""Closure tests of the simulated world's geometry (DESIGN section 3 sign conventions).
+"""Closure tests of the simulated world's geometry (the sign conventions of docs/layout.md).
 
 Each geometric term is injected alone as the truth of the noise-free world of
 ``tests/data/scenarios/quiet.toml`` (no gain fluctuation, radiometer noise ~5e-12 K per sample,
@@ -9,9 +9,10 @@ each term is written out below from its published formula, independently of
 * Ghigo's W1..W10 are "indicated minus true" (encoder minus true observed position), the 1990
   report's section II: dE = W1 + W2 cos A + W3 sin A + W4 cos E + W5 cot E and
   dA cos E = W6 cos E + (W7 cos A + W8 sin A + W9) sin E + W10 (written below as dA);
-* TPOINT's terms give a correction, ``true = raw + correction``, evaluated with TPOINT's own
-  South-based azimuth ``A_S = A - 180 deg`` (``controller.pointing.terms`` module docstring); the
-  "indicated minus true" error is minus the correction.
+* TPOINT's terms give a correction, ``true = raw + correction``, written as TPOINT's routine
+  tptPterms writes them, in TPOINT's own azimuth ``A_T = 180 deg - A`` (South = 0, East = 90),
+  whose azimuth correction is minus the North-based one (``controller.pointing.terms`` module
+  docstring); the "indicated minus true" error is minus the correction.
 
 Two closures are shown: the world's error for a beam at the true position ``B`` equals the
 formula (``World.pointing_error_rad``, float rounding only), and, end to end through the
@@ -38,7 +39,7 @@ from controller.pointing.model import PointingModel
 from controller.protocol import Antenna
 
 ARCSEC = math.pi / 648000.0  # radians per arcsec
-#: DESIGN/brief: closure of each term to better than 0.01"
+#: closure of each term to better than 0.01"
 CLOSURE_ARCSEC = 0.01
 #: World.pointing_error_rad is the model's own formula: agreement to float rounding of
 #: arcsec-sized numbers (1e-9" is ~1e-15 rad, a few ulp of angles of order 1 rad)
@@ -55,7 +56,7 @@ def _expected(name: str, c: float, az: np.ndarray, el: np.ndarray):
     true North-based azimuth ``az`` and elevation ``el`` (radians)."""
     zero = np.zeros_like(az)
     sec, tan, cot = 1 / np.cos(el), np.tan(el), 1 / np.tan(el)
-    a_s = az - math.pi  # TPOINT's South-based azimuth
+    a_t = math.pi - az  # TPOINT's azimuth, South = 0, East = 90
     ghigo = {  # Ghigo (1990) section II: indicated - true, dA = (dA cos E) / cos E
         "W1": (zero, c + zero), "W2": (zero, c * np.cos(az)), "W3": (zero, c * np.sin(az)),
         "W4": (zero, c * np.cos(el)), "W5": (zero, c * cot), "W6": (c + zero, zero),
@@ -64,18 +65,16 @@ def _expected(name: str, c: float, az: np.ndarray, el: np.ndarray):
     }
     if name in ghigo:
         return ghigo[name]
-    tpoint_correction = {  # TPOINT: true = raw + correction
-        "IA": (-c + zero, zero), "IE": (zero, c + zero), "CA": (-c * sec, zero),
-        "NPAE": (-c * tan, zero),
-        "AN": (-c * np.sin(a_s) * tan, -c * np.cos(a_s)),
-        "AW": (-c * np.cos(a_s) * tan, c * np.sin(a_s)),
+    tpoint_correction = {  # TPOINT: true = raw + correction, (dA_T, dE)
+        "IA": (c + zero, zero), "IE": (zero, c + zero), "CA": (c * sec, zero),
+        "NPAE": (c * tan, zero),
+        "AN": (c * np.sin(a_t) * tan, c * np.cos(a_t)),
+        "AW": (-c * np.cos(a_t) * tan, c * np.sin(a_t)),
         "TF": (zero, -c * np.cos(el)), "TX": (zero, -c * cot),
-        # the harmonic generator's azimuth is A_H = 180 deg - A_S = -A_N
-        # (controller/pointing/terms.py)
-        "HESA2": (zero, c * np.sin(2 * (math.pi - a_s))),
+        "HESA2": (zero, c * np.sin(2 * a_t)),
     }
-    d_a, d_e = tpoint_correction[name]
-    return -d_a, -d_e
+    d_a_t, d_e = tpoint_correction[name]
+    return d_a_t, -d_e  # indicated - true: dA_N = -dA_T, so -dA_N = +dA_T
 
 
 TERMS = [f"W{i}" for i in range(1, 11)] + ["IA", "IE", "CA", "NPAE", "AN", "AW", "TF", "TX",
@@ -224,7 +223,7 @@ def test_truth_lists_terms_in_arcsec_and_effects(ghigo_path):
     assert truth["w_terms"] == "Ghigo 1990 (NRAO EDIR 288) section II"
     assert truth["seed"] == 11
     assert truth["model"] == "ghigo10"
-    # the scenario gives Table 3 in arcmin; truth.json holds arcsec (DESIGN section 4)
+    # the scenario gives Table 3 in arcmin; truth.json holds arcsec (docs/contract.md)
     assert truth["terms"]["W6"] == {"value_arcsec": pytest.approx(12.24 * 60.0, abs=1e-9)}
     assert truth["terms"]["W1"]["value_arcsec"] == pytest.approx(-1.88 * 60.0, abs=1e-9)
     assert [e["effect"] for e in truth["effects"]] == ["thermal", "tracking_jitter"]

@@ -11,7 +11,7 @@ import argparse
 import json
 import sys
 
-from antsim.commands import MAX_CASES, MAX_SIMULATIONS, check_count, check_processes
+from antsim.options import MAX_CASES, MAX_SIMULATIONS, check_count, check_processes
 from controller.errors import InputError
 
 #: the scenario the effects are hidden in unless --scenario says otherwise

@@ -16,7 +16,6 @@ import os
 import sys
 from pathlib import Path
 
-from antsim.commands import MAX_SIMULATIONS, check_count, check_processes
 from controller.errors import InputError
 
 
@@ -42,7 +41,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="a setting of a CSV of your own measurements that the file does "
                              "not state, e.g. 'sign: true-minus-indicated' (docs/inputs.md)")
     parser.add_argument("--json", action="store_true",
-                        help="print the result as JSON (docs/outputs.md, docs/diagnose.md)")
+                        help="print the result as JSON (the keys: docs/contract.md; their meaning: docs/diagnose.md)")
     parser.add_argument("--out", metavar="DIR",
                         help="write diagnose.json/.txt, report.html, model_updated.dat/.json, "
                              "scenario_updated.toml and before/after plots into DIR")
@@ -100,97 +99,36 @@ def main(args: argparse.Namespace) -> int:
         raise InputError("command line", "RECORDINGS", "(none)",
                          "is required (a recordings.ecsv or a TPOINT data file)",
                          "antsim diagnose --list alone prints the candidate library")
-    check_processes(args.jobs, "--jobs")
-    check_count(args.sims, "--sims", 2, MAX_SIMULATIONS, "each is a campaign simulated")
-    if args.resimulate is not None:
-        check_count(args.resimulate, "--resimulate", 0, MAX_SIMULATIONS,
-                    "each is a campaign simulated")
-    if args.model is not None and not args.model.strip():  # not "no model": said so
-        raise InputError("command line", "--model", args.model, "is empty",
-                         "give a named model, a model file or T1,T2,...")
+    from antsim.diagnose.request import check_options
+
+    check_options(args.jobs, args.sims, args.resimulate, args.model)
     if args.out is None:
         return _diagnose(args, None)
+    from antsim.diagnose.request import refuse_links
     from antsim.outdir import held_output_dir
 
     # held from the start: refused early
     with held_output_dir(args.out, "--out", "antsim diagnose") as out:
-        _refuse_links(out)
+        refuse_links(out)
         return _diagnose(args, out)
 
 
-#: the files diagnose writes into --out (and its figures, diagnose*.png)
-OUTPUTS = ("diagnose.json", "diagnose.txt", "report.html", "model_updated.dat",
-           "model_updated.json", "scenario_updated.toml")
-
-
-def _refuse_links(out: Path) -> None:
-    """A symbolic link where diagnose writes one of its files would be written through
-    (its target overwritten): refused before anything runs."""
-    from fnmatch import fnmatch
-
-    links = sorted(p.name for p in out.iterdir() if p.is_symlink() and (
-        p.name in OUTPUTS or fnmatch(p.name, "diagnose*.png")))
-    if links:
-        raise InputError("command line", "--out", str(out),
-                         f"holds {' '.join(links)} as a symbolic link: diagnose writes its "
-                         "outputs there and does not write through a link",
-                         "remove the link, or write into another directory")
-
-
 def _diagnose(args: argparse.Namespace, out: Path | None) -> int:
+    from antsim.diagnose.request import diagnose_file, read_scenario
+
     scenario = None
     if args.scenario:
-        from antsim.bundled import find
-        from antsim.scenario import load_scenario
-
-        scenario = load_scenario(find(args.scenario, field="--scenario"))
-        from controller.program.recordings import recorded_mount
-
-        mount = recorded_mount(args.recordings)
-        if mount is not None and mount != scenario.mount.kind:  # before 7 s of simulation
-            raise InputError(args.recordings, "mount", mount,
-                             f"the recordings' mount; --scenario {args.scenario} is an "
-                             f"{scenario.mount.kind} mount's",
-                             "diagnose them with a scenario of their own telescope")
-        if Path(args.recordings).is_file():
-            # a cold baseline's quiet campaign starts now, on the second core, while this
-            # process imports the analysis and reads the recordings (antsim.simulate.streaming)
-            from antsim.simulate.streaming import prestart
-
-            prestart(args.jobs, scenario)
+        scenario = read_scenario(args.scenario, args.recordings, args.jobs)
     from antsim.progress import Progress
 
     with Progress("diagnose", args.progress) as progress:
-        progress.stage("reading the recordings")
-        from antsim.diagnose import diagnose, load_observations
-
-        obs = load_observations(args.recordings, mount=args.mount, csv_options=args.csv)
-        for note in obs.meta.get("notes", ()):
-            progress.write(f"note: {note}", file=sys.stderr)
-        if scenario is not None and (obs.kind == "tpoint" or not obs.has_time):
-            raise InputError(args.recordings, "--scenario", args.scenario,
-                             f"{'a TPOINT data file' if obs.kind == 'tpoint' else 'a file'} "
-                             "without times has nothing to simulate against",
-                             "diagnose it without --scenario")
-        progress.stage("the noise the scenario predicts (simulations) and the candidate "
-                       "effects" if scenario is not None else "testing the candidate effects")
-        try:
-            diag = diagnose(obs, scenario, args.model, n_sims=args.sims, cache_dir=args.cache,
-                            use_cache=not args.no_cache, jobs=args.jobs)
-        except ValueError as err:
-            if isinstance(err, InputError):
-                raise
-            raise InputError(args.recordings, "observations", obs.n, str(err)) from None
-        written = None
-        if out is not None:
-            from antsim.diagnose.modelit import resimulation_words, write_outputs
-
-            resim = 4 if args.resimulate is None else args.resimulate
-            progress.stage("writing the outputs" + (f" and re-simulating {resim} times"
-                                                    if scenario and resim else ""))
-            written = write_outputs(diag, out, scenario, resim if scenario else 0,
-                                    cache_dir=args.cache, use_cache=not args.no_cache,
-                                    jobs=args.jobs)
+        asked = diagnose_file(
+            args.recordings, scenario, scenario_spec=args.scenario, model=args.model,
+            mount=args.mount, csv_options=args.csv, sims=args.sims, jobs=args.jobs,
+            cache_dir=args.cache, use_cache=not args.no_cache, out=out,
+            resimulate=args.resimulate, progress=progress,
+            note=lambda line: progress.write(f"note: {line}", file=sys.stderr))
+    diag, written = asked.diagnosis, asked.written
     if args.json:
         doc = diag.to_json()
         if written is not None:
@@ -200,6 +138,8 @@ def _diagnose(args: argparse.Namespace, out: Path | None) -> int:
     else:
         print(diag.text())
         if written and "resimulation" in written:
+            from antsim.diagnose.modelit import resimulation_words
+
             print(resimulation_words(written["resimulation"]))
         if out is not None:
             from antsim.outdir import LOCK_NAME

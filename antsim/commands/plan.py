@@ -14,10 +14,6 @@ import json
 import sys
 from contextlib import nullcontext
 
-from antsim.commands import check_processes
-from antsim.outdir import write_file
-from controller.errors import InputError
-
 
 def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("plan", help="plan: a name (antsim scenarios lists them, e.g. "
@@ -56,19 +52,12 @@ def configure(parser: argparse.ArgumentParser) -> None:
 def main(args: argparse.Namespace) -> int:
     from antsim.bundled import find
     from antsim.outdir import held_output_dir
-    from antsim.plan.planfile import MAX_MEMBERS, load_plan
+    from antsim.plan.outputs import check_options, write_outputs
+    from antsim.plan.planfile import load_plan
     from antsim.plan.study import run_plan
     from antsim.progress import Progress
 
-    if args.members is not None and not 2 <= args.members <= MAX_MEMBERS:
-        raise InputError("command line", "--members", args.members,
-                         f"must be within 2..{MAX_MEMBERS}")
-    if args.workers is not None:
-        check_processes(args.workers, "--workers", minimum=0)
-    if args.scheduler is not None and args.workers is not None:
-        raise InputError("command line", "--workers", args.workers,
-                         "give --workers or --scheduler, not both",
-                         "the Dask cluster sets its own workers")
+    check_options(args.members, args.workers, args.scheduler)
     held = (held_output_dir(args.out, "--out", "antsim plan") if args.out is not None
             else nullcontext())
     with held as out, Progress("plan", args.progress) as progress:
@@ -85,16 +74,8 @@ def main(args: argparse.Namespace) -> int:
         doc = result.to_json()
         text = result.text()
         if out is not None:
-            from antsim.figures.plan import plan_figures
-
             progress.stage("figures")
-            write_file(out / "plan.json", json.dumps(doc, indent=2) + "\n")
-            plan_text = result.text(timing=False)
-            write_file(out / "plan.txt", plan_text)
-            figures = plan_figures(doc, out)
-            from antsim.plan.report import write_plan_report
-
-            write_plan_report(doc, plan_text, figures, out)
+            figures = write_outputs(result, out, doc)
             text += (f"wrote {out}/: plan.json plan.txt report.html and {len(figures)} "
                      "figures\n")
     if args.json:

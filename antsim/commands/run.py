@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 
 from controller.errors import InputError
@@ -35,58 +34,20 @@ def main(args: argparse.Namespace) -> int:
     from antsim.bundled import find
     from antsim.outdir import held_output_dir
     from antsim.progress import Progress
-    from antsim.run.outputs import PRODUCTS, clear_products, write_outputs
-    from antsim.scenario import load_scenario, overcorrection, thermal_terms_of
+    from antsim.run.campaign import check_seed, model_in_use, refuse_earlier_run
+    from antsim.run.outputs import clear_products, write_outputs
+    from antsim.scenario import load_scenario
     from antsim.simulate.runner import run_campaign
 
-    if args.seed is not None and args.seed < 0:
-        raise InputError("command line", "--seed", args.seed, "must be >= 0")
-    if args.model is not None and not args.model.strip():
-        raise InputError("command line", "--model", args.model, "is empty",
-                         "give a named model (none, ghigo10, ...) or a model file")
+    check_seed(args.seed)
     scenario = load_scenario(find(args.scenario))
-    model = None
-    if args.model is not None and scenario.mount.kind == "equatorial":
-        from controller.pointing.equatorial import load_equatorial_model
-
-        model = load_equatorial_model(args.model, scenario.site.latitude_deg)
-    elif args.model is not None:
-        from controller.pointing.modelio import load_model
-
-        model = load_model(args.model)
-        thermal = thermal_terms_of(model)
-        if thermal:
-            raise InputError("command line", "--model", args.model,
-                             f"has thermal terms ({', '.join(thermal)}), which the controller "
-                             "does not apply (they need structure temperatures at every "
-                             "instant)", "give a model of the position alone")
-    found = (None if model is None
-             else overcorrection(model, scenario.mount, scenario.controller.scheduler))
-    if found is not None:
-        raise InputError("command line", "--model", args.model, found.problem,
-                         "check the model's values and their units")
+    model = model_in_use(args.model, scenario)
     for option, given in (("--seed", args.seed is not None), ("--resume", args.resume)):
         if given and args.connect is not None:
             raise InputError("command line", option, True, "not with --connect",
                              "the simulation is the server's (antsim serve --seed)")
     with held_output_dir(args.out, "--out", "antsim run") as out:
-        # a link counts (a dangling one too): antsim never writes through one
-        present = [name for name in PRODUCTS if os.path.lexists(out / name)]
-        if present and not args.resume:
-            raise InputError("command line", "--out", str(out),
-                             f"already holds {' '.join(present)} of an earlier run",
-                             "use --resume to continue that run, or an empty or new directory")
-        recordings = out / "recordings.ecsv"
-        if args.resume and recordings.is_symlink():
-            raise InputError("command line", "--out", str(out),
-                             "holds recordings.ecsv as a symbolic link: a resumed run appends "
-                             "to its recordings and does not write through a link",
-                             "copy the file there, or run into a new directory")
-        if args.resume and recordings.exists() and not recordings.is_file():
-            raise InputError("command line", "--out", str(out),
-                             "holds recordings.ecsv as something other than a file (a "
-                             "directory, a FIFO): there is no run to resume",
-                             "run into a new directory")
+        refuse_earlier_run(out, args.resume)
         antenna, seed = None, args.seed
         if args.connect is not None:
             from antsim.serve.remote import connect

@@ -1,4 +1,5 @@
-"""`antsim serve SCENARIO.toml`: the simulated antenna as a KATCP device (docs/katcp.md)."""
+"""`antsim serve SCENARIO.toml`: the simulated antenna as a KATCP device (docs/katcp.md;
+`antsim serve --requests` prints the request list from the device itself)."""
 
 from __future__ import annotations
 
@@ -9,8 +10,12 @@ from controller.errors import InputError
 
 
 def configure(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("scenario", help="a scenario's name (antsim scenarios lists them, "
-                                         "e.g. ghigo1990) or a scenario file (TOML)")
+    parser.add_argument("scenario", nargs="?", default=None,
+                        help="a scenario's name (antsim scenarios lists them, "
+                             "e.g. ghigo1990) or a scenario file (TOML)")
+    parser.add_argument("--requests", action="store_true",
+                        help="print the KATCP requests the antenna serves (arguments, reply, "
+                             "meaning) and the conventions, and exit")
     parser.add_argument("--host", default="127.0.0.1",
                         help="address to listen on (default: 127.0.0.1, this machine only)")
     parser.add_argument("--port", type=int, default=5025,
@@ -34,6 +39,15 @@ def main(args: argparse.Namespace) -> int:
     from antsim.serve.app import PRODUCTS, serve
     from antsim.serve.clock import parse_clock
 
+    if args.requests:
+        from antsim.serve.requests import request_list
+
+        print(request_list(), end="")
+        return 0
+    if args.scenario is None:
+        raise InputError("command line", "SCENARIO", "",
+                         "a scenario is needed (a name antsim scenarios lists, or a TOML file)",
+                         "or --requests for the request list")
     try:
         clock = parse_clock(args.clock)
     except ValueError as err:

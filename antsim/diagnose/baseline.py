@@ -1,6 +1,6 @@
 """The baseline: what the user believes, and the noise it predicts.
 
-Rules (issue 5): the pointing-model terms are those of ``--model`` when given; else, with a
+Rules: the pointing-model terms are those of ``--model`` when given; else, with a
 scenario, the scenario's ``controller.fit_model`` (or the terms of its model in use); else the
 model in the recordings' metadata; else, for a TPOINT file, TPOINT's eight terms IA IE NPAE CA
 AN AW TF TX. Recordings of an equatorial mount take their terms from TPOINT's equatorial
@@ -656,7 +656,7 @@ def offset_scale(obs: Observations, scenario=None) -> np.ndarray:
     the catalogued source size when the controller uses it); a source of size s_s seen with
     the true beam s_b gives a Gaussian of width sqrt(s_b^2 + s_s^2), and the five-point
     estimate of its offset is s_a^2 / (s_b^2 + s_s^2) of the true one (0.91 for Taurus A and
-    Cassiopeia A reduced with the 11' beam). With a scenario the sizes are
+    Cassiopeia A reduced with the 11' beam, docs/physics.md). With a scenario the sizes are
     the scenario's; without one they come from the widths the recordings measured per source.
     """
     n = obs.n

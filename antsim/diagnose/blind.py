@@ -7,7 +7,7 @@ expected chi^2 decrease of its test equals the critical value the selection uses
 family-corrected level ALPHA, the candidate's degrees of freedom and look-elsewhere
 trials), computed from the baseline's predicted noise on the scenario's own schedule and
 from the part of the signature the baseline terms cannot absorb (the orthogonal part: what
-the selection tests, issue 24). For the exact tilt, whose signature is quadratic in the
+the selection tests). For the exact tilt, whose signature is quadratic in the
 tilt, the factor applies to the signature.
 
 An effect that depends on the direction only (a pointing-model term: harmonics, the
@@ -16,7 +16,7 @@ fitted its model would carry it: the part the baseline terms take (their least-s
 to it over the scenario's scans) is in the controller's model in use, so that the scans
 measure what the model leaves; the recordings' total errors hold the whole effect. Near-
 degenerate effects are thus drawn at 3-10 times their orthogonal threshold whatever their
-total size (issue 24: effects of elevation alone, sin/cos pairs the model nearly mimics),
+total size (effects of elevation alone, sin/cos pairs the model nearly mimics),
 as are steps at an unknown time and transients after sunset (70" over 1.4 h is only about
 4 sigma on the 1990 campaign: weak for its size).
 

@@ -54,8 +54,7 @@ SUCCESSIVE_S = 300.0
 
 @dataclass
 class Finding:
-    """One finding, as ``antsim diagnose --json`` reports it (docs/outputs.md), with the
-    selection's step."""
+    """One finding, as the JSON of docs/contract.md reports it (plus the selection step)."""
 
     step: Step
     where: str
@@ -343,7 +342,7 @@ class Diagnosis:
         return out
 
     def to_json(self) -> dict[str, Any]:
-        """``antsim diagnose --json`` (docs/outputs.md), extended with the rule, the
+        """``antsim diagnose --json`` (docs/contract.md), extended with the rule, the
         baseline and its terms' support, the located mismatch, the refusals and the summary
         statistics."""
         sel = self.selection

@@ -37,6 +37,7 @@ __all__ = [
     "format_number",
     "render_report",
     "software_versions",
+    "table_html",
     "write_report",
 ]
 
@@ -182,6 +183,11 @@ def _render_table(table: Table) -> str:
         out.append("<tr>" + "".join(cells) + "</tr>")
     out.append("</tbody></table></div>")
     return "\n".join(out)
+
+
+def table_html(table: Table) -> str:
+    """The HTML of one table as a report shows it (a notebook shows results with it)."""
+    return _render_table(table)
 
 
 def _render_figure(figure: Figure) -> str:

@@ -14,7 +14,7 @@ from typing import Any
 from antsim.outdir import replacing
 
 from .charts import plain_log_ticks
-from .style import FigureFile
+from .style import FigureFile, keeping
 
 __all__ = ["draw_duration", "plan_figures"]
 
@@ -91,15 +91,16 @@ def _duration_figure(answer: dict[str, Any], path: Path) -> FigureFile:
         FigureCanvasAgg(fig)
         draw_duration(fig.add_axes((0.11, 0.13, 0.85, 0.74)), answer)
         fig.suptitle(title, fontsize=11)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with replacing(path) as fh:  # whole or not at all; an error names the file
-            fig.savefig(fh, format="png", dpi=DPI, metadata={"Software": "antsim"})
+        if not keeping():
+            path.parent.mkdir(parents=True, exist_ok=True)
+            with replacing(path) as fh:  # whole or not at all; an error names the file
+                fig.savefig(fh, format="png", dpi=DPI, metadata={"Software": "antsim"})
     caption = (f"Predicted sigma against the number of {answer['unit']}s of "
                f"'{answer['based_on']}': " + (
                    f"the target is reached after {answer['answer']['count']} "
                    f"{answer['unit']}s." if answer["reached"] else
                    "the target is not reached within the range tried."))
-    return FigureFile(path, title, caption)
+    return FigureFile(path, title, caption, figure=fig if keeping() else None)
 
 
 def draw_duration(ax, answer: dict[str, Any]) -> None:

@@ -5,14 +5,21 @@ imported: no global figure state, no GUI backend), matplotlib's default style re
 figure (:class:`Canvas`), fixed size and resolution (:data:`FIG_DPI`), no timestamps: PNG
 metadata carry only ``Software: antsim``, SVG files a fixed ``svg.hashsalt`` and no date. The
 same inputs give byte-identical files.
+
+Inside :func:`in_memory` (the Python API, :mod:`antsim.api`) a figure is drawn the same way
+and kept, not written: its :class:`FigureFile` holds the matplotlib Figure and names the file
+it would have been.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -20,7 +27,7 @@ from antsim.outdir import replacing
 from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 
 __all__ = ["FIG_DPI", "SERIES_COLORS", "Canvas", "FigureFile", "binned_mean",
-           "day_night_groups", "figure_file", "rms"]
+           "day_night_groups", "figure_file", "in_memory", "keeping", "rms"]
 
 #: resolution of every PNG (dots per inch); figure sizes are given in inches
 FIG_DPI = 100
@@ -57,12 +64,36 @@ _SVG_METADATA = {"Creator": "antsim", "Date": None}
 @dataclass(frozen=True)
 class FigureFile:
     """A figure written to disk: ``path`` (the PNG), a ``title`` saying what is plotted and a
-    ``caption`` for a report; ``extra`` lists the same figure in other formats (e.g. SVG)."""
+    ``caption`` for a report; ``extra`` lists the same figure in other formats (e.g. SVG).
+    Drawn inside :func:`in_memory`: nothing written, ``path`` the file it would have been,
+    ``figure`` the matplotlib Figure (None otherwise)."""
 
     path: Path
     title: str
     caption: str
     extra: tuple[Path, ...] = ()
+    figure: Any = field(default=None, compare=False, repr=False)
+
+
+#: whether figures drawn now are kept in memory instead of written (:func:`in_memory`)
+_KEEP: ContextVar[bool] = ContextVar("antsim_figures_in_memory", default=False)
+
+
+@contextmanager
+def in_memory() -> Iterator[None]:
+    """``with in_memory():`` every figure drawn inside is kept, not written: the drawing
+    functions return :class:`FigureFile` s whose ``figure`` is the matplotlib Figure, and
+    write no file (the Python API draws a command's figures so, for a notebook)."""
+    token = _KEEP.set(True)
+    try:
+        yield
+    finally:
+        _KEEP.reset(token)
+
+
+def keeping() -> bool:
+    """True inside :func:`in_memory` (figures kept, not written)."""
+    return _KEEP.get()
 
 
 class Canvas:
@@ -111,7 +142,11 @@ def _save(fig, path: Path, formats: Sequence[str]) -> tuple[Path, tuple[Path, ..
 
 def figure_file(fig, path: Path, title: str, caption: str,
                  formats: Sequence[str]) -> FigureFile:
+    """``fig`` titled and written as ``path`` (PNG) and ``formats``; inside
+    :func:`in_memory` kept instead (nothing written)."""
     fig.suptitle(title, fontsize=11, fontweight="bold")
+    if keeping():
+        return FigureFile(Path(path).with_suffix(".png"), title, caption, figure=fig)
     png, extra = _save(fig, path, formats)
     return FigureFile(png, title, caption, extra)
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 from antsim.documents import Reference, reference_for
@@ -28,7 +29,8 @@ from controller.pointing.variants import VARIANTS, fit_variants
 from .inuse import Pointing, pointing_in_use
 from .sources import points_per_source
 
-__all__ = ["PRODUCTS", "clear_products", "fit_tables", "run_fits", "write_outputs"]
+__all__ = ["PRODUCTS", "RunProducts", "clear_products", "fit_tables", "model_caption",
+           "run_fits", "run_products", "write_outputs"]
 
 
 def run_fits(result: RunResult) -> dict[str, FitResult | None]:
@@ -180,26 +182,30 @@ def clear_products(out: Path, keep: tuple[str, ...] = ("recordings.ecsv", "truth
             path.unlink()
 
 
-def write_outputs(result: RunResult, report: bool = True,
-                  progress: Progress | None = None) -> str:
-    """Write the products of a run into its output directory; return a short summary that
-    names exactly the files written. With ``report`` also the figures (``figures/``) and
-    ``report.html`` (:mod:`antsim.run.report`); ``progress``: the command's, told each
-    stage."""
-    out = Path(result.out_dir)
-    written = ["recordings.ecsv"] + (["truth.json"] if result.truth else [])
+@dataclass
+class RunProducts:
+    """What a run's files hold, computed once (:func:`run_products`): fits A-F (None where
+    too few observations), how the model in use pointed (None without a good scan), the
+    text of ``fit.txt`` and the command's summary (without the files written). The run's
+    gain curve and opacity are set on the run itself (``RunResult.calibration``)."""
+
+    fits: dict[str, FitResult | None]
+    in_use: Pointing | None
+    tables: str
+    summary: str
+
+    @property
+    def fit_a(self) -> FitResult | None:
+        return self.fits.get("A")
+
+
+def run_products(result: RunResult, progress: Progress | None = None) -> RunProducts:
+    """The fits, tables and summary of a run, and its calibration (set on ``result``);
+    ``progress``: the command's, told the stage."""
     if progress is not None:
         progress.stage("fits A-F")
     fits = run_fits(result)
-    doc = {k: (v.to_json() if v is not None else None) for k, v in fits.items()}
     fit_a = fits.get("A")
-    write_file(out / "fit_variants.json", json.dumps(doc, indent=2) + "\n")
-    if fit_a is not None:
-        write_file(out / "fit.json", json.dumps(fit_a.to_json(), indent=2) + "\n")
-        caption = f"{result.scenario.name} seed {result.seed}: fit A"
-        write_model_file(TPointModel.from_fit(fit_a, caption=caption), out / "model.dat")
-        written += ["fit.json"]
-    written += ["fit_variants.json"]
     from controller.scans.gaincurve import calibrate
 
     result.calibration = calibrate(result.rows, result.scenario.controller, result.tippings)
@@ -208,14 +214,8 @@ def write_outputs(result: RunResult, report: bool = True,
              f"model in use {result.model.name}")
     reference = reference_for(result.scenario.name)
     in_use = pointing_in_use(result.rows, result.model)
-    write_file(out / "fit.txt",
-               fit_tables(fits, title, result.scenario.controller.night_sun_max_deg, reference,
-                          points_per_source(result.rows, fit_a), in_use))
-    written += ["fit.txt"] + (["model.dat"] if fit_a is not None else [])
-    if result.calibration is not None:
-        write_file(out / "gaincurve.json",
-                   json.dumps(result.calibration.to_json(), indent=2) + "\n")
-        written += ["gaincurve.json"]
+    tables = fit_tables(fits, title, result.scenario.controller.night_sun_max_deg, reference,
+                        points_per_source(result.rows, fit_a), in_use)
     good = sum(1 for r in result.rows if r["polarization"] == "AVG" and r["good"])
     summary = (f"{result.scenario.name}: {result.n_scans} {what} ({good} good) in "
                f"{result.scenario.duration_s / 3600:.1f} h, seed {result.seed}")
@@ -228,11 +228,45 @@ def write_outputs(result: RunResult, report: bool = True,
                     "(fit.json and model.dat not written)")
     if in_use is not None and in_use.ratio is not None:
         summary += "\n" + in_use.line()
+    return RunProducts(fits, in_use, tables, summary)
+
+
+def model_caption(result: RunResult) -> str:
+    """The caption of ``model.dat`` (and so the name of the model read back from it)."""
+    return f"{result.scenario.name} seed {result.seed}: fit A"
+
+
+def write_outputs(result: RunResult, report: bool = True,
+                  progress: Progress | None = None,
+                  products: RunProducts | None = None) -> str:
+    """Write the products of a run into its output directory; return a short summary that
+    names exactly the files written. With ``report`` also the figures (``figures/``) and
+    ``report.html`` (:mod:`antsim.run.report`); ``progress``: the command's, told each
+    stage; ``products``: :func:`run_products` of the run where already computed."""
+    out = Path(result.out_dir)
+    written = ["recordings.ecsv"] + (["truth.json"] if result.truth else [])
+    if products is None:
+        products = run_products(result, progress)
+    fits, fit_a = products.fits, products.fit_a
+    doc = {k: (v.to_json() if v is not None else None) for k, v in fits.items()}
+    write_file(out / "fit_variants.json", json.dumps(doc, indent=2) + "\n")
+    if fit_a is not None:
+        write_file(out / "fit.json", json.dumps(fit_a.to_json(), indent=2) + "\n")
+        write_model_file(TPointModel.from_fit(fit_a, caption=model_caption(result)),
+                         out / "model.dat")
+        written += ["fit.json"]
+    written += ["fit_variants.json"]
+    write_file(out / "fit.txt", products.tables)
+    written += ["fit.txt"] + (["model.dat"] if fit_a is not None else [])
+    if result.calibration is not None:
+        write_file(out / "gaincurve.json",
+                   json.dumps(result.calibration.to_json(), indent=2) + "\n")
+        written += ["gaincurve.json"]
     if report:
         from .report import write_run_report
 
         if progress is not None:
             progress.stage("figures and report")
-        _, figures = write_run_report(result, fits, out, in_use)
+        _, figures = write_run_report(result, fits, out, products.in_use)
         written += ["report.html", f"figures/ ({len(figures)} figures)"]
-    return summary + f"\nwrote {out}/: {' '.join(written)}"
+    return products.summary + f"\nwrote {out}/: {' '.join(written)}"

@@ -26,8 +26,8 @@ if TYPE_CHECKING:
 
     from .inuse import Pointing
 
-__all__ = ["coefficient_table", "fit_summary_table", "source_points_table", "truth_pull_table",
-           "truth_terms_arcsec", "write_run_report"]
+__all__ = ["coefficient_table", "fit_summary_table", "report_figures", "source_points_table",
+           "truth_pull_table", "truth_terms_arcsec", "write_run_report"]
 
 #: |pull| above which a table cell is highlighted
 PULL_WARN = 3.0
@@ -192,8 +192,6 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
                      ) -> tuple[Path, list[FigureFile]]:
     """Figures (``DIR/figures/``) and ``DIR/report.html`` of a run; returns both. ``in_use``:
     how well the model in use pointed (:mod:`antsim.run.inuse`)."""
-    from antsim.figures.run import run_figures
-
     from .sources import points_per_source
 
     out = Path(out_dir if out_dir is not None else result.out_dir)
@@ -201,11 +199,7 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
     truth = truth_terms_arcsec(result.truth)
     document = reference_for(scenario.name)
     reference = dict(document.table2) if document is not None and document.table2 else None
-    figures = run_figures(result.rows, fits, out / "figures", truth_arcsec=truth or None,
-                          name=scenario.name, start_label=f"UTC {scenario.epoch_utc}",
-                          el_limit_deg=scenario.controller.scheduler.elevation_min_deg,
-                          reference_rms=reference, gain_fit=_elevation_gain_fit(result),
-                          model_in_use=result.model.name if len(result.model) else None)
+    figures = report_figures(result, fits, out / "figures")
     good = sum(1 for r in result.rows if r["polarization"] == "AVG" and r["good"])
     fit_a = fits.get("A")
     summary = (f"{scenario.description or scenario.name}. Campaign of "
@@ -277,6 +271,24 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
     path = write_report(out / "report.html", f"antsim run: {scenario.name}, seed {result.seed}",
                         sections, subtitle=scenario.description)
     return path, figures
+
+
+def report_figures(result: RunResult, fits: Mapping[str, FitResult | None],
+                   figures_dir: str | Path) -> list[FigureFile]:
+    """The figures of a run's report (:func:`antsim.figures.run.run_figures`) into
+    ``figures_dir``, with the truth, the published rms, the gain curve and the model in use
+    of the run ``result`` (its calibration set by :func:`antsim.run.outputs.run_products`)."""
+    from antsim.figures.run import run_figures
+
+    scenario = result.scenario
+    truth = truth_terms_arcsec(result.truth)
+    document = reference_for(scenario.name)
+    reference = dict(document.table2) if document is not None and document.table2 else None
+    return run_figures(result.rows, fits, figures_dir, truth_arcsec=truth or None,
+                       name=scenario.name, start_label=f"UTC {scenario.epoch_utc}",
+                       el_limit_deg=scenario.controller.scheduler.elevation_min_deg,
+                       reference_rms=reference, gain_fit=_elevation_gain_fit(result),
+                       model_in_use=result.model.name if len(result.model) else None)
 
 
 def _elevation_gain_fit(result: RunResult):

@@ -101,6 +101,7 @@ def _request(kind: str):
         async def handler(self: "AntennaDevice", ctx: aiokatcp.RequestContext, *args: bytes):
             return await self._serve(ctx, kind, func, args)
 
+        handler.antsim_kind = kind  # for the request list (antsim serve --requests)
         return handler
 
     return wrap
@@ -341,7 +342,10 @@ class AntennaDevice(aiokatcp.DeviceServer):
     async def request_track(self, ctx, *args: bytes):
         """Follow a program track: ?track T AZ EL [T AZ EL ...] -> clock, slew+settle s.
 
-        Times on the antenna clock (s), encoder degrees; see docs/katcp.md."""
+        Times on the antenna clock (s), encoder degrees. Replaces the track and resets the
+        offsets; the antenna interpolates linearly (azimuth the shorter way round), holds
+        the first point before the table and the last after it, and refuses a track whose
+        elevation at arrival is outside the mount's limits (?antenna)."""
         self.clock.check_room(0.0, "?track")
         track = ProgramTrack.from_numbers(numbers(args), times_s=self._track_times())
         slew_s, _, _ = self.world.mount.plan_slew(track)  # what the antenna will take
@@ -367,7 +371,10 @@ class AntennaDevice(aiokatcp.DeviceServer):
 
     @_request("command")
     async def request_offset(self, ctx, *args: bytes):
-        """Offset from the track: ?offset DAZ DEL (encoder deg) -> clock, move+settle s."""
+        """Offset from the track: ?offset DAZ DEL (encoder deg) -> clock, move+settle s.
+
+        Needs a track being followed (?track); refused when the track plus the offsets would
+        leave the mount's axis limits, now or when the move ends."""
         at_most(args, 2, "?offset DAZ DEL")
         d_az, d_el = number(args, 0, "DAZ"), number(args, 1, "DEL")
         mount = self.world.mount

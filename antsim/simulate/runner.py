@@ -61,7 +61,7 @@ class RunResult:
 
 
 def recording_meta(scenario: Scenario, seed: int, model: PointingModel) -> dict:
-    """Metadata of ``recordings.ecsv`` (DESIGN section 4)."""
+    """Metadata of ``recordings.ecsv`` (docs/contract.md)."""
     c = scenario.controller
     site = scenario.site
     return {

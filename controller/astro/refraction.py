@@ -43,7 +43,7 @@ def refraction_rad(el_vacuum_rad, weather: Weather, *,
     The model is ERFA's (``erfa.refco`` A tan z + B tan^3 z, inverted as in ``eraAtioq``), the
     one astropy's ``AltAz`` uses with pressure, temperature, humidity and ``obswl``: at 10 C,
     50 % humidity, 920 hPa it gives 5.29' at 10 deg, 2.63' at 20 deg, 0.965' at 45 deg
-    (DESIGN: 5.3', 2.6', 0.97'). Below about 3 deg elevation (ERFA's limit) the bending is
+    (docs/physics.md: 5.3', 2.6', 0.97'). Below about 3 deg elevation (ERFA's limit) the bending is
     held near its 3 deg value (about 11.5' at 920 hPa); the model is not meant for the horizon.
     """
     if not isinstance(weather, Weather):

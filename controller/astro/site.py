@@ -69,7 +69,7 @@ class Site:
 
 #: The NRAO 45-ft (13.7 m) alt-az antenna at Green Bank (at Green Bank since 1988, after its
 #: years as the GBI's remote element at Huntersville). No published survey of the 45-ft's
-#: own pad was found, so these are DESIGN.md's nominal Green Bank values (latitude +38.43 deg,
+#: own pad was found, so these are docs/physics.md's nominal Green Bank values (latitude +38.43 deg,
 #: longitude -79.84 deg, height 800 m), an assumption. The GBT, a few hundred metres away, is
 #: published at 38.4331 N, 79.8398 W, about 810-825 m; the nominal values may be off the
 #: 45-ft by some 10-20 arcsec of latitude/longitude. That matters only when comparing with

@@ -20,8 +20,8 @@ memo's order; ``controller.pointing.terms.WRIGHT_EQUIVALENTS``, tested column by
 | a(1) | IA | b(1) | -IE |
 | a(2) | CA | b(2) | -HESE |
 | a(3) | NPAE | b(3) | TF |
-| a(4) | -HSSASE | b(4) | HESA |
-| a(5) | HSCASE | b(5) | -HECA |
+| a(4) | HSSASE | b(4) | -HESA |
+| a(5) | -HSCASE | b(5) | HECA |
 | a(6) | -HASA2 | b(6) | HESA2 |
 | a(7) | HACA2 | b(7) | TX |
 """
@@ -44,12 +44,13 @@ def tilt_collimation_equivalents(tilt_arcmin: float, tilt_az_deg: float,
     """The linear (small-angle) BIMA-term coefficients, arcsec in TPOINT's sign, of an
     azimuth-axis tilt ``tilt_arcmin`` towards azimuth ``tilt_az_deg`` (N = 0) and a
     collimation error ``collimation_arcmin`` (the simulator's ``exact_tilt_collimation``):
-    with AN = -tilt cos(az_t), AW = tilt sin(az_t), CA = -collimation, the memo's separate
+    with AN = tilt cos(az_t), AW = -tilt sin(az_t) (TPOINT's: AN > 0 the pole north of the
+    zenith, AW > 0 west of it), CA = -collimation, the memo's separate
     azimuth and elevation tilt terms are HSSASE = HECA = AN, HSCASE = -AW, HESA = AW (TPOINT's
     harmonic signs, :mod:`controller.pointing.terms`; tested against AN and AW)."""
     tilt = tilt_arcmin * 60.0
     phi = math.radians(tilt_az_deg)
-    an = -tilt * math.cos(phi)
-    aw = tilt * math.sin(phi)
+    an = tilt * math.cos(phi)
+    aw = -tilt * math.sin(phi)
     return {"HSSASE": an, "HECA": an, "HSCASE": -aw, "HESA": aw,
             "CA": -collimation_arcmin * 60.0}

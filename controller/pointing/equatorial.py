@@ -28,7 +28,7 @@ positive West.
 with ``sin E = sin(phi) sin(dec) + cos(phi) cos(dec) cos H``. TF and TX are exactly the alt-az
 TF (dE = -TF cos E) and TX (dE = -TX cot E) moved onto the hour-angle and declination axes
 (tested), so TPOINT's alt-az and equatorial sign conventions agree. MA, ME, TF, FO and DAF are
-as the rotse.net summary of TPOINT and the issue list them; IH, ID, CH and NP carry the same
+as the rotse.net summary of TPOINT lists them; IH, ID, CH and NP carry the same
 negative sign as TPOINT's alt-az IA, CA and NPAE (TPOINT's own formula sheet was not
 retrievable: an assumption, stated in ``docs/telescopes.md``). The harmonic generator works
 as TPOINT's: ``H`` + result (``H``: dH, ``D``: dDec, ``X``: dH cos(dec)) + one or two factors

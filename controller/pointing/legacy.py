@@ -1,6 +1,6 @@
 """Files that name W1..W10 as antsim did before it had the 1990 report's equations.
 
-Until issue 22 the report's section II was not available, and W1..W10 were a reconstruction
+Until the report was at hand its section II was not available, and W1..W10 were a reconstruction
 (the same ten functions in another order, each with the same sign):
 
     reconstruction  W1  W2   W3  W4  W5  W6  W7  W8  W9  W10

@@ -116,7 +116,7 @@ class FitResult:
         return self.model.values_arcsec
 
     def to_json(self) -> dict:
-        """The ``antsim fit --json`` document (DESIGN section 4): plain types, null for NaN."""
+        """The ``antsim fit --json`` document (docs/contract.md): plain types, null for NaN."""
         names = list(self.names)
         return {
             "n_input": int(self.n_input),

@@ -10,15 +10,20 @@ position. Azimuth arguments are North-based (N = 0, E = 90 deg) everywhere in th
 
 Two facts fix the signs (both are tested):
 
-* TPOINT's basic terms are evaluated here at ``A_S = A_N - 180 deg``, where ``A_N`` is
-  antsim's azimuth of TPOINT data (a file's azimuth + 180 deg, :mod:`.tpoint`): a fit of
-  ``examples/mmt_20210821_k_and_e.dat`` then reproduces TPOINT's published AN = +2.495" and
-  AW = -10.335". TPOINT itself writes its terms in ``A_T = 180 deg - (the file's
-  azimuth)``, South = 0, East = 90, its azimuth corrections growing with ``A_T``: the
-  formulas below are TPOINT's, turned to ``A_S = 180 deg - A_T`` (TPOINT routine tptPterms,
-  note 8 and terms 31-35). The harmonic generator's azimuth below is ``A_T`` itself. On
-  North-based data (CSV, recordings) AN, AW, ACEC, ACES and the harmonics odd in A
-  therefore carry the sign opposite to TPOINT's (docs/assumptions.md, "TPOINT's azimuth").
+* TPOINT writes its terms in its own azimuth, South = 0, East = 90: ``A_T = 180 deg - A_N``,
+  the mirror image of the North-based azimuth, not a half turn of it (P. T. Wallace, TPOINT
+  routine tptPterms, revision of 14 November 2006, note 8: "Azimuth - zero for due south,
+  and 90 degrees for due east"), with its azimuth corrections growing with ``A_T``. Every
+  TPOINT term here is TPOINT's formula at ``A_T`` with its azimuth results negated (``dA_N =
+  -dA_T``): AN is dA = -AN sin A_T tan E, dE = +AN cos A_T (tptPterms term 31: "the pole of
+  the mounting is north of the zenith"), AW is dA = +AW cos A_T tan E, dE = +AW sin A_T
+  (term 32: "west of the zenith"), ACES and ACEC are dA = -ACES sin A_T, -ACEC cos A_T
+  (terms 34, 35). The basic terms are written below in ``A_N`` (sin A_T = sin A_N, cos A_T =
+  -cos A_N); the harmonic generator's azimuth is ``A_T`` itself. A TPOINT data file's
+  azimuth is North-based (:mod:`.tpoint` reads it as it is), so the same terms fit TPOINT
+  files as TPOINT fits them (``examples/mmt_20210821_k_and_e.dat``: TPOINT's AN = +2.495",
+  AW = -10.335") and North-based data (CSV, recordings, the simulated telescope) with
+  TPOINT's meaning: AN > 0 is the azimuth axis's pole north of the zenith, AW > 0 west of it.
 * Ghigo (1990) and katpoint write the opposite quantity, "indicated minus true", which is
   minus the TPOINT correction. Their basis functions are therefore negated here, so that a
   fitted coefficient equals the number those sources print.
@@ -31,35 +36,34 @@ names each term), indicated minus true, North-based azimuth::
 
 The report ties W2 = W8 (elevation axis misalignment) and W3 = -W7 (azimuth axis
 misalignment) physically but fits all ten independently (Table 3: W2 -0.17', W8 -0.35').
-With TPOINT's corrections (true = raw + correction, A_S = A_N - 180 deg) every W is one
-TPOINT term up to sign (``GHIGO_EQUIVALENTS``; tested column by column):
-W1 = -IE, W2 = -HECA, W3 = HESA, W4 = TF, W5 = TX, W6 = IA, W7 = HSCASE, W8 = -HSSASE,
-W9 = NPAE, W10 = CA; tied, an azimuth-axis tilt is W2 = W8 = -AN and W3 = -W7 = AW
+With TPOINT's corrections (true = raw + correction, TPOINT's azimuth A_T = 180 deg - A_N)
+every W is one TPOINT term up to sign (``GHIGO_EQUIVALENTS``; tested column by column):
+W1 = -IE, W2 = HECA, W3 = -HESA, W4 = TF, W5 = TX, W6 = IA, W7 = -HSCASE, W8 = HSSASE,
+W9 = NPAE, W10 = CA; tied, an azimuth-axis tilt is W2 = W8 = AN and W3 = -W7 = -AW
 (``GHIGO_TILT``). Fomalont's 1973 model (the report's Appendix A) has the same ten functions:
 C1..C5 = W6..W10 and D1..D5 = W1..W5 (``FOMALONT_NAMES``), plus its feed terms.
 
 The harmonic generator follows TPOINT: ``H`` + result letter (A: azimuth, E: elevation,
 S: left-right on the sky = dA cos E, Z: zenith distance) + one or two factors, each ``S`` or
 ``C`` (sine, cosine) of ``A``, ``E`` or ``Z`` with an optional integer multiplier. Its signs
-are TPOINT's own, fixed by TPOINT's FAUTO fit of ``examples/auxtel_20200315.dat``
-(22 terms, ten of them harmonics with results A, E and S and arguments up to 7A; tested):
+are TPOINT's own, those of its basic terms, and TPOINT's FAUTO fit of
+``examples/auxtel_20200315.dat`` (22 terms, ten of them harmonics with results A, E and S and
+arguments up to 7A) confirms them (tested):
 
-* the azimuth of a harmonic is ``A_H = 180 deg - A_S = -A_N`` (mod 360 deg), not ``A_S``:
-  TPOINT's own ``A_T``;
-* an ``A`` or ``S`` result is minus the harmonic, as TPOINT's IA and CA are: ``HACA2`` is
-  dA = -c cos 2A_H, ``HSCA5CE8`` is dA cos E = -c cos 5A_H cos 8E;
-* an ``E`` result is plus it (``HESA2`` is dE = +c sin 2A_H = -c sin 2A_N) and a ``Z`` result
+* the azimuth of a harmonic is TPOINT's own, ``A_T = 180 deg - A_N``;
+* an ``A`` or ``S`` result is minus the harmonic (``dA_N = -dA_T``, as for IA and CA):
+  ``HACA2`` is dA = -c cos 2A_T, ``HSCA5CE8`` is dA cos E = -c cos 5A_T cos 8E;
+* an ``E`` result is plus it (``HESA2`` is dE = +c sin 2A_T = -c sin 2A_N) and a ``Z`` result
   is dZ = +c f, i.e. dE = -c f.
 
-Within the conventions "argument +-A_S + k 180 deg, one sign per result letter" this is the
+So TPOINT's ACEC and ACES are HACA and HASA, column for column (tptPterms terms 34, 35). With
+the North-based azimuth, sin kA_T = -(-1)^k sin kA_N and cos kA_T = (-1)^k cos kA_N: HECA is
+dE = -c cos A_N, HESA dE = +c sin A_N, HESA2 dE = -c sin 2A_N.
+Among the conventions "argument +-A_N + k 180 deg, one sign per result letter" this is the
 only one that reproduces the signs of all ten of TPOINT's harmonic coefficients on that file
-(HACA2, HASA7, HESACE, HESA2, HESA3, HSCA5CE8, HSSA6CE6, HSCE3, HSSE8, HSCE8); the earlier
-``A_S`` with every result ``+c f`` flipped six of them (HACA2, HASA7, HESA2, HSCE3, HSSE8,
-HSCE8). Written with the South-based azimuth of AN and AW, the once-per-turn terms are
-dE = +HESA sin A_S, dE = -HECA cos A_S, dA = -HASA sin A_S, dA = +HACA cos A_S; with the
-North-based one, sin kA_H = -sin kA_N and cos kA_H = +cos kA_N. No ``Z`` harmonic was in
-that fit: its sign (dE = -c f) is the natural reading of a zenith-distance result, not
-evidence.
+(HACA2, HASA7, HESACE, HESA2, HESA3, HSCA5CE8, HSSA6CE6, HSCE3, HSSE8, HSCE8). No ``Z``
+harmonic was in that fit: its sign (dE = -c f) is the natural reading of a zenith-distance
+result (tptPterms' TF and TX are changes in zenith distance), not evidence.
 
 Beyond TPOINT, the argument ``F`` is the feed (rotator) angle of a feed box turned during a
 campaign (Fomalont 1973's feed terms). TPOINT has no such argument; for consistency the
@@ -122,11 +126,10 @@ __all__ = [
 # A term is a sum of components; each component is sign * product of factors, landing in
 # dA (axis "A"), dE (axis "E") or left-right on the sky (axis "S": dA cos E). A factor is
 # (function, argument, multiplier): functions sin cos tan sec cot lin csc; arguments
-# "AS" (TPOINT's South-based azimuth A_N - pi, of its basic terms AN, AW...), "AH" (the
-# azimuth of TPOINT's harmonic generator, pi - A_S = -A_N), "AN" (North-based azimuth), "E"
-# (elevation), "Z" (zenith distance), "F" (feed angle), a Regressor (a recorded quantity) or a
-# hashable callable (see the module docstring). Models evaluate each distinct factor once
-# (see ``evaluate_basis``; a Regressor's once per axis).
+# "AN" (North-based azimuth), "AT" (TPOINT's own azimuth pi - A_N, South = 0, East = 90, of
+# its harmonic generator), "E" (elevation), "Z" (zenith distance), "F" (feed angle), a
+# Regressor (a recorded quantity) or a hashable callable (see the module docstring). Models
+# evaluate each distinct factor once (see ``evaluate_basis``; a Regressor's once per axis).
 Factor = tuple[str, str, int]
 Component = tuple[str, float, tuple[Factor, ...]]
 
@@ -195,10 +198,8 @@ def _argument(arg, az: np.ndarray, el: np.ndarray, feed=None) -> np.ndarray:
         return arg(az, el)
     if arg == "F":
         return _feed(feed)
-    if arg == "AS":
-        return az - math.pi
-    if arg == "AH":
-        return -az
+    if arg == "AT":
+        return math.pi - az
     if arg == "AN":
         return az
     if arg == "E":
@@ -318,10 +319,8 @@ def _argument_scalar(arg, az: float, el: float, feed=None) -> float:
         return float(arg(az, el))
     if arg == "F":
         return _feed(feed)
-    if arg == "AS":
-        return az - math.pi
-    if arg == "AH":
-        return -az
+    if arg == "AT":
+        return math.pi - az
     if arg == "AN":
         return az
     if arg == "E":
@@ -379,7 +378,6 @@ def _t(name, desc, *components, kind="angle") -> Term:
     return Term(name, desc, tuple((ax, float(sg), tuple(fs)) for ax, sg, fs in components), kind)
 
 
-SIN_AS, COS_AS = ("sin", "AS", 1), ("cos", "AS", 1)
 SIN_AN, COS_AN = ("sin", "AN", 1), ("cos", "AN", 1)
 TAN_E, SEC_E, COT_E = ("tan", "E", 1), ("sec", "E", 1), ("cot", "E", 1)
 SIN_E, COS_E = ("sin", "E", 1), ("cos", "E", 1)
@@ -394,22 +392,27 @@ def _tpoint_terms() -> dict[str, Term]:
         _t("IE", "elevation index (encoder zero): dE = +IE", ("E", 1, ())),
         _t("CA", "collimation, left-right: dA = -CA sec E", ("A", -1, (SEC_E,))),
         _t("NPAE", "az/el axis non-perpendicularity: dA = -NPAE tan E", ("A", -1, (TAN_E,))),
-        _t("AN", "azimuth axis tilt, north-south: dA = -AN sin A tan E, dE = -AN cos A",
-           ("A", -1, (SIN_AS, TAN_E)), ("E", -1, (COS_AS,))),
-        _t("AW", "azimuth axis tilt, east-west: dA = -AW cos A tan E, dE = +AW sin A",
-           ("A", -1, (COS_AS, TAN_E)), ("E", 1, (SIN_AS,))),
+        # TPOINT's AN and AW (tptPterms, terms 31 and 32) in its azimuth A_T = 180 deg - A_N:
+        # dA_T = +AN sin A_T tan E, dE = +AN cos A_T ("the pole of the mounting is north of
+        # the zenith"); dA_T = -AW cos A_T tan E, dE = +AW sin A_T ("west of the zenith").
+        # Written in A_N (sin A_T = sin A_N, cos A_T = -cos A_N, dA_N = -dA_T):
+        _t("AN", "azimuth axis tilt, pole north of the zenith: dA = -AN sin A tan E, "
+           "dE = -AN cos A (A North-based)",
+           ("A", -1, (SIN_AN, TAN_E)), ("E", -1, (COS_AN,))),
+        _t("AW", "azimuth axis tilt, pole west of the zenith: dA = -AW cos A tan E, "
+           "dE = +AW sin A (A North-based)",
+           ("A", -1, (COS_AN, TAN_E)), ("E", 1, (SIN_AN,))),
         _t("TF", "tube flexure (gravitational sag), cos E law: dE = -TF cos E",
            ("E", -1, (COS_E,))),
         _t("TX", "tube flexure / refraction error, cot E law: dE = -TX cot E",
            ("E", -1, (COT_E,))),
-        # TPOINT defines ACEC and ACES as its harmonics HACA and HASA (tptPterms, terms 34
-        # and 35: dAz = ACES sin Az, dAz = ACEC cos Az in its own azimuth A_H): written
-        # with A_S = 180 deg - A_H, ACEC = +cos A_S, ACES = -sin A_S (tested equal to HACA,
-        # HASA column by column)
-        _t("ACEC", "azimuth centering error, cos component: dA = +ACEC cos A",
-           ("A", 1, (COS_AS,))),
-        _t("ACES", "azimuth centering error, sin component: dA = -ACES sin A",
-           ("A", -1, (SIN_AS,))),
+        # TPOINT's ACES and ACEC are its harmonics HASA and HACA (tptPterms, terms 34 and
+        # 35: dA_T = ACES sin A_T, ACEC cos A_T): written in A_N, dA = -ACES sin A_N,
+        # +ACEC cos A_N (tested equal to HASA, HACA column by column)
+        _t("ACEC", "azimuth centering error, cos component: dA = +ACEC cos A (A North-based)",
+           ("A", 1, (COS_AN,))),
+        _t("ACES", "azimuth centering error, sin component: dA = -ACES sin A (A North-based)",
+           ("A", -1, (SIN_AN,))),
         _t("ECEC", "elevation centering error, cos component: dE = +ECEC cos E",
            ("E", 1, (COS_E,))),
         _t("ECES", "elevation centering error, sin component: dE = +ECES sin E",
@@ -458,14 +461,14 @@ def _harmonic(name: str) -> Term | None:
     if raw is None:
         return None
     factors = tuple(
-        ("sin" if f == "S" else "cos", "AH" if a == "A" else a, n) for f, a, n in raw
+        ("sin" if f == "S" else "cos", "AT" if a == "A" else a, n) for f, a, n in raw
     )
     axis, sign = _HARMONIC_RESULT[result]
     words = {"A": "dA = -", "E": "dE = ", "S": "dA cos E = -", "Z": "dZ = "}
     desc = " * ".join(f"{'sin' if f == 'S' else 'cos'}({'' if n == 1 else n}"
-                      f"{'A_H' if a == 'A' else a})" for f, a, n in raw)
+                      f"{'A_T' if a == 'A' else a})" for f, a, n in raw)
     if any(a == "A" for _, a, _ in raw):
-        desc += ", A_H = -A_N"
+        desc += ", A_T = 180 deg - A_N"
     return _t(name, f"harmonic: {words[result]}{name} {desc}", (axis, sign, factors))
 
 
@@ -601,15 +604,15 @@ WRIGHT_EQUIVALENTS: dict[str, tuple[str, float]] = {
     "A1": ("IA", 1.0),
     "A2": ("CA", 1.0),
     "A3": ("NPAE", 1.0),
-    "A4": ("HSSASE", -1.0),
-    "A5": ("HSCASE", 1.0),
+    "A4": ("HSSASE", 1.0),
+    "A5": ("HSCASE", -1.0),
     "A6": ("HASA2", -1.0),
     "A7": ("HACA2", 1.0),
     "B1": ("IE", -1.0),
     "B2": ("HESE", -1.0),
     "B3": ("TF", 1.0),
-    "B4": ("HESA", 1.0),
-    "B5": ("HECA", -1.0),
+    "B4": ("HESA", -1.0),
+    "B5": ("HECA", 1.0),
     "B6": ("HESA2", 1.0),
     "B7": ("TX", 1.0),
 }
@@ -618,23 +621,23 @@ WRIGHT_EQUIVALENTS: dict[str, tuple[str, float]] = {
 #: W fitted on its own (as the report fits ten) is one TPOINT term or harmonic.
 GHIGO_EQUIVALENTS: dict[str, tuple[str, float]] = {
     "W1": ("IE", -1.0),
-    "W2": ("HECA", -1.0),
-    "W3": ("HESA", 1.0),
+    "W2": ("HECA", 1.0),
+    "W3": ("HESA", -1.0),
     "W4": ("TF", 1.0),
     "W5": ("TX", 1.0),
     "W6": ("IA", 1.0),
-    "W7": ("HSCASE", 1.0),
-    "W8": ("HSSASE", -1.0),
+    "W7": ("HSCASE", -1.0),
+    "W8": ("HSSASE", 1.0),
     "W9": ("NPAE", 1.0),
     "W10": ("CA", 1.0),
 }
 
 #: The report's tied pairs (section II: W2 = W8, W3 = -W7) are TPOINT's azimuth-axis tilt:
-#: a tilt AN is W2 = W8 = -AN, a tilt AW is W3 = -W7 = AW, i.e. TPOINT term = sum of
+#: a tilt AN is W2 = W8 = AN, a tilt AW is W3 = -W7 = -AW, i.e. TPOINT term = sum of
 #: (sign * W term) over the pair, as basis columns (tested).
 GHIGO_TILT: dict[str, tuple[tuple[str, float], tuple[str, float]]] = {
-    "AN": (("W2", -1.0), ("W8", -1.0)),
-    "AW": (("W3", 1.0), ("W7", -1.0)),
+    "AN": (("W2", 1.0), ("W8", 1.0)),
+    "AW": (("W3", -1.0), ("W7", 1.0)),
 }
 
 #: Fomalont's 1973 coefficients (the 1990 report's Appendix A) on the report's functions:
@@ -645,27 +648,27 @@ FOMALONT_NAMES: dict[str, str] = {
 }
 
 #: Where katpoint's P terms coincide with TPOINT's: P = sign * TPOINT coefficient (tested).
-#: P5/P6 are the azimuth-axis tilt and equal -AN/+AW in both axes at once. P2 and P10 are
+#: P5/P6 are the azimuth-axis tilt and equal +AN/-AW in both axes at once. P2 and P10 are
 #: unused by katpoint; P9 and P12 are scale factors with no TPOINT twin here.
 KATPOINT_EQUIVALENTS: dict[str, tuple[str, float]] = {
     "P1": ("IA", 1.0),
     "P3": ("NPAE", 1.0),
     "P4": ("CA", -1.0),
-    "P5": ("AN", -1.0),
-    "P6": ("AW", 1.0),
+    "P5": ("AN", 1.0),
+    "P6": ("AW", -1.0),
     "P7": ("IE", -1.0),
     "P8": ("TF", 1.0),
     "P11": ("HESE", -1.0),
-    "P13": ("HACA", 1.0),
-    "P14": ("HASA", -1.0),
+    "P13": ("HACA", -1.0),
+    "P14": ("HASA", 1.0),
     "P15": ("HECA2", -1.0),
     "P16": ("HESA2", 1.0),
     "P17": ("HACA2", 1.0),
     "P18": ("HASA2", -1.0),
     "P19": ("HECE8", -1.0),
     "P20": ("HESE8", -1.0),
-    "P21": ("HECA", -1.0),
-    "P22": ("HESA", 1.0),
+    "P21": ("HECA", 1.0),
+    "P22": ("HESA", -1.0),
 }
 
 

@@ -15,15 +15,12 @@ Pointing data (TPOINT's ``INDAT`` input), as in ``examples/*.dat``::
     ; 357.56 17.95 357.49 18.04 masked observation: read, flagged, not fitted by default
     END
 
-The azimuth: TPOINT writes its terms in its own azimuth, South = 0, East = 90, the mirror
-image of the North-based one (A_T = 180 deg - A_N), and reads a file's azimuth North-based
-(N = 0, E = 90). The reader adds 180 deg to a file's azimuth (and the writer takes it off):
-that sum is antsim's azimuth of TPOINT data, the azimuth in which the terms of
-:mod:`.terms` reproduce TPOINT's own fits (docs/assumptions.md, "TPOINT's azimuth"). For a
-file in TPOINT's convention it is the true azimuth + 180 deg: a direction read from it as a
-North-based azimuth (diagnose's exact tilt, its "towards the north" groups) is half a turn
-off (docs/inputs.md, "The azimuth of a TPOINT file"; tested end to end in
-tests/end_to_end/test_tpoint_azimuth.py). This is the only place the conversion happens.
+The azimuth: a TPOINT data file gives it North-based (N = 0, E = 90), as TPOINT reads it,
+and it is read and written as it is: the azimuth of every star is the one the file gives,
+the same as antsim's everywhere else. TPOINT writes its terms in its own azimuth, South = 0,
+East = 90, the mirror image of the North-based one (A_T = 180 deg - A_N); the terms of
+:mod:`.terms` do the same, so they reproduce TPOINT's own fits (docs/inputs.md, "The azimuth
+of a TPOINT file"; tested end to end in tests/end_to_end/test_tpoint_azimuth.py).
 "obs" is the true (catalogue, observed) position and "raw" the indicated (encoder) one, so
 the pointing error "indicated minus true" is raw - obs.
 
@@ -234,8 +231,8 @@ class TPointData:
 
     ``coordinates`` says what the four position columns hold:
 
-    * ``"azel"`` (decimal records in an ``: ALTAZ`` file): antsim's azimuth of TPOINT data
-      (the file's + 180 deg: the module docstring says what it is) and elevation, degrees;
+    * ``"azel"`` (decimal records in an ``: ALTAZ`` file): azimuth (North-based, as the
+      file gives it) and elevation, degrees;
       ``rotator_deg`` holds the fifth column when present (NaN where absent);
     * ``"radec"`` (sexagesimal records): right ascension (hours converted to degrees) and
       declination, with ``lst_hours`` the sidereal time (NaN if absent);
@@ -612,11 +609,9 @@ def parse_tpoint(text: str, source: str = "<string>", mount: str | None = None) 
     coordinates, notes = _coordinates(kind, options,
                                       table[np.isfinite(table[:, :4]).all(axis=1)], mount,
                                       source)
-    if coordinates == "azel":
-        # TPOINT's file azimuth plus 180 deg: antsim's azimuth of TPOINT data, the only
-        # place this happens (the module docstring says what it is and is not)
-        table[:, 0] = (table[:, 0] + 180.0) % 360.0
-        table[:, 2] = (table[:, 2] + 180.0) % 360.0
+    if coordinates == "azel":  # azimuths as the file gives them, within 0..360 deg
+        table[:, 0] %= 360.0
+        table[:, 2] %= 360.0
     arrays = [np.ascontiguousarray(table[:, i]) for i in range(6)]
     for a in (*arrays, masked_arr, lines_arr):
         a.setflags(write=False)
@@ -686,7 +681,7 @@ def read_tpoint(path: str | Path, mount: str | None = None) -> TPointData:
 
 def format_tpoint(data: TPointData, decimals: int = 7) -> str:
     """TPOINT data file text for ``data``; positions printed with ``decimals`` decimals
-    (7 decimals of a degree is 0.36 mas). Azimuth goes back to South-based for alt-az data."""
+    (7 decimals of a degree is 0.36 mas). Azimuths are written as they are, North-based."""
     lines = [f"! {c}" if c else "!" for c in data.comments]
     lines.append(data.caption)
     lines += [f": {o}" for o in data.options]
@@ -712,11 +707,8 @@ def format_tpoint(data: TPointData, decimals: int = 7) -> str:
             fields.extend(data.extra_fields[i] if data.extra_fields else ())
             lines.append(prefix + "  ".join(fields))
             continue
-        lon_obs, lon_raw = data.lon_obs_deg[i], data.lon_raw_deg[i]
-        if data.coordinates == "azel":
-            lon_obs = (lon_obs - 180.0) % 360.0
-            lon_raw = (lon_raw - 180.0) % 360.0
-        values = [lon_obs, data.lat_obs_deg[i], lon_raw, data.lat_raw_deg[i]]
+        values = [data.lon_obs_deg[i], data.lat_obs_deg[i], data.lon_raw_deg[i],
+                  data.lat_raw_deg[i]]
         if math.isfinite(data.rotator_deg[i]):
             values.append(data.rotator_deg[i])
         lines.append(prefix + " ".join(f"{v:.{decimals}f}" for v in values))

@@ -9,9 +9,10 @@ term that is one TPOINT term up to sign (:data:`~controller.pointing.terms.GHIGO
 ``KATPOINT_EQUIVALENTS``, ``WRIGHT_EQUIVALENTS``, tested column by column) under TPOINT's name
 with TPOINT's sign, and says in a comment on its line which term it was:
 
-    W1 = -IE, W4 = TF, W5 = TX, W6 = IA, W9 = NPAE, W10 = CA; fitted on their own, W2 = -HECA,
-    W3 = HESA, W7 = HSCASE, W8 = -HSSASE; tied as the report ties them (W2 = W8, W3 = -W7),
-    the azimuth axis's tilt W2 = W8 = -AN and W3 = -W7 = AW.
+    W1 = -IE, W4 = TF, W5 = TX, W6 = IA, W9 = NPAE, W10 = CA; fitted on their own, W2 = HECA,
+    W3 = -HESA, W7 = -HSCASE, W8 = HSSASE; tied as the report ties them (W2 = W8, W3 = -W7),
+    the azimuth axis's tilt W2 = W8 = AN and W3 = -W7 = -AW (TPOINT's terms at its azimuth
+    A_T = 180 deg - A_N: AN > 0 the pole north of the zenith, AW > 0 west of it).
 
 The model points exactly as before (each renamed column is the old one times its sign). Terms
 with no TPOINT twin (Crane's, katpoint's scale factors P9, P12) keep their names.

@@ -348,9 +348,9 @@ def reduce_clark(
     (n + 4) / 8``: it removes a baseline linear in offset exactly, at a cost of 3% in the
     offset's noise at zero offset (the line's slope is antisymmetric, like an offset). The
     other reading, ``baseline="mean"`` (a constant level, the mean of the two), reaches the
-    constant-baseline bound at zero offset and reproduces the DESIGN's efficiencies 0.67,
-    0.27, 0.10 at 1', 2', 3' (the line gives 0.64, 0.26, 0.096). Neither removes a drift
-    linear in *time* (the offsets are unevenly spaced in time): a drift of d per integration
+    constant-baseline bound at zero offset and reproduces the efficiencies 0.67, 0.27,
+    0.10 at 1', 2', 3' (docs/physics.md; the line gives 0.64, 0.26, 0.096). Neither removes a
+    drift linear in *time* (the offsets are unevenly spaced in time): a drift of d per integration
     biases the offset by about 4.8' d / A (line) or 9.6' d / A (mean) at zero offset.
 
     ``times_s`` is accepted (and only shape-checked) so that both :data:`ESTIMATORS` share a

@@ -1,6 +1,7 @@
 """Every real pointing run the project may read goes through the front door, and reads the
-same with the comments observatories append to records. The runs live next to the
-repository (``../shared/data/real``, or ``ANTSIM_REAL_DATA``); the tests skip without them."""
+same with the comments observatories append to records. The runs live in the shared
+folder beside the repository (``shared/data/real``, or ``ANTSIM_REAL_DATA``); the tests skip
+without them."""
 
 from __future__ import annotations
 

@@ -8,11 +8,10 @@ known physical error (the azimuth axis's pole tilted towards a known azimuth, co
 a rotation, and an elevation nod three times a turn in TPOINT's own azimuth), then read and
 fitted as a user would: the fit must give TPOINT's coefficients with TPOINT's meaning (AN > 0:
 the pole north of the zenith; AW > 0: west of it), and the tilt's direction comes back.
-
-Two known mismatches are kept as strict expected failures (docs/inputs.md, "The azimuth of
-a TPOINT file"): antsim's own azimuth of a TPOINT file's star is the file's plus 180 deg (the
-true one plus 180), and on North-based data (CSV, recordings) antsim's AN and AW carry the
-opposite sign to TPOINT's.
+antsim's terms are TPOINT's at A_T = 180 deg - A_N on any data, so the same holds for
+North-based CSV measurements, for the simulated telescope's recordings (a tilt the world
+makes with a rotation) and for those recordings written as a TPOINT file; a TPOINT file's
+stars keep their true azimuth (docs/inputs.md, "The azimuth of a TPOINT file").
 """
 
 from __future__ import annotations
@@ -98,20 +97,16 @@ def test_a_file_written_south_zero_east_ninety_is_a_mirror_image(tmp_path):
     assert fit["HESA3"] == pytest.approx(NOD_ARCSEC, abs=0.05)
 
 
-@pytest.mark.xfail(strict=True, reason="antsim's azimuth of a TPOINT file's star is the file's "
-                   "+ 180 deg: the true azimuth + 180 deg for a file in TPOINT's convention "
-                   "(docs/inputs.md); the exact tilt's tilt_az_deg and diagnose's 'towards "
-                   "the north' groups read it")
 def test_antsims_azimuth_of_a_tpoint_file_is_the_true_one(tmp_path):
+    """What diagnose's exact tilt (tilt_az_deg) and its "towards the north" groups read."""
     data = read_pointing_file(_tpoint_file(tmp_path)).pointing_data()
     np.testing.assert_allclose(np.degrees(data.az_rad) % 360.0, TRUE_AZ_DEG % 360.0,
                                atol=1e-6)
 
 
-@pytest.mark.xfail(strict=True, reason="on North-based data antsim's AN, AW (and ACEC, ACES, "
-                   "odd harmonics in A) are the negatives of TPOINT's: its terms take TPOINT's "
-                   "azimuth as A_N - 180 deg where TPOINT's is 180 deg - A_N (docs/inputs.md)")
 def test_north_based_measurements_give_tpoints_coefficients(tmp_path):
+    """The same telescope measured as CSV (North-based, indicated minus true): the same
+    coefficients as the TPOINT file's, the tolerance the first test's."""
     raw_az, raw_el = _encoder_positions()
     d_az = (raw_az - TRUE_AZ_DEG + 180.0) % 360.0 - 180.0
     rows = [f"{TRUE_AZ_DEG[i]:.8f},{TRUE_EL_DEG[i]:.8f},"
@@ -121,5 +116,51 @@ def test_north_based_measurements_give_tpoints_coefficients(tmp_path):
     path.write_text("# sign: indicated-minus-true\naz_deg,el_deg,d_xel_arcsec,d_el_arcsec\n"
                     + "\n".join(rows) + "\n", encoding="utf-8")
     fit = _fit(str(path))
-    assert fit["AN"] == pytest.approx(TILT_ARCSEC * math.cos(math.radians(TILT_TOWARDS_DEG)),
-                                      abs=0.05)
+    towards = math.radians(TILT_TOWARDS_DEG)
+    assert fit["AN"] == pytest.approx(TILT_ARCSEC * math.cos(towards), abs=0.05)
+    assert fit["AW"] == pytest.approx(-TILT_ARCSEC * math.sin(towards), abs=0.05)
+    assert fit["HESA3"] == pytest.approx(NOD_ARCSEC, abs=0.05)
+    assert fit["HECA3"] == pytest.approx(0.0, abs=0.05)
+
+
+#: the simulated telescope's tilt: 1' towards azimuth 30 deg (N = 0, E = 90)
+WORLD_TILT_ARCMIN = 1.0
+
+
+def test_a_tilt_the_world_makes_comes_back_with_tpoints_signs(quiet_path, tmp_path):
+    """The noise-free test world (tests/data/scenarios/quiet.toml, three hours, its extended
+    source made a point) with its azimuth axis tilted by a rotation (the effect
+    exact_tilt_collimation: 1' towards azimuth 30 deg), observed by antsim's own campaign:
+    its recordings, and the same recordings written as a TPOINT data file, both give AN =
+    +tilt cos 30, AW = -tilt sin 30. Tolerance 0.3": the second order of a 1' tilt is
+    (60")^2 / 206265" tan E < 0.1" below 80 deg, and the noise-free reduction leaves
+    ~0.1" (the residual rms is checked too)."""
+    from antsim.scenario import load_scenario
+    from antsim.simulate.runner import run_campaign
+    from controller.pointing.tpoint import RunParameters, TPointData, write_tpoint
+    from tests.conftest import edit_text
+
+    text = edit_text(quiet_path.read_text(encoding="utf-8"), (
+        ("duration_h = 1.0", "duration_h = 3.0"),
+        ("size_arcmin = 3.46", "size_arcmin = 0.0"),
+        ("[controller]", '[[truth.effects]]\neffect = "exact_tilt_collimation"\n'
+                         f"tilt_arcmin = {WORLD_TILT_ARCMIN}\ntilt_az_deg = 30.0\n\n"
+                         "[controller]")))
+    scenario_path = tmp_path / "tilted.toml"
+    scenario_path.write_text(text, encoding="utf-8")
+    run_campaign(load_scenario(scenario_path), tmp_path / "run", show_progress=False)
+    recordings = read_pointing_file(str(tmp_path / "run" / "recordings.ecsv")).pointing_data()
+    assert recordings.az_rad.size >= 20
+    az, el = np.degrees(recordings.az_rad), np.degrees(recordings.el_rad)
+    exported = tmp_path / "recordings.dat"
+    write_tpoint(TPointData.from_azel(
+        "antsim recordings", RunParameters(38.43), az, el,
+        az + recordings.xel_arcsec / 3600.0 / np.cos(recordings.el_rad),
+        el + recordings.el_arcsec / 3600.0), exported)
+    tilt = 60.0 * WORLD_TILT_ARCMIN
+    towards = math.radians(30.0)
+    for data in (recordings, read_pointing_file(str(exported)).pointing_data()):
+        result = fit_model(data, ["IA", "IE", "AN", "AW"], robust=False)
+        assert result.sky_rms_arcsec < 0.3
+        assert result.model["AN"] == pytest.approx(tilt * math.cos(towards), abs=0.3)
+        assert result.model["AW"] == pytest.approx(-tilt * math.sin(towards), abs=0.3)

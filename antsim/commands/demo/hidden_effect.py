@@ -20,8 +20,8 @@ from .story import Story
 
 __all__ = ["DIRECTORY", "HIDDEN_ARCSEC", "HIDDEN_TERM", "SEED", "run_diagnose_json", "tell"]
 
-#: the hidden effect: an uneven azimuth track, dE = HESA2 sin 2A_H (arcsec; TPOINT's
-#: harmonic azimuth A_H = -A_N, controller/pointing/terms.py), i.e. a correction of +60" sin 2A_N
+#: the hidden effect: an uneven azimuth track, dE = HESA2 sin 2A_T (arcsec; TPOINT's azimuth
+#: A_T = 180 deg - A_N, controller/pointing/terms.py), i.e. a correction of +60" sin 2A_N
 HIDDEN_TERM = "HESA2"
 HIDDEN_ARCSEC = -60.0
 #: the campaign's seed (a new night's noise)

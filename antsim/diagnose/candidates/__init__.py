@@ -1,6 +1,6 @@
 """The library of candidate physical effects: signature, parameters, physical cause, test.
 
-Every row of DESIGN section 5's signature table is here, and the effects that are not
+Every row of docs/physics.md's signature table is here, and the effects that are not
 harmonics. Each candidate knows
 
 * its residual **signature** as regressors: columns of the error (indicated minus true,
@@ -23,5 +23,5 @@ offset), :mod:`.thermal` (sunset drifts and transients, temperature drifts),
 :mod:`.changes` (a step at an unknown time), :mod:`.dynamics` (clock, servo lag, backlash),
 :mod:`.optics` (source structure, exact tilt and collimation, squint, beam width);
 :mod:`.library` lists them all (:data:`~.library.CANDIDATES`), the term families as tables
-(rows of DESIGN's signature table, TPOINT's harmonic generator) that a new family extends.
+(rows of docs/physics.md's signature table, TPOINT's harmonic generator) that a new family extends.
 """

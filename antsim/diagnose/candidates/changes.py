@@ -1,7 +1,7 @@
 """Changes at one instant: a step (changepoint) in either axis at an unknown time.
 
 The azimuth or the elevation zero point changes between two scans and stays changed (an
-encoder slip, a moved subreflector or feed, a re-levelling; DESIGN section 5's "step change
+encoder slip, a moved subreflector or feed, a re-levelling; docs/physics.md's "a step
 at an unknown time"). Every gap between consecutive scans (with at least ``MIN_SIDE`` scans
 on each side) on either axis is one trial; all are tested at once, vectorized (one
 projection of every step column), and the look-elsewhere effect is paid with the effective

@@ -1,5 +1,4 @@
-"""The library: every candidate, the signature table of docs/diagnose.md's effects first, as
-data.
+"""The library: every candidate, docs/physics.md's signature table first, as data.
 
 Each row names the simulator effect it reproduces, its title, signature and the physical
 cause; :data:`CANDIDATES` is the library in the order the selection tries them, and
@@ -86,7 +85,7 @@ MECHANISMS: dict[str, tuple[str, ...]] = {
 
 IN_SPAN = "already in the 45-ft's ten-term model (W terms), so invisible with that baseline"
 
-#: the signature table's harmonic rows: simulator effect, title, signature
+#: docs/physics.md's signature table, harmonic rows: simulator effect, title, signature
 HARMONIC_ROWS = (
     ("az_track_2a", "azimuth track unevenness (twice per turn)",
      "dE ~ sin 2A, cos 2A (BIMA memo 23 saw 6\" rms)"),
@@ -99,7 +98,7 @@ HARMONIC_ROWS = (
      "dE ~ sin 2E, cos 2E"),
 )
 
-#: the signature table's rows that name two orders at once (one finding each:
+#: the rows of docs/physics.md's signature table that name two orders at once (one finding each:
 #: an encoder both eccentric and elliptical, a track with two and three high points)
 TWO_ORDER_ROWS = (
     ("az_runout_1a_2a", ("HASA", "HACA", "HASA2", "HACA2"),

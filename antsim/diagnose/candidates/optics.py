@@ -142,9 +142,10 @@ class ExactTiltCandidate(Candidate):
 
     @staticmethod
     def linear_terms(theta: Sequence[float]) -> np.ndarray:
-        """AN, AW, CA (arcsec) of the small-angle limit (ExactTiltCollimation's docstring)."""
+        """AN, AW, CA (arcsec) of the small-angle limit (ExactTiltCollimation's docstring):
+        TPOINT's, AN the tilt's north component, AW minus its east one."""
         tn, te, c = (float(v) * 60.0 for v in theta)
-        return np.array([-tn, te, -c])
+        return np.array([tn, -te, -c])
 
     @staticmethod
     def _sky_error(sky, theta: Sequence[float]) -> np.ndarray:

@@ -105,7 +105,7 @@ class _LaggedCandidate(Candidate):
         the bounded search's stopping rule. That took 3-7 tests where scipy's bounded search
         (which ignores the grid's tests) took 6-7 (tests/test_diagnose_memory.py; 1-4 against
         7-10 at 200,000 scans); the time constants found move by under 1% of tau, 3% of
-        their sigma (docs/results/blind_fomalont.txt, issue 28p)."""
+        their sigma (docs/results/blind_fomalont.txt)."""
         obs = problem.obs
         tested: dict[float, TestResult] = {}  # log theta -> its test here
         values: dict[float, float] = {}  # log theta -> delta chi^2

@@ -7,13 +7,15 @@ indicated + correction), in the axis of the result letter (dA for ``A``, dE for 
 
     a sin(nX + phi) = a cos(phi) sin nX + a sin(phi) cos nX,
 
-with ``X`` the elevation or the South-based azimuth ``A_S = A_N - 180 deg`` of TPOINT's basic
-terms. TPOINT's harmonic generator uses its own azimuth ``A_H = 180 deg - A_S`` and negates
-``A`` results (:mod:`controller.pointing.terms`), so the pair's coefficients are ``s_sin a
-cos(phi)`` and ``s_cos a sin(phi)`` with a sign per term, ``signs`` below: for HESA2, sin 2A_H =
--sin 2A_S (s_sin = -1); for HACA, dA = -c cos A_H = +c cos A_S (s_cos = +1); elevation
-harmonics have both signs +1. The error the antenna makes (indicated minus true) is minus
-the correction, as for every geometric effect.
+with ``X`` the elevation or ``A_N - 180 deg``, the azimuth counted from South through West,
+in which these effects' phases are given. TPOINT's harmonic generator uses its own azimuth
+``A_T = 180 deg - A_N`` (South = 0, East = 90) and negates ``A`` results
+(:mod:`controller.pointing.terms`); since sin nX = -sin nA_T and cos nX = cos nA_T for every
+n, the pair's coefficients are ``s_sin a cos(phi)`` and ``s_cos a sin(phi)`` with the signs
+``signs`` below: (-1, +1) for an elevation result (HESA2 = -a cos phi), (+1, -1) for an
+azimuth result (dA = -c cos nA_T: HACA = -a sin phi), (+1, +1) for the elevation harmonics.
+The error the antenna makes (indicated minus true) is minus the correction, as for every
+geometric effect.
 
 | effect | terms | physical cause |
 |---|---|---|
@@ -71,7 +73,8 @@ class HarmonicEffect(Effect):
     signs: ClassVar[tuple[float, float]] = (1.0, 1.0)
     PARAMS: ClassVar[dict[str, Key]] = {
         "amplitude_arcsec": Key(0.0, "amplitude of the harmonic (arcsec)"),
-        "phase_deg": Key(0.0, "phase: the correction is a sin(nX + phase), X = A_S or E"),
+        "phase_deg": Key(0.0, "phase: the correction is a sin(nX + phase), X = E or the "
+                         "azimuth A - 180 deg (South = 0, West = 90)"),
     }
 
     def __init__(self, **params: Any):
@@ -119,7 +122,7 @@ class AzimuthTrack3A(HarmonicEffect):
     name: ClassVar[str] = "az_track_3a"
     sin_term: ClassVar[str] = "HESA3"
     cos_term: ClassVar[str] = "HECA3"
-    signs: ClassVar[tuple[float, float]] = (1.0, -1.0)
+    signs: ClassVar[tuple[float, float]] = (-1.0, 1.0)
     explanation: ClassVar[str] = (
         "the azimuth track is uneven with three high points per turn: elevation errors vary "
         "as sin 3A and cos 3A"
@@ -130,7 +133,7 @@ class AzimuthRunout1A(HarmonicEffect):
     name: ClassVar[str] = "az_runout_1a"
     sin_term: ClassVar[str] = "HASA"
     cos_term: ClassVar[str] = "HACA"
-    signs: ClassVar[tuple[float, float]] = (-1.0, 1.0)
+    signs: ClassVar[tuple[float, float]] = (1.0, -1.0)
     explanation: ClassVar[str] = (
         "the azimuth encoder is not centred on the axis (runout): the azimuth reading is off "
         "by an amount that varies once per turn, sin A and cos A"
@@ -152,7 +155,7 @@ class ElevationNod1A(HarmonicEffect):
     name: ClassVar[str] = "el_nod_1a"
     sin_term: ClassVar[str] = "HESA"
     cos_term: ClassVar[str] = "HECA"
-    signs: ClassVar[tuple[float, float]] = (1.0, -1.0)
+    signs: ClassVar[tuple[float, float]] = (-1.0, 1.0)
     explanation: ClassVar[str] = (
         "the elevation axis nods once per azimuth turn (a bent track or a tilted bearing "
         "race): elevation errors vary as sin A and cos A without the azimuth part of a tilt"

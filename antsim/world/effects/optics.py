@@ -103,7 +103,8 @@ class ExactTiltCollimation(Effect):
     is off the plane perpendicular to the elevation axis by ``collimation_arcmin``. The error is
     computed with rotations, so it stays right near the zenith and near azimuth 90 deg where
     the linear TPOINT terms (AN, AW, CA) fail for large angles. For small angles it equals
-    AN = -tilt cos(tilt_az), AW = tilt sin(tilt_az), CA = -collimation (tested).
+    AN = tilt cos(tilt_az), AW = -tilt sin(tilt_az), CA = -collimation (TPOINT's meaning: the
+    pole of the azimuth axis north of the zenith by AN, west of it by AW; tested).
     """
 
     name: ClassVar[str] = "exact_tilt_collimation"
@@ -129,7 +130,7 @@ class ExactTiltCollimation(Effect):
 
         tilt_arcsec = self.p["tilt_arcmin"] * 60.0
         phi = math.radians(self.p["tilt_az_deg"])
-        linear = {"AN": -tilt_arcsec * math.cos(phi), "AW": tilt_arcsec * math.sin(phi),
+        linear = {"AN": tilt_arcsec * math.cos(phi), "AW": -tilt_arcsec * math.sin(phi),
                   "CA": -self.p["collimation_arcmin"] * 60.0}
         params = {k: v for k, v in self.params().items() if k != "linear_part"}
         return {**linear, **tilt_collimation_equivalents(**params)}

@@ -400,7 +400,8 @@ class ThermalEffect(Effect):
 
     def pointing_error(self, state: PointingState) -> tuple[float, float]:
         p = self.p
-        # pedestal tilt as AN (north) / AW (east) terms, indicated - true
+        # the pedestal's tilt, indicated - true: TPOINT's AN = -tilt_n, AW = -tilt_e (AN > 0
+        # the pole north of the zenith, AW > 0 west of it)
         if np.ndim(state.t_s) == 0:  # one time (a World, or antsim.plan's shared schedule)
             now = self._series_at(float(state.t_s))
             xel, el, tilt_n, tilt_e = now[0], now[1], now[6], now[7]

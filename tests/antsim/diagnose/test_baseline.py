@@ -175,7 +175,7 @@ def test_the_cache_is_written_without_following_a_link(clean, tmp_path):
 
 
 def test_a_damaged_cache_does_not_change_diagnoses_answer(tmp_path, capsys):
-    """The issue's case: the same recordings and scenario, the cache damaged in place,
+    """The case once reported: the same recordings and scenario, the cache damaged in place,
     give the same answer, with one note line. Its 12 scans carry fewer parameters than the
     ten terms (a fifth of the numbers fitted), so nothing is found either way; the answer
     compared is also where the residuals exceed the noise the simulations predict (about

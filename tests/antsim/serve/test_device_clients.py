@@ -24,7 +24,7 @@ REPO = Path(__file__).resolve().parents[3]
 BASE = REPO / "tests" / "data" / "bad_inputs" / "scenario" / "_base.toml"
 TIMEOUT_S = 20.0
 
-#: (request arguments, what the failure says): the issue's requests and neighbours
+#: (request arguments, what the failure says): requests once mishandled and neighbours
 REFUSED = [
     (("offset", "1e12", "1e12"), "argument 1 (DAZ) '1e12': the first axis would be at 1e+12"),
     (("offset", "0", "100"), "argument 2 (DEL) '100': the second axis would be at 14"),

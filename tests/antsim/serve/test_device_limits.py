@@ -89,7 +89,7 @@ def _fails(c: LineClient, line: str) -> str:
 
 #: (request, what the failure reply says): each names the argument and its value
 BAD = [
-    # the issue's requests: offsets and a feed angle that moved the clock past its end
+    # requests once accepted: offsets and a feed angle that moved the clock past its end
     ("?offset 1e12 1e12", "argument 1 (DAZ) '1e12': the first axis would be at 1e+12 deg, "
                           "outside the mount's limits -90..450 deg"),
     ("?offset 1e300 0", "argument 1 (DAZ) '1e300': the first axis would be at 1e+300 deg"),
@@ -200,7 +200,7 @@ def test_a_sensor_name_pattern_of_single_repeats_is_served(client):
 
 
 def test_the_issues_requests_leave_the_server_serving(client):
-    """After every request of the issue, the clock is where it was, ``?clock`` and
+    """After every such request, the clock is where it was, ``?clock`` and
     ``?sensor-value`` answer, and a scan goes on as usual."""
     start = _clock(client)
     for line in ("?offset 1e12 1e12", "?offset 1e300 0", "?offset 200000 0",

@@ -1,0 +1,1 @@
+"""Tests of antsim/api/: the Python API against the commands it shares its code with."""
