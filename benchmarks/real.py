@@ -1,10 +1,12 @@
 """diagnose on real pointing runs: does the model it proposes predict stars it was not fitted to?
 
-    python benchmarks/real.py [--data DIR] [--out FILE]
+    python benchmarks/real.py [--data DIR] [--only NAME ...] [--stars N]
 
-For every real TPOINT file of examples/ and of ``--data DIR`` (default ``$ANTSIM_REAL_DATA``;
-a folder of more real runs in TPOINT's format, read where it is and never copied), by file
-name, once each:
+For every real TPOINT file of examples/ and of ``--data DIR`` (default ``$ANTSIM_REAL_DATA``,
+else a folder ``shared/data/real`` beside the repository where there is one: more real runs
+in TPOINT's format, read where they are and never copied), by file name, once each (``--only``:
+those files alone; ``--stars N``: only N stars left out in turn, evenly spread in the file's
+order, for a quick check):
 
 * the base model's leave-one-star-out Sky RMS: the eight terms fitted without each star
   (unweighted, as TPOINT fits) and that star predicted;
@@ -52,21 +54,44 @@ EIGHT_TERMS = ("IA", "IE", "NPAE", "CA", "AN", "AW", "TF", "TX")
 AUXTEL_MAX_FINDINGS = 4
 
 
-def files(data: Path | None) -> list[Path]:
-    """examples/ first, then the other folder's files not among them (by name)."""
+def real_folder() -> Path | None:
+    """``$ANTSIM_REAL_DATA``, else the folder of real runs beside the repository (or beside
+    the folder holding it: a worktree), else None."""
+    given = os.environ.get("ANTSIM_REAL_DATA")
+    if given:
+        return Path(given)
+    for up in (ROOT.parent, ROOT.parent.parent):
+        if (up / "shared" / "data" / "real").is_dir():
+            return up / "shared" / "data" / "real"
+    return None
+
+
+def files(data: Path | None, only: list[str] | None = None) -> list[Path]:
+    """examples/ first, then the other folder's files not among them (by name); ``only``:
+    those names alone."""
     out = sorted((ROOT / "examples").glob("*.dat"))
     names = {p.name for p in out}
     if data is not None and data.is_dir():
         out += [p for p in sorted(data.glob("*.dat")) if p.name not in names]
-    return out
+    return [p for p in out if not only or p.name in only]
 
 
-def leave_one_out(obs, automatic: bool = False) -> tuple[float, float, int, float]:
+def left_out(obs, stars: int | None = None) -> np.ndarray:
+    """The stars left out in turn: every good one, or ``stars`` of them evenly spread in the
+    file's order."""
+    good = np.flatnonzero(obs.good)
+    if stars is None or stars >= good.size:
+        return good
+    return good[(np.arange(stars) * good.size) // stars]
+
+
+def leave_one_out(obs, automatic: bool = False, stars: int | None = None
+                  ) -> tuple[float, float, int, float]:
     """Leave-one-star-out Sky RMS of the base model and of diagnose's (repeated in every
     fold), in how many folds diagnose proposed more than the base, and (``automatic``) the
     Sky RMS of an unpenalized automatic search to 22 terms repeated in every fold (NaN
-    otherwise)."""
-    good = np.flatnonzero(obs.good)
+    otherwise); over :func:`left_out`'s stars."""
+    good = left_out(obs, stars)
     base_sq, diag_sq, auto_sq, added = 0.0, 0.0, 0.0, 0
     if automatic:
         names = [*EIGHT_TERMS, *_harmonic_pool()]
@@ -142,14 +167,14 @@ def _one(obs, train: np.ndarray, i: int, terms) -> float:
     return float(r @ r)
 
 
-def report(path: Path) -> dict:
-    """One file's figures (printed as they come)."""
+def report(path: Path, stars: int | None = None) -> dict:
+    """One file's figures (printed as they come); ``stars``: :func:`left_out`'s."""
     obs = load_observations(path)
     t0 = time.perf_counter()
     d = diagnose(obs)
     seconds = time.perf_counter() - t0
     print(f"{path.name}: {int(obs.good.sum())} stars; diagnose {seconds:.2f} s "
-          f"(nested validation included)")
+          f"(nested validation included)", flush=True)
     for k, f in enumerate(d.findings, 1):
         print(f"  {k}. {f.headline()}")
         for a in f.step.alternatives:
@@ -163,15 +188,17 @@ def report(path: Path) -> dict:
         print(f"  base: {w}")
     t0 = time.perf_counter()
     auxtel = path.name == AUXTEL
-    base, ours, added, auto = leave_one_out(obs, automatic=auxtel)
+    out = left_out(obs, stars)
+    n_good = int(obs.good.sum())
+    some = "" if out.size == n_good else f"; {out.size} of the {n_good} stars left out"
+    base, ours, added, auto = leave_one_out(obs, automatic=auxtel, stars=stars)
     ratio = ours / base
     print(f"  leave-one-star-out Sky RMS, the selection repeated in every fold "
           f"({time.perf_counter() - t0:.0f} s): base {base:.3f}\", diagnose {ours:.3f}\" "
-          f"(ratio {ratio:.3f}; diagnose added terms in {added} of {int(obs.good.sum())} "
-          "folds)")
+          f"(ratio {ratio:.3f}; diagnose added terms in {added} of {out.size} folds{some})")
     if auxtel:
         fauto = math.sqrt(sum(_one(obs, obs.good & (np.arange(obs.n) != i), i, AUXTEL_22)
-                              for i in np.flatnonzero(obs.good)) / obs.good.sum())
+                              for i in out) / out.size)
         print(f"  for comparison: an unpenalized automatic search to 22 terms repeated in "
               f"every fold {auto:.3f}\"; TPOINT's own 22 terms (chosen on all the stars, "
               f"TX10 as TX) refitted without each star {fauto:.3f}\"")
@@ -182,11 +209,21 @@ def report(path: Path) -> dict:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--data", type=Path, default=os.environ.get("ANTSIM_REAL_DATA"),
-                        help="a folder of more real runs in TPOINT's format "
-                             "(default $ANTSIM_REAL_DATA)")
+    parser.add_argument("--data", type=Path, default=None,
+                        help="a folder of more real runs in TPOINT's format (default "
+                             "$ANTSIM_REAL_DATA, else shared/data/real beside the repository)")
+    parser.add_argument("--only", nargs="+", metavar="NAME",
+                        help="only these files (by name)")
+    parser.add_argument("--stars", type=int, default=None, metavar="N",
+                        help="leave out only N stars of each file, evenly spread (a quick "
+                             "check; default every star)")
     args = parser.parse_args()
-    rows = [report(p) for p in files(Path(args.data) if args.data else None)]
+    if args.stars is not None and args.stars < 1:
+        parser.error(f"--stars: {args.stars}: at least 1")
+    chosen = files(args.data if args.data else real_folder(), args.only)
+    if not chosen:
+        parser.error(f"--only: {' '.join(args.only)}: no such real file")
+    rows = [report(p, args.stars) for p in chosen]
     worst = max(rows, key=lambda r: r["ratio"])
     auxtel = next((r for r in rows if r["name"] == AUXTEL), None)
     print(f"files {len(rows)}; worst ratio to the base {worst['ratio']:.3f} ({worst['name']};"

@@ -41,7 +41,8 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="a setting of a CSV of your own measurements that the file does "
                              "not state, e.g. 'sign: true-minus-indicated' (docs/inputs.md)")
     parser.add_argument("--json", action="store_true",
-                        help="print the result as JSON (the keys: docs/contract.md; their meaning: docs/diagnose.md)")
+                        help="print the result as JSON (the keys: docs/contract.md; their "
+                             "meaning: docs/diagnose.md)")
     parser.add_argument("--out", metavar="DIR",
                         help="write diagnose.json/.txt, report.html, model_updated.dat/.json, "
                              "scenario_updated.toml and before/after plots into DIR")
