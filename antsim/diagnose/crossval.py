@@ -414,8 +414,24 @@ def choose(design: Design, counts: np.ndarray, plan: Plan = FULL, seed: int = SE
     kept = _kept(inner)
     alternatives = [_alternatives(design, counts, path, j) for j in range(kept)]
     stability = _stability(design, counts, path, kept, alternatives, seed, plan.n_resamples)
+    # said: a candidate the decision keeps as another finding, or part of one (its terms),
+    # is not an alternative (the data told them apart by keeping both); a resample that
+    # chooses it still chooses this finding's signature
+    alternatives = [[a for a in alts if not _in_other(design, path, kept, j, a.option)]
+                    for j, alts in enumerate(alternatives)]
     return Choice(path, [float(v) for v in inner], kept, alternatives, stability,
                   plan.n_resamples)
+
+
+def _in_other(design: Design, path: Path, kept: int, j: int, option: int) -> bool:
+    """Whether ``option``'s candidate, or a term of it, is that of a kept pick but the j-th."""
+    o = design.options[option]
+    for i, p in enumerate(path.picks[:kept]):
+        other = design.options[p.option]
+        if i != j and (other.candidate.name == o.candidate.name
+                       or set(other.names) & set(o.names)):
+            return True
+    return False
 
 
 def _stability(design: Design, counts: np.ndarray, path: Path, kept: int,
