@@ -19,7 +19,9 @@ noise level is estimated from the residuals, as :mod:`.problem` does.
 The rule, round by round (forward selection, as docs/diagnose.md states it):
 
 1. **Outliers.** A scan whose residual exceeds ``OUTLIER_Z`` times its noise on either axis
-   is left out (twice, from every scan of the set, after every change of the model).
+   is left out (twice, from every scan of the set, after every change of the model). An
+   option that lives mostly on the scans left out (``READMIT_FRACTION``) is also tested on
+   the scans a model with it keeps, as a candidate's own test is.
 2. **Each option's test.** Its columns projected off the current model (the added-variable
    test: what the model cannot absorb; a column with less than ``ABSORBED_1MR2`` of its
    square norm left is absorbed and not counted); the chi^2 decrease of fitting the rest,
@@ -81,6 +83,13 @@ DECIDE_SCANS = 5000
 AKAIKE_PER_PARAMETER = 2.0
 #: the residuals "match the predicted noise" above this chi^2 p-value on both axes
 MATCH_P = 0.05
+#: an option with at least this fraction of its signature's square norm on the scans the
+#: model rejects is also tested on the scans a model with it keeps (more than half: it lives
+#: there, as a source offset whose every scan is an outlier of the model without it)
+READMIT_FRACTION = 0.5
+#: below this correlation of successive scans an outlier leaks less than a fifth of itself
+#: into the next scan's decorrelated row: the design keeps it (a decision rejects it)
+WEAK_CORRELATION = 0.2
 #: a scan within this of the one before it on the sky repeats it (deg)
 REPEAT_DEG = 1.0
 
@@ -146,10 +155,13 @@ class Design:
         self.white = not problem.pred.known_noise
         #: the noise is correlated in time (predicted, or estimated from the residuals)
         self.correlated = bool(problem.pred.corr_xel or problem.pred.corr_el)
-        # white noise: every valid scan (a decision rejects its own outliers); correlated
-        # noise: the scans the base model keeps (an outlier would spread through the
-        # decorrelated rows of the scans after it)
-        mask = (problem.used if self.correlated else problem.valid).copy()
+        # every valid scan (a decision rejects its own outliers: a source whose every scan
+        # is an outlier of the base model is found by the offset that readmits them), but
+        # where the noise is strongly correlated: the scans the base model keeps (an outlier
+        # would spread through the decorrelated rows of the scans after it, by the
+        # correlation times its size)
+        strong = _successive_correlation(problem) > WEAK_CORRELATION
+        mask = (problem.used if strong else problem.valid).copy()
         self.n_file = int(mask.sum())
         if self.n_file > DECIDE_SCANS:
             every = -(-self.n_file // DECIDE_SCANS)
@@ -371,11 +383,11 @@ def decide(design: Design, counts: np.ndarray, alpha: float = ALPHA,
             stop = f"the limit of {max_findings} findings"
             break
         cols = [c for p in picks for c in p.cols]
-        rnd = _round(d, counts, active, scale, cols, {d.options[p.option].candidate.name
-                                                      for p in picks})
+        rnd = _round(d, counts, active, scale, cols, taken_names(d, picks))
         if rnd is None:
             stop = "the model's terms are not independent on these scans"
             break
+        _readmit(d, counts, rnd, active, scale, cols, taken_names(d, picks))
         groups = _group_picks(d, rnd)
         ranked = _candidates(groups)
         last = [pick for _, pick in ranked]
@@ -469,10 +481,10 @@ def _matches_noise(d: Design, counts: np.ndarray, active: np.ndarray, scale: np.
 
 
 def _round(d: Design, counts: np.ndarray, active: np.ndarray, scale: np.ndarray,
-           accepted: list[int], taken: set[str]) -> _Round | None:
+           accepted: list[int], taken: set[str], only: int | None = None) -> _Round | None:
     """Every option of a candidate not in the model (``taken``: their names; ``accepted``:
-    the model's design columns) tested against it (None where the model's own columns are
-    dependent on these scans)."""
+    the model's design columns; ``only``: that option alone) tested against it (None where
+    the model's own columns are dependent on these scans)."""
     sw = d.row_weights(counts, active, scale)
     idx = np.flatnonzero(sw)
     w = sw[idx, None]
@@ -494,7 +506,7 @@ def _round(d: Design, counts: np.ndarray, active: np.ndarray, scale: np.ndarray,
     m = model.shape[1]
     tests: dict[int, Tested] = {}
     for j, o in enumerate(d.options):
-        if o.candidate.name in taken:
+        if o.candidate.name in taken or (only is not None and j != only):
             continue
         cols = np.arange(o.cols.start, o.cols.stop)[ok[o.cols]]
         if not cols.size:
@@ -512,6 +524,56 @@ def _round(d: Design, counts: np.ndarray, active: np.ndarray, scale: np.ndarray,
                           _p_value(d.white, dchi2, int(cols.size), chi2_now, n_eff, m),
                           math.sqrt(min(max(r2, 0.0), 1.0)), tuple(int(c) for c in cols))
     return _Round(xp, zp, tests, chi2_now, n_eff, m)
+
+
+def _successive_correlation(problem: Problem) -> float:
+    """The larger of the two axes' noise correlations between successive valid scans (at
+    their median spacing in time; 0 for white noise)."""
+    models = [m for m in (problem.pred.corr_xel, problem.pred.corr_el) if m]
+    if not models:
+        return 0.0
+    t = np.sort(problem.obs.t_s[problem.valid])
+    if t.size < 2:
+        return 0.0
+    dt_s = float(np.median(np.diff(t)))
+    return max(abs(sum(w * math.exp(-dt_s / tau_s) for w, tau_s in m)) for m in models)
+
+
+def taken_names(d: Design, picks: list[Pick]) -> set[str]:
+    """The names of the candidates already in the model."""
+    return {d.options[p.option].candidate.name for p in picks}
+
+
+def _readmit(d: Design, counts: np.ndarray, rnd: _Round, active: np.ndarray,
+             scale: np.ndarray, accepted: list[int], taken: set[str]) -> None:
+    """An option that lives mostly on the scans the model rejects (a source offset whose
+    every scan is an outlier of the model without it) is tested on the scans a model with
+    it keeps, as a candidate's own test is (:meth:`.candidates.base.Candidate.test`); its
+    test in ``rnd`` is replaced where that one is more significant."""
+    live = counts > 0
+    out = live & ~active
+    if not out.any():
+        return
+    rows_out = np.concatenate([out, out])
+    rows_live = np.concatenate([live, live])
+    e_out = np.einsum("ij,ij->j", d.x[rows_out], d.x[rows_out])
+    e_live = np.einsum("ij,ij->j", d.x[rows_live], d.x[rows_live])
+    for j, o in enumerate(d.options):
+        if o.candidate.name in taken:
+            continue
+        total = float(e_live[o.cols].sum())
+        if total <= 0.0 or float(e_out[o.cols].sum()) < READMIT_FRACTION * total:
+            continue
+        own = list(range(o.cols.start, o.cols.stop))
+        kept, kept_scale = _reject(d, counts, [*accepted, *own], scale)
+        if kept.sum() <= active.sum() or kept.sum() < 3:
+            continue
+        other = _round(d, counts, kept & live, kept_scale, accepted, taken, only=j)
+        if other is None or j not in other.tests:
+            continue
+        t = other.tests[j]
+        if j not in rnd.tests or t.p < rnd.tests[j].p:
+            rnd.tests[j] = t
 
 
 def _p_value(white: bool, dchi2: float, q: int, chi2_now: float, n_eff: float,
@@ -546,7 +608,10 @@ def _trials(d: Design, rnd: _Round, group: Group, best: Tested) -> float:
             n2 = np.einsum("ij,ij->j", xs, xs)
             dots = np.einsum("ij,ij->j", xs[:, 1:], xs[:, :-1])
             if n2.size > 1:
-                cos = np.abs(dots) / np.sqrt(n2[1:] * n2[:-1])
+                # neighbours both seen on these scans (a change time between scans the set
+                # leaves out has no column here, and no length)
+                both = (n2[1:] > 0) & (n2[:-1] > 0)
+                cos = np.abs(dots[both]) / np.sqrt(n2[1:][both] * n2[:-1][both])
                 length += float(np.arccos(np.clip(cos, 0.0, 1.0)).sum())
         return tube_trials(best.delta_chi2, length, ends=2)
     return 1.0
