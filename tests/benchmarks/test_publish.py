@@ -23,7 +23,7 @@ _spec.loader.exec_module(publish)
 #: candidate in the finding pool needs the recordings' temperatures). `python
 #: benchmarks/publish.py NAME` records one; then drop it here (a test says so).
 AWAITING = {"recovery", "blind", "blind_nulls", "blind_fomalont", "blind_changes",
-            "blind_tpoint", "blind_tpoint_nulls", "blind_bound", "own_campaigns",
+            "blind_tpoint", "blind_tpoint_nulls", "blind_bound",
             "crane1981_diagnose", "crane1981_days", "ghigo1990_tables", "plan_accuracy",
             "ghigo1990_whatif", "ghigo1990_sensors_whatif"}
 #: the commands of the long results, as the docs name them (the arguments that made the

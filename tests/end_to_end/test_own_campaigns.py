@@ -5,6 +5,7 @@ the 1990 scenario puts beyond the ten W terms, the Sun's heating, is named, or n
 from __future__ import annotations
 
 import json
+import re
 
 import pytest
 
@@ -29,3 +30,19 @@ def test_the_1990_campaign_names_the_suns_heating_or_nothing(seed, tmp_path):
     assert set(names) <= truth, names
     assert d.summary["cv_sky_rms_after_arcsec"] <= d.summary["cv_sky_rms_before_arcsec"]
     assert "correlated in time as its residuals show" in d.prediction.description
+
+
+def test_the_docs_quote_the_benchmarks_count():
+    """docs/diagnose.md's paragraph on the project's own campaigns is the kept output's last
+    line: seeds, the truth's effect named, findings the truth does not hold (at most one)."""
+    from tests.conftest import REPO
+
+    output = (REPO / "docs" / "results" / "own_campaigns.txt").read_text(encoding="utf-8")
+    seeds, held, not_held = (int(v) for v in re.search(
+        r"(\d+) seeds without --scenario: findings of an effect the truth holds (\d+), of one "
+        r"it does not hold (\d+)", output).groups())
+    assert not_held <= 1
+    docs = " ".join((REPO / "docs" / "diagnose.md").read_text(encoding="utf-8").split())
+    assert f"is named on {held} of {seeds} seeds" in docs
+    words = {0: "no finding", 1: "one finding"}
+    assert f"{words[not_held]} in all names an effect the truth does not hold" in docs
