@@ -11,10 +11,15 @@ from __future__ import annotations
 
 import argparse
 import difflib
+import errno
+import gc
 import importlib
+import io
+import os
 import re
 import sys
 import warnings
+from pathlib import PurePath
 
 from controller.errors import InputError, Note
 from controller.pointing.legacy import RelabelledTermsWarning
@@ -93,8 +98,6 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 def os_error_line(err: OSError) -> str:
     """One line for a file-system error: the file, what the system said, and its code."""
-    import errno
-
     network = isinstance(err, ConnectionError | TimeoutError)
     filename = err.filename if err.filename is not None or network else _file_of(err)
     where = filename if filename is not None else "network" if network else "system"
@@ -110,9 +113,6 @@ def _file_of(err: OSError) -> str | None:
     ``write`` knows only a descriptor): the path or open file of the innermost frame that
     holds one (``Path.write_text``'s own path, a writer's file object). antsim's own
     outputs name their file (:func:`antsim.outdir.write_file`); this names the others'."""
-    import io
-    from pathlib import PurePath
-
     frames = []
     tb = err.__traceback__
     while tb is not None:
@@ -240,8 +240,6 @@ EXIT_BROKEN_PIPE = 141
 def _silence_stdout() -> None:
     """Point stdout at the null device, so that the interpreter's flush at exit does not
     fail on the closed pipe a second time (Python's signal docs, "Note on SIGPIPE")."""
-    import os
-
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, sys.stdout.fileno())
 
@@ -269,8 +267,6 @@ def command() -> int:
     object the command made (astropy's and scipy's modules, the recordings) to free memory
     the process is about to return anyway: 0.1 s of the ``antsim run`` command. Objects are
     still freed as their last reference goes, and exit handlers run as usual."""
-    import gc
-
     code = main()
     gc.disable()
     gc.freeze()

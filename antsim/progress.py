@@ -17,6 +17,8 @@ import time
 from collections.abc import Callable
 from typing import IO, Literal
 
+from tqdm import tqdm
+
 __all__ = ["EVERY_S", "Progress", "progress_for", "span_words"]
 
 #: seconds between two lines off a terminal
@@ -60,8 +62,6 @@ class Progress:
             self.text, self.total, self.unit, self.n, self.now = text, total, unit, 0, ""
             if self.mode == "bar":
                 self._close_bar()
-                from tqdm import tqdm
-
                 self._bar = tqdm(total=total, unit=unit or "it", desc=text, leave=False,
                                  file=self.stream, dynamic_ncols=True)
 

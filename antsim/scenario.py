@@ -25,10 +25,21 @@ from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+from astropy.coordinates import Angle
+
 from controller.astro.site import Site
 from controller.errors import InputError
+from controller.pointing.crane import REFRACTION_SCALE_TERM
+from controller.pointing.equatorial import (
+    EQUATORIAL_MODELS,
+    equatorial_model,
+    equatorial_term,
+)
 from controller.pointing.model import NAMED_MODELS, PointingModel
+from controller.pointing.modelio import load_model
 from controller.pointing.terms import TermError, get_term
+from controller.pointing.thermal import STRUCTURE_SENSORS, thermal_regressors
 from controller.program.campaign import EPHEMERIS_MARGIN_S
 from controller.program.config import (
     CatalogSource,
@@ -50,7 +61,7 @@ from .world.camera import CameraConfig, synthetic_stars
 from .world.effects import EFFECTS
 from .world.mount import AxisConfig, MountConfig, move_time_s
 from .world.receiver import ChannelConfig, ReceiverConfig
-from .world.sensors import SensorConfig
+from .world.sensors import SensorConfig, thermal_truth
 from .world.sky import SourceConfig
 from .world.weather import WeatherConfig
 
@@ -124,8 +135,6 @@ class Scenario:
         """The same scenario with another pointing model in use by the controller (on an
         equatorial mount the model's term names are re-bound to equatorial terms)."""
         if self.mount.kind == "equatorial":
-            from controller.pointing.equatorial import equatorial_model
-
             model = equatorial_model(model.names, self.site.latitude_deg,
                                      list(model.values_arcsec), model.name)
         return replace(self, controller=replace(self.controller, model=model))
@@ -140,12 +149,8 @@ class Scenario:
         world's refraction scale (:mod:`controller.pointing.crane`), not a term of the truth
         model: its truth is the ``refraction_anomaly`` effect's scale (1 without one), at 60"
         per unit."""
-        from controller.pointing.crane import REFRACTION_SCALE_TERM
-
         truth = self.truth_model.as_dict()
         if self.structure_sensors is not None:  # thermal terms: the thermal effect's
-            from .world.sensors import thermal_truth
-
             for effect in self.effects:
                 if effect.name == "thermal":
                     truth = {**thermal_truth(effect.params), **truth}
@@ -379,8 +384,6 @@ def _angle(t: Table, key: str, unit: str) -> float:
     if f"{key}_deg" in t:
         return keys.read(t, f"{key}_deg")
     text = keys.read(t, key)
-    from astropy.coordinates import Angle
-
     try:
         value = Angle(text, unit=unit).deg
     except Exception:  # astropy raises several types for unparseable angles
@@ -417,12 +420,6 @@ def _model(t: Table, keys: Section, base: Path, mount: MountConfig | None = None
     bounds = keys["terms"]
     values: dict[str, float] = {}
     equatorial = mount is not None and mount.kind == "equatorial"
-    if equatorial:
-        from controller.pointing.equatorial import (
-            EQUATORIAL_MODELS,
-            equatorial_model,
-            equatorial_term,
-        )
     given: dict[str, str] = {}
     for key in values_table:
         try:
@@ -479,8 +476,6 @@ def overcorrection(model: PointingModel, mount: MountConfig,
     mount, within the axes' limits); None when there is none."""
     if not len(model):
         return None
-    import numpy as np
-
     if mount.kind == "equatorial":
         axis1 = np.linspace(mount.az.min_deg, mount.az.max_deg, 37)
         axis2 = np.linspace(max(mount.el.min_deg, -89.0), min(mount.el.max_deg, 89.0), 19)
@@ -529,16 +524,12 @@ def _check_correction(t: Table, model: PointingModel, mount: MountConfig,
 def thermal_terms_of(model: PointingModel) -> list[str]:
     """The model's terms in recorded quantities (structure temperatures, proxies): a truth
     model and the controller's model in use must be functions of the position alone."""
-    from controller.pointing.thermal import thermal_regressors
-
     return [t.name for t in model.terms if thermal_regressors((t,))]
 
 
 def _sensors(t: Table, mount: MountConfig) -> SensorConfig:
     """``[structure_sensors]``: which sensors, their noise, resolution and lag, and how far a
     sensor's member departs from its part's mean in sunshine (antsim.world.sensors)."""
-    from controller.pointing.thermal import STRUCTURE_SENSORS
-
     if mount.kind != "altaz":
         raise t.error("names", "(table)", "structure sensors are modelled on an alt-az "
                       "antenna's dish, yoke and pedestal", "remove [structure_sensors]")
@@ -559,8 +550,6 @@ def _sensors(t: Table, mount: MountConfig) -> SensorConfig:
 
 
 def _model_file(t: Table, spec: str, base: Path) -> PointingModel:
-    from controller.pointing.modelio import load_model
-
     path = Path(spec)
     if not path.is_absolute():
         path = base / path
@@ -585,8 +574,6 @@ def _effect(t: Table, mount: MountConfig | None = None, site: Site | None = None
                       "alt-az mount")
     if name == "terms":
         if equatorial:  # the mount's own vocabulary (controller.pointing.equatorial)
-            from controller.pointing.equatorial import equatorial_term
-
             effect = cls.from_table(t, lambda n: equatorial_term(n, site.latitude_deg))
         else:
             effect = cls.from_table(t)
@@ -728,8 +715,6 @@ def _fit_spec(t: Table, mount: MountConfig | None = None,
     lookup = get_term
     named = NAMED_MODELS
     if mount is not None and mount.kind == "equatorial":
-        from controller.pointing.equatorial import EQUATORIAL_MODELS, equatorial_term
-
         named = EQUATORIAL_MODELS
 
         def lookup(n: str):

@@ -18,7 +18,7 @@ quantities:
    the fit without b(6) (the sin 2Az term) with its F test.
 
 The study has no randomness; the night is the scenario's seed 3. About 3 s. The figures are
-checked in tests/test_bima.py.
+checked in tests/end_to_end/test_bima.py.
 """
 
 from __future__ import annotations

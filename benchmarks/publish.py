@@ -15,7 +15,7 @@ machine, the date and the wall time, with the output of the result's reduced che
 command on a few seeds or cases, short enough to run in the tests
 (``tests/benchmarks/test_publish.py`` reruns it and compares, so that a file the code no
 longer makes fails). Then the docs' numbers are checked against the files by
-``tests/test_readme.py`` and the tests named beside them: run the suite after publishing.
+``tests/end_to_end/test_readme.py`` and the tests named beside them: run the suite after publishing.
 
 Lines that report a wall time are compared without it (:attr:`Result.timing`): a machine's
 speed is not a result.

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from astropy import units as u
 
 __all__ = [
     "ARCMIN_PER_RAD",
@@ -35,8 +36,6 @@ def to_value(quantity, unit: str, name: str) -> np.ndarray | float:
     Units are never guessed from the type: a bare number raises ``TypeError`` that says
     which unit to attach.
     """
-    from astropy import units as u
-
     if not isinstance(quantity, u.Quantity):
         raise TypeError(
             f"{name} must be an astropy Quantity (e.g. {name} * u.{unit}); "

@@ -53,6 +53,7 @@ from collections.abc import Callable
 from dataclasses import fields
 from functools import partial
 
+import aiokatcp
 import numpy as np
 
 from .protocol import (
@@ -157,8 +158,6 @@ class KatcpAntenna:
     clock, not ``env``'s, measures time)."""
 
     def __init__(self, host: str, port: int, env, timeout_s: float = REPLY_TIMEOUT_S):
-        import aiokatcp
-
         self._Message = aiokatcp.Message
         self.env = env
         self.address = f"{host}:{port}"

@@ -361,3 +361,67 @@ def test_a_bad_import_and_a_circle_are_caught(tmp_path):
                for b in breaches)
     assert len(breaches) == 6
     assert cycles(graph) == [["antsim.world.a", "antsim.world.b"]]
+
+
+#: where an import inside a function is the right place, and why. Commands import their
+#: feature when they run (the command line starts without loading every feature).
+IMPORTS_INSIDE: dict[tuple[str, str], str] = {
+    ("antsim/__init__.py", "__getattr__"):
+        "the Python API is imported when first used, so that the command line starts light",
+    ("antsim/cli.py", "check_figure_backend"):
+        "matplotlib is imported with MPLBACKEND unset, to check the variable before use",
+    ("antsim/outdir.py", "__enter__"):
+        "fcntl exists on POSIX only; without it the lock is a plain file",
+    ("antsim/simulate/ensemble.py", "__init__"): "Dask is optional (pip install antsim[dask])",
+    ("antsim/simulate/ensemble.py", "as_completed"): "Dask is optional",
+    ("controller/astro/site.py", "earth_location"):
+        "astropy.coordinates takes large parts of a second: controller.astro stays light for "
+        "the command line, and only exact astropy transforms need it",
+    ("controller/pointing/model.py", "fit"):
+        "the fitter brings scipy (0.3 s): importing a model, as the command line does, "
+        "stays cheap",
+    ("controller/astro/ephemeris.py", "icrs_radec_rad"):
+        "astropy.coordinates, as for earth_location: only a catalogue's first positions need it",
+}
+#: modules being rewritten elsewhere when the rest was swept: every other module imports at
+#: the top
+NOT_YET_SWEPT = ("antsim/diagnose/", "antsim/plan/fisher.py", "antsim/simulate/vectorized.py",
+                 "antsim/world/effects/thermal.py", "antsim/world/receiver.py",
+                 "antsim/world/weather.py", "antsim/world/world.py")
+
+
+def imports_inside_functions(root: Path) -> list[str]:
+    """Each import made inside a function outside ``antsim/commands/``, as
+    'path:line in function', but for :data:`IMPORTS_INSIDE`'s."""
+    found = []
+    for top in ("antsim", "controller"):
+        for path in sorted((root / top).rglob("*.py")):
+            rel = path.relative_to(root).as_posix()
+            if rel.startswith(("antsim/commands/", *NOT_YET_SWEPT)):
+                continue
+            tree = ast.parse(path.read_text(encoding="utf-8"))
+            for func in ast.walk(tree):
+                if not isinstance(func, ast.FunctionDef | ast.AsyncFunctionDef):
+                    continue
+                if (rel, func.name) in IMPORTS_INSIDE:
+                    continue
+                found += [f"{rel}:{node.lineno} in {func.name}" for node in ast.walk(func)
+                          if isinstance(node, ast.Import | ast.ImportFrom)]
+    return sorted(set(found))
+
+
+def test_modules_import_at_the_top():
+    """A reader sees what a module depends on at its top: imports inside functions only in
+    the commands and where :data:`IMPORTS_INSIDE` says why."""
+    assert imports_inside_functions(ROOT) == []
+
+
+def test_an_import_inside_a_function_is_caught(tmp_path):
+    root = _fake_tree(tmp_path, {
+        "controller/__init__.py": "",
+        "controller/units.py": "def f():\n    import math\n    return math.pi\n",
+        "antsim/__init__.py": "def __getattr__(name):\n    from . import api\n",
+        "antsim/commands/__init__.py": "",
+        "antsim/commands/run.py": "def main():\n    import antsim.world\n",
+    })
+    assert imports_inside_functions(root) == ["controller/units.py:2 in f"]

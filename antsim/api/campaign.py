@@ -10,17 +10,30 @@ from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import astropy.units as u
+import numpy as np
+from astropy.table import Table as AstropyTable
+
+from antsim.bundled import find
+from antsim.figures.html import Table
+from antsim.outdir import held_output_dir
+from antsim.progress import Progress
+from antsim.run.campaign import check_seed, model_in_use, refuse_earlier_run
+from antsim.run.outputs import model_caption, run_products, write_outputs
+from antsim.run.report import report_figures, truth_terms_arcsec
+from antsim.scenario import load_scenario
+from antsim.simulate.runner import run_campaign as run_into
+from antsim.simulate.runner import simulate
 from controller.errors import InputError
+from controller.pointing.variants import VARIANTS, columns, pointing_data, variant_mask
 
 from .fit import Fit
 from .show import ShownAsTable, arcsec, drawn, figure_of
 
 if TYPE_CHECKING:
     from astropy.table import QTable
-    from astropy.table import Table as AstropyTable
     from astropy.units import Quantity
 
-    from antsim.figures.html import Table
     from antsim.run.inuse import Pointing
     from antsim.run.outputs import RunProducts
     from antsim.simulate.runner import RunResult
@@ -70,8 +83,6 @@ class Campaign(ShownAsTable):
     @property
     def duration(self) -> Quantity:
         """The campaign's length (hours)."""
-        import astropy.units as u
-
         return self.run.scenario.duration_s / 3600.0 * u.h
 
     @property
@@ -91,10 +102,8 @@ class Campaign(ShownAsTable):
     def recordings(self) -> AstropyTable:
         """The rows recorded (one per scan and polarization), as an astropy Table whose
         column names carry their units (as ``recordings.ecsv``'s)."""
-        from astropy.table import Table
-
         rows = self.run.rows
-        return Table(rows=[[r[k] for k in rows[0]] for r in rows],
+        return AstropyTable(rows=[[r[k] for k in rows[0]] for r in rows],
                      names=list(rows[0])) if rows else Table()
 
     # ----------------------------------------------------------------- the fits
@@ -102,11 +111,6 @@ class Campaign(ShownAsTable):
     def fits(self) -> dict[str, Fit | None]:
         """Fits A-F (and T with structure thermometers) of the 1990 report's variants, as
         ``fit_variants.json`` holds them; None where too few observations."""
-        import numpy as np
-
-        from antsim.run.outputs import model_caption
-        from controller.pointing.variants import VARIANTS, columns, pointing_data, variant_mask
-
         cols = columns(self.run.rows)
         out: dict[str, Fit | None] = {}
         for variant in VARIANTS:
@@ -157,8 +161,6 @@ class Campaign(ShownAsTable):
     @property
     def truth_terms(self) -> dict[str, Quantity]:
         """The injected value of each term of the truth model (arcsec)."""
-        from antsim.run.report import truth_terms_arcsec
-
         return {k: arcsec(v) for k, v in truth_terms_arcsec(self.run.truth).items()}
 
     def pulls(self) -> QTable:
@@ -187,8 +189,6 @@ class Campaign(ShownAsTable):
         ``report.html`` shows them), by the name of their file in ``DIR/figures``
         ("fig1_sky", "fig2_total_errors", ...); drawn once, kept."""
         if self._figures is None:
-            from antsim.run.report import report_figures
-
             self._figures = drawn(lambda folder: report_figures(
                 self.run, self.products.fits, folder))
         return self._figures
@@ -221,8 +221,6 @@ class Campaign(ShownAsTable):
         return self.plot("model_in_use")
 
     def _table(self) -> Table:
-        from antsim.figures.html import Table
-
         fit = self.products.fit_a
         rows: list[list[Any]] = [
             ["scenario", self.scenario], ["seed", self.seed],
@@ -261,12 +259,6 @@ def run_campaign(scenario: str | os.PathLike, *, seed: int | None = None,
     Same scenario and seed, same numbers: the fits equal the ``fit.json`` and
     ``fit_variants.json`` the command writes. Bad input raises
     :class:`controller.errors.InputError` with the line ``antsim run`` prints."""
-    from antsim.bundled import find
-    from antsim.progress import Progress
-    from antsim.run.campaign import check_seed, model_in_use
-    from antsim.run.outputs import run_products
-    from antsim.scenario import load_scenario
-
     check_seed(seed)
     loaded = load_scenario(find(os.fspath(scenario)))
     if isinstance(model, Fit):
@@ -275,8 +267,6 @@ def run_campaign(scenario: str | os.PathLike, *, seed: int | None = None,
         model = os.fspath(model)
     use = model_in_use(model, loaded)
     if out is None:
-        from antsim.simulate.runner import simulate
-
         with Progress("run", progress) as shown:
             hours = round(loaded.duration_s / 3600.0, 2)
             shown.stage("campaign", total=hours, unit="h")
@@ -284,11 +274,6 @@ def run_campaign(scenario: str | os.PathLike, *, seed: int | None = None,
                 round(min(t_s, loaded.duration_s) / 3600.0, 2)))
             products = run_products(run, shown)
         return Campaign(run, products)
-    from antsim.outdir import held_output_dir
-    from antsim.run.campaign import refuse_earlier_run
-    from antsim.run.outputs import write_outputs
-    from antsim.simulate.runner import run_campaign as run_into
-
     with held_output_dir(os.fspath(out), "--out", "antsim.run_campaign") as directory:
         refuse_earlier_run(directory, resume=False)
         with Progress("run", progress) as shown:

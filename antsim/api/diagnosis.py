@@ -11,15 +11,21 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from antsim.diagnose.modelit import plots, resimulation_words
+from antsim.diagnose.request import check_options, diagnose_file, read_scenario, refuse_links
+from antsim.figures.html import Table
+from antsim.outdir import held_output_dir
+from antsim.progress import Progress
+from antsim.simulate.streaming import release_prestarted
 from controller.errors import Note
 
+from .campaign import recordings_file
 from .show import ShownAsTable, arcsec, drawn, figure_of
 
 if TYPE_CHECKING:
     from astropy.units import Quantity
 
     import antsim.diagnose
-    from antsim.figures.html import Table
     from controller.pointing.model import PointingModel
 
 __all__ = ["Diagnosis", "diagnose_model"]
@@ -52,8 +58,6 @@ class Diagnosis(ShownAsTable):
         """The report in words, as ``antsim diagnose`` prints it."""
         text = self.diagnosis.text()
         if self.written and "resimulation" in self.written:
-            from antsim.diagnose.modelit import resimulation_words
-
             text += "\n" + resimulation_words(self.written["resimulation"])
         return text
 
@@ -92,8 +96,6 @@ class Diagnosis(ShownAsTable):
         :mod:`antsim.figures.diagnose`: before and after the findings, or before only), by
         file name ("diagnose_residuals", "diagnose_histograms", "diagnose_quiver")."""
         if self._figures is None:
-            from antsim.diagnose.modelit import plots
-
             self._figures = drawn(lambda folder: plots(self.diagnosis, folder))
         return self._figures
 
@@ -106,8 +108,6 @@ class Diagnosis(ShownAsTable):
         return figure_of(self.figures(), "diagnose_quiver", "this diagnosis")
 
     def _table(self) -> Table:
-        from antsim.figures.html import Table
-
         doc = self.to_json()
         rows = [[i, f["effect"], " ".join(f["terms"]), f["significance"],
                  f["sky_rms_before_arcsec"], f["sky_rms_after_arcsec"], f["where"]]
@@ -147,12 +147,6 @@ def diagnose_model(data: str | os.PathLike | Any, *, scenario: str | os.PathLike
 
     The file's notes are issued as :class:`controller.errors.Note` warnings. Bad input
     raises :class:`controller.errors.InputError` with the line ``antsim diagnose`` prints."""
-    from antsim.diagnose.request import check_options, diagnose_file, read_scenario
-    from antsim.progress import Progress
-    from antsim.simulate.streaming import release_prestarted
-
-    from .campaign import recordings_file
-
     path = recordings_file(data, "antsim.diagnose_model")
     check_options(jobs, sims, resimulate, model)
     spec = None if scenario is None else os.fspath(scenario)
@@ -175,9 +169,6 @@ def diagnose_model(data: str | os.PathLike | Any, *, scenario: str | os.PathLike
 
     if out is None:
         return ask(None)
-    from antsim.diagnose.request import refuse_links
-    from antsim.outdir import held_output_dir
-
     with held_output_dir(os.fspath(out), "--out", "antsim.diagnose_model") as directory:
         refuse_links(directory)
         return ask(directory)

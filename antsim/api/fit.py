@@ -9,13 +9,25 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+from astropy.table import QTable
+
+from antsim.figures.charts import (
+    histogram_figure,
+    pointing_errors_figure,
+    residual_quiver_figure,
+)
+from antsim.figures.html import Table
+from antsim.run.report import truth_pull_table
+from controller.pointing.modelio import write_model_file
+from controller.pointing.tpoint import TPointModel, format_mod, parse_mod
+from controller.pointing.vocabulary import in_tpoint_terms
+
 from .show import ShownAsTable, arcsec, as_arcsec, drawn, figure_of, formatted
 
 if TYPE_CHECKING:
-    from astropy.table import QTable
     from astropy.units import Quantity
 
-    from antsim.figures.html import Table
     from controller.pointing.data import PointingData
     from controller.pointing.model import PointingModel
     from controller.pointing.result import FitResult
@@ -111,8 +123,6 @@ class Fit(ShownAsTable):
 
     def coefficients(self) -> QTable:
         """A table of the coefficients: term, value, TPOINT's sigma, honest sigma (arcsec)."""
-        from astropy.table import QTable
-
         honest = self.sigma_honest
         table = QTable({"term": list(self.names), "value": self.values, "sigma": self.sigma,
                         "sigma_honest": honest if honest is not None
@@ -124,10 +134,6 @@ class Fit(ShownAsTable):
         campaign's :attr:`~antsim.api.Campaign.truth_terms`), as the run's report tables
         them: truth, fit, fit minus truth, TPOINT's sigma and its pull, the honest sigma and
         its pull (pull = (fit - truth) / sigma). A term without a truth has no pull."""
-        from astropy.table import QTable
-
-        from antsim.run.report import truth_pull_table
-
         given = {name: as_arcsec(v, "truth", name) for name, v in truth.items()}
         rows = truth_pull_table(self.result, given).rows
         column = list(zip(*rows, strict=True)) if rows else [()] * 8
@@ -147,17 +153,11 @@ class Fit(ShownAsTable):
         """The fitted model as its TPOINT ``.mod`` file holds it (the file's precision and
         caption): what ``antsim run --model FILE`` reads back from :meth:`write_model`'s
         file, so a campaign pointed with it is the command's to the byte."""
-        from controller.pointing.tpoint import TPointModel, format_mod, parse_mod
-        from controller.pointing.vocabulary import in_tpoint_terms
-
         model = TPointModel.from_fit(self.result, caption=self.caption)
         return parse_mod(format_mod(in_tpoint_terms(model)), source=self.caption)
 
     def write_model(self, path: str | os.PathLike) -> Path:
         """Write the model as a TPOINT ``.mod`` file (TPOINT's term names and signs)."""
-        from controller.pointing.modelio import write_model_file
-        from controller.pointing.tpoint import TPointModel
-
         return write_model_file(TPointModel.from_fit(self.result, caption=self.caption),
                                 Path(path))
 
@@ -166,14 +166,6 @@ class Fit(ShownAsTable):
         """The fit's figures (matplotlib Figures, drawn by :mod:`antsim.figures.charts`):
         "residuals" (against elevation and azimuth, rejected points marked), "sky" (arrows
         on the sky) and "histograms"."""
-        import numpy as np
-
-        from antsim.figures.charts import (
-            histogram_figure,
-            pointing_errors_figure,
-            residual_quiver_figure,
-        )
-
         fit, data = self.result, self.data
         used = np.asarray(fit.used, bool)
         series = {"used": (fit.residual_xel_arcsec[used], fit.residual_el_arcsec[used])}
@@ -203,8 +195,6 @@ class Fit(ShownAsTable):
         return figure_of(self.figures(), "sky", "a fit")
 
     def _table(self) -> Table:
-        from antsim.figures.html import Table
-
         fit = self.result
         honest = fit.sigma_honest_arcsec
         rows = [[name, float(fit.values_arcsec[j]), float(fit.sigma_arcsec[j]),

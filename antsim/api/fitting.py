@@ -8,6 +8,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from antsim.fit.fitfile import fit_file, read_file
 from controller.errors import Note
 
 from .campaign import recordings_file
@@ -41,8 +42,6 @@ def fit_model(data: str | os.PathLike | Any, *, model: str | os.PathLike | None 
     The file's notes (what its reader left out or assumed) are issued as
     :class:`controller.errors.Note` warnings. Bad input raises
     :class:`controller.errors.InputError` with the line ``antsim fit`` prints."""
-    from antsim.fit.fitfile import fit_file, read_file
-
     path = recordings_file(data, "antsim.fit_model")
     term_text = terms if terms is None or isinstance(terms, str) else ",".join(terms)
     fixed_text = None if not fixed else ",".join(

@@ -5,15 +5,25 @@ answers, and the comparison figures."""
 from __future__ import annotations
 
 import os
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from astropy.table import QTable
+
+from antsim.bundled import find
+from antsim.figures.plan import plan_figures
+from antsim.outdir import held_output_dir
+from antsim.plan.outputs import check_options, write_outputs
+from antsim.plan.planfile import load_plan
+from antsim.plan.report import variants_table
+from antsim.plan.study import run_plan
+from antsim.progress import Progress
+
 from .show import ShownAsTable, arcsec, drawn, figure_of, formatted
 
 if TYPE_CHECKING:
-    from astropy.table import QTable
-
     from antsim.figures.html import Table
     from antsim.plan.study import PlanResult
 
@@ -56,8 +66,6 @@ class PlanAnswers(ShownAsTable):
     def terms(self, variant: str | int = 0) -> QTable:
         """One variant's terms (by name or index): truth, sigma predicted (Fisher) and
         Monte Carlo, bias Monte Carlo and predicted (arcsec)."""
-        from astropy.table import QTable
-
         plans = self.to_json()["plans"]
         names = [p["name"] for p in plans]
         if isinstance(variant, str):
@@ -81,8 +89,6 @@ class PlanAnswers(ShownAsTable):
         :mod:`antsim.figures.plan`), by file name ("sigma_predicted", "sigma_monte_carlo",
         "sigma_mc_over_predicted", "bias", "duration_1", "sources_1", ...)."""
         if self._figures is None:
-            from antsim.figures.plan import plan_figures
-
             self._figures = drawn(lambda folder: plan_figures(self.to_json(), folder))
         return self._figures
 
@@ -95,8 +101,6 @@ class PlanAnswers(ShownAsTable):
         return self.plot("sigma_predicted")
 
     def _table(self) -> Table:
-        from antsim.plan.report import variants_table
-
         return variants_table(self.to_json())
 
 
@@ -119,15 +123,6 @@ def answer_plan(plan: str | os.PathLike, *, members: int | None = None,
 
     Bad input raises :class:`controller.errors.InputError` with the line ``antsim plan``
     prints."""
-    from contextlib import nullcontext
-
-    from antsim.bundled import find
-    from antsim.outdir import held_output_dir
-    from antsim.plan.outputs import check_options, write_outputs
-    from antsim.plan.planfile import load_plan
-    from antsim.plan.study import run_plan
-    from antsim.progress import Progress
-
     check_options(members, workers, scheduler)
     held = (held_output_dir(os.fspath(out), "--out", "antsim.answer_plan") if out is not None
             else nullcontext())

@@ -13,6 +13,11 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import astropy.units as u
+import numpy as np
+
+from antsim.figures.html import format_number, table_html
+from antsim.figures.style import in_memory
 from controller.errors import InputError
 
 if TYPE_CHECKING:
@@ -27,9 +32,6 @@ __all__ = ["ShownAsTable", "arcsec", "as_arcsec", "drawn", "figure_of", "formatt
 
 def arcsec(value: Any) -> Quantity | None:
     """``value`` (arcsec: a number or an array) as a Quantity; None and NaN stay None."""
-    import astropy.units as u
-    import numpy as np
-
     if value is None:
         return None
     if np.ndim(value) == 0 and not math.isfinite(float(value)):
@@ -39,8 +41,6 @@ def arcsec(value: Any) -> Quantity | None:
 
 def as_arcsec(value: Any, where: str, field: str) -> float:
     """An angle given to the API: a Quantity of angle, or a plain number of arcsec."""
-    import astropy.units as u
-
     if isinstance(value, u.Quantity):
         if not value.unit.is_equivalent(u.arcsec) or not value.isscalar:
             raise InputError(where, field, str(value), "must be one angle (arcsec, deg, ...)")
@@ -61,8 +61,6 @@ def formatted(table: QTable, number_format: str) -> QTable:
 
 def _cell(value: Any, spec: str) -> str:
     """A cell of a text table as the HTML one shows it (a dash for nothing)."""
-    from antsim.figures.html import format_number
-
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return "-"
     if isinstance(value, float):
@@ -94,8 +92,6 @@ class ShownAsTable:
         raise NotImplementedError
 
     def _repr_html_(self) -> str:
-        from antsim.figures.html import table_html
-
         return table_html(self._table())
 
     def __repr__(self) -> str:
@@ -105,8 +101,6 @@ class ShownAsTable:
 def drawn(draw: Callable[[Path], Sequence[FigureFile]]) -> dict[str, Any]:
     """The figures ``draw(directory)`` makes, drawn in memory (nothing written), by the name
     of the file each would have been (its stem: "fig1_sky", "diagnose_quiver", ...)."""
-    from antsim.figures.style import in_memory
-
     with in_memory():
         files = draw(Path("figures"))
     return {Path(f.path).stem: f.figure for f in files}

@@ -5,8 +5,8 @@ Nothing here knows about pointing: every function takes arrays and returns array
 statistics (:mod:`.problem`, :mod:`.select`, :mod:`.crossval`, the candidates) call them;
 the tall-matrix paths (normal equations where well conditioned, blocked products,
 Fortran-ordered gathers) are there for diagnose's designs of 2 n_used rows by a few
-columns, and give the numbers of the plain formulas to rounding (tests/test_diagnose.py
-compares them).
+columns, and give the numbers of the plain formulas to rounding
+(tests/antsim/diagnose/test_diagnose.py compares them).
 """
 
 from __future__ import annotations
@@ -210,7 +210,7 @@ def qt_dot(q: np.ndarray, x: np.ndarray) -> np.ndarray:
     :data:`QT_BLOCK` rows: OpenBLAS's one product over 400,000 rows of a thin pair reads
     memory about twice over (2.4-3.0 ms against 1.5-1.8 ms blocked, one thread, m = 12,
     k = 2-4). The same sums in another order: equal to rounding (each entry within
-    ~N eps |q_j| |x_l|; tests/test_diagnose.py compares the two)."""
+    ~N eps |q_j| |x_l|; tests/antsim/diagnose/test_diagnose.py compares the two)."""
     n = q.shape[0]
     if n <= 2 * QT_BLOCK:
         return q.T @ x

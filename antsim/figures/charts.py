@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from controller.pointing.data import PointingData
 from controller.pointing.result import FitResult
@@ -51,8 +52,6 @@ def spread_arcsec(*values) -> float:
 def plain_log_ticks(axis) -> None:
     """Ticks of a log-scaled matplotlib ``axis`` at 1, 2 and 5 times the powers of ten,
     labelled as plain numbers ("20", "0.5"; not matplotlib's "2x10^1"), no minor labels."""
-    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
-
     axis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
     axis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{v:g}"))
     axis.set_minor_formatter(NullFormatter())

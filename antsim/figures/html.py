@@ -18,6 +18,7 @@ import math
 import platform
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -225,8 +226,6 @@ def _render_block(block: Block) -> str:
 
 def software_versions() -> dict[str, str]:
     """Versions of antsim, the libraries it computes with, and Python."""
-    from importlib import metadata
-
     versions = {"antsim": __version__}
     for package in ("numpy", "scipy", "astropy", "simpy", "matplotlib"):
         try:

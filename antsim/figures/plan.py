@@ -11,9 +11,13 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import matplotlib
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
 from antsim.outdir import replacing
 
-from .charts import plain_log_ticks
+from .charts import comparison_figure, plain_log_ticks
 from .style import FigureFile, keeping
 
 __all__ = ["draw_duration", "plan_figures"]
@@ -24,8 +28,6 @@ DPI = 100
 def plan_figures(doc: dict[str, Any], out_dir: str | Path) -> list[FigureFile]:
     """Write the figures of a plan document (``antsim plan --json``) into ``out_dir``;
     returns them with their titles and captions (for ``report.html``)."""
-    from .charts import comparison_figure
-
     out = Path(out_dir)
     written: list[FigureFile] = []
     plans = doc["plans"]
@@ -78,10 +80,6 @@ def plan_figures(doc: dict[str, Any], out_dir: str | Path) -> list[FigureFile]:
 
 def _duration_figure(answer: dict[str, Any], path: Path) -> FigureFile:
     """Predicted sigma of the question's terms against the number of hours, days or nights."""
-    import matplotlib
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     one = answer["target_arcsec"]  # one target for every term, or None: each its own
     goal = f"{one:g}\"" if one is not None else "their targets"
     title = f"How long for {', '.join(answer['terms'])} to reach {goal}"

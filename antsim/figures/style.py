@@ -19,15 +19,29 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
+import matplotlib
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
 from antsim.outdir import replacing
 from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 
-__all__ = ["FIG_DPI", "SERIES_COLORS", "Canvas", "FigureFile", "binned_mean",
-           "day_night_groups", "figure_file", "in_memory", "keeping", "rms"]
+__all__ = [
+    "FIG_DPI",
+    "SERIES_COLORS",
+    "BinnedMean",
+    "Canvas",
+    "FigureFile",
+    "binned_mean",
+    "day_night_groups",
+    "figure_file",
+    "in_memory",
+    "keeping",
+    "rms",
+]
 
 #: resolution of every PNG (dots per inch); figure sizes are given in inches
 FIG_DPI = 100
@@ -104,10 +118,6 @@ class Canvas:
         self.size = (width_in, height_in)
 
     def __enter__(self):
-        import matplotlib
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-        from matplotlib.figure import Figure
-
         self._rc = matplotlib.rc_context()
         self._rc.__enter__()
         matplotlib.rcdefaults()
@@ -156,8 +166,17 @@ def rms(x: np.ndarray) -> float:
     return float(np.sqrt(np.mean(x * x))) if x.size else math.nan
 
 
+class BinnedMean(NamedTuple):
+    """Bins of :func:`binned_mean`: their centres, the means in them and their standard
+    errors (in the units of x and y)."""
+
+    centres: np.ndarray
+    means: np.ndarray
+    errors: np.ndarray
+
+
 def binned_mean(x: np.ndarray, y: np.ndarray, edges: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                 ) -> BinnedMean:
     """Bin centres, means and standard errors of ``y`` in bins of ``x`` (bins with fewer than
     three points left out)."""
     idx = np.digitize(x, edges) - 1
@@ -168,7 +187,7 @@ def binned_mean(x: np.ndarray, y: np.ndarray, edges: np.ndarray
             centres.append(0.5 * (edges[k] + edges[k + 1]))
             means.append(sel.mean())
             errors.append(sel.std(ddof=1) / math.sqrt(sel.size))
-    return np.array(centres), np.array(means), np.array(errors)
+    return BinnedMean(np.array(centres), np.array(means), np.array(errors))
 
 
 def day_night_groups(sun_el_deg: np.ndarray) -> list[tuple[str, np.ndarray, str]]:

@@ -18,13 +18,19 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from antsim.blas import one_blas_thread
 from antsim.progress import Progress
 from controller.errors import InputError
 from controller.pointing.data import PointingData
-from controller.pointing.model import NAMED_MODELS
-from controller.pointing.modelio import MAX_VALUE_ARCSEC
+from controller.pointing.equatorial import EQUATORIAL_MODELS, equatorial_terms
+from controller.pointing.fitting import fit_model
+from controller.pointing.model import NAMED_MODELS, PointingModel
+from controller.pointing.modelio import MAX_VALUE_ARCSEC, load_model, write_model_file
+from controller.pointing.proxies import PROXY_NAMES
 from controller.pointing.result import FitResult
-from controller.program.inputs import PointingFile
+from controller.pointing.terms import TermError, is_term_name, term_refusal
+from controller.pointing.tpoint import TPointModel
+from controller.program.inputs import PointingFile, read_pointing_file
 
 __all__ = ["DEFAULT_MODEL", "FileFit", "fit_file", "model_target", "read_file"]
 
@@ -51,9 +57,6 @@ class FileFit:
 
     def write_model(self, target: str | Path) -> Path:
         """Write the fitted model as a TPOINT ``.mod`` file (TPOINT's names and signs)."""
-        from controller.pointing.modelio import write_model_file
-        from controller.pointing.tpoint import TPointModel
-
         return write_model_file(TPointModel.from_fit(self.result, caption=self.caption),
                                 target)
 
@@ -61,8 +64,6 @@ class FileFit:
 def read_file(path: str | Path, csv_options: Sequence[str] = (),
               mount: str | None = None) -> PointingFile:
     """The file to fit (its notes are for the user: the command prints them)."""
-    from controller.program.inputs import read_pointing_file
-
     return read_pointing_file(Path(path), purpose="fit", csv_options=list(csv_options),
                               mount=mount)
 
@@ -94,9 +95,6 @@ def fit_file(file: PointingFile, *, model: str | None = None, terms: str | None 
     ``write_model``: a ``.mod`` file to write the fitted model to; ``show_progress``: a
     progress bar (None: on a terminal, lines off one). The options are the command line's,
     in its words."""
-    from antsim.blas import one_blas_thread
-    from controller.pointing.fitting import fit_model
-
     if model is not None and terms is not None:  # argparse refuses both on the command line
         raise InputError("command line", "--terms", terms, "not with --model",
                          "give the terms by a model or by name, not both")
@@ -129,8 +127,6 @@ def fit_file(file: PointingFile, *, model: str | None = None, terms: str | None 
 
 
 def _terms_from_option(text: str) -> tuple[str, ...]:
-    from controller.pointing.terms import is_term_name, term_refusal
-
     names = [t.strip().upper() for t in text.split(",")]
     if not text.strip() or any(not n for n in names):
         raise InputError("command line", "--terms", text,
@@ -183,8 +179,6 @@ def _terms_from_model(spec: str) -> tuple[tuple[str, ...], str]:
         raise InputError("command line", "--model", spec,
                          "is neither a named model nor an existing model file",
                          f"named models: {', '.join(sorted(NAMED_MODELS))}")
-    from controller.pointing.modelio import load_model
-
     return load_model(spec).names, path.stem
 
 
@@ -192,9 +186,6 @@ def _pointing_data(file: PointingFile, include_masked: bool, terms=()):
     """The pointing data of a file :func:`~controller.program.inputs.read_pointing_file`
     read. Thermal terms among ``terms`` read the recordings' structure temperatures, or
     proxies (their site and times)."""
-    from controller.pointing.model import PointingModel
-    from controller.pointing.proxies import PROXY_NAMES
-
     needed = PointingModel(list(terms)).regressors if terms else frozenset()
     if needed and file.kind == "tpoint":
         raise InputError(file.path, "--terms", ",".join(terms),
@@ -213,9 +204,6 @@ def _pointing_data(file: PointingFile, include_masked: bool, terms=()):
 
 def _equatorial_terms(model: str | None, terms: str | None, latitude_deg: float):
     """Equatorial terms from ``--terms`` or a named equatorial ``--model`` (crane11)."""
-    from controller.pointing.equatorial import EQUATORIAL_MODELS, equatorial_terms
-    from controller.pointing.terms import TermError
-
     if terms is not None:
         names = [t.strip().upper() for t in terms.split(",")]
         try:

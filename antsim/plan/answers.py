@@ -37,13 +37,16 @@ import numpy as np
 from antsim.figures.html import format_number
 from antsim.simulate.ensemble import Executor, Job, task_record
 from antsim.simulate.flow import Chain, Flow, Handle, Task
+from antsim.simulate.runner import check_scenario
 from antsim.simulate.vectorized import SharedSchedule, quiet_scenario
 from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 from controller.errors import InputError
 from controller.pointing.model import PointingModel
+from controller.program.campaign import plan_targets
 
 from ..progress import span_words
 from .fisher import (
+    COMPONENTS,
     REJECTION_DRAWS,
     NoiseModel,
     Prediction,
@@ -331,8 +334,6 @@ def reachable_cells(q: CoverageQuestion, scenario) -> set[tuple[int, int]]:
     """The cells below ``q.dec_max_deg`` that a catalogue source passes through within the
     scheduler's limits (elevation window, hour-angle and declination limits) for at least
     half of the cell's hour angles, from each source's apparent declination at the start."""
-    from controller.program.campaign import plan_targets
-
     c = scenario.controller
     sched = c.scheduler
     observer, targets = plan_targets(c)
@@ -394,8 +395,6 @@ def coverage_answer(q: CoverageQuestion, long, shared) -> dict[str, Any]:
 def sources_shortlist(q: SourcesQuestion, vr) -> dict[str, Any]:
     """The source lists worth predicting exactly: the best ``q.candidates`` by the proxy,
     and the list as planned (each with its scenario, or None and why if infeasible)."""
-    from controller.program.campaign import plan_targets
-
     base = vr.scenario
     sched = base.controller.scheduler
     catalogue = list(sched.sources) or [s.name for s in base.sources]
@@ -406,8 +405,6 @@ def sources_shortlist(q: SourcesQuestion, vr) -> dict[str, Any]:
     shared = vr.shared
     slots = shared.columns["t_s"].astype(float)
     # per-source predicted offset variance (xel, el) from the variant's noise model
-    from .fisher import COMPONENTS
-
     var = sum(vr.noise.unit_variance(c) for c in COMPONENTS)  # (design scans, 2)
     src_of = np.array(shared.sources)[vr.noise.scans]
     default = np.median(var, axis=0)
@@ -460,8 +457,6 @@ def sources_shortlist(q: SourcesQuestion, vr) -> dict[str, Any]:
     planned = tuple(catalogue)
     if planned not in shortlist:
         shortlist.append(planned)
-    from antsim.simulate.runner import check_scenario
-
     items = []
     for subset in shortlist:
         scenario = replace(base, controller=replace(

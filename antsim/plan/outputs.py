@@ -10,11 +10,13 @@ import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from antsim.figures.plan import plan_figures
 from antsim.options import check_processes
 from antsim.outdir import write_file
 from controller.errors import InputError
 
 from .planfile import MAX_MEMBERS
+from .report import write_plan_report
 
 if TYPE_CHECKING:
     from antsim.figures.style import FigureFile
@@ -43,10 +45,6 @@ def write_outputs(result: PlanResult, out: Path,
     """Write ``plan.json``, ``plan.txt``, the figures and ``report.html`` of ``result``
     (``doc``: its :meth:`~antsim.plan.study.PlanResult.to_json` where already made) into
     ``out``; returns the figures."""
-    from antsim.figures.plan import plan_figures
-
-    from .report import write_plan_report
-
     doc = result.to_json() if doc is None else doc
     write_file(out / "plan.json", json.dumps(doc, indent=2) + "\n")
     plan_text = result.text(timing=False)

@@ -47,8 +47,12 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from astropy.time import Time
+
+from antsim.simulate.runner import NoScanError, check_scenario
 from controller.errors import InputError
 from controller.pointing.model import NAMED_MODELS, PointingModel
+from controller.pointing.modelio import load_model
 from controller.pointing.terms import TermError, get_term
 from controller.scans.config import SkyConfig
 
@@ -441,8 +445,6 @@ def make_variant(base: Scenario, spec: VariantSpec, where: str = "plan") -> Scen
                              fit_model_name=spec.fit_model if spec.fit_model in NAMED_MODELS
                              else "custom")
     scenario = replace(scenario, controller=controller)
-    from antsim.simulate.runner import NoScanError, check_scenario
-
     try:
         check_scenario(scenario)
     except NoScanError as e:
@@ -463,8 +465,6 @@ def make_variant(base: Scenario, spec: VariantSpec, where: str = "plan") -> Scen
 
 
 def _iso(text: str) -> str:
-    from astropy.time import Time
-
     return Time(text, scale="utc").isot
 
 
@@ -487,8 +487,6 @@ def _model(spec: VariantSpec, base: Scenario, where: str, err) -> PointingModel:
     if not path.exists():
         raise err("model", text, "neither scenario, none, truth, a named model nor a file",
                   f"named models: {', '.join(sorted(NAMED_MODELS))}")
-    from controller.pointing.modelio import load_model
-
     return load_model(path)
 
 

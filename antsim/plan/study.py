@@ -35,6 +35,7 @@ from controller.pointing.signs import UNITS, sign_convention
 
 from ..progress import Progress, progress_for, span_words
 from ..scenario import Scenario
+from .answers import Questions, answers_text
 from .fisher import (
     REJECTION_DRAWS,
     NoiseModel,
@@ -243,8 +244,6 @@ class PlanResult:
                  f"fitter's own sigmas; all {UNITS}; sign of the terms: {self.sign()}", ""]
         for v in self.variants:
             lines += [v.text(), ""]
-        from .answers import answers_text
-
         lines += answers_text(self.answers)
         if timing and self.engine:
             lines.append(f"computed in {self.wall_s:.1f} s on {self.engine}")
@@ -338,8 +337,6 @@ def _run(plan: Plan, executor: Executor, members: int | None, progress: Progress
     flow = Flow(executor, on_done=count)
     questions = None
     if answers and (plan.durations or plan.sources or plan.coverage):
-        from .answers import Questions
-
         questions = Questions(plan, executor, log)
     # beside the members when there are workers to share (one worker gains nothing)
     early = questions is not None and executor.workers >= 2

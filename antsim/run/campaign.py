@@ -11,7 +11,9 @@ from pathlib import Path
 
 from antsim.scenario import Scenario, overcorrection, thermal_terms_of
 from controller.errors import InputError
+from controller.pointing.equatorial import load_equatorial_model
 from controller.pointing.model import PointingModel
+from controller.pointing.modelio import load_model
 
 from .outputs import PRODUCTS
 
@@ -39,12 +41,8 @@ def model_in_use(spec: str | PointingModel | None, scenario: Scenario) -> Pointi
     if isinstance(spec, PointingModel):
         model = spec
     elif scenario.mount.kind == "equatorial":
-        from controller.pointing.equatorial import load_equatorial_model
-
         model = load_equatorial_model(spec, scenario.site.latitude_deg)
     else:
-        from controller.pointing.modelio import load_model
-
         model = load_model(spec)
     thermal = [] if scenario.mount.kind == "equatorial" else thermal_terms_of(model)
     if thermal:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,10 +24,13 @@ from controller.astro.sun import NIGHT_SUN_MAX_DEG
 from controller.pointing.modelio import write_model_file
 from controller.pointing.result import FitResult
 from controller.pointing.signs import UNITS, sign_convention
+from controller.pointing.terms import get_term
 from controller.pointing.tpoint import TPointModel
 from controller.pointing.variants import VARIANTS, fit_variants
+from controller.scans.gaincurve import calibrate
 
 from .inuse import Pointing, pointing_in_use
+from .report import write_run_report
 from .sources import points_per_source
 
 __all__ = ["PRODUCTS", "RunProducts", "clear_products", "fit_tables", "model_caption",
@@ -135,8 +139,6 @@ def _coefficient_lines(fits, present: list[str], reference: Reference | None) ->
 def _thermal_lines(fit: FitResult) -> list[str]:
     """Fit T's thermal terms: value and honest sigma (arcsec per kelvin, or per unit of a
     proxy)."""
-    from controller.pointing.terms import get_term
-
     honest = fit.sigma_honest_arcsec
     lines = ["", "Thermal terms of fit T (arcsec per kelvin of the difference, or per unit of "
              "a proxy); honest sigma", ""]
@@ -170,8 +172,6 @@ def clear_products(out: Path, keep: tuple[str, ...] = ("recordings.ecsv", "truth
     """Remove an earlier run's products from ``out`` (all but ``keep``), so that a resumed run
     leaves only what it wrote itself: no stale ``model.dat`` beside recordings that can no
     longer be fitted."""
-    import shutil
-
     for name in PRODUCTS:
         path = out / name
         if name in keep or not (path.exists() or path.is_symlink()):
@@ -206,8 +206,6 @@ def run_products(result: RunResult, progress: Progress | None = None) -> RunProd
         progress.stage("fits A-F")
     fits = run_fits(result)
     fit_a = fits.get("A")
-    from controller.scans.gaincurve import calibrate
-
     result.calibration = calibrate(result.rows, result.scenario.controller, result.tippings)
     what = "star offsets" if result.scenario.controller.method == "optical" else "cross scans"
     title = (f"{result.scenario.name}, seed {result.seed}: {result.n_scans} {what}, "
@@ -263,8 +261,6 @@ def write_outputs(result: RunResult, report: bool = True,
                    json.dumps(result.calibration.to_json(), indent=2) + "\n")
         written += ["gaincurve.json"]
     if report:
-        from .report import write_run_report
-
         if progress is not None:
             progress.stage("figures and report")
         _, figures = write_run_report(result, fits, out, products.in_use)

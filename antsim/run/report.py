@@ -15,10 +15,14 @@ from typing import TYPE_CHECKING, Any
 
 from antsim.documents import Reference, reference_for
 from antsim.figures.html import Block, Figure, Paragraph, Preformatted, Section, Table, write_report
+from antsim.figures.run import run_figures
 from controller.astro.sun import NIGHT_SUN_MAX_DEG
 from controller.pointing.result import FitResult
 from controller.pointing.signs import sign_convention
+from controller.pointing.terms import get_term
 from controller.pointing.variants import VARIANTS
+
+from .sources import points_per_source
 
 if TYPE_CHECKING:
     from antsim.figures.style import FigureFile
@@ -109,8 +113,6 @@ def _arcsec(arcmin: float | None) -> float | None:
 def thermal_table(fit: FitResult, truth_arcsec: Mapping[str, float] | None = None) -> Table:
     """Fit T's thermal terms: value and honest sigma (arcsec per kelvin of structure
     temperature difference, or per unit of a proxy), and the truth where it is known."""
-    from controller.pointing.terms import get_term
-
     honest = (fit.sigma_honest_arcsec if fit.sigma_honest_arcsec is not None
               else [math.nan] * len(fit.names))
     rows = []
@@ -192,8 +194,6 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
                      ) -> tuple[Path, list[FigureFile]]:
     """Figures (``DIR/figures/``) and ``DIR/report.html`` of a run; returns both. ``in_use``:
     how well the model in use pointed (:mod:`antsim.run.inuse`)."""
-    from .sources import points_per_source
-
     out = Path(out_dir if out_dir is not None else result.out_dir)
     scenario = result.scenario
     truth = truth_terms_arcsec(result.truth)
@@ -278,8 +278,6 @@ def report_figures(result: RunResult, fits: Mapping[str, FitResult | None],
     """The figures of a run's report (:func:`antsim.figures.run.run_figures`) into
     ``figures_dir``, with the truth, the published rms, the gain curve and the model in use
     of the run ``result`` (its calibration set by :func:`antsim.run.outputs.run_products`)."""
-    from antsim.figures.run import run_figures
-
     scenario = result.scenario
     truth = truth_terms_arcsec(result.truth)
     document = reference_for(scenario.name)

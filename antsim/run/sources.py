@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from controller.astro.ephemeris import Ephemeris
+from controller.astro.site import Site
+from controller.astro.sources import FixedSource
 from controller.pointing.result import FitResult
 from controller.pointing.variants import VARIANTS, columns, variant_mask
 
@@ -28,10 +31,6 @@ def points_per_source(rows, fit: FitResult | None) -> dict[str, int]:
 def visible_hours(scenario, step_s: float = 60.0) -> dict[str, float]:
     """Hours each catalogue source spends inside the scheduler's elevation window during the
     campaign (sampled every ``step_s``): what a source's share of the scans is measured by."""
-    from controller.astro.ephemeris import Ephemeris
-    from controller.astro.site import Site
-    from controller.astro.sources import FixedSource
-
     c = scenario.controller
     site = Site(c.site_latitude_deg, c.site_longitude_deg, c.site_height_m)
     sources = [FixedSource(s.name, s.ra_deg, s.dec_deg, s.frame) for s in c.sources]

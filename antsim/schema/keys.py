@@ -30,6 +30,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from ..tomlcheck import Table
+from .utc import utc_time
 
 __all__ = ["FROM_SETTINGS", "KINDS", "REQUIRED", "Key", "Section", "check_bounds",
            "check_elements", "check_line", "check_name", "duplicate", "range_text",
@@ -211,8 +212,6 @@ def read_key(table: Table, name: str, key: Key, default: Any = FROM_SETTINGS) ->
         elif kind == "line":
             check_line(table, name, value)
         elif kind == "time":
-            from .utc import utc_time
-
             utc_time(table, name, value)
         return value
     if kind == "boolean":

@@ -14,6 +14,9 @@ import warnings
 from datetime import datetime, timedelta
 from functools import lru_cache
 
+import erfa
+from astropy.time import Time
+
 from ..tomlcheck import Table
 
 __all__ = ["FIRST_UTC_YEAR", "last_known_year", "utc_known", "utc_time"]
@@ -27,8 +30,6 @@ YEARS = (1900, 2200)
 @lru_cache(maxsize=256)
 def utc_known(year: int, month: int = 1, day: int = 1) -> bool:
     """Whether ERFA knows UTC's offset from atomic time on this day."""
-    import erfa
-
     with warnings.catch_warnings():
         warnings.simplefilter("error", erfa.ErfaWarning)
         try:
@@ -57,9 +58,6 @@ def _parsed(text: str) -> tuple[str, tuple[int, int, int], float, bool] | None:
     """(ISO time, (year, month, day), second, ERFA found a 60th second past the day's end)
     of ``text``, or None where astropy reads no UTC time (a scenario is read many times in
     a plan and in the tests: one parse per text)."""
-    import erfa
-    from astropy.time import Time
-
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", erfa.ErfaWarning)

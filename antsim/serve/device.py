@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING
 import aiokatcp
 import numpy as np
 import simpy
+from astropy.time import Time
 
 from controller.astro.earth import UtcLabeller
 from controller.errors import InputError
@@ -117,8 +118,6 @@ class AntennaDevice(aiokatcp.DeviceServer):
                  clock: ClockSpec, log: RequestLog | None = None,
                  say: Callable[[str], None] = lambda text: None):
         super().__init__(host, port)
-        from astropy.time import Time
-
         self.scenario = scenario
         self.env = simpy.Environment()
         self.world = World(scenario, self.env, seed)

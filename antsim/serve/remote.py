@@ -9,6 +9,7 @@ at the wrong sky; the recordings name the antenna's seed.
 from __future__ import annotations
 
 import simpy
+from astropy.time import Time
 
 from controller.errors import InputError
 from controller.protocol import AntennaError
@@ -51,8 +52,6 @@ def connect(scenario: Scenario, address: str) -> tuple[KatcpAntenna, int]:
 
 
 def _epoch(text: str) -> float | None:
-    from astropy.time import Time
-
     try:
         return round(float(Time(text, scale="utc").unix), 3)
     except ValueError:

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import inspect
 
+from .device import AntennaDevice
+
 #: what every client needs before the list (docs/katcp.md, "Conventions", says more)
 CONVENTIONS = """\
 antsim serve: the simulated antenna as a KATCP v5 device (aiokatcp).
@@ -30,8 +32,6 @@ gets a failure reply naming it.
 def request_list() -> str:
     """The conventions, then each request: its name, whether it commands or reads, and its
     docstring (the arguments, the reply after ``ok`` and what it does)."""
-    from .device import AntennaDevice
-
     kinds = {"command": "command", "reading": "reading",
              "command-with-args": "reading without arguments, command with them"}
     ours, theirs = [], []

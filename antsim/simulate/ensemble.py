@@ -17,6 +17,7 @@ schedule once. Workers cache one engine (reference world, classified effects) pe
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
@@ -25,6 +26,9 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
+import simpy
+
+from antsim.world.world import World
 from controller.errors import InputError
 
 from ..scenario import Scenario
@@ -82,10 +86,6 @@ def engine_for(job: Job) -> MemberEngine:
     """This process's engine for ``job`` (built once)."""
     engine = _ENGINES.get(job.token)
     if engine is None:
-        import simpy
-
-        from antsim.world.world import World
-
         reference = World(job.quiet, simpy.Environment(), REFERENCE_SEED)
         engine = MemberEngine(job.scenario, job.shared, reference, job.terms, job.fit_name)
         if len(_ENGINES) >= 8:
@@ -153,9 +153,8 @@ class Executor:
 
 
 def _warm_up(_: int) -> int:
-    """Import the simulation in a new worker (so that the first tasks do not pay for it)."""
-    from . import vectorized  # noqa: F401
-
+    """Start a new worker: unpickling this function imports this module, and with it the
+    simulation, so that the first tasks do not pay for it."""
     return os.getpid()
 
 
@@ -163,8 +162,6 @@ class PoolExecutor(Executor):
     """A local pool of spawned processes."""
 
     def __init__(self, workers: int):
-        import multiprocessing
-
         self.workers = workers
         self.description = f"local process pool of {workers} worker{'s' if workers != 1 else ''}"
         with single_threaded():

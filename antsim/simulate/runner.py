@@ -24,7 +24,9 @@ from controller.astro.earth import UtcLabeller
 from controller.errors import InputError
 from controller.pointing.legacy import w_terms_marker
 from controller.pointing.model import PointingModel
-from controller.program.campaign import ControlProgram
+from controller.program.campaign import ControlProgram, plan_targets
+from controller.program.observer import never_rises, never_visible, why_unschedulable
+from controller.program.optical import OpticalPointingProgram
 from controller.program.recordings import RecordingWriter, recording_columns
 from controller.protocol import Antenna
 
@@ -132,8 +134,6 @@ def simulate(scenario: Scenario, seed: int | None = None, model: PointingModel |
 
     program_class: type[ControlProgram] = ControlProgram
     if scenario.controller.method == "optical":
-        from controller.program.optical import OpticalPointingProgram
-
         program_class = OpticalPointingProgram
     program = program_class(scenario.controller, antenna, sink=collect, progress=progress)
     if program.scan_duration_s > scenario.duration_s:
@@ -154,9 +154,6 @@ def check_scenario(scenario: Scenario, observer=None, targets=None) -> None:
     to observe that is never inside the elevation window during the campaign, or limits
     (window, elevations, hour angle, declination) that let no source be observed at any time
     (:class:`NoScanError`)."""
-    from controller.program.campaign import plan_targets
-    from controller.program.observer import never_rises, never_visible, why_unschedulable
-
     if observer is None:
         observer, targets = plan_targets(scenario.controller)
     sched = scenario.controller.scheduler

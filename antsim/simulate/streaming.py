@@ -23,13 +23,21 @@ it as before and discards the members' powers when it cannot.
 
 from __future__ import annotations
 
+import atexit
+import multiprocessing
 import os
 import queue
 from collections.abc import Iterator, Sequence
 from dataclasses import replace
 from typing import Any
 
+import simpy
+
+from antsim.world.world import World
+
 from ..scenario import Scenario
+from .schedule import REFERENCE_SEED, quiet_scenario, record_schedule
+from .vectorized import MemberEngine, SharedSchedule
 
 __all__ = ["ScheduleStream", "prestart", "release_prestarted", "stream_available"]
 
@@ -44,8 +52,6 @@ ITEM_KEYS = ("t", "enc_az", "enc_el", "state", "paths")
 def stream_available(jobs: int) -> bool:
     """Whether a second process may run the quiet campaign (``jobs`` >= 2, two cores, and
     an operating system that forks)."""
-    import multiprocessing
-
     return (jobs >= 2 and (os.cpu_count() or 1) >= 2
             and "fork" in multiprocessing.get_all_start_methods())
 
@@ -55,8 +61,6 @@ def _quiet_run_process(quiet: Scenario, seed: int, outbox) -> None:
     ("items", [...]), then ("done", the schedule without its integrations) or ("error",
     message)."""
     try:
-        from .schedule import record_schedule
-
         batch: list[dict[str, Any]] = []
 
         def send(**item: Any) -> None:
@@ -79,8 +83,6 @@ class ScheduleStream:
     :meth:`items` for its integrations as they are recorded, then take :meth:`schedule`."""
 
     def __init__(self, quiet: Scenario, seed: int):
-        import multiprocessing
-
         self.quiet, self.seed = quiet, int(seed)
         #: the scenario ``quiet`` was made from, when the caller says (see :func:`take`)
         self.source: Scenario | None = None
@@ -149,10 +151,6 @@ def prestart(jobs: int, scenario: Scenario) -> None:
     to the baseline; an unused one ends at exit or at :func:`release_prestarted`."""
     global _PRESTARTED
     if _PRESTARTED is None and stream_available(jobs):
-        import atexit
-
-        from .schedule import REFERENCE_SEED, quiet_scenario
-
         _PRESTARTED = ScheduleStream(quiet_scenario(scenario), REFERENCE_SEED)
         _PRESTARTED.source = scenario
         atexit.unregister(release_prestarted)  # once, however often this is called
@@ -163,8 +161,6 @@ def take(scenario: Scenario, seed: int) -> ScheduleStream:
     """The prestarted stream if it runs the quiet campaign of ``scenario`` (the same object,
     or an equal one) with ``seed``, else a new one."""
     global _PRESTARTED
-    from .schedule import quiet_scenario
-
     stream, _PRESTARTED = _PRESTARTED, None
     if stream is not None and not (stream.seed == int(seed) and (
             stream.source is scenario or stream.quiet == quiet_scenario(scenario))):
@@ -187,12 +183,6 @@ def stream_members(stream: ScheduleStream, scenario: Scenario,
     """Members ``seeds`` of ``scenario`` integrated behind ``stream``'s quiet run: returns
     the finished schedule and the members' (power, std), (integrations, members, channels).
     Raises RuntimeError if the stream fails or the members cannot follow it."""
-    import simpy
-
-    from antsim.world.world import World
-
-    from .vectorized import MemberEngine, SharedSchedule
-
     quiet = stream.quiet
     reference = World(quiet, simpy.Environment(), stream.seed)
     channels = tuple(c.name for c in quiet.receiver.channels)

@@ -2,8 +2,8 @@
 
 The memo's Table 4 (pointing coefficients C1..C11 in arcmin with standard errors, number of
 points and rms per point, per band, all data and night) and Table 5 (gain curves in K/Jy) as
-data, and what ``benchmarks/crane1981.py`` and ``tests/test_crane1981.py`` compare with the
-simulated runs of ``scenarios/crane1981_140ft_*.toml``:
+data, and what ``benchmarks/crane1981.py`` and ``tests/end_to_end/test_crane1981.py`` compare
+with the simulated runs of ``scenarios/crane1981_140ft_*.toml``:
 
 * :func:`sigma_pattern`: the standard errors of C1..C11 that a run's schedule and noise give,
   per axis weighted as Crane's rms per axis implies (weighted least squares with the run's own
@@ -30,13 +30,18 @@ from __future__ import annotations
 import itertools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
+from scipy.stats import chi2
 
 from controller.pointing.crane import CANDIDATES, CRANE_NAMES, candidate_terms
+from controller.pointing.equatorial import equatorial_model
 from controller.pointing.terms import evaluate_basis
+from controller.scans.gaincurve import corrected_amplitudes, fit_harmonic_gain
+from controller.units import ARCSEC_PER_RAD
 
-__all__ = ["BANDS", "DEC_LIBRARY", "TABLE4", "TABLE5", "Dataset", "absorbed_by_crane",
+__all__ = ["BANDS", "DEC_LIBRARY", "TABLE4", "TABLE5", "Chi2Test", "Dataset", "absorbed_by_crane",
            "channel_gain", "difference_chi2", "good_rows", "rounding_ratio",
            "search_declination_terms", "sigma_pattern", "table4_datasets", "worst_factor"]
 
@@ -205,24 +210,29 @@ def rounding_ratio(ours: Sequence[float], memo: Sequence[float],
     return np.where(hi > 1.0, hi, np.where(lo < 1.0, lo, 1.0))
 
 
-def difference_chi2(all_fit: Sequence[tuple[float, float]],
-                    night_fit: Sequence[tuple[float, float]]) -> tuple[float, int, float]:
-    """(chi-square, degrees of freedom, probability of a larger one) of night minus all
-    coefficient differences, each in units of the night fit's standard error."""
-    from scipy.stats import chi2
+class Chi2Test(NamedTuple):
+    """A chi-square test: the statistic, its degrees of freedom and the probability of a
+    larger one."""
 
+    chi2: float
+    dof: int
+    p_value: float
+
+
+def difference_chi2(all_fit: Sequence[tuple[float, float]],
+                    night_fit: Sequence[tuple[float, float]]) -> Chi2Test:
+    """The chi-square test of night minus all coefficient differences, each in units of the
+    night fit's standard error."""
     total = 0.0
     for (va, _), (vn, sn) in zip(all_fit, night_fit, strict=True):
         total += ((vn - va) / sn) ** 2
     dof = len(all_fit)
-    return total, dof, float(chi2.sf(total, dof))
+    return Chi2Test(total, dof, float(chi2.sf(total, dof)))
 
 
 def channel_gain(cols: Mapping[str, np.ndarray], channel: str, flux_jy: Mapping[str, float],
                  hpbw_arcmin: float, opacity: float = 0.0):
     """The harmonic gain curve (controller.scans.gaincurve) of one channel's good rows."""
-    from controller.scans.gaincurve import corrected_amplitudes, fit_harmonic_gain
-
     sel = ((np.asarray(cols["polarization"]).astype(str) == channel)
            & np.asarray(cols["good"]).astype(bool))
     sub = {k: np.asarray(v)[sel] for k, v in cols.items()}
@@ -244,9 +254,6 @@ def absorbed_by_crane(ha_rad: np.ndarray, dec_rad: np.ndarray, latitude_deg: flo
     declinations (rad): the least-squares fit of its errors (cross-declination and
     declination, both axes alike as fit A) by C1..C11, in arcmin (Crane's sign; C5 in its
     own unit, a refraction scale)."""
-    from controller.pointing.equatorial import equatorial_model
-    from controller.units import ARCSEC_PER_RAD
-
     ha = np.asarray(ha_rad, float)
     dec = np.asarray(dec_rad, float)
     effect = equatorial_model(list(terms_arcsec), latitude_deg, list(terms_arcsec.values()))

@@ -23,8 +23,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
+from scipy.stats import f as f_dist
 
 from antsim.world.effects.optics import ExactTiltCollimation
 from controller.pointing.bima import BIMA_TERMS
@@ -33,8 +35,9 @@ from controller.pointing.fitting import fit_model
 from controller.pointing.result import FitResult
 from controller.units import ARCSEC_PER_RAD
 
-__all__ = ["SPEED_OF_LIGHT_M_S", "TABLE1_ANT5", "StudyResult", "TermTest", "axis_offset_delay_s",
-           "axis_offset_path_m", "exact_errors_arcsec", "memo23_study", "term_significance"]
+__all__ = ["SPEED_OF_LIGHT_M_S", "TABLE1_ANT5", "StudyResult", "TermTest", "WorstResidual",
+           "axis_offset_delay_s", "axis_offset_path_m", "exact_errors_arcsec", "memo23_study",
+           "term_significance"]
 
 
 def exact_errors_arcsec(tilt_arcmin: float, collimation_arcmin: float, tilt_az_deg: float,
@@ -47,6 +50,14 @@ def exact_errors_arcsec(tilt_arcmin: float, collimation_arcmin: float, tilt_az_d
     d_az = (az_enc - az_rad + math.pi) % (2 * math.pi) - math.pi
     return d_az * np.cos(el_rad) * ARCSEC_PER_RAD, (el_enc - el_rad) * ARCSEC_PER_RAD
 
+
+
+class WorstResidual(NamedTuple):
+    """The largest residual: its azimuth and elevation (deg) and its size (arcsec)."""
+
+    az_deg: float
+    el_deg: float
+    residual_arcsec: float
 
 @dataclass(frozen=True)
 class StudyResult:
@@ -81,10 +92,11 @@ class StudyResult:
                 out[float(v)] = math.sqrt(float(r2[sel].mean()))
         return out
 
-    def worst(self) -> tuple[float, float, float]:
-        """(azimuth deg, elevation deg, residual arcsec) of the largest residual."""
+    def worst(self) -> WorstResidual:
+        """Where the largest residual is, and its size."""
         k = int(np.argmax(self.residual_arcsec))
-        return float(self.az_deg[k]), float(self.el_deg[k]), float(self.residual_arcsec[k])
+        return WorstResidual(float(self.az_deg[k]), float(self.el_deg[k]),
+                             float(self.residual_arcsec[k]))
 
 
 def memo23_study(tilt_arcmin: float = 6.0, collimation_arcmin: float = 9.0,
@@ -146,8 +158,6 @@ def term_significance(data: PointingData, terms: tuple[str, ...], term: str,
                       pattern: np.ndarray) -> TermTest:
     """Least-squares fits of ``terms`` with and without ``term``; the F test of the residual
     sums of squares (both axes, 1 and n - m degrees of freedom)."""
-    from scipy.stats import f as f_dist
-
     full = fit_model(data, terms, robust=False)
     reduced = fit_model(data, tuple(t for t in terms if t != term), robust=False)
     n = 2 * len(data)

@@ -7,24 +7,23 @@ from __future__ import annotations
 import datetime
 import math
 import warnings
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
+from astropy import units as u
+from astropy.time import Time, TimeDelta
+from astropy.utils import iers
 
 from . import offline as _offline
 
-if TYPE_CHECKING:
-    from astropy.time import Time
-
-__all__ = ["UtcLabeller"]
+__all__ = ["UtcLabeller", "polar_motion_rad", "ut1_two_part", "utc_instant"]
 
 #: astropy's fallback polar motion (50-year mean) for dates outside the IERS tables (arcsec)
 _DEFAULT_POLAR_MOTION_ARCSEC = (0.035, 0.29)
 
 
-def _utc_instant(epoch_utc: Any) -> Time:
-    from astropy.time import Time
-
+def utc_instant(epoch_utc: Any) -> Time:
+    """``epoch_utc`` (a Time, or anything astropy reads as a UTC time) as a UTC ``Time``."""
     if isinstance(epoch_utc, Time):
         epoch = epoch_utc
     else:
@@ -40,10 +39,8 @@ def _utc_instant(epoch_utc: Any) -> Time:
     return epoch.utc
 
 
-def _ut1(times: Time) -> tuple[np.ndarray, np.ndarray]:
+def ut1_two_part(times: Time) -> tuple[np.ndarray, np.ndarray]:
     """UT1 as two-part Julian dates, exactly as astropy's transforms obtain it."""
-    from astropy.utils import iers
-
     _offline.use_cached_eop_table()
     try:
         ut1 = times.ut1
@@ -53,12 +50,9 @@ def _ut1(times: Time) -> tuple[np.ndarray, np.ndarray]:
     return ut1.jd1, ut1.jd2
 
 
-def _polar_motion_rad(times: Time) -> tuple[np.ndarray, np.ndarray]:
+def polar_motion_rad(times: Time) -> tuple[np.ndarray, np.ndarray]:
     """Polar motion (xp, yp) in rad from the IERS tables, with astropy's fallback (the
     50-year mean) outside them, so positions match astropy's transforms."""
-    from astropy import units as u
-    from astropy.utils import iers
-
     _offline.use_cached_eop_table()
     xp, yp, status = iers.earth_orientation_table.get().pm_xy(times, return_status=True)
     xp = np.array(xp.to_value(u.rad), dtype=float, ndmin=1)
@@ -81,8 +75,6 @@ class UtcLabeller:
     without astropy per call (a leap second in the span is checked for)."""
 
     def __init__(self, epoch_utc: str, duration_s: float):
-        from astropy.time import Time, TimeDelta
-
         epoch = Time(epoch_utc, scale="utc")
         end = epoch + TimeDelta(duration_s, format="sec")
         # A leap second inside the campaign would shift naive datetime arithmetic by 1 s;
@@ -93,7 +85,5 @@ class UtcLabeller:
 
     def __call__(self, t_s: float) -> str:
         if self.leap:
-            from astropy.time import TimeDelta
-
             return (self.epoch + TimeDelta(t_s, format="sec")).isot
         return (self.epoch_dt + datetime.timedelta(seconds=t_s)).isoformat(timespec="milliseconds")

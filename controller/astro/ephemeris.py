@@ -16,8 +16,8 @@ transforms (milliseconds each):
    plain numpy, and turned into azimuth/elevation by exact spherical trigonometry.
 
 Measured against per-point astropy ``AltAz(pressure=0)`` the error is a few micro-arcseconds
-(``benchmarks/ephemeris.py``, ``tests/test_astro.py``); one ``altaz_rad`` call costs tens of
-microseconds.
+(``benchmarks/ephemeris.py``, ``tests/controller/astro/test_ephemeris.py``); one ``altaz_rad``
+call costs tens of microseconds.
 
 Conventions: angles in radians unless the name says otherwise; azimuth from North through
 East (N = 0, E = pi/2) in [0, 2 pi); hour angle positive West; times are float seconds since the
@@ -40,9 +40,11 @@ import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
+import erfa
 import numpy as np
+from astropy.time import TimeDelta
 
-from .earth import _polar_motion_rad, _ut1, _utc_instant
+from .earth import polar_motion_rad, ut1_two_part, utc_instant
 from .hermite import hermite_evaluate, hermite_table
 from .site import Site
 from .sources import FixedSource
@@ -178,7 +180,7 @@ class Ephemeris:
         self.site = site
         self.sources: tuple[FixedSource, ...] = sources
         self.names: tuple[str, ...] = names
-        self.epoch: Time = _utc_instant(epoch_utc)
+        self.epoch: Time = utc_instant(epoch_utc)
         self.duration_s = duration_s
         self.grid_step_s = grid_step_s
         self.margin_s = margin_s
@@ -208,13 +210,10 @@ class Ephemeris:
     def _exact_hadec(self, grid_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Exact apparent topocentric (HA, Dec) in rad at ``grid_s``, shape (bodies, grid);
         the last body is the Sun."""
-        import erfa
-        from astropy.time import TimeDelta
-
         site = self.site
         times = self.epoch + TimeDelta(grid_s, format="sec")
-        ut1 = _ut1(times)
-        xp, yp = _polar_motion_rad(times)
+        ut1 = ut1_two_part(times)
+        xp, yp = polar_motion_rad(times)
         epoch_tt = self.epoch.tt
         tt1 = np.full(grid_s.shape, epoch_tt.jd1)
         tt2 = epoch_tt.jd2 + grid_s / 86400.0  # TT runs in SI seconds, like campaign time
@@ -415,8 +414,6 @@ class Ephemeris:
 
     def time(self, t_s) -> Time:
         """The UTC astropy ``Time`` of campaign time(s) ``t_s`` (s), for reports."""
-        from astropy.time import TimeDelta
-
         if hasattr(t_s, "unit"):
             t_s = t_s.to_value("s")
         return self.epoch + TimeDelta(np.asarray(t_s, dtype=float), format="sec")

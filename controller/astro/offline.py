@@ -13,7 +13,21 @@ again, the file rewritten, and a one-line note says so. docs/caches.md states wh
 trusts.
 """
 
+import contextlib
+import hashlib
+import json
+import os
+import warnings
+from importlib import metadata
+from pathlib import Path
+
+import astropy
+import numpy as np
+from astropy import units as u
+from astropy.table import Column, MaskedColumn
 from astropy.utils import iers
+
+from controller.errors import Note
 
 iers.conf.auto_download = False
 iers.conf.auto_max_age = None
@@ -33,9 +47,6 @@ _EOP_READY = False
 
 def cache_dir():
     """``$ANTSIM_CACHE``, else ``$XDG_CACHE_HOME/antsim``, else ``~/.cache/antsim``."""
-    import os
-    from pathlib import Path
-
     env = os.environ.get("ANTSIM_CACHE")
     if env:
         return Path(env)
@@ -45,10 +56,6 @@ def cache_dir():
 def _versions() -> dict[str, str] | None:
     """The astropy and astropy-iers-data versions that make the table (None: the data
     package is not installed, astropy finds its tables its own way)."""
-    from importlib import metadata
-
-    import astropy
-
     try:
         data_version = metadata.version("astropy-iers-data")
     except metadata.PackageNotFoundError:
@@ -64,8 +71,6 @@ def eop_cache_path(versions: dict[str, str]):
 
 
 def _digest(manifest: str, arrays) -> str:
-    import hashlib
-
     h = hashlib.sha256(manifest.encode("utf-8"))
     for array in arrays:
         h.update(str(array.dtype.str).encode())
@@ -76,9 +81,6 @@ def _digest(manifest: str, arrays) -> str:
 
 def _columns(table) -> tuple[dict, dict]:
     """The table as a JSON-able manifest and named plain arrays (values, masks)."""
-    import numpy as np
-    from astropy.table import MaskedColumn
-
     kinds, units, arrays = [], [], {}
     for i, name in enumerate(table.colnames):
         col = table[name]
@@ -103,11 +105,6 @@ def _columns(table) -> tuple[dict, dict]:
 def write_eop_cache(table, versions: dict[str, str], path) -> None:
     """Write ``table`` (an ``IERS_Auto``) to ``path`` as data only, with its digest; the
     file appears whole or not at all (written beside it, then renamed)."""
-    import json
-    import os
-
-    import numpy as np
-
     manifest, arrays = _columns(table)
     manifest["versions"] = versions
     text = json.dumps(manifest, sort_keys=True)
@@ -130,12 +127,6 @@ def write_eop_cache(table, versions: dict[str, str], path) -> None:
 def read_eop_cache(path, versions: dict[str, str]):
     """The ``IERS_Auto`` table of a cache file; ValueError (saying why) when the file is not
     one this code wrote for ``versions``. Only data is read: ``allow_pickle=False``."""
-    import json
-
-    import numpy as np
-    from astropy import units as u
-    from astropy.table import Column, MaskedColumn
-
     with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
         if not hasattr(z, "zip"):
             raise ValueError("it is not an archive of arrays")
@@ -175,11 +166,6 @@ def use_cached_eop_table() -> None:
     if _EOP_READY:
         return
     _EOP_READY = True
-    import contextlib
-    import warnings
-
-    from controller.errors import Note
-
     versions = _versions()
     if versions is None:
         return  # let astropy find its tables its own way

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 from functools import lru_cache
 
+import erfa
 import numpy as np
 
 from .site import Weather
@@ -25,8 +26,6 @@ _SPEED_OF_LIGHT_UM_GHZ = 299792.458  # micrometres * GHz
 @lru_cache(maxsize=256)
 def _refraction_constants(pressure_hpa: float, temperature_c: float, relative_humidity: float,
                           wavelength_um: float) -> tuple[float, float]:
-    import erfa
-
     refa, refb = erfa.refco(pressure_hpa, temperature_c, relative_humidity, wavelength_um)
     return float(refa), float(refb)
 

@@ -43,16 +43,21 @@ FO DAF TX HCES. HCEC is left out because DAF = -cos(phi) HCEC + sin(phi) NP exac
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 
+from controller.errors import InputError
+
 from .crane import CRANE_NAMES, crane_term
 from .model import PointingModel
+from .modelio import check_value, read_model_file, refuse_empty
 from .terms import Term, TermError, harmonic_factors
 
 __all__ = [
@@ -208,11 +213,6 @@ def load_equatorial_model(spec: str, latitude_deg: float) -> PointingModel:
     """An equatorial model from a name (zero coefficients), a ``fit.json``/model JSON or a
     TPOINT ``.mod`` file (``antsim run --model`` on an equatorial mount: the closed loop).
     Bad input raises :class:`~controller.errors.InputError`."""
-    import json
-    from pathlib import Path
-
-    from controller.errors import InputError
-
     text_spec = str(spec)
     if text_spec in EQUATORIAL_MODELS:
         return equatorial_model(text_spec, latitude_deg)
@@ -221,8 +221,6 @@ def load_equatorial_model(spec: str, latitude_deg: float) -> PointingModel:
         raise InputError("command line", "--model", text_spec,
                          "neither a named equatorial model nor an existing file",
                          f"equatorial models: {', '.join(sorted(EQUATORIAL_MODELS))}")
-    from .modelio import check_value, read_model_file, refuse_empty
-
     kind, content = read_model_file(path)
     names: list[str] = []
     values: list[float] = []

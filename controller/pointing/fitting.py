@@ -19,7 +19,7 @@ import numpy as np
 from .data import PointingData, require_pointing_data
 from .jackknife import BLOCK_PHASES, BLOCK_S, JackknifeResult
 from .model import NAMED_MODELS, PointingModel
-from .result import FitResult, _readonly
+from .result import FitResult, readonly
 from .robust import LAD_FACTOR, RMS_FACTOR, fit_terms
 from .terms import Term
 
@@ -134,6 +134,6 @@ def _with_fixed(result: FitResult, start: PointingModel, fixed: Mapping[str, flo
 
     return dataclasses.replace(
         result, model=start.with_values(values, name=start.name),
-        sigma_arcsec=_readonly(spread(result.sigma_arcsec)), correlation=_readonly(corr),
+        sigma_arcsec=readonly(spread(result.sigma_arcsec)), correlation=readonly(corr),
         honest_source=honest if source is not None else None,
         fixed=tuple(n for n in names if n in fixed))

@@ -16,11 +16,13 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from astropy import units as u
 
 from controller.units import ARCSEC_PER_RAD, RAD_PER_ARCSEC, to_value
 
 from .data import PointingData
 from .terms import Term, combine_arrays, combine_scalar, evaluate_basis, get_term
+from .thermal import thermal_regressors
 
 __all__ = ["NAMED_MODELS", "PointingModel", "named_model_terms"]
 
@@ -140,8 +142,6 @@ class PointingModel:
         :meth:`design_matrix`); empty for a model of the position alone."""
         cached = self.__dict__.get("_regressors")
         if cached is None:
-            from .thermal import thermal_regressors
-
             cached = frozenset(thermal_regressors(self.terms))
             object.__setattr__(self, "_regressors", cached)
         return cached
@@ -213,22 +213,16 @@ class PointingModel:
     # ------------------------------------------------------------------ Quantity API
     def offset(self, az, el):
         """Indicated minus true at true position(s): ``(daz, del)`` as Quantity (arcsec)."""
-        from astropy import units as u
-
         d_az, d_el = self.offset_rad(to_value(az, "rad", "az"), to_value(el, "rad", "el"))
         return (d_az * ARCSEC_PER_RAD) * u.arcsec, (d_el * ARCSEC_PER_RAD) * u.arcsec
 
     def apply(self, az, el):
         """Encoder position to command for a true position: ``(az, el)`` Quantity (deg)."""
-        from astropy import units as u
-
         a, e = self.apply_rad(to_value(az, "rad", "az"), to_value(el, "rad", "el"))
         return (np.degrees(a)) * u.deg, (np.degrees(e)) * u.deg
 
     def reverse(self, az, el):
         """True position for an encoder position: inverse of :meth:`apply` (Quantity, deg)."""
-        from astropy import units as u
-
         a, e = self.reverse_rad(to_value(az, "rad", "az"), to_value(el, "rad", "el"))
         return (np.degrees(a)) * u.deg, (np.degrees(e)) * u.deg
 

@@ -13,6 +13,8 @@ from controller.filekind import KIND_NAMES, file_kind
 from .legacy import W_TERMS_KEY, names_w_terms, relabel_reconstructed, w_terms_marker
 from .model import NAMED_MODELS, PointingModel
 from .terms import TermError
+from .tpoint import TPointModel, parse_mod, write_mod
+from .vocabulary import in_tpoint_terms
 
 if TYPE_CHECKING:
     from .tpoint import TPointModel
@@ -39,9 +41,6 @@ def write_model_file(model: TPointModel, path: str | Path) -> Path:
     comment on the line, units and sign convention in the header); :func:`load_model` (and
     ``antsim run --model``) reads it back. The one writer of ``run``'s ``model.dat``,
     ``fit --write-model`` and ``diagnose``'s ``model_updated.dat``."""
-    from .tpoint import write_mod
-    from .vocabulary import in_tpoint_terms
-
     path = Path(path)
     write_mod(in_tpoint_terms(model), path)
     return path
@@ -109,8 +108,6 @@ def model_from_json(data: dict, where: str) -> PointingModel:
             raise InputError(where, f"terms.{name}.sigma_arcsec", sigma,
                              "must be a finite number >= 0 (NaN or null: none)")
     if isinstance(rms, int | float) and not isinstance(rms, bool):
-        from .tpoint import TPointModel
-
         sigmas = [_number_or_nan(terms.get(n)) for n in names] if names == list(terms) \
             else None  # renamed from an old file: its sigmas are left out
         n_used = data.get("n_used", 0)
@@ -226,6 +223,4 @@ def load_model(spec: str | Path) -> PointingModel:
     kind, content = read_model_file(path)
     if kind == "json":
         return refuse_empty(model_from_json(content, str(path)), str(path))
-    from .tpoint import parse_mod
-
     return refuse_empty(parse_mod(content, source=str(path)), str(path))

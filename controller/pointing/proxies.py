@@ -27,6 +27,11 @@ import math
 from collections.abc import Mapping
 
 import numpy as np
+from astropy.time import Time, TimeDelta
+from scipy.signal import lfilter
+
+from controller.astro.ephemeris import Ephemeris
+from controller.astro.site import Site
 
 __all__ = ["PROXY_NAMES", "PROXY_TAU_S", "proxy_aux"]
 
@@ -40,8 +45,6 @@ PROXY_NAMES = ("sun_lag", "sun_face", "sun_side", "sun_north_lag", "sun_east_lag
 
 def _lag(x: np.ndarray, tau_s: float, initial: float) -> np.ndarray:
     """First-order lag of ``x`` sampled every STEP_S (exact decay per step)."""
-    from scipy.signal import lfilter
-
     alpha = math.exp(-STEP_S / tau_s)
     out, _ = lfilter([1.0 - alpha], [1.0, -alpha], x, zi=[alpha * initial])
     return out
@@ -55,11 +58,6 @@ def proxy_aux(t_s: np.ndarray, az_rad: np.ndarray, el_rad: np.ndarray,
     ``aux`` (the same value for both axes' rows). ``site``: ``latitude_deg``,
     ``longitude_deg``, ``height_m`` (the recordings' metadata). ``air_temp_c`` None: no
     ``air_lag``."""
-    from astropy.time import Time, TimeDelta
-
-    from controller.astro.ephemeris import Ephemeris
-    from controller.astro.site import Site
-
     t_s = np.asarray(t_s, dtype=float)
     az, el = np.asarray(az_rad, dtype=float), np.asarray(el_rad, dtype=float)
     end = float(np.max(t_s)) if t_s.size else 0.0

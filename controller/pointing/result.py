@@ -14,7 +14,7 @@ from .jackknife import JackknifeResult
 from .legacy import w_terms_marker
 from .signs import UNITS, sign_convention
 
-__all__ = ["FitResult"]
+__all__ = ["FitResult", "readonly"]
 
 
 def _json_float(x: float) -> float | None:
@@ -22,7 +22,8 @@ def _json_float(x: float) -> float | None:
     return x if math.isfinite(x) else None
 
 
-def _readonly(a: np.ndarray) -> np.ndarray:
+def readonly(a: np.ndarray) -> np.ndarray:
+    """A read-only copy of ``a`` (a result's arrays cannot be changed by who reads them)."""
     a = np.array(a, copy=True)
     a.setflags(write=False)
     return a
@@ -84,17 +85,17 @@ class FitResult:
     @property
     def sigma_honest_arcsec(self) -> np.ndarray | None:
         j = self._jackknife
-        return None if j is None else _readonly(j.sigma_t_scaled)
+        return None if j is None else readonly(j.sigma_t_scaled)
 
     @property
     def sigma_jackknife_arcsec(self) -> np.ndarray | None:
         j = self._jackknife
-        return None if j is None else _readonly(j.sigma)
+        return None if j is None else readonly(j.sigma)
 
     @property
     def honest_dof(self) -> np.ndarray | None:
         j = self._jackknife
-        return None if j is None else _readonly(j.dof)
+        return None if j is None else readonly(j.dof)
 
     @property
     def honest_clusters(self) -> int:

@@ -62,15 +62,15 @@ from .jackknife import (
     cluster_jackknife,
     within_rms,
 )
-from .result import FitResult, _readonly
+from .result import FitResult, readonly
 from .solvers import (
-    _independent_columns,
-    _lad_blocks,
-    _LadBlock,
-    _least_squares,
-    _matvec,
-    _Rank,
-    _Solution,
+    LadBlock,
+    Rank,
+    Solution,
+    independent_columns,
+    lad_blocks,
+    least_squares,
+    matvec,
 )
 
 __all__ = ["CORRELATION_WARNING_LEVEL", "Equations", "fit_terms", "fit_terms_before_after",
@@ -165,7 +165,7 @@ class Equations:
 
     def abs_residuals(self, coeffs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """|weighted residual| of every observation, xel and el, for coefficients ``coeffs``."""
-        r = self.y_w - _matvec(self.a_w, coeffs)
+        r = self.y_w - matvec(self.a_w, coeffs)
         return np.abs(r[:self.n]), np.abs(r[self.n:])
 
 
@@ -187,8 +187,8 @@ class _LadFit:
     the same design to other data can take from it)."""
 
     coeffs: np.ndarray
-    rank: _Rank
-    blocks: list[_LadBlock | None]
+    rank: Rank
+    blocks: list[LadBlock | None]
 
 
 def _lad_stage(eq: Equations, prior: _LadFit | None = None,
@@ -198,12 +198,12 @@ def _lad_stage(eq: Equations, prior: _LadFit | None = None,
     again; ``centre``: an estimate of the coefficients, one per term (the LAD of a larger
     set of observations), where the LAD's search starts, ``band_rows`` rows about it in the
     first LP (:func:`solvers._lad_dense`)."""
-    rank = prior.rank if prior is not None else _independent_columns(eq.a_w, eq.names)
+    rank = prior.rank if prior is not None else independent_columns(eq.a_w, eq.names)
     coeffs = np.zeros(len(eq.names))
-    blocks: list[_LadBlock | None] = []
+    blocks: list[LadBlock | None] = []
     if rank.kept:
         k = list(rank.kept)
-        coeffs[k], blocks = _lad_blocks(eq.a_w[:, k], eq.y_w, eq.n,
+        coeffs[k], blocks = lad_blocks(eq.a_w[:, k], eq.y_w, eq.n,
                                         None if prior is None else prior.blocks,
                                         None if centre is None else centre[k], band_rows)
     return _LadFit(coeffs, rank, blocks)
@@ -221,10 +221,10 @@ def reject_beyond_mad(eq: Equations, coeffs: np.ndarray, factor: float) -> np.nd
     return used
 
 
-def least_squares_fit(eq: Equations, used: np.ndarray) -> _Solution:
+def least_squares_fit(eq: Equations, used: np.ndarray) -> Solution:
     """Stages 3 and 5: least squares on the observations ``used``."""
     rows = np.concatenate([used, used])
-    return _least_squares(eq.a_w[rows], eq.y_w[rows], eq.names)
+    return least_squares(eq.a_w[rows], eq.y_w[rows], eq.names)
 
 
 def reject_beyond_rms(eq: Equations, coeffs: np.ndarray, used: np.ndarray,
@@ -344,14 +344,14 @@ def _check_options(data: PointingData, start: LinearModel, weighted: bool, lad_f
         raise ValueError(f"{n} observations cannot determine {m} terms; observe more positions")
 
 
-def _result(data: PointingData, start: LinearModel, eq: Equations, sol: _Solution,
+def _result(data: PointingData, start: LinearModel, eq: Equations, sol: Solution,
             used: np.ndarray, rejection: Rejection | None, *, robust: bool, weighted: bool,
             block_s: float, block_phases: int) -> FitResult:
     """The final fit's residuals of every observation, TPOINT's statistics over the used
     ones, the honest error bars (computed on first use) and the warnings."""
     n, m, names = eq.n, len(eq.names), eq.names
     coeffs = sol.coeffs
-    fitted = _matvec(eq.design, coeffs)  # TPOINT correction rows; the fitted error is minus this
+    fitted = matvec(eq.design, coeffs)  # TPOINT correction rows; the fitted error is minus this
     res_x = data.xel_arcsec + fitted[:n]
     res_e = data.el_arcsec + fitted[n:]
 
@@ -376,19 +376,19 @@ def _result(data: PointingData, start: LinearModel, eq: Equations, sol: _Solutio
 
     return FitResult(
         model=start.with_values(coeffs, name=start.name),
-        sigma_arcsec=_readonly(sigma),
+        sigma_arcsec=readonly(sigma),
         n_input=n,
         n_used=n_used,
         n_rejected=n - n_used,
-        used=_readonly(used),
-        residual_xel_arcsec=_readonly(res_x),
-        residual_el_arcsec=_readonly(res_e),
+        used=readonly(used),
+        residual_xel_arcsec=readonly(res_x),
+        residual_el_arcsec=readonly(res_e),
         sky_rms_arcsec=sky,
         xel_rms_arcsec=xel_rms,
         el_rms_arcsec=el_rms,
         popn_sd_arcsec=popn,
         condition_number=sol.condition_number,
-        correlation=_readonly(corr),
+        correlation=readonly(corr),
         unconstrained=tuple(names[j] for j in range(m) if j not in sol.rank.kept),
         warnings=_warnings(names, sol, corr),
         robust=robust,
@@ -406,11 +406,11 @@ def _honest(a_w: np.ndarray, y_w: np.ndarray, coeffs: np.ndarray, used: np.ndarr
     """:func:`cluster_jackknife` of the fit ``coeffs`` of the weighted equations ``a_w``,
     ``y_w``: its residuals made when the honest error bars are first asked for (most fits
     never ask: a matrix-vector product of the whole design saved)."""
-    return cluster_jackknife(a_w, y_w - _matvec(a_w, coeffs), used, kept, n, t_s, block_s,
+    return cluster_jackknife(a_w, y_w - matvec(a_w, coeffs), used, kept, n, t_s, block_s,
                              rejection, phases)
 
 
-def _warnings(names: Sequence[str], sol: _Solution, corr: np.ndarray) -> tuple[str, ...]:
+def _warnings(names: Sequence[str], sol: Solution, corr: np.ndarray) -> tuple[str, ...]:
     """The terms the data cannot determine, and TPOINT's warning for each pair of terms that
     "cannot reliably be distinguished"."""
     m = len(names)

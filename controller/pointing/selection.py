@@ -30,8 +30,10 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.stats import f as f_dist
 
 from .data import PointingData
+from .fitting import fit_model, without_fixed
 from .model import PointingModel
 from .robust import Equations
 
@@ -127,10 +129,6 @@ def select_terms(data: PointingData, base: Sequence[str],
     """Forward selection of ``candidates`` (a term, or a sequence of terms that enter
     together) on top of ``base`` (see the module docstring). ``fixed`` terms (held values)
     are taken off the data as the final fit does."""
-    from scipy.stats import f as f_dist
-
-    from .fitting import fit_model, without_fixed
-
     current = list(base)
     remaining = [_group(c) for c in candidates]
     steps: list[Step] = []

@@ -17,7 +17,8 @@ import numpy as np
 import scipy.linalg
 from scipy.optimize import linprog
 
-__all__ = ["RANK_RTOL"]
+__all__ = ["RANK_RTOL", "LadBlock", "Rank", "Solution", "independent_columns", "lad_blocks",
+           "least_squares", "matvec"]
 
 #: A term is unconstrained when its unit-length design column is within this distance (the
 #: sine of the angle) of the span of the columns before it, or is this small relative to the
@@ -46,14 +47,14 @@ _LAD_CENTRE_TRIES = 3
 # least squares
 # ---------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
-class _Rank:
+class Rank:
     """Which columns of a design the data determine, and why the others are not."""
 
     kept: tuple[int, ...]
     reasons: dict[int, str]
 
 
-def _rank_analysis(r_unit: np.ndarray, col_norms: np.ndarray, names: Sequence[str]) -> _Rank:
+def _rank_analysis(r_unit: np.ndarray, col_norms: np.ndarray, names: Sequence[str]) -> Rank:
     """Decide, in model order, which columns are independent.
 
     ``r_unit`` is the R factor of the design with unit-length columns (so column j of R has
@@ -85,14 +86,14 @@ def _rank_analysis(r_unit: np.ndarray, col_norms: np.ndarray, names: Sequence[st
         reasons[j] = "it is indistinguishable from " + (
             " and ".join(partners) if len(partners) <= 2 else ", ".join(partners)
         ) + " over the used observations"
-    return _Rank(tuple(kept), reasons)
+    return Rank(tuple(kept), reasons)
 
 
 @dataclass(frozen=True)
-class _Solution:
+class Solution:
     coeffs: np.ndarray  # (M,), 0 for unconstrained
     cov_unscaled: np.ndarray  # (M, M) (A^T W A)^-1, NaN for unconstrained
-    rank: _Rank
+    rank: Rank
     condition_number: float
 
 
@@ -103,7 +104,7 @@ class _Solution:
 _QR_BLOCK_ELEMENTS = 6000
 
 
-def _matvec(a: np.ndarray, x: np.ndarray) -> np.ndarray:
+def matvec(a: np.ndarray, x: np.ndarray) -> np.ndarray:
     """``a @ x`` without BLAS (see the note on OpenBLAS threads)."""
     return np.einsum("ij,j...->i...", a, x)
 
@@ -159,7 +160,7 @@ def _unit_columns(a: np.ndarray, y: np.ndarray | None = None) -> tuple[np.ndarra
     return out, norms
 
 
-def _least_squares(a: np.ndarray, y: np.ndarray, names: Sequence[str]) -> _Solution:
+def least_squares(a: np.ndarray, y: np.ndarray, names: Sequence[str]) -> Solution:
     """Least squares by one Householder QR of [A | y] with unit-scaled columns."""
     m = a.shape[1]
     aug, norms = _unit_columns(a, y)
@@ -180,10 +181,10 @@ def _least_squares(a: np.ndarray, y: np.ndarray, names: Sequence[str]) -> _Solut
         coeffs[k] = c_unit / scale[k]
         cov[np.ix_(k, k)] = cov_unit / np.outer(scale[k], scale[k])
         cond = float(np.linalg.cond(r2))
-    return _Solution(coeffs, cov, rank, cond)
+    return Solution(coeffs, cov, rank, cond)
 
 
-def _independent_columns(a: np.ndarray, names: Sequence[str]) -> _Rank:
+def independent_columns(a: np.ndarray, names: Sequence[str]) -> Rank:
     unit, norms = _unit_columns(a)
     return _rank_analysis(_r_factor(unit), norms, names)
 
@@ -271,8 +272,8 @@ def _lad_band(a: np.ndarray, y: np.ndarray, coeffs: np.ndarray, chol: np.ndarray
     rows), the others' signs fixed and confirmed; the band widened while its rows number
     fewer than ``limit``, else None."""
     n, p = a.shape
-    leverage = np.linalg.norm(_matvec(a, scipy.linalg.solve_triangular(chol, np.eye(p))), axis=1)
-    resid = y - _matvec(a, coeffs)
+    leverage = np.linalg.norm(matvec(a, scipy.linalg.solve_triangular(chol, np.eye(p))), axis=1)
+    resid = y - matvec(a, coeffs)
     with np.errstate(divide="ignore", invalid="ignore"):
         z = np.where(leverage > 0, np.abs(resid) / leverage, np.inf)
     tol = 1e-9 * max(1.0, float(np.abs(y).max()))
@@ -298,7 +299,7 @@ def _lad_band(a: np.ndarray, y: np.ndarray, coeffs: np.ndarray, chol: np.ndarray
         lower = np.concatenate([-np.ones(k), np.zeros(n_globs)])
         upper = np.ones(k + n_globs)
         trial, d = _lad_lp(np.vstack(rows), np.concatenate(rhs), lower, upper)
-        trial_resid = y - _matvec(a, trial)
+        trial_resid = y - matvec(a, trial)
         wrong = (above & (trial_resid < -tol)) | (below & (trial_resid > tol))
         if not wrong.any() and bool(np.all(d[k:] >= 1 - 1e-9)):
             return trial  # every fixed sign confirmed: the exact optimum of the full problem
@@ -310,8 +311,8 @@ def _lad_band(a: np.ndarray, y: np.ndarray, coeffs: np.ndarray, chol: np.ndarray
 
 
 @dataclass(frozen=True)
-class _LadBlock:
-    """One separable block of an exact LAD fit (:func:`_lad_blocks`): its rows and columns of
+class LadBlock:
+    """One separable block of an exact LAD fit (:func:`lad_blocks`): its rows and columns of
     the design, its data, the centre given, the subsampling generator's state before and
     after its solve, and its coefficients."""
 
@@ -334,14 +335,14 @@ class _LadBlock:
 
 
 def _lad(a: np.ndarray, y: np.ndarray, n_xel: int | None = None) -> np.ndarray:
-    """Exact LAD fit of ``y ~ a @ c`` (:func:`_lad_blocks`)."""
-    return _lad_blocks(a, y, n_xel)[0]
+    """Exact LAD fit of ``y ~ a @ c`` (:func:`lad_blocks`)."""
+    return lad_blocks(a, y, n_xel)[0]
 
 
-def _lad_blocks(a: np.ndarray, y: np.ndarray, n_xel: int | None = None,
-                prior: Sequence[_LadBlock | None] | None = None,
+def lad_blocks(a: np.ndarray, y: np.ndarray, n_xel: int | None = None,
+                prior: Sequence[LadBlock | None] | None = None,
                 centre: np.ndarray | None = None, band_rows: int | None = None
-                ) -> tuple[np.ndarray, list[_LadBlock | None]]:
+                ) -> tuple[np.ndarray, list[LadBlock | None]]:
     """Exact LAD fit of ``y ~ a @ c``, and its blocks.
 
     When the first ``n_xel`` rows (cross-elevation) and the rest (elevation) involve disjoint
@@ -364,7 +365,7 @@ def _lad_blocks(a: np.ndarray, y: np.ndarray, n_xel: int | None = None,
             blocks = [np.flatnonzero(in_xel), np.flatnonzero(in_el)]
     rng = np.random.default_rng(_LAD_SEED)
     coeffs = np.zeros(p)
-    solved: list[_LadBlock | None] = []
+    solved: list[LadBlock | None] = []
     for i, cols in enumerate(blocks):
         if cols.size == 0:
             solved.append(None)
@@ -377,7 +378,7 @@ def _lad_blocks(a: np.ndarray, y: np.ndarray, n_xel: int | None = None,
         if old is None or not old.solves(rows, cols, y_block, block_centre, state_in):
             block_coeffs = _lad_dense(np.ascontiguousarray(a[np.ix_(rows, cols)]), y_block, rng,
                                       block_centre, band_rows)
-            old = _LadBlock(rows, cols, y_block, block_centre, state_in,
+            old = LadBlock(rows, cols, y_block, block_centre, state_in,
                             rng.bit_generator.state, block_coeffs)
         rng.bit_generator.state = old.state_out
         coeffs[cols] = old.coeffs

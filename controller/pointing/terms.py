@@ -599,7 +599,7 @@ _FIXED: dict[str, Term] = {**_tpoint_terms(), **_ghigo_terms(), **_katpoint_term
                            **_wright_terms()}
 
 #: Where Wright's a(i), b(i) coincide with TPOINT's terms: coefficient = sign * TPOINT's
-#: (tested column by column in tests/test_bima.py).
+#: (tested column by column in tests/end_to_end/test_bima.py).
 WRIGHT_EQUIVALENTS: dict[str, tuple[str, float]] = {
     "A1": ("IA", 1.0),
     "A2": ("CA", 1.0),

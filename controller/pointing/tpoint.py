@@ -60,6 +60,7 @@ from controller.errors import InputError, read_text_file, write_text_file
 from controller.filekind import tpoint_or_mod
 from controller.units import RAD_PER_DEG
 
+from .data import PointingData
 from .legacy import W_TERMS, W_TERMS_COMMENT, names_w_terms, relabel_reconstructed
 from .model import PointingModel
 from .terms import TermError, get_term, term_refusal
@@ -359,8 +360,6 @@ class TPointData:
         ``include_masked``. Equatorial data raise :class:`InputError`: the alt-az term set
         does not support them yet.
         """
-        from .data import PointingData
-
         if self.coordinates != "azel":
             kind = "equatorial (RA/Dec)" if self.coordinates == "radec" else "non-alt-az"
             if _mount_option(self.options) is None and self.coordinates == "decimal":

@@ -40,7 +40,9 @@ from controller.astro.sun import DAY_SUN_MIN_DEG, NIGHT_SUN_MAX_DEG
 from .data import PointingData
 from .fitting import fit_model
 from .model import named_model_terms
+from .proxies import proxy_aux
 from .result import FitResult
+from .selection import select_terms
 from .thermal import (
     PROXY_TERMS,
     SENSOR_FAMILY,
@@ -217,8 +219,6 @@ def thermal_fit(cols: Mapping[str, np.ndarray], mask: np.ndarray, terms: Sequenc
     candidates: they are not measurements of separate parts but alternative descriptions of
     the same heating (the Sun's height, its direction, the air), largely collinear, among
     which the selection chooses."""
-    from .selection import select_terms
-
     base = list(named_model_terms(terms) if isinstance(terms, str) else terms)
     data = pointing_data(cols, mask, float((context or {}).get("sensor_lag_s", 0.0)))
     family = tuple(t for t in SENSOR_FAMILY
@@ -227,8 +227,6 @@ def thermal_fit(cols: Mapping[str, np.ndarray], mask: np.ndarray, terms: Sequenc
     if not candidates:
         if context is None or "ha_deg" in cols or "epoch_utc" not in context:
             return None
-        from .proxies import proxy_aux
-
         air = cols["air_temp_c"][mask].astype(float) if "air_temp_c" in cols else None
         aux = proxy_aux(data.t_s, data.az_rad, data.el_rad, air, context["site"],
                         context["epoch_utc"])

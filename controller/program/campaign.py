@@ -42,6 +42,7 @@ from controller.pointing.thermal import structure_column, structure_time_column
 from controller.protocol import Antenna, AntennaError
 from controller.scans.reduction import Flag
 from controller.scans.scan import AXES, RawScan, ReducedScan, cross_scan, reduce_scan
+from controller.scans.tipping import tipping_scan
 from controller.scans.tracking import RefractionCorrection, SourceTrajectory, standard_weather
 from controller.units import ARCMIN_PER_RAD
 
@@ -184,8 +185,6 @@ class ControlProgram:
             if now + self.scan_duration_s > end:
                 break
             if now >= self._next_tipping_s:
-                from controller.scans.tipping import tipping_scan
-
                 self._next_tipping_s = now + self.config.tipping.interval_s
                 tip = yield env.process(tipping_scan(env, self.antenna, self.config.tipping,
                                                      self.frame, self.observer, self.targets,

@@ -9,7 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from controller.astro.sun import NIGHT_SUN_MAX_DEG
-from controller.pointing.model import PointingModel
+from controller.pointing.equatorial import equatorial_terms
+from controller.pointing.model import NAMED_MODELS, PointingModel
 from controller.scans.config import GainCurveConfig, ScanConfig, SkyConfig, TippingConfig
 
 __all__ = ["CatalogSource", "ControllerConfig", "OpticalConfig", "SchedulerConfig",
@@ -136,8 +137,6 @@ class ControllerConfig:
         """(terms, model name) to fit. For an equatorial mount the terms are
         :class:`~controller.pointing.terms.Term` objects bound to the site's latitude."""
         if self.mount == "equatorial":
-            from controller.pointing.equatorial import equatorial_terms
-
             if self.fit_terms:
                 return (equatorial_terms(self.fit_terms, self.site_latitude_deg),
                         self.fit_model_name or "custom")
@@ -146,6 +145,4 @@ class ControllerConfig:
             return self.fit_terms, self.fit_model_name or "custom"
         if len(self.model):
             return self.model.names, self.model.name
-        from controller.pointing.model import NAMED_MODELS
-
         return NAMED_MODELS["tpoint8"], "tpoint8"

@@ -34,9 +34,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from astropy.time import Time
 
 from controller.errors import InputError, read_text_file
 from controller.filekind import looks_like_csv
+from controller.pointing.data import PointingData
 from controller.pointing.thermal import STRUCTURE_SENSORS, sensor_aux, structure_sensor_names
 
 from .tablecheck import ColumnRule, check_range, first_repeat, unit_factor
@@ -305,8 +307,6 @@ def _numbers(cells: Sequence[str], heading: str, where: str, lines: list[int]) -
 
 def _times(values: np.ndarray, where: str, lines: list[int]) -> tuple[np.ndarray, str]:
     """Seconds since the first time, and that time (ISO UTC), from ISO UTC strings."""
-    from astropy.time import Time
-
     texts = [str(v).removesuffix("Z") for v in values]
     try:
         with warnings.catch_warnings():
@@ -351,8 +351,6 @@ def _site_meta(settings: Mapping[str, str], where: str) -> dict[str, Any]:
 def pointing_data(data: CsvData):
     """The measurements as :class:`~controller.pointing.data.PointingData` (total pointing
     error, indicated minus true, arcsec)."""
-    from controller.pointing.data import PointingData
-
     c = data.columns
     sensors = structure_sensor_names(list(c))
     return PointingData(az_rad=np.radians(c["az_deg"]), el_rad=np.radians(c["el_deg"]),

@@ -29,7 +29,7 @@ from controller.errors import InputError, read_text_file
 from controller.filekind import file_kind
 from controller.pointing.tpoint import TPointData, parse_tpoint
 
-from .csvdata import CsvData, read_csv
+from .csvdata import CsvData, pointing_data, read_csv
 from .recordings import read_recordings, recording_notes, table_pointing_data
 
 __all__ = ["DataKind", "PointingFile", "read_pointing_file"]
@@ -86,8 +86,6 @@ class PointingFile:
         if self.kind == "tpoint":
             return self.tpoint.pointing_data(include_masked=include_masked)
         if self.kind == "csv":
-            from .csvdata import pointing_data
-
             return pointing_data(self.csv)
         return table_pointing_data(self.recordings, self.path, proxies=proxies,
                                    with_times=True)

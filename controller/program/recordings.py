@@ -27,19 +27,30 @@ import io
 import math
 import os
 import re
+import warnings
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
+from astropy.io.misc import yaml as astropy_yaml
+from astropy.table import Table
+from astropy.time import Time
 
 from controller.astro.frames import MOUNT_KINDS
 from controller.errors import InputError, read_text_file
+from controller.pointing.data import PointingData
+from controller.pointing.equatorial import is_equatorial_term
 from controller.pointing.legacy import W_TERMS, W_TERMS_KEY, names_w_terms, relabel_reconstructed
+from controller.pointing.proxies import proxy_aux
+from controller.pointing.terms import is_term_name
 from controller.pointing.thermal import (
     STRUCTURE_SENSORS,
+    sensor_aux,
     structure_column,
+    structure_sensor_names,
     structure_time_column,
 )
 
@@ -220,8 +231,6 @@ def _format(value: Any, dtype: str) -> str:
 
 def header_text(meta: dict[str, Any], columns: Sequence[Column] = COLUMNS) -> str:
     """The ECSV header (with the column-name line) for the given metadata."""
-    from astropy.table import Table
-
     table = Table(meta=meta)
     for col in columns:
         dtype = "U1" if col.dtype == "str" else col.dtype
@@ -382,16 +391,12 @@ def _yaml_header(lines: Iterable[str]) -> dict:
     times, arrays, coordinates, tuples: the same objects from any document both read),
     else by astropy's, which also reports a malformed header (importing it imports
     astropy.coordinates, 0.05 s that nothing else in diagnose needs)."""
-    import yaml
-
     text = "\n".join(line[2:] if line.startswith("# ") else line[1:] for line in lines)
     _refuse_aliases(text, None)
     try:
         return yaml.load(text, Loader=yaml.SafeLoader)
     except yaml.YAMLError:
-        from astropy.io.misc.yaml import load
-
-        return load(text)
+        return astropy_yaml.load(text)
 
 
 #: the largest header the readers take (bytes): antsim writes about 10 kB
@@ -404,8 +409,6 @@ def _refuse_aliases(header: str, where: str | None) -> None:
     "alias bomb") once expanded. ``where``: the file (its line is named), or None."""
     if "&" not in header and "*" not in header:
         return
-    import yaml
-
     try:
         for event in yaml.parse(header, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
             if isinstance(event, yaml.AliasEvent):
@@ -443,8 +446,6 @@ def _header_text(text: str, where: str) -> str:
 def _refuse_repeated_keys(header: str, where: str) -> None:
     """InputError for a key given twice in one mapping of the header (``site`` twice in
     ``meta``, ``unit`` twice in a column): YAML readers keep one of the two silently."""
-    import yaml
-
     try:
         root = yaml.compose(header, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
     except yaml.YAMLError:
@@ -479,10 +480,6 @@ def _fast_table(text: str, end: int):
     numpy's C reader a line at a time: astropy's holds every cell as a Python string
     (200,000 recordings: 590 MB and 3.5 s). None for anything else, which astropy's reader
     then reads."""
-    import warnings
-
-    from astropy.table import Table
-
     try:
         head_end = 0
         while text.startswith("#", head_end):
@@ -558,10 +555,6 @@ def read_recordings(path: str | Path, purpose: str = "fit", text: str | None = N
     ``purpose="diagnose"``) must be there. Masked (missing) numbers become NaN. Every refusal
     is one InputError line naming ``file:line``, the column and the value.
     """
-    import warnings
-
-    from astropy.table import Table
-
     path = Path(path)
     where = str(path)
     if text is None:
@@ -690,9 +683,6 @@ def _check_model_meta(model, mount: str, where: str) -> None:
     """``meta.model``: the model in use, a mapping whose ``terms_arcsec`` maps known term
     names to finite coefficients (arcsec); a term the readers do not know or a value that is
     no number would be left out of the model in use silently."""
-    from controller.pointing.equatorial import is_equatorial_term
-    from controller.pointing.terms import is_term_name
-
     if not isinstance(model, dict):
         raise InputError(where, "meta.model", model, "must be a mapping (name, terms_arcsec)")
     terms = model.get("terms_arcsec", {})
@@ -750,10 +740,6 @@ def _check_meta(meta, where: str) -> None:
             raise InputError(where, f"meta.{key}", value, "must be a positive number")
     epoch = meta.get("epoch_utc")
     if epoch is not None:
-        import warnings
-
-        from astropy.time import Time
-
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # ERFA's "dubious year": refused below
@@ -790,9 +776,6 @@ def table_pointing_data(table, where: str, polarization: str = "AVG", good_only:
                         proxies: bool = False, with_times: bool = False):
     """:func:`read_pointing_data` of a table :func:`read_recordings` returned; with
     ``with_times`` the observations carry their times (the honest sigma's time blocks)."""
-    from controller.pointing.data import PointingData
-    from controller.pointing.thermal import sensor_aux, structure_sensor_names
-
     mask = np.asarray(table["polarization"]) == polarization
     if good_only and "good" in table.colnames:
         mask &= np.asarray(table["good"], dtype=bool)
@@ -818,8 +801,6 @@ def table_pointing_data(table, where: str, polarization: str = "AVG", good_only:
             raise InputError(where, "metadata", "site, epoch_utc",
                              "the proxies of thermal terms need the site, the epoch and the "
                              "times of the recordings")
-        from controller.pointing.proxies import proxy_aux
-
         air = np.asarray(sel["air_temp_c"], dtype=float) if "air_temp_c" in sel.colnames \
             else None
         aux |= proxy_aux(np.asarray(sel["t_s"], dtype=float), az, el_rad, air, meta["site"],

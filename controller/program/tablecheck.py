@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import astropy.units as u
 import numpy as np
 
 from controller.errors import InputError
@@ -38,8 +39,6 @@ def unit_factor(given: str | None, rule: ColumnRule, where: str, named: bool = F
     the file names none) into ``rule.unit``; InputError when they are not convertible. A
     column without a unit is in ``rule.unit`` when its name says so (``named``: ``az_deg``);
     otherwise it must declare one: a bare number could be any unit."""
-    import astropy.units as u
-
     want = u.dimensionless_unscaled if rule.unit is None else u.Unit(rule.unit)
     if not given:
         if rule.unit is None or named:

@@ -41,6 +41,12 @@ from dataclasses import dataclass
 from itertools import pairwise
 
 import numpy as np
+from scipy.optimize import least_squares
+
+from controller.astro.frames import altaz_to_hadec
+
+from .config import GainCurveConfig
+from .tipping import opacity_from_scans
 
 __all__ = [
     "HARMONIC_NAMES",
@@ -177,8 +183,6 @@ class ElevationGainFit:
 def fit_elevation_gain(el_deg, amp_k, source, knots_deg: Sequence[float] = (10.0, 20.0, 30.0)
                        ) -> ElevationGainFit:
     """Fit ``amp = K_source * piecewise_gain(el)`` (see the module) by Gauss-Newton."""
-    from scipy.optimize import least_squares
-
     el = np.asarray(el_deg, dtype=float)
     y = np.asarray(amp_k, dtype=float)
     src = np.asarray(source).astype(str)
@@ -259,8 +263,6 @@ def calibrate(rows, config, tippings: Sequence = ()) -> Calibration | None:
     Opacity: the mean of the tippings' fits (polarization average) when there are any, else
     ``gain_curve.zenith_opacity`` if set, else the fit of the scans' off-source powers.
     """
-    from .tipping import opacity_from_scans
-
     gc = config.gain_curve
     cols = _cols(rows)
     if not cols or "polarization" not in cols:
@@ -269,8 +271,6 @@ def calibrate(rows, config, tippings: Sequence = ()) -> Calibration | None:
     if gc is None:
         if config.method != "five_point" or not all(s in names for s in STRONG_SOURCES):
             return None
-        from .config import GainCurveConfig
-
         gc = GainCurveConfig(sources=STRONG_SOURCES)
     sel = ((cols["polarization"].astype(str) == "AVG") & cols["good"].astype(bool)
            & np.isfinite(cols["xel_amp_k"].astype(float))
@@ -304,8 +304,6 @@ def calibrate(rows, config, tippings: Sequence = ()) -> Calibration | None:
                 flux = {s.name: s.flux_jy for s in config.sources}
                 lon, lat = (("ha_deg", "dec_deg") if "ha_deg" in cols else (None, None))
                 if lon is None:
-                    from controller.astro.frames import altaz_to_hadec
-
                     ha, dec = altaz_to_hadec(np.radians(cols["az_deg"][use].astype(float)),
                                              np.radians(cols["el_deg"][use].astype(float)),
                                              math.radians(config.site_latitude_deg))

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, fields, replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -18,8 +19,17 @@ from controller.protocol import Antenna, Integration
 from .config import ScanConfig
 from .reduction import AxisReduction, reduce_clark, reduce_lsq
 
-__all__ = ["AXES", "RawScan", "ReducedScan", "channel_average", "cross_scan", "reduce_powers",
-           "reduce_scan", "reduce_sources"]
+__all__ = ["AXES", "RawScan", "ReducedScan", "ScanPowers", "channel_average", "cross_scan",
+           "reduce_powers", "reduce_scan", "reduce_sources"]
+
+
+class ScanPowers(NamedTuple):
+    """A cross scan's integrations, shape (axes, channels + AVG, positions): powers and
+    sample standard deviations (K) and mid-times (s)."""
+
+    power_k: np.ndarray
+    std_k: np.ndarray
+    t_mid_s: np.ndarray
 
 AXES = ("az", "el")
 
@@ -41,7 +51,7 @@ class RawScan:
     #: when they were read (antenna clock, s): axis -> time
     structure_t_s: dict[str, float] = field(default_factory=dict)
 
-    def powers(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def powers(self) -> ScanPowers:
         """Power, sample std (K) and mid-times (s), shape (axes, channels + AVG, positions).
 
         The AVG channel is the mean of the channels' powers, its std the rms of theirs
@@ -58,7 +68,7 @@ class RawScan:
                     std[a, c, k] = integ.std_k[ch]
                 times[a, :, k] = integ.t_mid_s
         power[:, n_ch], std[:, n_ch] = channel_average(power[:, :n_ch], std[:, :n_ch], axis=1)
-        return power, std, times
+        return ScanPowers(power, std, times)
 
     @property
     def t_start_s(self) -> float:

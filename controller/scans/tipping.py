@@ -26,11 +26,13 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.optimize import minimize_scalar
 
 from controller.astro.frames import MountFrame
 from controller.protocol import Antenna, AntennaError
 
 from .config import TippingConfig
+from .tracking import ProgramTrack
 
 __all__ = ["FixedTrajectory", "OpacityFit", "Tipping", "airmass", "fit_opacity",
            "opacity_from_scans", "tipping_scan"]
@@ -68,8 +70,6 @@ def fit_opacity(airmass_values, power_k, t_atm_k: float) -> OpacityFit:
     (bounded Brent) followed by the linearised covariance for the standard error of ``tau``.
     Raises ValueError for fewer than three points or a single airmass.
     """
-    from scipy.optimize import minimize_scalar
-
     a = np.asarray(airmass_values, dtype=float).reshape(-1)
     p = np.asarray(power_k, dtype=float).reshape(-1)
     keep = np.isfinite(a) & np.isfinite(p)
@@ -137,9 +137,9 @@ class FixedTrajectory:
     def elevation_deg(self, t_s: float) -> float:
         return self.lat_deg
 
-    def program_track(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def program_track(self) -> ProgramTrack:
         """One point: a program track that holds it (see SourceTrajectory.program_track)."""
-        return np.zeros(1), np.array([self.lon_deg]), np.array([self.lat_deg])
+        return ProgramTrack(np.zeros(1), np.array([self.lon_deg]), np.array([self.lat_deg]))
 
     def covers(self, t_s) -> bool:
         return True

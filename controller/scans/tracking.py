@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -32,7 +33,15 @@ from controller.astro.site import Weather
 from controller.pointing.model import PointingModel
 from controller.units import DEG_PER_RAD, RAD_PER_ARCMIN
 
-__all__ = ["RefractionCorrection", "SourceTrajectory", "standard_weather"]
+__all__ = ["ProgramTrack", "RefractionCorrection", "SourceTrajectory", "standard_weather"]
+
+
+class ProgramTrack(NamedTuple):
+    """A program track's table: clock times (s) and encoder azimuth and elevation (deg)."""
+
+    t_s: np.ndarray
+    az_deg: np.ndarray
+    el_deg: np.ndarray
 
 NODE_STEP_S = 30.0
 NODE_SPAN_S = 900.0
@@ -143,13 +152,14 @@ class SourceTrajectory:
         az, el = az + d_az, el + refraction + d_el
         return (az * DEG_PER_RAD) % 360.0, el * DEG_PER_RAD
 
-    def program_track(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def program_track(self) -> ProgramTrack:
         """The table this trajectory interpolates linearly: clock times (s), encoder
         azimuth (deg, continuous: not reduced to 0..360) and elevation (deg). Between its
         first and last time the trajectory is ``np.interp`` on it (azimuth then modulo 360),
         bit for bit, so that an antenna given the table (a program track) points exactly
         where this trajectory would; elsewhere it is computed exactly (:meth:`covers`)."""
-        return self._t_table.copy(), self._table_az_deg.copy(), self._table_el_deg.copy()
+        return ProgramTrack(self._t_table.copy(), self._table_az_deg.copy(),
+                            self._table_el_deg.copy())
 
     def covers(self, t_s) -> bool:
         """Whether every time of ``t_s`` lies within :meth:`program_track`'s table."""

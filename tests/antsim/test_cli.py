@@ -1,6 +1,8 @@
-"""The command line's own checks and answers: the terminal's encoding, the figures' backend,
-the file a failed write was writing; ``antsim help COMMAND``, and a misspelt command or option
-answered with the one meant (the bad-input suite holds the option cases)."""
+"""The command line (antsim.cli): the entry point (exit status passed through, no collection
+at shutdown, quiet when its reader has left); its own checks and answers: the terminal's
+encoding, the figures' backend, the file a failed write was writing; ``antsim help COMMAND``,
+and a misspelt command or option answered with the one meant (the bad-input suite holds the
+option cases)."""
 
 from __future__ import annotations
 
@@ -8,6 +10,7 @@ import errno
 import os
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -98,3 +101,55 @@ def test_a_misspelt_command_is_one_line(argv, line, capsys):
     assert main(argv) == 2
     captured = capsys.readouterr()
     assert captured.out == "" and captured.err == line + "\n"
+
+
+def test_console_script_and_module_use_the_command_entry_point():
+    scripts = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["scripts"]
+    assert scripts["antsim"] == "antsim.cli:command"
+    assert "command()" in (REPO / "antsim" / "__main__.py").read_text()
+
+
+def test_command_passes_the_exit_status_and_skips_the_shutdown_collection():
+    """``command`` returns ``main``'s status (2: no subcommand) and leaves the collector off
+    and the heap frozen, so that the interpreter's shutdown does not walk it."""
+    code = ("import gc, sys; from antsim.cli import command; sys.argv = ['antsim']; "
+            "status = command(); print(status, gc.isenabled(), gc.get_freeze_count() > 0, "
+            "file=sys.stderr)")
+    done = subprocess.run([sys.executable, "-c", code], env=_env(), capture_output=True,
+                          text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.splitlines()[-1] == "2 False True"
+    assert "usage: antsim" in done.stdout
+
+
+def _env() -> dict[str, str]:
+    return {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(REPO), *filter(None, [os.environ.get("PYTHONPATH")])])}
+
+
+def test_a_reader_that_left_ends_the_command_quietly(tmp_path):
+    """``antsim scenarios | head -1``: stdout's reader has gone before the listing is
+    written. The command ends as a shell expects of a process ended by SIGPIPE (status 141)
+    with nothing on stderr: no traceback, no 'Exception ignored' at exit, no error line."""
+    read_end, write_end = os.pipe()
+    os.close(read_end)  # the reader has left before the first write
+    try:
+        done = subprocess.run([sys.executable, "-m", "antsim", "scenarios"], env=_env(),
+                              stdout=write_end, stderr=subprocess.PIPE, text=True,
+                              timeout=120, check=False, cwd=tmp_path)
+    finally:
+        os.close(write_end)
+    assert done.returncode == 141, done.stderr
+    assert done.stderr == ""
+
+
+def test_the_command_line_starts_light():
+    """Importing the command line loads neither scipy, astropy.coordinates, matplotlib nor
+    simpy (each is large parts of a second): ``antsim --help`` and a misspelt option answer at
+    once, and each command imports what it needs when it runs."""
+    code = ("import sys, antsim.cli; print(sorted(m for m in sys.modules if m.split('.')[0] in "
+            "('scipy', 'matplotlib', 'simpy') or m.startswith('astropy.coordinates')))")
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+    done = subprocess.run([sys.executable, "-c", code], cwd=REPO, env=env, capture_output=True,
+                          text=True, check=True)
+    assert done.stdout.strip() == "[]"

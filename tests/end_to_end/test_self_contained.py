@@ -26,8 +26,8 @@ EXCEPTIONS = {
     "antsim/world/weather.py", "antsim/world/world.py", "antsim/world/effects/drifts.py",
     "antsim/world/effects/steps.py", "antsim/world/effects/thermal.py",
 }
-#: this file and the README check of tests/test_readme_commands.py name the patterns
-SELF = {"tests/end_to_end/test_self_contained.py", "tests/test_readme_commands.py"}
+#: this file and the README check of tests/end_to_end/test_readme_commands.py name the patterns
+SELF = {"tests/end_to_end/test_self_contained.py", "tests/end_to_end/test_readme_commands.py"}
 
 
 def _project_files() -> list[Path]:

@@ -50,7 +50,7 @@ class Story:
 
     def command(self, chapter: Chapter, text: str) -> None:
         """A command line the reader can run to repeat the step (it must run as printed:
-        tests/test_demo.py runs every one)."""
+        tests/end_to_end/test_demo.py runs every one)."""
         from antsim.figures.html import Preformatted
 
         chapter.blocks.append(Preformatted(text, caption="Try it yourself"))

@@ -18,7 +18,7 @@ unit-normalized projected step columns trace on the sphere (the sum of the angle
 neighbours). Nyholt's eigenvalue count, right for the drifts' few time constants, is five
 times too conservative here; the tube formula, 1.5-2 times (a Monte Carlo of the maximum
 on the 1990 campaign's 282 scans: 0.0065 against 0.0117 at u = 16, 0.0010 against 0.0016
-at u = 20; tests/test_diagnose.py checks it on a smaller design).
+at u = 20; tests/antsim/diagnose/test_diagnose.py checks it on a smaller design).
 """
 
 from __future__ import annotations

@@ -126,7 +126,7 @@ class ExactTiltCandidate(Candidate):
                        "threshold (tilts of 45-80' on the 45-ft's schedule) the second-order "
                        "errors reach 4-12' near the zenith, beyond what a five-point scan "
                        "with 7' steps measures; it is proven separately at 25-40' "
-                       "(tests/test_diagnose_sim.py, benchmarks/blind.py --tilt)")
+                       "(tests/end_to_end/test_diagnose_sim.py, benchmarks/blind.py --tilt)")
     linear_signature = False
     #: the chi^2 decrease of this 3-parameter even (quadratic) family is referred to chi^2_6,
     #: the dimension of the space of quadratic forms its signature spans (conservative)

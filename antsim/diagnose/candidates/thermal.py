@@ -103,7 +103,7 @@ class _LaggedCandidate(Candidate):
         by the golden section where a parabola does not narrow it), until both lie within
         XATOL_LOG_THETA of the best: a unimodal optimum is then within that tolerance of it,
         the bounded search's stopping rule. That took 3-7 tests where scipy's bounded search
-        (which ignores the grid's tests) took 6-7 (tests/test_diagnose_memory.py; 1-4 against
+        (which ignores the grid's tests) took 6-7 (tests/antsim/diagnose/test_memory.py; 1-4 against
         7-10 at 200,000 scans); the time constants found move by under 1% of tau, 3% of
         their sigma (docs/results/blind_fomalont.txt)."""
         obs = problem.obs

@@ -45,6 +45,8 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
+from controller.pointing.equatorial import equatorial_model
+
 from .base import Effect, Key
 from .harmonics import HarmonicEffect
 
@@ -61,8 +63,6 @@ class EquatorialHarmonicEffect(HarmonicEffect):
         self.model = None  # bound to the mount in start()
 
     def start(self, world, rng) -> None:
-        from controller.pointing.equatorial import equatorial_model
-
         if world.frame.is_altaz:
             raise ValueError(f"effect {self.name} models an equatorial mount")
         self.model = equatorial_model(self.terms, world.frame.latitude_deg,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
+from controller.pointing.equatorial import equatorial_model
 from controller.pointing.model import PointingModel
 from controller.pointing.terms import TermError, get_term
 
@@ -74,8 +75,6 @@ class TermsEffect(GeometricEffect):
 
     def start(self, world, rng) -> None:
         if not world.frame.is_altaz:
-            from controller.pointing.equatorial import equatorial_model
-
             self.model = equatorial_model(list(self.values_arcsec), world.frame.latitude_deg,
                                           list(self.values_arcsec.values()), name="terms")
         elif self.model is None:

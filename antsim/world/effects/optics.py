@@ -7,6 +7,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from controller.pointing.bima import tilt_collimation_equivalents
+from controller.pointing.model import PointingModel
 from controller.units import RAD_PER_ARCMIN, RAD_PER_ARCSEC
 
 from .base import Effect, Key, PointingState
@@ -126,8 +128,6 @@ class ExactTiltCollimation(Effect):
         """Small-angle equivalents (arcsec, TPOINT's sign) in TPOINT's terms (AN, AW, CA) and
         in the BIMA memo's separate azimuth and elevation tilt terms (HSSASE, HECA, HSCASE,
         HESA): what a linear fit of either model should recover."""
-        from controller.pointing.bima import tilt_collimation_equivalents
-
         tilt_arcsec = self.p["tilt_arcmin"] * 60.0
         phi = math.radians(self.p["tilt_az_deg"])
         linear = {"AN": tilt_arcsec * math.cos(phi), "AW": -tilt_arcsec * math.sin(phi),
@@ -179,8 +179,6 @@ class ExactTiltCollimation(Effect):
     def _linear(self):
         model = getattr(self, "_linear_model", None)
         if model is None:
-            from controller.pointing.model import PointingModel
-
             c = self.coefficients()
             model = PointingModel(["AN", "AW", "CA"], [c["AN"], c["AW"], c["CA"]])
             self._linear_model = model

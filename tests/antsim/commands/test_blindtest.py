@@ -19,8 +19,8 @@ def _strict(text: str):
 
 @pytest.mark.parametrize("as_json", [False, True])
 def test_the_readme_blindtest_without_a_null_case(as_json, diagnose_cache, capsys, tmp_path):
-    """The README's blindtest, reduced as tests/test_readme_commands.py runs it (2 cases, seed
-    1): both cases hide an effect, so no false alarm can be counted."""
+    """The README's blindtest, reduced as tests/end_to_end/test_readme_commands.py runs it (2
+    cases, seed 1): both cases hide an effect, so no false alarm can be counted."""
     out = tmp_path / "blind.json"
     assert main(["blindtest", "--n", "2", "--seed", "1", "--cache", str(diagnose_cache),
                  "--no-progress", "--out", str(out), *(["--json"] if as_json else [])]) == 0

@@ -9,7 +9,7 @@ import re
 import pytest
 
 from antsim.figures.html import Section, Table, _render_table, format_number, render_report
-from tests.test_report import needs_chromium, run_chromium
+from tests.antsim.run.test_report_page import needs_chromium, run_chromium
 
 #: a coefficient table as a run's report has it: a term and 12 columns of numbers
 WIDE = Table(["term", *(f"fit {k} (\")" for k in "ABCDEFGHIJKL")],

@@ -20,7 +20,7 @@ from antsim.plan.study import run_plan
 from antsim.progress import Progress
 from antsim.simulate.ensemble import Job, task_record
 from antsim.simulate.vectorized import quiet_scenario
-from tests.test_plan import assert_docs_close
+from tests.antsim.plan.test_plan import assert_docs_close
 
 PLAN = """name = "answers"
 scenario = "{scenario}"

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from antsim.cli import main
-from tests.test_report import read_page
+from tests.antsim.run.test_report_page import read_page
 
 REPO = Path(__file__).resolve().parents[3]
 BASE = REPO / "tests" / "data" / "bad_inputs" / "scenario" / "_base.toml"

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from antsim.cli import main
 from antsim.serve.process import ServerProcess
-from tests.test_serve import LineClient
+from tests.antsim.serve.test_serve import LineClient
 
 REPO = Path(__file__).resolve().parents[3]
 BASE = REPO / "tests" / "data" / "bad_inputs" / "scenario" / "_base.toml"

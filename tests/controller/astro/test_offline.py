@@ -1,6 +1,7 @@
-"""The Earth-orientation cache holds data only and is checked against what wrote it: a
-crafted pickle, an archive with an object array, a damaged or edited file, or one written
-for other versions is never executed or trusted; the table is rebuilt with a note."""
+"""The Earth-orientation cache (controller.astro.offline): the table it holds is astropy's,
+read back the same and rebuilt when damaged; it holds data only and is checked against what
+wrote it: a crafted pickle, an archive with an object array, a damaged or edited file, or one
+written for other versions is never executed or trusted; the table is rebuilt with a note."""
 
 from __future__ import annotations
 
@@ -178,3 +179,41 @@ def test_a_cache_that_cannot_be_written_only_costs_time(first, tmp_path):
     blocker.write_text("")
     got, notes = _run(blocker / "cache")  # a path through a file: mkdir fails
     assert got == first[2] and notes == []
+
+
+TABLE_SCRIPT = """
+import numpy as np
+from astropy.time import Time
+from astropy.utils import iers
+import controller.astro.offline as offline
+offline.use_cached_eop_table()
+t = Time(np.linspace(47000.0, 61000.0, 7), format="mjd")
+print(type(iers.earth_orientation_table.get()).__name__,
+      repr(iers.earth_orientation_table.get().ut1_utc(t).value.tolist()))
+"""
+
+
+def _table(cache_dir) -> str:
+    env = {**os.environ, "ANTSIM_CACHE": str(cache_dir)}
+    done = subprocess.run([sys.executable, "-c", TABLE_SCRIPT], env=env, capture_output=True,
+                          text=True, check=True)
+    return done.stdout.strip()
+
+
+def _astropy_own() -> str:
+    script = TABLE_SCRIPT.replace("offline.use_cached_eop_table()", "")
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          check=True)
+    return done.stdout.strip()
+
+
+def test_cached_table_is_astropys_and_survives_damage(tmp_path):
+    own = _astropy_own()
+    assert own.startswith("IERS_Auto")
+    assert _table(tmp_path) == own  # first use: astropy's loading, then written to the cache
+    (cache,) = tmp_path.glob("iers-auto-*.npz")
+    assert cache.stat().st_size > 100_000
+    assert _table(tmp_path) == own  # read back from the cache: the same numbers
+    cache.write_bytes(b"not a cache file")
+    assert _table(tmp_path) == own  # damaged: rebuilt
+    assert cache.stat().st_size > 100_000

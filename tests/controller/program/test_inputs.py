@@ -63,7 +63,14 @@ def test_fit_and_diagnose_read_through_the_front_door(monkeypatch, capsys):
         calls.append((Path(path).name, kwargs.get("purpose")))
         return real(path, **kwargs)
 
-    monkeypatch.setattr(inputs, "read_pointing_file", counting)
+    # every module that took the front door's function by name (fit's at its top, diagnose's
+    # in the function that reads) gets the counting one
+    import antsim.diagnose.data
+    import antsim.fit.fitfile
+
+    for module in (inputs, antsim.fit.fitfile, antsim.diagnose.data):
+        if hasattr(module, "read_pointing_file"):
+            monkeypatch.setattr(module, "read_pointing_file", counting)
     tpoint = str(DATA / "tpoint" / "_base.dat")
     assert main(["fit", tpoint, "--no-progress"]) == 0
     assert main(["diagnose", tpoint, "--no-progress"]) == 0

@@ -1,0 +1,1 @@
+"""Tests of antsim.world: the simulated telescope, one file per module."""

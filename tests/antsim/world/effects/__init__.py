@@ -1,0 +1,1 @@
+"""Tests of antsim.world.effects: the physical effects, one file per module."""

@@ -1,0 +1,1 @@
+"""Tests of controller.scans: scans, their reduction, tipping and gain curves."""
