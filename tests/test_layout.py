@@ -385,9 +385,7 @@ IMPORTS_INSIDE: dict[tuple[str, str], str] = {
 }
 #: modules being rewritten elsewhere when the rest was swept: every other module imports at
 #: the top
-NOT_YET_SWEPT = ("antsim/diagnose/", "antsim/plan/fisher.py", "antsim/simulate/vectorized.py",
-                 "antsim/world/effects/thermal.py", "antsim/world/receiver.py",
-                 "antsim/world/weather.py", "antsim/world/world.py")
+NOT_YET_SWEPT = ("antsim/diagnose/",)
 
 
 def imports_inside_functions(root: Path) -> list[str]:

@@ -50,7 +50,17 @@ from antsim.simulate.ensemble import Job, engine_for
 from antsim.simulate.vectorized import MemberEngine, SharedSchedule
 from antsim.world.effects.tracking import TrackingJitter
 from controller.pointing.model import PointingModel
+from controller.pointing.robust import (
+    LAD_FACTOR,
+    RMS_FACTOR,
+    Equations,
+    lad_fit,
+    least_squares_fit,
+    reject_beyond_mad,
+    reject_beyond_rms,
+)
 from controller.pointing.thermal import sensor_aux, structure_sensor_names
+from controller.scans.scan import reduce_sources
 
 __all__ = ["NoiseModel", "Prediction", "RejectionDesign", "RejectionDraws", "noise_model",
            "predict", "predict_prefixes", "rejection_design", "rejection_draws", "task_noise",
@@ -491,8 +501,6 @@ def with_thermal(noise: NoiseModel, shared: SharedSchedule,
 
 def engine_reduce(engine: MemberEngine, power, std, times):
     """The controller's reduction of arbitrary (..., 5) arrays of one variant."""
-    from controller.scans.scan import reduce_sources
-
     return reduce_sources(power, std, np.broadcast_to(times, power.shape),
                           engine.scenario.controller.scan, engine.scan_widths, 0)
 
@@ -666,16 +674,6 @@ def rejection_draws(design: RejectionDesign, draws: Sequence[int]) -> RejectionD
     spacing; the slow thermal errors enter by their variance): the least-squares part of
     the covariance, with every correlation, is the sandwich of :func:`predict`. The normals
     come from a fixed seed: the same prediction every time."""
-    from controller.pointing.robust import (
-        LAD_FACTOR,
-        RMS_FACTOR,
-        Equations,
-        lad_fit,
-        least_squares_fit,
-        reject_beyond_mad,
-        reject_beyond_rms,
-    )
-
     draws = np.asarray(draws, dtype=np.int64)
     n_pre, n_d, m = len(design.sizes), draws.size, design.a.shape[1]
     normals = np.random.default_rng(REJECTION_SEED).standard_normal(

@@ -57,8 +57,10 @@ from antsim.world.effects.thermal import OUProcess
 from antsim.world.effects.tracking import TrackingJitter
 from antsim.world.receiver import Receiver
 from antsim.world.world import World, component_rng, weather_model
+from controller.astro.refraction import refraction_rad
+from controller.astro.site import Weather
 from controller.pointing.fitting import fit_model
-from controller.pointing.variants import VARIANTS, pointing_data, variant_mask
+from controller.pointing.variants import VARIANTS, columns, pointing_data, variant_mask
 from controller.scans.scan import channel_average, reduce_sources
 from controller.units import ARCSEC_PER_RAD
 
@@ -307,9 +309,6 @@ class _RefractionWander:
     def delta_rad(self, t0_s: np.ndarray, el_rad: np.ndarray) -> np.ndarray:
         """(K, n, members) for integrations starting at ``t0_s`` (K,) whose sources are at
         ``el_rad`` (K, n) (radians)."""
-        from controller.astro.refraction import refraction_rad
-        from controller.astro.site import Weather
-
         quiet = self.reference.weather
         frequency = self.reference.sky.frequency_ghz
         d_t = np.stack([w.air_temperature_c(t0_s) for w in self.weathers], axis=-1) \
@@ -648,6 +647,4 @@ def full_member(scenario: Scenario, member: int, seed: int, terms: Sequence[str]
 
 
 def _columns(rows: list[dict]) -> dict[str, np.ndarray]:
-    from controller.pointing.variants import columns
-
     return columns(rows)

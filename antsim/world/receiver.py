@@ -18,6 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .effects.thermal import OUProcess
+
 __all__ = ["ChannelConfig", "Receiver", "ReceiverConfig"]
 
 
@@ -47,8 +49,6 @@ class Receiver:
     """Turns input temperatures into sampled total powers with noise (kelvin)."""
 
     def __init__(self, config: ReceiverConfig, rng: np.random.Generator):
-        from .effects.thermal import OUProcess
-
         self.config = config
         self.rng = rng
         self.names = tuple(c.name for c in config.channels)

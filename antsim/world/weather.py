@@ -18,6 +18,8 @@ import numpy as np
 
 from controller.protocol import WeatherReading
 
+from .effects.thermal import ScalarInterpolator, ou_series
+
 __all__ = ["WeatherConfig", "WeatherModel"]
 
 
@@ -47,8 +49,6 @@ class WeatherModel:
 
     def __init__(self, config: WeatherConfig, epoch_utc_hours: float, longitude_deg: float,
                  duration_s: float, rng: np.random.Generator, spinup_s: float = 86400.0):
-        from .effects.thermal import ou_series
-
         self.config = config
         self.pressure_hpa = config.pressure_hpa
         self.relative_humidity = config.relative_humidity
@@ -106,8 +106,6 @@ class WeatherModel:
         """What the weather sensors report at ``t_s``."""
         t_s = float(t_s)
         if self._wander_now is None:
-            from .effects.thermal import ScalarInterpolator
-
             self._wander_now = ScalarInterpolator(self._t, [self._wander])
         daily_c = self._daily_curve_scalar_c(t_s)
         wind = self._wind_from_daily(daily_c)

@@ -41,6 +41,8 @@ from functools import lru_cache, partial
 from typing import TYPE_CHECKING
 
 import numpy as np
+from astropy import units as u
+from astropy.time import Time
 
 from controller.astro.ephemeris import Ephemeris
 from controller.astro.frames import ALTAZ, MountFrame, altaz_to_hadec
@@ -55,6 +57,7 @@ from controller.protocol import (
     Trajectory,
     WeatherReading,
 )
+from controller.scans.gaincurve import HARMONIC_NAMES, harmonic_basis
 from controller.units import ARCMIN_PER_RAD, RAD_PER_DEG
 
 from .atmosphere import Atmosphere
@@ -64,6 +67,7 @@ from .effects import EFFECTS, GeometricEffect, PointingState
 from .effects.base import BLOCK_FIELDS
 from .mount import Mount
 from .receiver import Receiver
+from .sensors import StructureSensors
 from .sky import Sky
 from .weather import WeatherModel
 
@@ -100,8 +104,6 @@ def weather_model(scenario: Scenario, rng: np.random.Generator) -> WeatherModel:
 @lru_cache(maxsize=16)
 def _epoch_hours(epoch_utc: str) -> float:
     """UTC hour of day of the epoch."""
-    from astropy.time import Time
-
     return (Time(epoch_utc, scale="utc").mjd % 1.0) * 24.0
 
 
@@ -120,8 +122,6 @@ class World:
         self.seed = scenario.seed if seed is None else seed
         self.duration_s = scenario.duration_s
         site = scenario.site
-        from astropy.time import Time
-
         epoch = Time(scenario.epoch_utc, scale="utc")
         fixed = tuple(FixedSource(s.name, s.ra_deg, s.dec_deg, s.frame) for s in scenario.sources)
         self.ephemeris = Ephemeris(site, epoch, self.duration_s + EPHEMERIS_MARGIN_S, fixed)
@@ -155,8 +155,6 @@ class World:
         self.fast_effects = [e for e in self.effects if e.per_sample]
         config = getattr(scenario, "structure_sensors", None)
         if config is not None:
-            from .sensors import StructureSensors
-
             self.sensors = StructureSensors(config, self, component_rng(self.seed, "sensors"))
         self.antenna = SimulatedAntenna(self)
 
@@ -195,8 +193,6 @@ class World:
             truth["mount"] = self.scenario.mount.kind
         harmonics = getattr(self.beam.config, "gain_harmonics", None)
         if harmonics is not None:  # the gain curve in K/Jy (controller.scans.gaincurve's form)
-            from controller.scans.gaincurve import HARMONIC_NAMES
-
             base = self.beam.config.gain_k_per_jy
             relative = channel_gains(self.scenario)
             per_channel = {ch: base * relative.get(ch, 1.0)
@@ -353,8 +349,6 @@ class World:
         harmonics = getattr(self.beam.config, "gain_harmonics", None)
         if harmonics is None:
             return self.beam.efficiency(el_rad)
-        from controller.scans.gaincurve import harmonic_basis
-
         ha, dec = altaz_to_hadec(az_rad, el_rad, self.frame.latitude_rad)
         return harmonic_basis(ha, dec) @ np.asarray(harmonics, dtype=float)
 
@@ -366,8 +360,6 @@ def channel_gains(scenario) -> dict[str, float]:
 
 
 def _day():
-    from astropy import units as u
-
     return u.day
 
 

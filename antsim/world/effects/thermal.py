@@ -17,6 +17,7 @@ from functools import lru_cache
 from typing import ClassVar
 
 import numpy as np
+from scipy.signal import lfilter
 
 from controller.units import RAD_PER_ARCSEC
 
@@ -49,8 +50,6 @@ def first_order_filter(x: np.ndarray, gain: float, rho: float, state=0.0) -> np.
     a shorter series than :data:`LFILTER_SAMPLES` without importing scipy.signal (0.6 s of
     start-up for one recursion)."""
     if x.ndim == 1 and x.size >= LFILTER_SAMPLES:
-        from scipy.signal import lfilter
-
         return lfilter([gain], [1.0, -rho], x, zi=[float(state)])[0]
     out = np.empty_like(x)
     if x.ndim == 1:
