@@ -128,3 +128,19 @@ def test_the_kept_file_is_what_the_code_makes_now(name):
         f"docs/results/{name}.txt is stale: python benchmarks/publish.py {name}"
     if result.check == result.command:
         assert now == publish.normalized(result.path.read_text(encoding="utf-8"), result)
+
+
+def test_a_failing_command_publishes_nothing_unless_its_status_says_a_criterion_missed():
+    """A command exiting with a status its result does not declare raises; a declared one
+    ('criterion not met', said in the output) is kept as it is; a crash (Python's 1) is never
+    published."""
+    argv = ("-c", "print('criterion: NOT met'); raise SystemExit(3)")
+    with pytest.raises(RuntimeError, match="exited 3"):
+        publish.run(publish.Result("strict", argv, argv, 0.0), argv)
+    missed = publish.Result("missed", argv, argv, 0.0, exits=(0, 3))
+    text, _ = publish.run(missed, argv)
+    assert text == "criterion: NOT met\n"
+    crash = ("-c", "raise ValueError('boom')")
+    with pytest.raises(RuntimeError, match="exited 1"):
+        publish.run(publish.Result("crash", crash, crash, 0.0, exits=(0, 3)), crash)
+    assert publish.BY_NAME["plan_accuracy"].exits == (0, 3)
