@@ -162,7 +162,7 @@ def recoverable_truth(rows: Sequence[Mapping], scenario, world) -> RecoverableTr
     refraction = dict.fromkeys(terms, 0.0)
     if scale:
         refraction = {n: scale * v for n, v in
-                      refraction_equivalent_arcsec(rows, terms, c.frequency_ghz).items()}
+                      refraction_equivalent_arcsec(rows, terms, world.sky.frequency_ghz).items()}
     return RecoverableTruth(mount=mount, refraction=refraction,
                             heating=heating_equivalent_arcsec(rows, terms, world),
                             irregularities=pattern_equivalent_arcsec(rows, terms, world))
