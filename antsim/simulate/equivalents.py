@@ -150,12 +150,16 @@ def recoverable_truth(rows: Sequence[Mapping], scenario, world) -> RecoverableTr
     left out) should recover from ``rows``: the mount's terms plus the fit's shares of the
     world's uncorrected refraction, heating and irregularities (a mount term the fit has
     not is not projected on the fitted ones). None where this projection does not apply: an
-    equatorial mount, optical pointing, or no good scan."""
+    equatorial mount, optical pointing, fitted terms of the feed angle or of recorded
+    temperatures (the projection is of position alone), or no good scan."""
     c = scenario.controller
     if c.mount != "altaz" or c.method != "five_point" or not _good(rows):
         return None
     fixed = {name for name, _ in c.fit_fixed}
     terms = [n for n in c.fit_spec()[0] if n not in fixed]
+    fitted = PointingModel(terms)
+    if fitted.needs_feed or fitted.regressors:
+        return None
     injected = scenario.truth_model.as_dict()
     mount = {n: float(injected.get(n, 0.0)) for n in terms}
     scale = uncorrected_refraction_scale(c, world)
