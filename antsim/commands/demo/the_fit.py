@@ -46,7 +46,7 @@ def tell(story: Story, first: Campaign) -> dict[str, Any]:
     w6 = fit.names.index("W6") if "W6" in fit.names else None
     if truth:
         story.say(ch, recoverable_words(first.result.truth))
-        story.table(ch, truth_pull_table(fit, truth, "Coefficients against the truth"))
+        story.table(ch, truth_pull_table(fit, truth, "Coefficients against the recoverable truth"))
         if w6 is not None and "W6" in truth and fit.sigma_honest_arcsec is not None:
             pull = pulls(fit, truth)
             worst = max(pull, key=lambda k: abs(pull[k]))
