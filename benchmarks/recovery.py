@@ -64,8 +64,8 @@ sys.path.insert(0, str(ROOT))
 
 from antsim.run.outputs import run_fits  # noqa: E402
 from antsim.scenario import Scenario, load_scenario  # noqa: E402
+from antsim.simulate.equivalents import refraction_equivalent_arcsec  # noqa: E402
 from antsim.simulate.runner import simulate  # noqa: E402
-from antsim.studies.ghigo1990 import refraction_equivalent_arcsec  # noqa: E402
 from controller.pointing.fitting import fit_model  # noqa: E402
 from controller.pointing.model import named_model_terms  # noqa: E402
 from controller.pointing.selection import ALPHA  # noqa: E402

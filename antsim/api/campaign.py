@@ -20,7 +20,11 @@ from antsim.outdir import held_output_dir
 from antsim.progress import Progress
 from antsim.run.campaign import check_seed, model_in_use, refuse_earlier_run
 from antsim.run.outputs import model_caption, run_products, write_outputs
-from antsim.run.report import report_figures, truth_terms_arcsec
+from antsim.run.report import (
+    recoverable_terms_arcsec,
+    report_figures,
+    truth_terms_arcsec,
+)
 from antsim.scenario import load_scenario
 from antsim.simulate.runner import run_campaign as run_into
 from antsim.simulate.runner import simulate
@@ -163,13 +167,22 @@ class Campaign(ShownAsTable):
         """The injected value of each term of the truth model (arcsec)."""
         return {k: arcsec(v) for k, v in truth_terms_arcsec(self.run.truth).items()}
 
+    @property
+    def recoverable_terms(self) -> dict[str, Quantity]:
+        """The recoverable truth of each fitted term (arcsec): the mount's terms plus what
+        the fit makes of the uncorrected refraction, the heating and the repeatable
+        irregularities (``truth.json``'s ``recoverable``; the mount's terms without it)."""
+        return {k: arcsec(v) for k, v in recoverable_terms_arcsec(self.run.truth).items()}
+
     def pulls(self) -> QTable:
-        """Fit A against the truth (:meth:`Fit.pulls`), as the report's table: a term
-        the truth model leaves out has no pull."""
+        """Fit A against the recoverable truth (:attr:`recoverable_terms`, :meth:`Fit.pulls`),
+        as the report's table: the mount's terms plus what the fit makes of the uncorrected
+        refraction, the heating and the repeatable irregularities. A term without a truth
+        has no pull."""
         if self.fit is None:
             raise ValueError(f"campaign {self.scenario} seed {self.seed} has no fit A "
                              "(too few observations)")
-        return self.fit.pulls(self.truth_terms)
+        return self.fit.pulls(self.recoverable_terms)
 
     # ----------------------------------------------------------------- the model in use
     @property

@@ -131,7 +131,7 @@ class Fit(ShownAsTable):
 
     def pulls(self, truth: Mapping[str, Any]) -> QTable:
         """The coefficients against a truth (``{term: angle}``, Quantities or arcsec; e.g. a
-        campaign's :attr:`~antsim.api.Campaign.truth_terms`), as the run's report tables
+        campaign's :attr:`~antsim.api.Campaign.recoverable_terms`), as the run's report tables
         them: truth, fit, fit minus truth, TPOINT's sigma and its pull, the honest sigma and
         its pull (pull = (fit - truth) / sigma). A term without a truth has no pull."""
         given = {name: as_arcsec(v, "truth", name) for name, v in truth.items()}

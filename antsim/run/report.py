@@ -30,8 +30,9 @@ if TYPE_CHECKING:
 
     from .inuse import Pointing
 
-__all__ = ["coefficient_table", "fit_summary_table", "report_figures", "source_points_table",
-           "truth_pull_table", "truth_terms_arcsec", "write_run_report"]
+__all__ = ["coefficient_table", "fit_summary_table", "recoverable_terms_arcsec",
+           "recoverable_words", "report_figures", "source_points_table", "truth_pull_table",
+           "truth_terms_arcsec", "write_run_report"]
 
 #: |pull| above which a table cell is highlighted
 PULL_WARN = 3.0
@@ -140,8 +141,10 @@ def source_points_table(points: Mapping[str, int], reference: Reference | None) 
                          + (f", beside {reference.citation}'s" if report else ""))
 
 
-def truth_pull_table(fit: FitResult, truth_arcsec: Mapping[str, float]) -> Table:
-    """Fitted coefficients against the injected truth (arcsec) with pulls
+def truth_pull_table(fit: FitResult, truth_arcsec: Mapping[str, float],
+                     caption: str = "Coefficients against the injected truth") -> Table:
+    """Fitted coefficients against a truth (arcsec; the recoverable one where
+    ``truth.json`` has it, :func:`recoverable_terms_arcsec`) with pulls
     (fit - truth) / sigma, for TPOINT's sigma and the honest (cluster-robust) one."""
     honest = (fit.sigma_honest_arcsec if fit.sigma_honest_arcsec is not None
               else [math.nan] * len(fit.names))
@@ -158,7 +161,7 @@ def truth_pull_table(fit: FitResult, truth_arcsec: Mapping[str, float]) -> Table
         rows.append([name, truth, float(value), diff, float(sigma), pull_t, float(h), pull_h])
     return Table(["term", "truth (\")", "fit (\")", "fit \N{MINUS SIGN} truth (\")",
                   "TPOINT sigma (\")", "pull (TPOINT)", "honest sigma (\")", "pull (honest)"],
-                 rows, caption="Coefficients against the injected truth", number_format=".2f",
+                 rows, caption=caption, number_format=".2f",
                  highlight=frozenset(highlight))
 
 
@@ -179,6 +182,23 @@ def truth_terms_arcsec(truth: Mapping[str, Any] | None) -> dict[str, float]:
     if not truth:
         return {}
     return {k: float(v["value_arcsec"]) for k, v in truth.get("terms", {}).items()}
+
+
+def recoverable_terms_arcsec(truth: Mapping[str, Any] | None) -> dict[str, float]:
+    """``{term: value_arcsec}`` of a ``truth.json`` document's recoverable truth (the mount's
+    terms plus what the fit makes of the uncorrected refraction, the heating and the
+    repeatable irregularities: :mod:`antsim.simulate.equivalents`), the mount's terms
+    (:func:`truth_terms_arcsec`) for a document without one."""
+    if not truth or "recoverable" not in truth:
+        return truth_terms_arcsec(truth)
+    return {k: float(v["value_arcsec"]) for k, v in truth["recoverable"]["terms"].items()}
+
+
+def recoverable_words(truth: Mapping[str, Any] | None) -> str:
+    """One sentence saying what the truth a fit is compared with holds."""
+    if truth and "recoverable" in truth:
+        return f"The truth here is {truth['recoverable']['about']} (truth.json's recoverable)."
+    return "The truth here is the mount's injected terms."
 
 
 def thermal_truth_arcsec(truth: Mapping[str, Any] | None) -> dict[str, float]:
@@ -252,9 +272,16 @@ def write_run_report(result: RunResult, fits: Mapping[str, FitResult | None],
                 f"Cells above {PULL_WARN:g} are highlighted.")
         if effects:
             text += (" The truth also holds effects the fitted model has no terms for ("
-                     + ", ".join(effects) + "): they bias some coefficients.")
-        sections.append(Section("Coefficients against the truth",
-                                [truth_pull_table(fit_a, truth), Paragraph(text)]))
+                     + ", ".join(effects) + "): "
+                     + ("those the recoverable truth does not count bias some coefficients."
+                        if "recoverable" in (result.truth or {})
+                        else "they bias some coefficients."))
+        recoverable = recoverable_terms_arcsec(result.truth)
+        caption = ("Coefficients against the recoverable truth" if "recoverable"
+                   in (result.truth or {}) else "Coefficients against the injected truth")
+        sections.append(Section("Coefficients against the truth", [
+            Paragraph(recoverable_words(result.truth)),
+            truth_pull_table(fit_a, recoverable, caption), Paragraph(text)]))
     if fit_a is not None:
         blocks: list[Block] = [Paragraph(
             f"Condition number {fit_a.condition_number:.3g}; Popn SD "

@@ -8,6 +8,8 @@
   simulated in full;
 * :mod:`.streaming`: the quiet run in a second process, its schedule streamed to the members;
 * :mod:`.ensemble`: tasks and executors (this process, a local process pool, Dask);
+* :mod:`.equivalents`: what a fit of the terms makes of the world's effects at a campaign's
+  scans, and the recoverable truth (the mount's terms plus those shares) in ``truth.json``;
 * :mod:`.flow`: several chains of tasks on one executor at once (each a generator of the
   tasks it needs next), the longest chains' tasks first.
 

@@ -19,6 +19,7 @@ from antsim._version import __version__
 from antsim.outdir import write_file
 from antsim.progress import Progress, progress_for
 from antsim.scenario import Scenario
+from antsim.simulate.equivalents import recoverable_truth
 from antsim.world.world import World
 from controller.astro.earth import UtcLabeller
 from controller.errors import InputError
@@ -142,8 +143,13 @@ def simulate(scenario: Scenario, seed: int | None = None, model: PointingModel |
                          "lengthen the campaign or shorten controller.scan.integration_s")
     check_scenario(scenario, program.observer, program.targets)
     env.run(until=env.process(program.run(env)))
-    return RunResult(scenario=scenario, seed=seed, model=model, rows=rows,
-                     truth=world.truth() if world is not None else {},
+    truth = {}
+    if world is not None:
+        truth = world.truth()
+        recoverable = recoverable_truth(rows, scenario, world)
+        if recoverable is not None:
+            truth["recoverable"] = recoverable.as_json()
+    return RunResult(scenario=scenario, seed=seed, model=model, rows=rows, truth=truth,
                      program=program, world=world, wall_s=time.perf_counter() - t0,
                      tippings=list(getattr(program, "tippings", ())))
 

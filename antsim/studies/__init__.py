@@ -5,5 +5,6 @@
 * :mod:`.crane1981`: NRAO Engineering Memo 147 (Crane 1981): its Tables 4 and 5 as data and
   the comparisons of the 140-ft's simulated runs with them.
 
-May import: :mod:`antsim.world` and :mod:`controller`; benchmarks and tests use it.
+May import: :mod:`antsim.world`, :mod:`antsim.simulate` and :mod:`controller`; benchmarks
+and tests use it.
 """

@@ -125,7 +125,8 @@ def test_antsim_run_twice_writes_identical_bytes(short_scenario, tmp_path, capsy
         a, b = (o / filename for o in outputs)
         assert a.read_bytes() == b.read_bytes(), filename
     truth = json.loads((outputs[0] / "truth.json").read_text(encoding="utf-8"))
-    assert set(truth) == {"seed", "model", "w_terms", "sign_convention", "terms", "effects"}
+    assert set(truth) == {"seed", "model", "w_terms", "sign_convention", "terms", "effects",
+                          "recoverable"}
     assert truth["terms"]["W6"]["value_arcsec"] == pytest.approx(734.4, abs=1e-9)  # 12.24'
     # and a different seed gives different recordings
     out = tmp_path / "c"

@@ -134,7 +134,7 @@ def test_the_text_quotes_the_numbers_of_its_tables_and_figures(demo):
     assert float(w6.group(1)) == round(fit_a["value_arcsec"] / 60, 2)
     assert float(w6.group(2)) == round(fit_a["sigma_honest_arcsec"] / 60, 2)
     assert float(w6.group(3)) == round(fit_a["sigma_arcsec"] / 60, 2)
-    table = html[html.index("<caption>Coefficients against the injected truth</caption>"):]
+    table = html[html.index("<caption>Coefficients against the recoverable truth</caption>"):]
     row = re.search(r"<td>W6</td>((?:<td[^>]*>[^<]*</td>){7})", table).group(1)
     assert f">{fit_a['sigma_honest_arcsec']:.2f}<" in row  # the table's honest sigma
     before, after = (float(x) for x in re.search(

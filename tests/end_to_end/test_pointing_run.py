@@ -64,7 +64,7 @@ def _recoverable_truth(scenario, result, names, heating: bool = True) -> dict[st
     """The mount's injected W's plus what a fit of ``names`` makes of the atmosphere's
     refraction, the repeatable irregularities and (``heating``) the Sun's heating at the
     campaign's scans (arcsec)."""
-    from antsim.studies.ghigo1990 import (
+    from antsim.simulate.equivalents import (
         heating_equivalent_arcsec,
         pattern_equivalent_arcsec,
         refraction_equivalent_arcsec,

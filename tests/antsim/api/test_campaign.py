@@ -79,8 +79,8 @@ def test_the_loop_closed_with_a_fit_is_the_commands_with_its_model_file(
     assert closed.in_use_sky_rms.to_value(u.arcsec) == closed.in_use.sky_rms_arcsec
 
 
-def test_pulls_are_fit_minus_truth_over_sigma(campaign):
-    truth = campaign.truth["terms"]
+def test_pulls_are_fit_minus_recoverable_truth_over_sigma(campaign):
+    truth = campaign.truth["recoverable"]["terms"]
     table = campaign.pulls()
     assert list(table["term"]) == list(campaign.fit.names)
     saved = campaign.fit_json()["terms"]
