@@ -24,7 +24,7 @@ _spec.loader.exec_module(publish)
 #: benchmarks/publish.py NAME` records one; then drop it here (a test says so).
 AWAITING = {"recovery", "blind", "blind_nulls", "blind_fomalont", "blind_changes",
             "blind_tpoint", "blind_tpoint_nulls", "blind_bound",
-            "crane1981_diagnose", "crane1981_days", "plan_accuracy"}
+            "crane1981_diagnose", "crane1981_days"}
 #: the commands of the long results, as the docs name them (the arguments that made the
 #: kept files): the dry run must list exactly these
 LONG = {
