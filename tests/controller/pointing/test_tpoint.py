@@ -589,9 +589,15 @@ def test_mod_write_read_round_trip(names, data):
                         caption="Round trip")
     back = parse_mod(format_mod(model))
     assert back.names == model.names
-    np.testing.assert_allclose(back.values_arcsec, model.values_arcsec, rtol=0, atol=0.5e-4)
+    # written to 4 (values) and 5 (sigmas) decimals: off by at most half the last digit, plus
+    # the binary representation of the decimal read back (below 1e-9 for |x| < 1e5; 1.09375
+    # is written 1.0938, which reads back 5.00000000001e-05 away)
+    represented = 1e-9
+    np.testing.assert_allclose(back.values_arcsec, model.values_arcsec, rtol=0,
+                               atol=0.5e-4 + represented)
     expected_sigma = np.array([np.nan if s is None else s for s in sigmas], float)
-    np.testing.assert_allclose(back.sigma_arcsec, expected_sigma, rtol=0, atol=0.5e-5)
+    np.testing.assert_allclose(back.sigma_arcsec, expected_sigma, rtol=0,
+                               atol=0.5e-5 + represented)
     assert back.fixed == model.fixed and back.parallel == model.parallel
     assert format_mod(back) == format_mod(model)
 
