@@ -70,11 +70,12 @@ NOT_IMPORTED: dict[str, str] = {
                            "(tests/antsim/run/, tests/end_to_end/test_pointing_run.py)",
     "antsim.run.report": "antsim run's report.html, run through antsim.cli.main "
                          "(tests/antsim/run/test_report_page.py)",
-    "antsim.serve.app": _SPLIT.format("the device's tests in tests/antsim/serve/test_serve.py"),
-    "antsim.serve.requests": _SPLIT.format(
-        "antsim serve --requests in tests/antsim/serve/test_serve.py"),
-    "antsim.serve.sensors": _SPLIT.format(
-        "the device's sensor tests in tests/antsim/serve/test_serve.py"),
+    "antsim.serve.app": "the server's run, started as a child process by ServerProcess "
+                        "(tests/antsim/serve/test_app.py)",
+    "antsim.serve.requests": "antsim serve --requests, run through antsim.cli.main "
+                             "(tests/antsim/commands/test_serve.py)",
+    "antsim.serve.sensors": "the device's sensors, read over KATCP "
+                            "(tests/antsim/serve/test_device.py)",
     "antsim.world.weather": _SPLIT.format("the world's tests in tests/antsim/world/test_world.py"),
     "antsim.world.effects.dynamics": _SPLIT.format(
         "the catalogue's tests in tests/antsim/world/effects/test_effects.py"),
