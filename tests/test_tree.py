@@ -77,12 +77,12 @@ NOT_IMPORTED: dict[str, str] = {
     "antsim.serve.sensors": "the device's sensors, read over KATCP "
                             "(tests/antsim/serve/test_device.py)",
     "antsim.world.weather": _SPLIT.format("the world's tests in tests/antsim/world/test_world.py"),
-    "antsim.world.effects.dynamics": _SPLIT.format(
-        "the catalogue's tests in tests/antsim/world/effects/test_effects.py"),
-    "antsim.world.effects.equatorial": _SPLIT.format(
-        "the catalogue's tests in tests/antsim/world/effects/test_effects.py"),
-    "antsim.world.effects.tracking": _SPLIT.format(
-        "the catalogue's tests in tests/antsim/world/effects/test_effects.py"),
+    "antsim.world.effects.dynamics": "its effects, made by name in a world "
+                                     "(tests/antsim/world/effects/test_dynamics.py)",
+    "antsim.world.effects.equatorial": "its effect, run by name in the 140-ft's scenario "
+                                       "(tests/antsim/world/effects/test_effects.py)",
+    "antsim.world.effects.tracking": "its effect, made by name in a world "
+                                     "(tests/antsim/world/effects/test_tracking.py)",
     "controller.astro.earth": "its UTC instants and IERS values are checked through the "
                               "ephemeris against astropy "
                               "(tests/controller/astro/test_ephemeris.py)",
