@@ -86,12 +86,12 @@ NOT_IMPORTED: dict[str, str] = {
     "controller.astro.earth": "its UTC instants and IERS values are checked through the "
                               "ephemeris against astropy "
                               "(tests/controller/astro/test_ephemeris.py)",
-    "controller.program.config": _SPLIT.format(
-        "the campaign's tests in tests/controller/program/test_campaign.py"),
+    "controller.program.config": "read from every scenario's [controller] tables "
+                                 "(tests/antsim/test_scenario.py, tests/controller/program/)",
     "controller.program.optical": _SPLIT.format(
         "the optical campaigns in tests/end_to_end/test_bima.py"),
-    "controller.program.scheduler": _SPLIT.format(
-        "the campaign's tests in tests/controller/program/test_campaign.py"),
+    "controller.program.scheduler": "its policies, run through whole campaigns "
+                                    "(tests/controller/program/test_scheduler.py)",
 }
 
 
