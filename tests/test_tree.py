@@ -63,9 +63,10 @@ NOT_IMPORTED: dict[str, str] = {
         "the library's tests in tests/antsim/diagnose/test_diagnose.py"),
     "antsim.diagnose.request": _SPLIT.format(
         "antsim diagnose's runs in tests/antsim/diagnose/test_diagnose.py"),
-    "antsim.plan.outputs": _SPLIT.format("antsim plan's runs in tests/antsim/plan/test_plan.py"),
-    "antsim.simulate.schedule": _SPLIT.format(
-        "the shared-schedule ensemble's tests in tests/antsim/plan/test_plan.py"),
+    "antsim.plan.outputs": "antsim plan's files, written by runs through antsim.cli.main "
+                           "(tests/antsim/plan/test_study.py, test_report.py)",
+    "antsim.simulate.schedule": "the shared schedule, made through antsim.simulate.vectorized "
+                                "(tests/antsim/simulate/test_vectorized.py)",
     "antsim.run.campaign": "antsim run's work, run through antsim.cli.main "
                            "(tests/antsim/run/, tests/end_to_end/test_pointing_run.py)",
     "antsim.run.report": "antsim run's report.html, run through antsim.cli.main "
