@@ -63,34 +63,36 @@ NOT_IMPORTED: dict[str, str] = {
         "the library's tests in tests/antsim/diagnose/test_diagnose.py"),
     "antsim.diagnose.request": _SPLIT.format(
         "antsim diagnose's runs in tests/antsim/diagnose/test_diagnose.py"),
-    "antsim.plan.outputs": _SPLIT.format("antsim plan's runs in tests/antsim/plan/test_plan.py"),
-    "antsim.simulate.schedule": _SPLIT.format(
-        "the shared-schedule ensemble's tests in tests/antsim/plan/test_plan.py"),
+    "antsim.plan.outputs": "antsim plan's files, written by runs through antsim.cli.main "
+                           "(tests/antsim/plan/test_study.py, test_report.py)",
+    "antsim.simulate.schedule": "the shared schedule, made through antsim.simulate.vectorized "
+                                "(tests/antsim/simulate/test_vectorized.py)",
     "antsim.run.campaign": "antsim run's work, run through antsim.cli.main "
                            "(tests/antsim/run/, tests/end_to_end/test_pointing_run.py)",
     "antsim.run.report": "antsim run's report.html, run through antsim.cli.main "
                          "(tests/antsim/run/test_report_page.py)",
-    "antsim.serve.app": _SPLIT.format("the device's tests in tests/antsim/serve/test_serve.py"),
-    "antsim.serve.requests": _SPLIT.format(
-        "antsim serve --requests in tests/antsim/serve/test_serve.py"),
-    "antsim.serve.sensors": _SPLIT.format(
-        "the device's sensor tests in tests/antsim/serve/test_serve.py"),
+    "antsim.serve.app": "the server's run, started as a child process by ServerProcess "
+                        "(tests/antsim/serve/test_app.py)",
+    "antsim.serve.requests": "antsim serve --requests, run through antsim.cli.main "
+                             "(tests/antsim/commands/test_serve.py)",
+    "antsim.serve.sensors": "the device's sensors, read over KATCP "
+                            "(tests/antsim/serve/test_device.py)",
     "antsim.world.weather": _SPLIT.format("the world's tests in tests/antsim/world/test_world.py"),
-    "antsim.world.effects.dynamics": _SPLIT.format(
-        "the catalogue's tests in tests/antsim/world/effects/test_effects.py"),
-    "antsim.world.effects.equatorial": _SPLIT.format(
-        "the catalogue's tests in tests/antsim/world/effects/test_effects.py"),
-    "antsim.world.effects.tracking": _SPLIT.format(
-        "the catalogue's tests in tests/antsim/world/effects/test_effects.py"),
+    "antsim.world.effects.dynamics": "its effects, made by name in a world "
+                                     "(tests/antsim/world/effects/test_dynamics.py)",
+    "antsim.world.effects.equatorial": "its effect, run by name in the 140-ft's scenario "
+                                       "(tests/antsim/world/effects/test_effects.py)",
+    "antsim.world.effects.tracking": "its effect, made by name in a world "
+                                     "(tests/antsim/world/effects/test_tracking.py)",
     "controller.astro.earth": "its UTC instants and IERS values are checked through the "
                               "ephemeris against astropy "
                               "(tests/controller/astro/test_ephemeris.py)",
-    "controller.program.config": _SPLIT.format(
-        "the campaign's tests in tests/controller/program/test_campaign.py"),
+    "controller.program.config": "read from every scenario's [controller] tables "
+                                 "(tests/antsim/test_scenario.py, tests/controller/program/)",
     "controller.program.optical": _SPLIT.format(
         "the optical campaigns in tests/end_to_end/test_bima.py"),
-    "controller.program.scheduler": _SPLIT.format(
-        "the campaign's tests in tests/controller/program/test_campaign.py"),
+    "controller.program.scheduler": "its policies, run through whole campaigns "
+                                    "(tests/controller/program/test_scheduler.py)",
 }
 
 

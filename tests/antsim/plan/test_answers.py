@@ -19,8 +19,10 @@ from antsim.plan.planfile import load_plan
 from antsim.plan.study import run_plan
 from antsim.progress import Progress
 from antsim.simulate.ensemble import Job, task_record
-from antsim.simulate.vectorized import quiet_scenario
-from tests.antsim.plan.test_plan import assert_docs_close
+from antsim.simulate.vectorized import (
+    quiet_scenario,
+)
+from tests.antsim.plan.conftest import assert_docs_close
 
 PLAN = """name = "answers"
 scenario = "{scenario}"
@@ -180,3 +182,37 @@ def test_questions_of_one_long_run_simulate_it_once(plan, monkeypatch):
     assert recorded == [0.125 * 86400.0]
     one, two = result.answers["duration"]
     assert one["curve"] == two["curve"] and one["target_arcsec"] != two["target_arcsec"]
+
+
+def test_answers_duration_sources_and_separation(write_plan):
+    more = ('[[answers.duration]]\nbased_on = "as run"\nterms = ["W1"]\n'
+            'target_arcsec = 60.0\nunit = "hour"\nmax_days = 0.125\n'
+            '[[answers.duration]]\nbased_on = "as run"\nterms = ["W1"]\n'
+            'target_arcsec = 0.5\nunit = "hour"\nmax_days = 0.125\n'
+            '[[answers.sources]]\nbased_on = "as run"\nmin_sources = 3\ncandidates = 1\n')
+    variant = 'duration_h = 2.0\nsources = ["3C84", "W31", "Cygnus A", "Cassiopeia A"]'
+    plan = load_plan(write_plan(members=2, block=2, variant=variant, more=more))
+    result = run_plan(plan, workers=0, progress=False)
+    reached, missed = result.answers["duration"]
+    assert reached["reached"] and reached["answer"]["sigma_arcsec"]["W1"] <= 60.0
+    # more hours, smaller sigma than the first hour's, though not hour by hour: the
+    # afternoon's rising wind makes its gusts, and a later hour's scans, noisier (measured
+    # 44.7", 14.4", 15.4" after 1, 2 and 3 hours)
+    sig = [c["sigma_arcsec"]["W1"] for c in reached["curve"]]
+    assert all(later < 0.5 * sig[0] for later in sig[1:])
+    earlier = [c for c in reached["curve"] if c["count"] < reached["answer"]["count"]]
+    assert all(c["sigma_arcsec"]["W1"] > 60.0 for c in earlier)
+    assert not missed["reached"] and missed["extrapolated"]["count"] > 3
+    src = result.answers["sources"][0]
+    best = src["best"]
+    assert best is not None and len(best["sources"]) >= 3
+    assert all(best["score"] >= c["score"] for c in src["checked"] if c["feasible"])
+    separation = result.answers["separation"][0]
+    v = result.variants[0]
+    sd = v.prediction.sigma_arcsec
+    corr = v.prediction.covariance / np.outer(sd, sd)
+    names = list(v.terms)
+    expected = {(names[i], names[j]) for i in range(len(names)) for j in range(i + 1, len(names))
+                if abs(corr[i, j]) > 0.95}
+    assert {tuple(p["terms"]) for p in separation["pairs"]} == expected
+    assert "duration:" in result.text() and "sources:" in result.text()

@@ -2,9 +2,17 @@
 
 from __future__ import annotations
 
+import json
 import re
+from html import escape
 
 from antsim.plan.report import TERMS_HEADER, VARIANTS_HEADER, write_plan_report
+from tests.antsim.run.test_report_page import (
+    _embedded,
+    assert_renders_in_a_browser,
+    needs_chromium,
+    read_page,
+)
 
 
 def _doc() -> dict:
@@ -33,3 +41,44 @@ def test_numbers_are_right_aligned_and_no_zero_is_negative(tmp_path):
         assert all(attrs == ' class="num"' for attrs, _ in row[1:])
     assert len(cells[0]) == len(VARIANTS_HEADER) and len(cells[1]) == len(TERMS_HEADER)
     assert "-0.0" not in page
+
+
+def test_plan_page_numbers_are_the_json_numbers(plan_out):
+    """report.html: the variants' and terms' numbers are plan.json's at plan.txt's precision
+    (one source), plan.txt is on the page whole, every figure embedded byte for byte."""
+    from antsim.figures.html import format_number
+    from antsim.plan.report import TERMS_HEADER, VARIANTS_HEADER
+
+    _, out = plan_out
+    doc = json.loads((out / "plan.json").read_text())
+    page = read_page(out / "report.html")
+
+    def f(x, spec):
+        return "\N{EN DASH}" if x is None else format_number(x, spec)
+
+    assert page.tables["The plan's variants"] == [list(VARIANTS_HEADER)] + [
+        [p["name"], f(p["duration_h"], ".1f"), str(p["n_scans"]), str(p["n_monte_carlo"]),
+         f(p["sky_rms_fisher_arcsec"], ".1f"), f(p["sky_rms_mc_arcsec"], ".1f")]
+        for p in doc["plans"]]
+    text = (out / "plan.txt").read_text()
+    for p in doc["plans"]:
+        rows = page.tables[f"{p['name']}: the fitted terms (arcsec)"]
+        assert rows == [list(TERMS_HEADER)] + [
+            [n, f(t["truth_arcsec"], "+.1f"), f(t["sigma_fisher_arcsec"], ".2f"),
+             f(t["sigma_mc_arcsec"], ".2f"), f(t["bias_arcsec"], "+.1f"),
+             f(t["bias_predicted_arcsec"], "+.1f")] for n, t in p["terms"].items()]
+        for n, t in p["terms"].items():  # the same figures as plan.txt's table
+            assert re.search(rf"^  {n} .*{f(t['sigma_fisher_arcsec'], '.2f')}", text, re.M)
+        assert f"predicted {f(p['sky_rms_fisher_arcsec'], '.1f')}\"" in text
+    html = (out / "report.html").read_text()
+    assert escape(text.rstrip("\n")) in html
+    embedded = _embedded(html)
+    pngs = sorted(x.name for x in out.glob("*.png"))
+    assert sorted(embedded) == pngs and len(pngs) >= 4
+    assert all(embedded[n] == (out / n).read_bytes() for n in pngs)
+
+
+@needs_chromium
+def test_plan_page_in_a_headless_browser(plan_out, tmp_path):
+    _, out = plan_out
+    assert_renders_in_a_browser(out / "report.html", tmp_path, len(list(out.glob("*.png"))))

@@ -29,7 +29,7 @@ from pathlib import Path
 import pytest
 
 from antsim.serve.process import ServerProcess
-from tests.antsim.serve.test_serve import TIMEOUT_S, LineClient
+from tests.antsim.serve.conftest import TIMEOUT_S, LineClient
 
 REPO = Path(__file__).resolve().parents[3]
 BASE = REPO / "tests" / "data" / "bad_inputs" / "scenario" / "_base.toml"

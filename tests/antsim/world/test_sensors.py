@@ -222,7 +222,7 @@ def test_a_model_with_thermal_terms_is_refused_as_the_controller_model(
 def test_the_server_serves_the_structure_temperatures(short_sensors):
     """?antenna counts the sensors, ?structure-temperatures reads them (one inform each),
     and the structure.NAME sensors hold that reading."""
-    from tests.antsim.serve.test_serve import LineClient
+    from tests.antsim.serve.conftest import LineClient
 
     with ServerProcess(short_sensors) as srv:
         client = LineClient(srv.port)

@@ -4,15 +4,23 @@ fast reader giving astropy's table."""
 
 from __future__ import annotations
 
+import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 from astropy.table import Table
 
+from antsim.simulate.runner import run_campaign
 from controller.errors import InputError
 from controller.program import recordings
-from controller.program.recordings import read_recordings, recorded_mount
+from controller.program.recordings import (
+    COLUMN_NAMES,
+    read_pointing_data,
+    read_recordings,
+    recorded_mount,
+)
 
 BASE = Path(__file__).resolve().parents[2] / "data" / "bad_inputs" / "ecsv" / "_base.ecsv"
 
@@ -91,3 +99,80 @@ def test_the_ecsv_header_is_read_as_astropys_yaml_loader_reads_it():
     assert got == load("\n".join(line[2:] for line in tagged))
     with pytest.raises(yaml.YAMLError):  # malformed: astropy's loader says so
         _yaml_header(["# meta: [1, 2"])
+
+
+def test_recordings_round_trip(ghigo, tmp_path):
+    sc = replace(ghigo, duration_s=2 * 3600.0,
+                 controller=replace(ghigo.controller, duration_s=2 * 3600.0))
+    result = run_campaign(sc, tmp_path, show_progress=False)
+    table = read_recordings(tmp_path / "recordings.ecsv")
+    assert tuple(table.colnames) == COLUMN_NAMES
+    assert len(table) == len(result.rows)
+    for i, row in enumerate(result.rows):
+        for name in COLUMN_NAMES:
+            value = table[name][i]
+            if isinstance(row[name], float):
+                assert float(value) == row[name] or (math.isnan(row[name])
+                                                     and math.isnan(float(value)))
+            else:
+                assert value == row[name]
+    assert table["xel_arcmin"].unit == "arcmin"
+    meta = table.meta
+    assert meta["scenario"] == "ghigo1990" and meta["seed"] == sc.seed
+    assert meta["model"]["name"] == "ghigo10"
+    assert meta["model"]["terms_arcsec"]["W6"] == pytest.approx(720.0)
+    assert meta["model"]["w_terms"] == "Ghigo 1990 (NRAO EDIR 288) section II"
+    assert meta["step_arcmin"] == 7.0 and meta["beam_hpbw_arcmin"] == 11.0
+    # total pointing error = measured + model in use + applied correction
+    data = read_pointing_data(tmp_path / "recordings.ecsv")
+    avg = [r for r in result.rows if r["polarization"] == "AVG" and r["good"]]
+    expected_el = [60 * (r["el_arcmin"] + r["model_el_arcmin"] + r["applied_el_arcmin"])
+                   for r in avg]
+    assert np.allclose(data.el_arcsec, expected_el)
+
+
+def test_resume_after_a_torn_write_is_byte_identical(ghigo, tmp_path):
+    sc = replace(ghigo, duration_s=2 * 3600.0,
+                 controller=replace(ghigo.controller, duration_s=2 * 3600.0))
+    full = tmp_path / "full"
+    run_campaign(sc, full, show_progress=False)
+    reference = (full / "recordings.ecsv").read_bytes()
+    names_line = reference.index(b"\nscan ") + 1
+    header_end = reference.index(b"\n", names_line) + 1  # first byte of the first data row
+    body_lines = reference[header_end:].count(b"\n")
+    assert body_lines > 20
+    rng = np.random.default_rng(7)
+    # cut the file anywhere: inside the header, mid-line, exactly at a line end
+    cuts = [header_end - 5, header_end + 10, reference.index(b"\n", header_end + 2000) + 1,
+            *rng.integers(header_end, len(reference) - 1, size=3)]
+    for cut in cuts:
+        part = tmp_path / f"cut{cut}"
+        part.mkdir()
+        (part / "recordings.ecsv").write_bytes(reference[:cut])
+        if cut < header_end:
+            # a torn header is not this run's header: resuming refuses, it does not guess
+            from controller.errors import InputError
+
+            with pytest.raises(InputError):
+                run_campaign(sc, part, resume=True, show_progress=False)
+            continue
+        # what is on disk is readable up to the last complete row
+        table = read_recordings(part / "recordings.ecsv")
+        assert len(table) == reference[header_end:cut].count(b"\n")
+        run_campaign(sc, part, resume=True, show_progress=False)
+        assert (part / "recordings.ecsv").read_bytes() == reference
+
+
+def test_resume_refuses_another_runs_file(ghigo, tmp_path):
+    from controller.program.recordings import ResumeMismatchError
+
+    sc = replace(ghigo, duration_s=1 * 3600.0,
+                 controller=replace(ghigo.controller, duration_s=1 * 3600.0))
+    run_campaign(sc, tmp_path, seed=1, show_progress=False)
+    text = (tmp_path / "recordings.ecsv").read_text()
+    # same header (same seed), but a tampered data row
+    lines = text.splitlines(keepends=True)
+    lines[-1] = lines[-1].replace("AVG", "XR", 1)
+    (tmp_path / "recordings.ecsv").write_text("".join(lines))
+    with pytest.raises(ResumeMismatchError):
+        run_campaign(sc, tmp_path, seed=1, resume=True, show_progress=False)

@@ -5,16 +5,26 @@ held fixed (so each expected value is analytic)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
+import simpy
 
+from antsim.scenario import EffectSpec, load_scenario
 from antsim.world import heat
 from antsim.world.effects import EFFECTS, PointingState
 from antsim.world.effects.heating import PARTS, _leg_lit, member_forcings
+from antsim.world.effects.thermal import GRID_STEP_S
 from antsim.world.structure import Structure
+from antsim.world.world import World
+from controller.astro.sun import sunset_times_s
+from tests.antsim.world.effects.conftest import (
+    _effect,
+    _rms,
+)
 
 S = Structure()
 SUN_EL, SUN_AZ = math.radians(30.0), math.radians(180.0)  # due south, 30 deg up
@@ -104,7 +114,7 @@ def _world(wind_m_s=3.0, air_c=0.0, duration_s=6 * 3600.0, sun_az=SUN_AZ):
         air_temperature_c=lambda t: np.full(np.shape(t), air_c))
 
 
-def _effect(world, **params):
+def _started(world, **params):
     effect = EFFECTS["thermal"](**{"cloud_modulation": 0.0, **params})
     effect.start(world, np.random.default_rng(0))
     return effect
@@ -116,7 +126,7 @@ def test_the_yoke_relaxes_with_rho_c_d_over_h_after_a_slew():
     wind's convection plus radiation plus the inside of the box (15 mm of steel in 3 m/s of
     wind: 38 minutes). One time constant after the slew it has covered 1 - 1/e of the way
     (to rounding: the state advances exactly)."""
-    effect = _effect(_world())
+    effect = _started(_world())
     p = effect.p
     h_plate = (float(heat.convective_coefficient_w_m2k(3.0))
                + float(heat.radiative_coefficient_w_m2k(p["emissivity"], 273.15))
@@ -140,7 +150,7 @@ def test_the_pedestal_leans_away_from_the_sun():
     warmer than the north (north minus south negative, east minus west nil), and the
     azimuth axis tilts north (away from the Sun) by the geometry's arcsec per kelvin of
     that difference."""
-    effect = _effect(_world(duration_s=4 * 3600.0))
+    effect = _started(_world(duration_s=4 * 3600.0))
     p = effect.p
     h_plate = (float(heat.convective_coefficient_w_m2k(3.0))
                + float(heat.radiative_coefficient_w_m2k(p["emissivity"], 273.15))
@@ -157,7 +167,7 @@ def test_the_pedestal_leans_away_from_a_morning_sun_too():
     """The same with the Sun due east: the east face is the warmer and the axis tilts west
     (negative towards the east) by the same arcsec per kelvin: the pedestal bends away from
     its warmer side whichever way that lies."""
-    effect = _effect(_world(duration_s=4 * 3600.0, sun_az=math.radians(90.0)))
+    effect = _started(_world(duration_s=4 * 3600.0, sun_az=math.radians(90.0)))
     east = effect.pedestal_e_k[-1]
     assert east > 0.0 and abs(effect.pedestal_n_k[-1]) < 1e-9 * east
     tilt_e = effect._tilt_e_arcsec[-1]
@@ -188,7 +198,7 @@ def test_the_tilt_turns_the_beam_as_a_tilted_azimuth_axis(tilt_n, tilt_e):
     sign is off by twice the tilt): pole north, the northern horizon
     tips down and a northern source is indicated too high (dE = i cos A, dA cos E = i sin A
     sin E). A flipped sign in either direction fails at the first azimuth."""
-    effect = _effect(_world())
+    effect = _started(_world())
     parts = np.zeros(4)
     for az_deg in (0.0, 60.0, 135.0, 210.0, 300.0):
         for el_deg in (15.0, 50.0, 80.0):
@@ -208,7 +218,7 @@ def test_the_sensors_tilt_terms_are_the_heatings_tilt():
     from antsim.world.sensors import thermal_truth
     from controller.pointing.model import PointingModel
 
-    effect = _effect(_world())
+    effect = _started(_world())
     c = effect.k["pedestal_tilt"]
     truth = thermal_truth({})
     assert (truth["TNPNS"], truth["TWPEW"], truth["TTILT"]) == pytest.approx((-c, c, c))
@@ -225,3 +235,63 @@ def test_the_sensors_tilt_terms_are_the_heatings_tilt():
         m_az, m_el = model.offset_rad(az, el, aux=aux)
         np.testing.assert_allclose(m_az, d_az, atol=1e-12)
         np.testing.assert_allclose(m_el, d_el, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_thermal_elevation_excursions_larger_by_day_than_by_night(ghigo_path, seed):
+    """The heating's elevation error with every member at its equilibrium, for a dish facing
+    south-east at 40 deg, over the 1990 scenario's minute grid: by day (Sun above the
+    horizon) its rms is more than three times the night's (measured: 20-22" by day, 3-4"
+    at night, the pedestal's and yoke's relaxation after sunset), and it moves by day."""
+    world = World(load_scenario(ghigo_path), simpy.Environment(), seed=seed)
+    thermal = _effect(world, "thermal")
+    t = np.arange(0.0, world.duration_s, 60.0)
+    _, el = thermal.equilibrium_errors_arcsec(t, math.radians(135.0), math.radians(40.0))
+    day = world.sun_el_rad(t) > 0.0
+    assert 0.2 < day.mean() < 0.6  # both halves well sampled (Feb: ~10.6 h of day)
+    assert _rms(el[day]) > 3.0 * _rms(el[~day])
+    assert np.std(el[day]) > 2.0 * np.std(el[~day])  # the excursion, not only the level
+
+
+def test_the_pointing_per_kelvin_follows_the_yoke_geometry_alone(ghigo_path):
+    """Doubling the yoke arms' height doubles their bow and roll per kelvin and nothing
+    else: an afternoon instant's error, less the same instant's with the yoke's
+    coefficients all but zeroed by arms a million metres deep and apart, scales by two (to
+    1e-5: that yoke keeps 3e-6 of the coefficients; the same differences, one product),
+    and the legs' and pedestal's per kelvin are unchanged."""
+    base = load_scenario(ghigo_path)
+
+    def effect(**params):
+        effects = tuple(EffectSpec(e.name, {**e.params, **params}) if e.name == "thermal"
+                        else e for e in base.effects)
+        world = World(dataclasses.replace(base, effects=effects), simpy.Environment(), seed=3)
+        return _effect(world, "thermal")
+
+    one, two = effect(yoke_height_m=3.0), effect(yoke_height_m=6.0)
+    for name in ("legs_el", "legs_xel", "pedestal_tilt"):
+        assert two.k[name] == one.k[name]
+    for name in ("yoke_bow", "yoke_roll"):
+        assert two.k[name] == pytest.approx(2.0 * one.k[name], rel=1e-12)
+    state = PointingState(3 * 3600.0, math.radians(130.0), math.radians(30.0))
+    e_one = np.array(one.pointing_error(dataclasses.replace(state)))
+    e_two = np.array(two.pointing_error(dataclasses.replace(state)))
+    without = effect(yoke_height_m=3.0, yoke_depth_m=1e6, yoke_separation_m=1e6)
+    e_none = np.array(without.pointing_error(dataclasses.replace(state)))
+    assert np.all(np.abs(e_one - e_none) > 1e-7)  # the yoke's share is there (> 0.02")
+    np.testing.assert_allclose(e_two - e_none, 2.0 * (e_one - e_none), rtol=1e-5)
+
+
+def test_the_pedestal_relaxes_after_sunset_with_its_time_constant(ghigo_path):
+    """After the geometric sunset the pedestal's forcing is zero and its north-south
+    difference decays with tau = rho c d / h of the evening's wind (h changes a little as
+    the wind drops: the decay over one mean time constant is e^-1 to 2%)."""
+    world = World(load_scenario(ghigo_path), simpy.Environment())
+    thermal = _effect(world, "thermal")
+    (t_set,) = sunset_times_s(world.ephemeris, horizon_deg=0.0)
+    grid = thermal.t_grid
+    i0 = int(np.searchsorted(grid, t_set)) + 1
+    tau = thermal.p["heat_capacity_j_m3k"] * thermal.p["pedestal_wall_m"] / thermal._h_plate
+    n = round(float(np.mean(tau[i0:i0 + 120])) / GRID_STEP_S)
+    start, later = thermal.pedestal_n_k[i0], thermal.pedestal_n_k[i0 + n]
+    assert abs(start) > 1.0  # a real difference to decay from (K)
+    assert later / start == pytest.approx(math.exp(-1.0), rel=0.02)
