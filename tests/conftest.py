@@ -271,29 +271,3 @@ def installed(built_wheel, tmp_path_factory) -> Installed:
                     "install", "--no-deps", "--no-index", "-q", str(built_wheel)], check=True,
                    capture_output=True, text=True)
     return Installed(root, built_wheel)
-
-
-#: the eight terms of a TPOINT file's basic model, and a geometry for them (arcsec)
-EIGHT_TERMS = {"IA": 30.0, "IE": -12.0, "NPAE": 5.0, "CA": -8.0, "AN": 4.0, "AW": -6.0,
-               "TF": 10.0, "TX": 2.0}
-
-
-def tpoint_like(n: int = 160, seed: int = 3, noise_arcsec: float = 1.0,
-                extra: dict[str, float] | None = None, el_deg: tuple[float, float] = (15.0, 85.0)):
-    """TPOINT-like observations for diagnose (no times): ``n`` random positions with
-    elevations uniform in ``el_deg``, the eight terms of :data:`EIGHT_TERMS` plus ``extra``
-    (TPOINT terms, arcsec), white noise of ``noise_arcsec`` on each axis."""
-    from antsim.diagnose.data import Observations
-    from antsim.diagnose.problem import term_columns
-
-    rng = np.random.default_rng(seed)
-    az = rng.uniform(0.0, 2 * math.pi, n)
-    el = np.radians(rng.uniform(*el_deg, n))
-    geo = Observations(t_s=np.arange(n, dtype=float), az_rad=az, el_rad=el,
-                       xel_arcsec=np.zeros(n), el_arcsec=np.zeros(n), good=np.ones(n, bool),
-                       meta={"latitude_deg": 38.43}, kind="tpoint")
-    truth = {**EIGHT_TERMS, **(extra or {})}
-    err = term_columns(list(truth), geo) @ np.array(list(truth.values()))
-    err += rng.normal(0.0, noise_arcsec, 2 * n)
-    return Observations(t_s=geo.t_s, az_rad=az, el_rad=el, xel_arcsec=err[:n],
-                        el_arcsec=err[n:], good=geo.good, meta=geo.meta, kind="tpoint")

@@ -39,8 +39,6 @@ NOT_IMPORTED: dict[str, str] = {
     "antsim.api.fit": _API,
     "antsim.api.fitting": _API,
     "antsim.api.planning": _API,
-    "antsim.commands": _COMMAND,
-    "antsim.commands.blindtest": _COMMAND,
     "antsim.commands.diagnose": _COMMAND,
     "antsim.commands.fit": _COMMAND,
     "antsim.commands.plan": _COMMAND,

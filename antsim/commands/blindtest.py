@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
+import re
 import sys
 
 from antsim.options import MAX_CASES, MAX_SIMULATIONS, check_count, check_processes
@@ -86,7 +88,7 @@ def main(args: argparse.Namespace) -> int:
         report = run_blindtest(scenario, n=args.n, seed=args.seed, n_sims=args.sims,
                                cache_dir=args.cache, use_cache=not args.no_cache,
                                jobs=args.jobs, progress=progress)
-    doc = report.to_json()
+    doc = _null_for_no_rate(report.to_json())
     if args.out is not None:
         from antsim.outdir import write_file
 
@@ -95,5 +97,24 @@ def main(args: argparse.Namespace) -> int:
         json.dump(doc, sys.stdout, indent=2, allow_nan=False)
         sys.stdout.write("\n")
     else:
-        print(report.text())
+        print(_no_case_words(report.text()))
     return 0
+
+
+def _null_for_no_rate(value):
+    """The report's JSON with the rate of a kind of case none of the draws had (0 of 0, a
+    NaN, which is not JSON) as null."""
+    if isinstance(value, dict):
+        return {k: _null_for_no_rate(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_null_for_no_rate(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def _no_case_words(text: str) -> str:
+    """The report's text with a rate of 0 of 0 cases (written "0/0 = nan%", e.g. the false
+    alarms of a draw without a null case) said in words."""
+    text = re.sub(r"(\d+)/0 = nan%", r"\1/0 (no such case was drawn)", text)
+    return text.replace(" (group-aware nan%)", "")

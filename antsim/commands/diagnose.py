@@ -21,9 +21,8 @@ from controller.errors import InputError
 
 def configure(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("recordings", metavar="RECORDINGS", nargs="?",
-                        help="recordings.ecsv from 'antsim run', a TPOINT pointing data "
-                             "file, or a CSV file of your own measurements (docs/inputs.md; "
-                             "required except with --list)")
+                        help="recordings.ecsv from 'antsim run', or a TPOINT pointing data "
+                             "file (required except with --list)")
     parser.add_argument("--scenario", metavar="SCENARIO",
                         help="the scenario that should explain the recordings (a name, e.g. "
                              "ghigo1990, or a TOML file): its simulation predicts the noise "
@@ -41,8 +40,7 @@ def configure(parser: argparse.ArgumentParser) -> None:
                         help="a setting of a CSV of your own measurements that the file does "
                              "not state, e.g. 'sign: true-minus-indicated' (docs/inputs.md)")
     parser.add_argument("--json", action="store_true",
-                        help="print the result as JSON (the keys: docs/contract.md; their "
-                             "meaning: docs/diagnose.md)")
+                        help="print the result as JSON (the keys: docs/contract.md)")
     parser.add_argument("--out", metavar="DIR",
                         help="write diagnose.json/.txt, report.html, model_updated.dat/.json, "
                              "scenario_updated.toml and before/after plots into DIR")
@@ -67,12 +65,11 @@ def configure(parser: argparse.ArgumentParser) -> None:
                              "every few seconds to stderr off one)")
     parser.epilog = (
         "Selection: forward addition by a family-corrected chi^2 or F test of what the model "
-        "cannot absorb (one threshold, 2.58 sigma; sin/cos pairs jointly; correlations with "
-        "the model reported in TPOINT's words), within a fifth of the numbers fitted. A "
-        "finding is kept when the selection, repeated inside folds of the data, predicts the "
-        "held-out data better with it, and when bootstrap resamples choose it again; the "
-        "held-out Sky RMS printed is the whole selection's, repeated on each fold "
-        "(docs/diagnose.md).")
+        "cannot absorb (sin/cos pairs jointly; correlations with the model reported in "
+        "TPOINT's words), confirmed on held-out data, stopping when the residuals match the "
+        "predicted noise. Without a noise prediction (a TPOINT file, no --scenario), once "
+        "something is significant, effects that lower the held-out Sky RMS follow, up to 4 "
+        "findings.")
 
 
 def _library_text() -> str:

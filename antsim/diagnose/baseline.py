@@ -182,49 +182,6 @@ def _needs_feed_angle(name: str) -> bool:
 # ---------------------------------------------------------------------------------------------
 # White noise (no simulation)
 # ---------------------------------------------------------------------------------------------
-#: recordings of at most this many scans have the correlation of their noise in time
-#: estimated from their residuals when no simulation predicts it (its factor is n^2)
-CORRELATED_SCANS = 5000
-
-
-def residual_correlation(t_s: np.ndarray, z: np.ndarray
-                         ) -> tuple[tuple[tuple[float, float], ...], ...]:
-    """Per axis, the correlation in time of standardized residuals ``z`` (2, n) at times
-    ``t_s`` (s): their products paired within the series and binned by lag
-    (:data:`CORR_BINS`), fitted by a sum of exponentials (:data:`CORR_TAUS_S`) with
-    non-negative weights summing to 0.9 at most, as :class:`SimulatedBaseline` fits the
-    simulations' deviations (positive definite by construction)."""
-    from scipy.optimize import nnls
-
-    dt = np.abs(t_s[:, None] - t_s[None, :])
-    off = ~np.eye(t_s.size, dtype=bool)
-    out = []
-    for axis in range(2):
-        v = z[axis] / max(float(np.sqrt(np.mean(z[axis] ** 2))), 1e-300)
-        prod = np.outer(v, v)
-        centres, values, weights = [], [], []
-        for lo, hi in CORR_BINS:
-            sel = off & (dt > lo) & (dt <= hi)
-            c = float(sel.sum())
-            if c < 50:
-                continue
-            centres.append(float(dt[sel].mean()))
-            values.append(float(prod[sel].mean()))
-            weights.append(math.sqrt(c))
-        if not centres:
-            out.append(())
-            continue
-        taus = np.array(CORR_TAUS_S)
-        a = np.exp(-np.array(centres)[:, None] / taus[None, :]) * np.array(weights)[:, None]
-        wts, _ = nnls(a, np.array(values) * np.array(weights))
-        total = wts.sum()
-        if total > 0.9:
-            wts *= 0.9 / total
-        out.append(tuple((float(w), float(tau)) for w, tau in zip(wts, taus, strict=True)
-                         if w > 1e-3))
-    return tuple(out)
-
-
 def white_prediction(obs: Observations, why: str = "") -> Prediction:
     """Zero systematic residual and unit noise (each axis' level is estimated in the fit);
     ``why``: words for the description (why no simulation predicts it)."""

@@ -96,12 +96,12 @@ class BlindCase:
         return self.named == self.hidden
 
     def to_json(self) -> dict[str, Any]:
-        return _strict({"case": self.index, "hidden": self.hidden, "params": self.params,
+        return {"case": self.index, "hidden": self.hidden, "params": self.params,
                 "factor": round(self.factor, 3), "threshold": self.threshold,
                 "named": self.named, "findings": self.findings, "correct": self.correct,
                 "group_correct": self.correct or self.group_ok, "recovered": self.recovered,
                 "hidden_amplitude": self.hidden_amplitude,
-                "fitted_amplitude": self.fitted_amplitude, "fitted_sigma": self.fitted_sigma})
+                "fitted_amplitude": self.fitted_amplitude, "fitted_sigma": self.fitted_sigma}
 
 
 @dataclass
@@ -167,14 +167,13 @@ class BlindReport:
             "",
             f"cases {r['cases']} ({r['effect_cases']} with a hidden effect, {r['null_cases']} "
             "null)",
-            f"correct identification {_rate_words(r['correct'], r['effect_cases'])}"
-            + (f" (group-aware {100 * r['group_correct_rate']:.1f}%)"
-               if r["effect_cases"] else ""),
-            f"false alarms {_rate_words(r['false_alarms'], r['null_cases'])}",
-            f"amplitude within 3 sigma {_rate_words(r['recovered'], r['recovery_cases'])}",
-            "cases with more than one finding "
-            + (f"{100 * r['extra_findings_rate']:.1f}%" if r["effect_cases"] else
-               "(no case with a hidden effect was drawn)"),
+            f"correct identification {r['correct']}/{r['effect_cases']} = "
+            f"{100 * r['correct_rate']:.1f}% (group-aware {100 * r['group_correct_rate']:.1f}%)",
+            f"false alarms {r['false_alarms']}/{r['null_cases']} = "
+            f"{100 * r['false_alarm_rate']:.1f}%",
+            f"amplitude within 3 sigma {r['recovered']}/{r['recovery_cases']} = "
+            f"{100 * r['recovery_rate']:.1f}%",
+            f"cases with more than one finding {100 * r['extra_findings_rate']:.1f}%",
             f"wall time {self.seconds:.0f} s",
         ]
         if self.capped:
@@ -186,38 +185,19 @@ class BlindReport:
         return "\n".join(lines)
 
     def to_json(self) -> dict[str, Any]:
-        """The report as strict JSON: a rate over no cases, and any number that is not
-        finite (an amplitude of a null case), is null."""
-        return _strict({"rates": self.rates(),
-                        "confusion": {h: dict(c) for h, c in self.confusion().items()},
-                        "excluded": self.excluded, "capped": self.capped,
-                        "thresholds": self.thresholds,
-                        "cases": [c.to_json() for c in self.cases], "seconds": self.seconds})
+        return {"rates": self.rates(),
+                "confusion": {h: dict(c) for h, c in self.confusion().items()},
+                "excluded": self.excluded, "capped": self.capped,
+                "thresholds": self.thresholds,
+                "cases": [c.to_json() for c in self.cases], "seconds": self.seconds}
 
 
 def _family(label: str) -> str:
     return label.split("[")[0]
 
 
-def _rate(k: int, n: int) -> float | None:
-    """k of n as a fraction; None (null in the JSON) where there is no case to count."""
-    return k / n if n else None
-
-
-def _rate_words(k: int, n: int) -> str:
-    """k of n in words: "3/4 = 75.0%", or "0/0 (no such case was drawn)"."""
-    return f"{k}/{n} = {100 * k / n:.1f}%" if n else f"{k}/0 (no such case was drawn)"
-
-
-def _strict(value: Any) -> Any:
-    """``value`` with every float that is not finite as None (strict JSON)."""
-    if isinstance(value, dict):
-        return {k: _strict(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_strict(v) for v in value]
-    if isinstance(value, float | np.floating) and not math.isfinite(float(value)):
-        return None
-    return value
+def _rate(k: int, n: int) -> float:
+    return k / n if n else float("nan")
 
 
 class Harness:

@@ -20,21 +20,25 @@ from controller.pointing.robust import fit_terms_before_after
 
 from ..blas import one_blas_thread
 from .baseline import (
-    CORRELATED_SCANS,
     BaselineSpec,
     SimulatedBaseline,
     offset_scale,
-    residual_correlation,
     resolve_baseline,
     white_prediction,
 )
 from .candidates.terms import TermsCandidate
-from .crossval import STABLE_FRACTION, TermSupport, base_support
 from .data import Observations
-from .decide import ALPHA, NUMBERS_PER_PARAMETER, parameter_bound, sigma_from_p
 from .linalg import lstsq
 from .locate import Location, locate, where_signal
-from .problem import Prediction, Problem, sky_of, term_columns
+from .problem import (
+    Prediction,
+    Problem,
+    folds_for,
+    folds_words,
+    heldout_sky_rms,
+    sky_of,
+    term_columns,
+)
 from .select import Selection, Step, select
 
 __all__ = ["Diagnosis", "Finding", "diagnose", "plain"]
@@ -48,8 +52,6 @@ __all__ = ["Diagnosis", "Finding", "diagnose", "plain"]
 #: noise is estimated from the data instead (then no findings on 12 seeds of 12;
 #: benchmarks/crane1981_diagnose.py)
 MIN_MATCHED_FRACTION = 0.9
-#: the lag (s) at which the noise's correlation in time is said in words: successive scans
-SUCCESSIVE_S = 300.0
 
 
 @dataclass
@@ -79,20 +81,9 @@ class Finding:
     def params(self) -> dict[str, Any]:
         return plain(self.result.params)
 
-    @property
-    def harmonic(self) -> bool:
-        """A pure harmonic: named by its signature, its mechanisms not asserted."""
-        return bool(self.result.candidate.harmonic)
-
     def explanation(self) -> str:
         c = self.result.candidate
-        if self.harmonic:
-            text = (f"{self.step.signature}: a harmonic, consistent with "
-                    + "; ".join(c.mechanisms) + ". None of them is asserted: nothing beyond "
-                    "the harmonic tells them apart here (a second axis in a fixed relation, "
-                    "its phase, a dependence on time or a sensor would).")
-        else:
-            text = f"{c.title}: {c.explanation}."
+        text = f"{c.title}: {c.explanation}."
         if self.result.absorbed:
             text += (f" Its component(s) {', '.join(self.result.absorbed)} are absorbed by the "
                      "baseline model.")
@@ -100,8 +91,7 @@ class Finding:
 
     def to_json(self) -> dict[str, Any]:
         s = self.step
-        c = self.result.candidate
-        out = {
+        return {
             "effect": self.effect,
             "terms": self.terms,
             "explanation": self.explanation(),
@@ -110,47 +100,7 @@ class Finding:
             "significance": round(float(s.significance), 3),
             "sky_rms_before_arcsec": round(float(s.sky_rms_before), 4),
             "sky_rms_after_arcsec": round(float(s.sky_rms_after), 4),
-            "signature": s.signature or c.signature,
-            "mechanisms": list(c.mechanisms) if self.harmonic else [c.title],
-            "mechanism_asserted": not self.harmonic,
-            "alternatives": [{"effect": a.result.candidate.name,
-                              "label": a.result.candidate.label(a.result.theta),
-                              "terms": list(a.result.comp_names),
-                              "words": a.reason, "tell_apart": a.tell_apart,
-                              "correlation": round(a.correlation, 3)}
-                             for a in s.alternatives],
         }
-        if s.stability is not None:
-            out["stability"] = {"fraction": round(float(s.stability), 3),
-                                "resamples": s.n_resamples, "stable": True}
-        if s.heldout is not None:
-            out["heldout_sky_rms_before_arcsec"] = round(float(s.heldout[0]), 4)
-            out["heldout_sky_rms_after_arcsec"] = round(float(s.heldout[1]), 4)
-        return out
-
-    def headline(self) -> str:
-        """The finding in one line: what it is, its parameters, and its figures."""
-        j = self.to_json()
-        s = self.step
-        shown = {k: v for k, v in j["params"].items() if not isinstance(v, dict)}
-        if "amplitude_arcsec" not in shown:  # single terms: their coefficients
-            shown = {**j["params"].get("terms_arcsec", {}), **shown}
-        params = ", ".join(f"{k} = {_fmt(v)}" for k, v in shown.items())
-        terms = f" [{' '.join(j['terms'])}]" if j["terms"] else ""
-        name = f"{s.signature}{terms} ({self.label})" if self.harmonic else \
-            f"{self.label}{terms}"
-        how = [f"{j['significance']:.1f} sigma"]
-        if s.stability is not None:
-            how.append(f"chosen in {100 * s.stability:.0f}% of {s.n_resamples} resamples")
-        how.append(f"Sky RMS {j['sky_rms_before_arcsec']:.2f}\" -> "
-                   f"{j['sky_rms_after_arcsec']:.2f}\"")
-        if s.heldout is not None:
-            how.append(f"held out {s.heldout[0]:.2f}\" -> {s.heldout[1]:.2f}\"")
-        return f"{name}: {params} ({'; '.join(how)})"
-
-    @property
-    def label(self) -> str:
-        return self.result.candidate.label(self.result.theta)
 
 
 def plain(value: Any) -> Any:
@@ -182,8 +132,6 @@ class Diagnosis:
     variants: dict[str, Any] = field(default_factory=dict)
     runtime_s: float = 0.0
     sim_baseline: SimulatedBaseline | None = None
-    #: whether each base term predicts left-out scans (:func:`.crossval.base_support`)
-    support: list[TermSupport] = field(default_factory=list)
 
     @property
     def mismatch(self) -> bool:
@@ -191,8 +139,9 @@ class Diagnosis:
 
     def updated_model(self) -> PointingModel:
         """The baseline terms refitted together with the findings, plus the findings' TPOINT
-        terms (an unweighted least-squares fit of the raw total errors, as TPOINT does): the
-        model the decision validated."""
+        terms (an unweighted least-squares fit of the raw total errors, as TPOINT does); a
+        finding with a simplest form (one term explaining as much as its pair) enters in
+        that form."""
         p = self.problem
         cols = [p.base]
         term_names: list[tuple[str, ...] | None] = []
@@ -201,7 +150,7 @@ class Diagnosis:
             if r.candidate.kind != "offsets":
                 continue
             if isinstance(r.candidate, TermsCandidate):
-                terms = tuple(r.comp_names)
+                terms = f.step.simplest.terms if f.step.simplest else tuple(r.comp_names)
                 cols.append(p.cand(term_columns(terms, p.obs)))
                 term_names.append(terms)
             else:
@@ -232,82 +181,12 @@ class Diagnosis:
 
     def nothing_found_words(self) -> str:
         """Why nothing was found, and what was tested (the text and the figures say it)."""
-        m = len(self.baseline.terms)
-        head = (f"nothing beyond the {m} base terms is supported by these data"
-                + (": the model explains them to the noise" if self.prediction.known_noise
-                   and self.selection.stop_reason.startswith("the residuals match") else ""))
+        head = ("no mismatch: the model explains the data to the noise"
+                if self.prediction.known_noise else
+                "nothing beyond the baseline terms is warranted by these data")
         tested = self.tested()
         return (f"{head}; tested {len(tested)} candidate effects against the baseline "
                 f"{' '.join(self.baseline.terms)}: {', '.join(tested)}")
-
-    def rule(self) -> dict[str, Any]:
-        """The one rule every finding meets, with this file's numbers."""
-        sel = self.selection
-        n = self.summary["n_decided"]
-        v = sel.validation
-        return {"alpha": ALPHA, "sigma": round(sigma_from_p(ALPHA), 2),
-                "candidates": sel.n_family,
-                "inner_folds": v.plan.k_inner if v is not None else 0,
-                "stable_fraction": STABLE_FRACTION,
-                "resamples": self.summary["n_resamples"],
-                "max_parameters": parameter_bound(n), "numbers": 2 * n,
-                "numbers_per_parameter": NUMBERS_PER_PARAMETER}
-
-    def rule_words(self) -> str:
-        """:meth:`rule` in words."""
-        r = self.rule()
-        decided = self.summary.get("decided_on", "every scan")
-        where = "" if decided == "every scan" else f"decided on {decided}: "
-        return (f"{where}a finding needs {r['sigma']:.2f} sigma once corrected for the "
-                f"{r['candidates']} candidates tested (a false alarm in {r['alpha']} of files "
-                f"without one), a lower held-out loss with it when the selection is repeated "
-                f"on {r['inner_folds']} folds of the data, and to be chosen again in at least "
-                f"{100 * r['stable_fraction']:.0f}% of {r['resamples']} bootstrap resamples; "
-                f"the model stays within {r['max_parameters']} parameters (a fifth of the "
-                f"{r['numbers']} numbers fitted)")
-
-    def support_words(self) -> list[str]:
-        """The base terms these data do not support, and why (each stays in the model: it is
-        the baseline's), and a baseline larger than the data carry."""
-        out = []
-        m = len(self.baseline.terms)
-        bound = parameter_bound(self.summary["n_decided"])
-        if m > bound:
-            out.append(f"the {m} base terms exceed the {bound} parameters these "
-                       f"{self.summary['n_decided']} scans carry (a fifth of the numbers "
-                       "fitted): nothing can be added")
-        corr = self._base_correlations()
-        el = np.degrees(self.obs.el_rad[self.problem.used])
-        span = (f"elevations {el.min():.0f} to {el.max():.0f} deg" if el.size else "")
-        for t in self.support:
-            if t.supported:
-                continue
-            rms = (f" ({t.sky_rms_without:.3f}\" without it, {t.sky_rms_with:.3f}\" with it)"
-                   if math.isfinite(t.sky_rms_with) else "")
-            partners = corr.get(t.term, "")
-            out.append(f"{t.term} is not supported by these data: the base model predicts "
-                       f"each left-out scan as well without it{rms}"
-                       + (f"; {partners}" if partners else "") + f" ({span})")
-        return out
-
-    def _base_correlations(self) -> dict[str, str]:
-        """Per base term, the base terms its coefficient is confused with (|r| > 0.95 in an
-        unweighted fit of the base), in TPOINT's words."""
-        p = self.problem
-        names = list(p.base_terms)
-        rows = p.rows()
-        x = term_columns(names, p.obs)[rows]
-        _, cov = lstsq(x, p.y_raw[rows])
-        sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-        with np.errstate(invalid="ignore", divide="ignore"):
-            corr = cov / np.outer(sd, sd)
-        out = {}
-        for i, name in enumerate(names):
-            near = [f"{names[j]} (r = {corr[i, j]:+.2f})" for j in range(len(names))
-                    if j != i and np.isfinite(corr[i, j]) and abs(corr[i, j]) > 0.95]
-            if near:
-                out[name] = "it cannot reliably be distinguished from " + ", ".join(near)
-        return out
 
     def axes_label(self) -> str:
         """The two offsets in words: "xel/el", or on an equatorial mount "RA/Dec" (the
@@ -342,28 +221,20 @@ class Diagnosis:
         return out
 
     def to_json(self) -> dict[str, Any]:
-        """``antsim diagnose --json`` (docs/contract.md), extended with the rule, the
-        baseline and its terms' support, the located mismatch, the refusals and the summary
-        statistics."""
+        """``antsim diagnose --json`` (docs/contract.md), extended with the baseline, the
+        located mismatch, the refusals and the summary statistics."""
         sel = self.selection
         return {
             "mismatch": self.mismatch,
             "findings": [f.to_json() for f in self.findings],
-            "rule": self.rule(),
             "baseline": {"terms": list(self.baseline.terms), "origin": self.baseline.origin,
-                         "noise": self.prediction.description,
-                         "support": [{"term": t.term, "supported": t.supported,
-                                      "loss_with": round(t.loss_with, 3),
-                                      "loss_without": round(t.loss_without, 3)}
-                                     for t in self.support],
-                         "words": self.support_words()},
+                         "noise": self.prediction.description},
             "located": {"words": self.location.words,
                         "ratio_to_noise": plain(self.location.ratio),
                         "p": plain(self.location.p)},
             "alternatives": [{"finding": f.effect,
                               "alternative": a.result.candidate.label(a.result.theta),
-                              "correlation": round(a.correlation, 3), "words": a.reason,
-                              "tell_apart": a.tell_apart}
+                              "correlation": round(a.correlation, 3), "words": a.reason}
                              for f in self.findings for a in f.step.alternatives],
             "separations": [{"finding": f.effect, "r": round(float(sp.r), 4),
                              "with": list(sp.partners), "sigma": round(float(sp.sigma), 2),
@@ -373,7 +244,7 @@ class Diagnosis:
                                 "sky_rms_after_arcsec": round(float(sf.sky_rms_after), 4),
                                 "words": sf.words}
                                for f in self.findings if (sf := f.step.simplest) is not None],
-            "refused": [{"effect": r.name, "words": r.reason} for r in sel.refused],
+            "refused": [{"effect": r.result.name, "words": r.reason} for r in sel.refused],
             "tested": self.tested(),
             "degeneracies": self.degeneracies(),
             "absorbed": [{"effect": r.name, "components": list(r.absorbed)}
@@ -389,24 +260,35 @@ class Diagnosis:
         lines = [f"{self.obs.path}: {s['n_used']} of {self.obs.n} scans used; baseline "
                  f"{' '.join(self.baseline.terms)} ({self.baseline.origin})",
                  f"noise: {self.prediction.description}",
-                 f"rule: {self.rule_words()}",
                  f"located: {self.location.words}"]
         if not self.findings:
             lines.append(self.nothing_found_words())
         for i, f in enumerate(self.findings, 1):
-            lines.append(f"{i}. {f.headline()}")
-            lines.append(f"   where: {f.where}")
-            lines.append(f"   why: {f.explanation()}")
+            j = f.to_json()
+            shown = {k: v for k, v in j["params"].items() if not isinstance(v, dict)}
+            if "amplitude_arcsec" not in shown:  # single terms: their coefficients
+                shown = {**j["params"].get("terms_arcsec", {}), **shown}
+            params = ", ".join(f"{k} = {_fmt(v)}" for k, v in shown.items())
+            terms = f" [{' '.join(j['terms'])}]" if j["terms"] else ""
+            how = (f"{j['significance']:.1f} sigma" if f.step.heldout is None else
+                   f"kept by cross-validation: held-out Sky RMS {f.step.heldout[0]:.2f}\" -> "
+                   f"{f.step.heldout[1]:.2f}\", {j['significance']:.1f} sigma alone")
+            lines.append(f"{i}. {f.effect}{terms}: {params} ({how}; Sky RMS "
+                         f"{j['sky_rms_before_arcsec']:.2f}\" -> "
+                         f"{j['sky_rms_after_arcsec']:.2f}\")")
+            lines.append(f"   where: {j['where']}")
+            lines.append(f"   why: {j['explanation']}")
             sp = f.step.separation
             if sp is not None and sp.words:
                 lines.append(f"   correlated: {sp.words}; the data separate it by "
                              f"{sp.sigma:.1f} sigma")
             if f.step.simplest is not None:
                 lines.append(f"   simplest form: {f.step.simplest.words}")
-            lines += [f"   alternative: {w}" for w in _alternative_lines(f.step)]
+            lines += [f"   alternative: {a.reason}" for a in f.step.alternatives
+                      if not a.sibling]
+            lines += _orders_line(f)
         for r in self.selection.refused:
             lines.append(f"refused: {r.reason}")
-        lines += [f"base: {w}" for w in self.support_words()]
         for w in self.degeneracies():
             if not any(w == r.reason for r in self.selection.refused):
                 lines.append(f"model: {w}")
@@ -442,21 +324,18 @@ def _fmt(v: Any) -> str:
 def diagnose(obs: Observations, scenario=None, model: str | None = None,
              n_sims: int = 8, cache_dir=None, use_cache: bool = True, jobs: int = 1,
              sim_baseline: SimulatedBaseline | None = None,
-             prediction: Prediction | None = None, held_out: bool = True) -> Diagnosis:
-    """Diagnose ``obs`` against the baseline (see :mod:`.baseline` for the rules);
-    ``held_out``: with the nested held-out figures (:func:`.crossval.nested`: they measure
-    the decision and change nothing in it; a procedure repeated inside folds of its own
-    needs no more)."""
+             prediction: Prediction | None = None) -> Diagnosis:
+    """Diagnose ``obs`` against the baseline (see :mod:`.baseline` for the rules)."""
     # one BLAS thread: diagnose's products are thin (see antsim.blas; 200,000 scans: 43.1 s
     # with two threads against 36.0 s with one on an idle machine)
     with one_blas_thread():
         return _diagnose(obs, scenario, model, n_sims, cache_dir, use_cache, jobs,
-                         sim_baseline, prediction, held_out)
+                         sim_baseline, prediction)
 
 
 def _diagnose(obs: Observations, scenario, model: str | None, n_sims: int, cache_dir,
               use_cache: bool, jobs: int, sim_baseline: SimulatedBaseline | None,
-              prediction: Prediction | None, held_out: bool) -> Diagnosis:
+              prediction: Prediction | None) -> Diagnosis:
     t0 = time.perf_counter()
     if scenario is not None and obs.air_daily_c is None:
         obs = replace(obs, air_daily_c=daily_air_curve(scenario))
@@ -484,12 +363,9 @@ def _diagnose(obs: Observations, scenario, model: str | None, n_sims: int, cache
             prediction = white_prediction(obs)
     problem = Problem(obs, prediction, spec.terms, offset_scale=offset_scale(obs, scenario))
     problem.update_outliers()
-    if not prediction.known_noise and obs.has_time and not prediction.corr_xel \
-            and not prediction.corr_el and problem.used.sum() <= CORRELATED_SCANS:
-        problem = _correlated(problem, spec.terms, offset_scale(obs, scenario))
-        prediction = problem.pred
     location = locate(problem)
-    selection = select(problem, held_out=held_out)
+    selection = select(problem)
+    base_cols = problem.base  # now a view of the final model's columns
     findings = []
     for step in selection.steps:
         if step.signal is not None:
@@ -500,99 +376,37 @@ def _diagnose(obs: Observations, scenario, model: str | None, n_sims: int, cache
         else:
             where = _channel_where(step)
         findings.append(Finding(step, where))
-    summary = _figures(problem, selection)
-    diag = Diagnosis(obs, spec, prediction, problem, location, selection, findings, summary,
-                     sim_baseline=sim_baseline)
-    if selection.validation is not None:
-        diag.support = base_support(selection.validation.design)
-    diag.variants = fit_variants_before_after(diag)
-    diag.runtime_s = time.perf_counter() - t0
-    return diag
-
-
-def _correlated(problem: Problem, terms, scale: np.ndarray) -> Problem:
-    """Recordings in time without a noise prediction: the correlation of their noise in
-    time estimated from the base model's residuals (:func:`.baseline.residual_correlation`)
-    and the problem made again with it, so that every test and fold treats successive scans
-    as the correlated measurements they are (the heat of a day, the weather of an hour);
-    the problem as it was where the residuals show none."""
-    used = problem.used
-    z = problem.fit_current().resid.reshape(2, -1)[:, used] / problem.scale[:, None]
-    corr = residual_correlation(problem.obs.t_s[used], z)
-    if not any(corr):
-        return problem
-    at = [sum(w * math.exp(-SUCCESSIVE_S / tau) for w, tau in model) for model in corr]
-    pred = replace(problem.pred, corr_xel=corr[0], corr_el=corr[1],
-                   description=f"{problem.pred.description}, correlated in time as its "
-                               f"residuals show (successive scans {at[0]:.2f} xel, "
-                               f"{at[1]:.2f} el)")
-    out = Problem(problem.obs, pred, terms, offset_scale=scale)
-    out.update_outliers()
-    return out
-
-
-def _figures(problem: Problem, selection: Selection) -> dict[str, Any]:
-    """The summary's figures, and each finding's, one truth each: in sample, unweighted fits
-    (TPOINT's Sky RMS) of the base and its first k findings over the final model's scans
-    (a finding's "after" is the next one's "before", the first's "before" and the last's
-    "after" the summary's); held out, the nested validation's (:class:`.crossval.Nested`:
-    the first k findings of each fold's own decision, the last finding's and the summary's
-    "after" each fold with all its findings)."""
-    p = problem
-    offsets = [s for s in selection.steps if s.signal is not None]
-    k_base = len(p.base_terms)
-    cols = p.current_columns()
-    widths = [e.shape[1] for e in p.extra]
-    raw = []
-    for k in range(len(widths) + 1):
-        raw.append(p.raw_residuals(np.ascontiguousarray(cols[:, :k_base + sum(widths[:k])])))
-    for k, step in enumerate(offsets):
-        step.sky_rms_before, step.sky_rms_after = sky_of(raw[k]), sky_of(raw[k + 1])
+    folds = folds_for(obs)
+    final = problem.current_columns()
 
     def axis_rms(r: np.ndarray) -> list[float]:  # (2, n) residuals -> rms per axis
         return [float(np.sqrt(np.mean(r[a] ** 2))) if r.shape[1] else float("nan")
                 for a in range(2)]
 
-    v = selection.validation
-    summary: dict[str, Any] = {
-        "n_used": int(p.used.sum()),
+    # each model's held-out residuals once (a QR of the whole and a pass per night), and
+    # its in-sample ones once (the Sky RMS and the axes' rms from the same fit)
+    held = [problem.heldout_residuals(c, folds) for c in (base_cols, final)]
+    raw = [problem.raw_residuals(c) for c in (base_cols, final)]
+    summary = {
+        "n_used": int(problem.used.sum()),
         "sky_rms_before_arcsec": sky_of(raw[0]),
-        "sky_rms_after_arcsec": sky_of(raw[-1]),
+        "sky_rms_after_arcsec": sky_of(raw[1]),
+        "cv_sky_rms_before_arcsec": heldout_sky_rms(held[0]),
+        "cv_sky_rms_after_arcsec": heldout_sky_rms(held[1]),
         # per axis (cross-axis, then elevation or declination): in-sample and held out
         "axis_rms_before_arcsec": axis_rms(raw[0]),
-        "axis_rms_after_arcsec": axis_rms(raw[-1]),
+        "axis_rms_after_arcsec": axis_rms(raw[1]),
+        "cv_axis_rms_before_arcsec": axis_rms(held[0]),
+        "cv_axis_rms_after_arcsec": axis_rms(held[1]),
+        "held_out": folds_words(obs),
         "gof_before": selection.gof_before, "gof_after": selection.gof_after,
         "n_candidates_tested": selection.n_family,
-        "n_decided": int(v.design.u) if v is not None else int(p.used.sum()),
-        "decided_on": (f"{v.design.u} of {v.design.n_file} scans (every "
-                       f"{-(-v.design.n_file // v.design.u)}th in time)"
-                       if v is not None and v.design.u < v.design.n_file else "every scan"),
-        "n_resamples": v.choice.n_resamples if v is not None else 0,
     }
-    if v is None or v.nested is None:
-        nan = float("nan")
-        summary.update({"cv_sky_rms_before_arcsec": nan, "cv_sky_rms_after_arcsec": nan,
-                        "cv_axis_rms_before_arcsec": [nan, nan],
-                        "cv_axis_rms_after_arcsec": [nan, nan], "held_out": "none"})
-        return summary
-    nst = v.nested
-    last = nst.sky_rms.size - 1
-    for k, step in enumerate(offsets):
-        step.heldout = (nst.at(k), nst.final if k + 1 == len(offsets) else nst.at(k + 1))
-    found = sum(bool(c.findings) for c in nst.choices)
-    summary.update({
-        "cv_sky_rms_before_arcsec": nst.at(0),
-        "cv_sky_rms_after_arcsec": nst.final,
-        "cv_axis_rms_before_arcsec": [float(x) for x in nst.axis_rms[0]],
-        "cv_axis_rms_after_arcsec": [float(x) for x in nst.axis_rms[last]],
-        "held_out": (("the whole selection repeated on each fold's training scans, "
-                      if v.plan.whole else "the decision repeated on each fold's training "
-                      "scans (its significance tests alone at this size), ")
-                     + f"{nst.folds.words}; it found something on {found} of {nst.folds.k}"),
-        "cv_folds": nst.folds.k, "cv_folds_with_findings": found,
-        "cv_sky_rms_by_findings_arcsec": [float(x) for x in nst.sky_rms],
-    })
-    return summary
+    diag = Diagnosis(obs, spec, prediction, problem, location, selection, findings, summary,
+                     sim_baseline=sim_baseline)
+    diag.variants = fit_variants_before_after(diag)
+    diag.runtime_s = time.perf_counter() - t0
+    return diag
 
 
 def daily_air_curve(scenario):
@@ -633,30 +447,22 @@ def _special_where(step: Step, obs: Observations) -> str:
     return ""
 
 
-def _alternative_lines(step: Step) -> list[str]:
-    """One line per candidate among a finding's alternatives: a harmonic family's orders
-    said together (each is an alternative of its own in the JSON)."""
+def _orders_line(f: Finding) -> list[str]:
+    """One line per harmonic family for its orders the data cannot tell from the finding
+    (each is an alternative of its own in the JSON)."""
     by: dict[str, list] = {}
-    for a in step.alternatives:
-        by.setdefault(a.result.candidate.name, []).append(a)
+    for a in f.step.alternatives:
+        if a.sibling:
+            by.setdefault(a.result.candidate.name, []).append(a)
+    r = f.result
     out = []
-    for alts in by.values():
-        if len(alts) == 1:
-            out.append(alts[0].reason)
-            continue
-        c = alts[0].result.candidate
-        alts.sort(key=lambda a: a.result.theta)
-        shapes = ", ".join(str(a.result.theta) for a in alts)
-        held = [a.heldout[0] for a in alts if math.isfinite(a.heldout[0])]
-        rms = (f" (left-out scans' Sky RMS {min(held):.3f}-{max(held):.3f}\" against "
-               f"{alts[0].heldout[1]:.3f}\")" if held else "")
-        what = (", consistent with " + "; ".join(c.mechanisms) if c.harmonic
-                else f": {c.title}")
-        apart = alts[0].tell_apart + (f" (for n = {alts[0].result.theta})"
-                                      if c.harmonic else "")
-        out.append(f"{c.name} with {'n' if c.harmonic else 'shape'} = {shapes} ({c.signature}"
-                   f"{what}) predict the left-out scans as well{rms}; to tell them apart: "
-                   f"{apart}")
+    for name, alts in by.items():
+        alts.sort(key=lambda a: int(a.result.theta))
+        orders = ", ".join(str(int(a.result.theta)) for a in alts)
+        lo, hi = min(a.correlation for a in alts), max(a.correlation for a in alts)
+        out.append(f"   alternative: {r.candidate.label(r.theta)} and {name} with n = "
+                   f"{orders} cannot reliably be distinguished (r = "
+                   + (f"{lo:.2f})" if f"{lo:.2f}" == f"{hi:.2f}" else f"{lo:.2f}-{hi:.2f})"))
     return out
 
 

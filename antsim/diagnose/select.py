@@ -1,25 +1,36 @@
-"""Findings: the decision (:mod:`.decide`), validated (:mod:`.crossval`), then each
-finding tested again on every scan for its parameters and its words.
+"""Honest selection: forward addition of candidate effects, one at a time.
 
-The decision chooses, the cross-validated stage keeps what the repeated decision predicts
-held-out data with and what resamples of the data choose again; this module then says it,
-in named steps:
+Each round every applicable candidate is tested against the current model by what the model
+cannot absorb: its signature's component orthogonal to the fitted terms (an added-variable,
+or partial, test: a chi^2 test when the simulation predicts the noise, an F test when the
+noise is estimated from the data; a sin/cos pair is one joint test with 2 degrees of freedom;
+nonlinear parameters pay for the look-elsewhere effect with an effective number of trials).
+The family of candidates is corrected together (Bonferroni over the candidates tested in the
+first round), so that data explained to the noise yield no finding with probability at least
+1 - ``ALPHA``; with the library's 20-odd candidates the criterion is stricter than BIC
+(``q ln N``) at every N here.
 
-* :func:`_test_round`: every candidate tested against the current model on every scan
-  (``Candidate.test``: its shapes searched and refined, its parameters fitted), for the
-  family (round 0: the candidates tested, ``n_family``) and the words;
-* :func:`_result_for`: the finding's own test at the shape the decision chose (a time
-  constant or a change time refined around it);
-* :func:`_accept`: the finding added to the model (outliers rejected again), with the
-  candidates the data cannot tell from it (:class:`Alternative`: each with its physics and
-  what observation would tell them apart), how closely the model mimics it
-  (:class:`Separation`) and its simplest form (one TPOINT term that explains as much,
-  reported).
+The most significant candidate is then
 
-What the decision refused is said in words (:class:`Refusal`): a significant candidate the
-repeated selection does not predict held-out data with, an unstable one, one the model
-mimics whose own part stays below detection. The polarization and beam-width candidates test
-other recorded quantities and are decided once, at the family's level.
+* refused when it does not lower the chi^2 of held-out data (another night when the data
+  span several, else 5-fold cross-validation interleaved in time; nonlinear parameters are
+  re-derived on each training set);
+* otherwise accepted, however closely the model mimics it: its correlation with
+  the model is reported in TPOINT's words ("X and Y cannot reliably be distinguished",
+  r above 0.95; "strongly correlated", above 0.85) beside how many sigma the data separate
+  it by (the local significance of its orthogonal part). A candidate the model mimics is
+  refused only when that part is below detection (and said so when it shows a hint, 3 sigma
+  locally);
+* replaced by a simpler candidate (fewer parameters) that the data cannot distinguish from it
+  (fitted signatures correlated above 0.95) when that one explains as much (the extra
+  parameters add at most Akaike's 2 of chi^2 each: it predicts as well); the other is reported
+  beside it, as are all near-degenerate alternatives (fitted signatures correlated above
+  0.9, or within 2 of its BIC). A pair whose improvement one TPOINT term matches (by the
+  same rule) is offered in that simplest form.
+
+Selection stops when no candidate passes, or as soon as the residuals match the predicted
+noise on both axes (p > 0.05), or after ``MAX_FINDINGS``. The polarization and beam-width
+candidates test other recorded quantities and are decided once, in the same family.
 """
 
 from __future__ import annotations
@@ -33,13 +44,16 @@ from . import pvalues
 from .candidates.base import DISTINGUISH_R, Candidate, TestResult, p_value
 from .candidates.library import CANDIDATES
 from .candidates.terms import HarmonicFamilyCandidate, TermsCandidate
-from .crossval import STABLE_FRACTION, Choice, Plan, Validation, validate
-from .decide import ALPHA, MAX_FINDINGS, Design, Option, Pick, parameter_bound, sigma_from_p
-from .physics import signature_words, tell_apart
-from .problem import Problem, term_columns
+from .crossval import MAX_FINDINGS_CV, cv_stage
+from .problem import Problem, folds_for, term_columns
 
 __all__ = ["ALPHA", "Selection", "Step", "correlation_words", "select", "sigma_from_p"]
 
+#: family-wise false-alarm probability of the whole selection
+ALPHA = 0.005
+MAX_FINDINGS = 5
+#: fitted signatures this correlated are "near-degenerate alternatives"
+ALTERNATIVE_R = 0.9
 #: TPOINT's lower level: coefficients this correlated are "strongly correlated"
 STRONG_R = 0.85
 #: a simpler form "explains as much" when each parameter it lacks would add at most this
@@ -52,8 +66,19 @@ SIMPLEST_CHUNK = 8
 HINT_SIGMA = 3.0
 
 
+def sigma_from_p(p: float, log_p: float | None = None) -> float:
+    """One-sided Gaussian equivalent of a p-value (handles underflow through log p); 0 for
+    p >= 0.5 (no evidence at all)."""
+    if log_p is None:
+        log_p = math.log(p) if p > 0 else -745.0
+    if log_p > -700:
+        return max(0.0, float(pvalues.norm_isf(math.exp(log_p))))
+    x = -2.0 * log_p
+    return float(math.sqrt(max(x - math.log(x) - math.log(2 * math.pi), 0.0)))
+
+
 def log_p_family(problem: Problem, res: TestResult, n_family: int) -> float:
-    """log of a test result's family-corrected p-value (precise far in the tail)."""
+    """log of the family-corrected p-value (precise far in the tail)."""
     if res.p > 1e-250:
         return math.log(min(1.0, res.p * n_family))
     if problem.pred.known_noise or res.candidate.kind == "channel":
@@ -73,11 +98,6 @@ def local_sigma(problem: Problem, res: TestResult) -> float:
     else:
         p = p_value(problem, res.delta_chi2, res.dof, res.chi2_now, res.mask)
         log_p = math.log(p) if p > 0 else -745.0
-    return _two_sided(log_p)
-
-
-def _two_sided(log_p: float) -> float:
-    """The two-sided Gaussian equivalent of a p-value given as its log."""
     half = log_p - math.log(2.0)
     return sigma_from_p(math.exp(half) if half > -700 else 0.0, half)
 
@@ -95,8 +115,10 @@ def correlation_words(name: str, r: float, partners: tuple[str, ...]) -> str:
 def explains_as_much(problem: Problem, simple_dchi2: float, simple_dof: int,
                      full: TestResult) -> bool:
     """Whether a form with fewer parameters explains as much as ``full``: the chi^2 the
-    extra parameters add is at most 2 per parameter (Akaike's criterion). Without a noise
-    prediction the chi^2 is in units of the fuller model's residual variance."""
+    extra parameters add is at most 2 per parameter (Akaike's criterion: the simpler form
+    then predicts new data as well, to first order as leave-one-out cross-validation
+    judges). Without a noise prediction the chi^2 is in units of the fuller model's residual
+    variance (the noise the data show once both are fitted)."""
     extra = max(full.dof - simple_dof, 1)
     gap = full.delta_chi2 - simple_dchi2
     if not problem.pred.known_noise:
@@ -110,19 +132,11 @@ def explains_as_much(problem: Problem, simple_dchi2: float, simple_dof: int,
 
 @dataclass
 class Alternative:
-    """A candidate the data cannot tell from a finding (it predicts each left-out scan as
-    well): its test on every scan, how closely their fitted signatures correlate, the words
-    (its signature and physics), and what observation would tell the two apart."""
-
     result: TestResult
     correlation: float
     reason: str
-    #: another shape of the finding's own candidate (a harmonic family's other order)
+    #: another order of a harmonic family (said in one line with the family's others)
     sibling: bool = False
-    tell_apart: str = ""
-    #: leave-one-scan-out Sky RMS (arcsec) with it and with the finding (no noise
-    #: prediction), else NaN
-    heldout: tuple[float, float] = (float("nan"), float("nan"))
 
 
 @dataclass
@@ -137,8 +151,7 @@ class Separation:
 
 @dataclass
 class SimplestForm:
-    """One TPOINT term that explains as much as a finding's pair (reported: the model keeps
-    the finding's terms, which the decision chose)."""
+    """One TPOINT term that explains as much as a finding's pair."""
 
     terms: tuple[str, ...]
     delta_chi2: float
@@ -148,28 +161,23 @@ class SimplestForm:
 
 @dataclass
 class Step:
-    """One finding with its statistics: the decision's (``pick``: its family-corrected
-    significance; ``stability``: the fraction of resamples that chose it), its test on every
-    scan (``result``: parameters), the in-sample and held-out Sky RMS before and after it
-    (arcsec; set by :mod:`.core` from the final model's scans, one figure each)."""
+    """One accepted finding with its statistics."""
 
     result: TestResult
     p_family: float
     log_p: float
     sky_rms_before: float
     sky_rms_after: float
+    cv_chi2_before: float = float("nan")
+    cv_chi2_after: float = float("nan")
     alternatives: list[Alternative] = field(default_factory=list)
     gof_after: dict | None = None
     signal: np.ndarray | None = None  # fitted error of the finding (2n, arcsec)
     separation: Separation | None = None
     simplest: SimplestForm | None = None
-    #: (before, after) held-out Sky RMS (arcsec): the nested validation's, with the first
-    #: k - 1 and k findings of each fold's own decision
+    #: (before, after) held-out Sky RMS (arcsec) of a finding the cross-validated stage
+    #: added (data without a noise prediction: :mod:`.crossval`), else None
     heldout: tuple[float, float] | None = None
-    stability: float | None = None
-    n_resamples: int = 0
-    #: the finding's signature in words (a harmonic's own, else the candidate's)
-    signature: str = ""
 
     @property
     def significance(self) -> float:
@@ -177,15 +185,38 @@ class Step:
 
 
 @dataclass
-class Refusal:
-    result: TestResult | None
-    reason: str
-    #: the candidate refused (its name; the result's where there is one)
-    name: str = ""
+class Chosen:
+    """The candidate a round chooses, with its family-corrected log p-value and the
+    held-out chi^2 of the model without and with it (it predicts held-out data better)."""
 
-    def __post_init__(self):
-        if not self.name and self.result is not None:
-            self.name = self.result.name
+    result: TestResult
+    log_p: float
+    cv_chi2_before: float
+    cv_chi2_after: float
+
+
+def _held_out(problem: Problem, r: TestResult, folds: np.ndarray, log_p: float
+              ) -> Chosen | None:
+    """``r`` chosen if the model with it predicts held-out data (``folds``, over ``r``'s
+    scans) better than the model without it, its nonlinear parameters re-derived on each
+    training set; None if not. Notes the figures in ``r.note``."""
+    cur = problem.current_columns()
+    cv_without = problem.cv_chi2(cur, folds, used=r.mask)
+    refit = None
+    if r.refit is not None:
+        def refit(train, _r=r, _cur=cur):
+            return np.column_stack([_cur, _r.refit(train)])
+    cv_with = problem.cv_chi2((cur, r.columns), folds, refit, used=r.mask)
+    r.note = f"held-out chi2 {cv_without:.1f} -> {cv_with:.1f}"
+    if not cv_with < cv_without:
+        return None
+    return Chosen(r, log_p, cv_without, cv_with)
+
+
+@dataclass
+class Refusal:
+    result: TestResult
+    reason: str
 
 
 @dataclass
@@ -199,8 +230,6 @@ class Selection:
     gof_before: dict
     gof_after: dict
     stop_reason: str
-    #: the decision, validated (None where nothing was decided: no offsets candidate)
-    validation: Validation | None = None
 
 
 def _fitted_signal(problem: Problem, cols: np.ndarray, extra: np.ndarray) -> np.ndarray:
@@ -315,14 +344,75 @@ def _simplest_form(problem: Problem, res: TestResult, vocabulary: list[str]
                         f"{gain[best]:.1f} against {res.delta_chi2:.1f})")
 
 
+def _label(r: TestResult) -> str:
+    return r.candidate.label(r.theta)
+
+
+def _alternatives(problem: Problem, corr_of: _Correlations, r: TestResult,
+                  ranked: list[TestResult], n_family: int, alpha: float) -> list[Alternative]:
+    """The significant candidates the data cannot distinguish from ``r`` or that fit almost
+    as well, and the other orders of a harmonic family (``TestResult.siblings``, of ``r``'s
+    own or of another candidate's) that the data cannot distinguish from it."""
+    out = []
+    n_obs = 2 * int(problem.used.sum())
+    siblings = [s for o in ranked for s in o.siblings]
+    for other in [*ranked, *siblings]:
+        if other is r or log_p_family(problem, other, n_family) >= math.log(alpha) \
+                or _contains(other, r):
+            continue
+        corr = corr_of(r, other)
+        bic_gap = (r.delta_chi2 - r.dof * math.log(n_obs)) \
+            - (other.delta_chi2 - other.dof * math.log(n_obs))
+        if corr > DISTINGUISH_R:
+            out.append(Alternative(other, corr, f"{_label(r)} and {_label(other)} cannot "
+                                                f"reliably be distinguished (r = {corr:.2f})",
+                                   sibling=other in siblings))
+        elif other in siblings:
+            continue
+        elif corr > ALTERNATIVE_R or bic_gap < 2.0:
+            out.append(Alternative(other, corr, f"{_label(other)} fits almost as well (chi2 "
+                                                f"decrease {other.delta_chi2:.1f} against "
+                                                f"{r.delta_chi2:.1f}; r = {corr:.2f})"))
+    return out
+
+
+def _contains(big: TestResult, small: TestResult) -> bool:
+    """Whether ``big``'s terms include all of ``small``'s (a fuller form of the same
+    terms, not an alternative to them)."""
+    return (isinstance(big.candidate, TermsCandidate) and isinstance(small.candidate,
+                                                                     TermsCandidate)
+            and set(small.comp_names) <= set(big.comp_names))
+
+
+def _simpler_equivalent(problem: Problem, corr_of: _Correlations, r: TestResult,
+                        ranked: list[TestResult], n_family: int, alpha: float
+                        ) -> TestResult | None:
+    """A significant candidate with fewer parameters to choose instead of ``r`` (the best
+    such), else None: one made of part of ``r``'s terms when the rest of ``r`` is not
+    significant on its own (at the family's level: a fuller form must earn its extra terms
+    as a finding would), or one the data cannot distinguish from ``r`` that explains as
+    much."""
+    best = None
+    for other in ranked:
+        if other is r or other.dof >= r.dof \
+                or log_p_family(problem, other, n_family) >= math.log(alpha):
+            continue
+        if _contains(r, other):
+            rest = float(pvalues.chi2_logsf(r.delta_chi2 - other.delta_chi2, r.dof - other.dof))
+            ok = rest + math.log(n_family) >= math.log(alpha)
+        else:
+            ok = corr_of(r, other) > DISTINGUISH_R \
+                and explains_as_much(problem, other.delta_chi2, other.dof, r)
+        if ok and (best is None or other.delta_chi2 > best.delta_chi2):
+            best = other
+    return best
+
+
 def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
-           alpha: float = ALPHA, max_findings: int = MAX_FINDINGS,
-           plan: Plan | None = None, held_out: bool = True) -> Selection:
-    """The findings on ``problem`` (modified in place: their columns are added): round 0's
-    tests set the family, the decision is made and validated (:func:`.crossval.validate`,
-    by ``plan`` or the design's own; ``held_out``: with its nested held-out figures, which
-    change nothing in it), and each
-    finding is tested again and added in the decision's order (the module docstring)."""
+           alpha: float = ALPHA, max_findings: int = MAX_FINDINGS) -> Selection:
+    """Forward selection on ``problem`` (modified in place: accepted columns are added), in
+    rounds (the module docstring): each tests the candidates against the current model
+    (:func:`_test_round`), chooses one (:func:`_choose`) and adds it (:func:`_accept`)."""
     obs = problem.obs
     known = problem.pred.known_noise
     problem.update_outliers()
@@ -330,48 +420,65 @@ def select(problem: Problem, candidates: tuple[Candidate, ...] = CANDIDATES,
     usable = [c for c in candidates if c.applicable(obs, known)]
     not_applicable = [c.name for c in candidates if c not in usable]
     vocabulary = _single_terms(tuple(usable))
-    perp, z_perp = problem.perp_for(problem.used)
-    tested = _test_round(problem, usable, set(), [], 0, perp, z_perp)
-    absorbed = [r for r in tested if not r.testable]
-    results = [r for r in tested if r.testable]
-    n_family = max(len(results), 1)
-    first_round = list(results)
-    channel_results = [r for r in results if r.candidate.kind == "channel"]
-    design = Design(problem, usable, n_family)
-    validation = validate(design, plan, held_out) \
-        if design.options else None
-    choice = validation.choice if validation is not None else None
+    folds = folds_for(obs)
     steps: list[Step] = []
+    refused: list[Refusal] = []
+    absorbed: list[TestResult] = []
     accepted: set[str] = set()
-    offsets = [r for r in results if r.candidate.kind == "offsets"]
-    for k, j in enumerate(choice.findings if choice is not None else []):
-        if k > 0:  # the words of a round against the model with the findings so far
-            perp, z_perp = problem.perp_for(problem.used)
-            offsets = [r for r in _test_round(problem, usable, accepted, [], k, perp, z_perp)
-                       if r.testable and r.candidate.kind == "offsets"]
-        pick = choice.path.picks[j]
-        option = design.options[pick.option]
-        r = _result_for(problem, option, offsets, perp, z_perp)
-        if r is None:
-            continue
-        alternatives = _alternatives(problem, design, choice, j, r, offsets, perp, z_perp)
-        step = _accept(problem, perp, r, pick, alternatives, vocabulary)
-        step.stability = choice.stability[j]
-        step.n_resamples = choice.n_resamples
-        step.signature = signature_words(option.candidate, option.names)
-        steps.append(step)
-        accepted.add(r.name)
-    refused = _refusals(problem, design, choice, alpha) if choice is not None else []
-    stop = _stop_words(choice) if choice is not None else "no candidate could be tested"
+    n_family = 0
+    first_round: list[TestResult] = []
+    stop = "no further candidate is significant"
+    channel_results: list[TestResult] = []
+    offsets: list[TestResult] = []
+    for round_no in range(max_findings + 1):
+        perp, z_perp = problem.perp_for(problem.used)
+        results = _test_round(problem, usable, accepted, refused, round_no, perp, z_perp)
+        if round_no == 0:
+            absorbed = [r for r in results if not r.testable]
+        results = [r for r in results if r.testable]
+        if round_no == 0:
+            n_family = max(len(results), 1)
+            first_round = list(results)
+            channel_results = [r for r in results if r.candidate.kind == "channel"]
+        offsets = [r for r in results if r.candidate.kind == "offsets"]
+        for r in offsets:
+            r.note = ""
+        ranked = sorted(offsets, key=lambda r: (log_p_family(problem, r, n_family),
+                                                -r.delta_chi2))
+        corr_of = _Correlations(problem, perp)
+        chosen = _choose(problem, corr_of, ranked, n_family, alpha, folds, refused)
+        if chosen is None:
+            break
+        steps.append(_accept(problem, corr_of, chosen, ranked, n_family, alpha, vocabulary))
+        accepted.add(chosen.result.name)
+        if len(steps) >= max_findings:
+            stop = f"the limit of {max_findings} findings"
+            break
+        if problem.matches_noise():
+            stop = "the residuals match the predicted noise"
+            break
+    if stop == "no further candidate is significant":
+        refused += _below_detection(problem, offsets, n_family, alpha)
+    if not known and steps and len(steps) < MAX_FINDINGS_CV:
+        added = _cross_validated(problem, usable, accepted, n_family,
+                                 MAX_FINDINGS_CV - len(steps))
+        steps += added
+        kept = {s.result.name for s in added}
+        refused = [r for r in refused if r.result.name not in kept]
+        if added:
+            stop = (f"the limit of {MAX_FINDINGS_CV} findings" if len(steps) >= MAX_FINDINGS_CV
+                    else "no further candidate lowers the held-out Sky RMS")
     # channel candidates (other recorded quantities): decided once, in the same family
     sky = problem.sky_rms()
     for r in channel_results:
         lp = log_p_family(problem, r, n_family)
         if lp < math.log(alpha):
-            steps.append(Step(r, min(1.0, math.exp(lp)), lp, sky, sky,
-                              signature=r.candidate.signature))
+            steps.append(Step(r, min(1.0, math.exp(lp)), lp, sky, sky))
+    # best first; the cross-validated findings after the significant ones, in the order
+    # they were added (each one's held-out figures continue the previous one's)
+    steps.sort(key=lambda s: (s.heldout is not None, s.log_p if s.heldout is None else 0.0))
     return Selection(steps, refused, absorbed, first_round, not_applicable, n_family,
-                     gof_before, problem.gof(), stop, validation)
+                     gof_before, problem.gof(), stop)
 
 
 def _test_round(problem: Problem, usable: list[Candidate], accepted: set[str],
@@ -391,33 +498,42 @@ def _test_round(problem: Problem, usable: list[Candidate], accepted: set[str],
     return results
 
 
+def _choose(problem: Problem, corr_of: _Correlations, ranked: list[TestResult],
+            n_family: int, alpha: float, folds: np.ndarray, refused: list[Refusal]
+            ) -> Chosen | None:
+    """The round's finding: the first of ``ranked`` (by family p-value) below ``alpha`` that
+    predicts held-out data better (those that do not are added to ``refused``), or its
+    simpler equivalent where that one does too; None where none passes."""
+    def confirmed(r: TestResult) -> Chosen | None:
+        chosen = _held_out(problem, r, folds, log_p_family(problem, r, n_family))
+        if chosen is None:
+            refused.append(Refusal(r, f"{r.name} is significant in-sample but does not "
+                                      f"predict held-out data ({r.note})"))
+        return chosen
+
+    chosen = None
+    for r in ranked:
+        if log_p_family(problem, r, n_family) >= math.log(alpha):
+            break
+        chosen = confirmed(r)
+        if chosen is not None:
+            break
+    if chosen is None:
+        return None
+    simpler = _simpler_equivalent(problem, corr_of, chosen.result, ranked, n_family, alpha)
+    if simpler is not None:
+        chosen = confirmed(simpler) or chosen
+    return chosen
 
 
-def _result_for(problem: Problem, option: Option, results: list[TestResult], perp,
-                z_perp: np.ndarray) -> TestResult | None:
-    """The test on every scan of the decided candidate at the decided shape: the round's
-    result where it is at that shape, or refined from it (a time constant, a change time,
-    the nonlinear tilt); a family's other order or source tested at the decided one."""
-    c = option.candidate
-    r = next((r for r in results if r.candidate is c), None)
-    if c.look_elsewhere in ("count", "none") and c.linear_signature and (
-            r is None or r.theta != option.theta):
-        r = next((s for s in (r.siblings if r is not None else [])
-                  if s.theta == option.theta), None)
-        if r is None:
-            cols, names = c.columns(problem.obs, option.theta)
-            r = c.linear_test(problem, perp, z_perp, cols, names, option.theta)
-        if not r.testable:
-            return None
-        r.trials = float(len(c.thetas(problem.obs))) if c.look_elsewhere == "count" else 1.0
-        c.finish(problem, r)
-    return r if r is not None and r.testable else None
-
-
-def _accept(problem: Problem, perp, r: TestResult, pick: Pick,
-            alternatives: list[Alternative], vocabulary: list[str]) -> Step:
-    """Add the finding ``r`` to the model (outliers rejected again) and say it: its
-    separation from the model, its simplest form, its fitted signal."""
+def _accept(problem: Problem, corr_of: _Correlations, chosen: Chosen,
+            ranked: list[TestResult], n_family: int, alpha: float, vocabulary: list[str]
+            ) -> Step:
+    """Add the chosen finding to the model (outliers rejected again) and say it: its
+    alternatives, its separation from the model, its simplest form, the Sky RMS before and
+    after, its fitted signal."""
+    r, lp = chosen.result, chosen.log_p
+    alternatives = _alternatives(problem, corr_of, r, ranked, n_family, alpha)
     separation = Separation(r.r_model, r.partners, local_sigma(problem, r),
                             correlation_words(r.name, r.r_model, r.partners))
     simplest = _simplest_form(problem, r, vocabulary)
@@ -426,108 +542,42 @@ def _accept(problem: Problem, perp, r: TestResult, pick: Pick,
     after = problem.sky_rms_added(extra)
     signal = _fitted_signal(problem, problem.add(r.name, extra, r.comp_names), extra)
     problem.update_outliers()
-    return Step(r, min(1.0, math.exp(pick.log_p)), pick.log_p, before, after, alternatives,
-                problem.gof(), signal, separation, simplest)
+    return Step(r, min(1.0, math.exp(lp)), lp, before, after, chosen.cv_chi2_before,
+                chosen.cv_chi2_after, alternatives, problem.gof(), signal, separation,
+                simplest)
 
 
-def _alternatives(problem: Problem, design: Design, choice: Choice, j: int, r: TestResult,
-                  results: list[TestResult], perp, z_perp: np.ndarray) -> list[Alternative]:
-    """The decision's alternatives of pick ``j`` (:func:`.crossval._alternatives`: the data
-    cannot tell them from it), each tested on every scan, with its physics and what would
-    tell it from the finding."""
+def _cross_validated(problem: Problem, usable: list[Candidate], accepted: set[str],
+                     n_family: int, room: int) -> list[Step]:
+    """The cross-validated stage (:mod:`.crossval`) as findings, with their statistics (the
+    family-corrected p-value of each, every option tried counted as a trial)."""
     out = []
-    path = choice.path
-    pick = path.picks[j]
-    before = path.cols(j)
-    mine = [*before, *pick.cols]
-    ones = np.ones(design.u)
-    for a in choice.alternatives[j] if j < len(choice.alternatives) else []:
-        option = design.options[a.option]
-        res = _result_for(problem, option, results, perp, z_perp)
-        if res is None:
-            continue
-        models = [[(design.options[p.option].candidate, design.options[p.option].theta,
-                    design.positions(p.option, p.cols)) for p in path.picks[:j]]
-                  for _ in range(2)]
-        models[0].append((design.options[pick.option].candidate,
-                          design.options[pick.option].theta,
-                          design.positions(pick.option, pick.cols)))
-        models[1].append((option.candidate, option.theta, design.positions(a.option, a.cols)))
-        coefs = [design.fit(ones, path.active, path.scale, cols)
-                 for cols in (mine, [*before, *a.cols])]
-        apart = tell_apart(problem.obs, problem.base_terms, models, coefs)
-        held = ""
-        if math.isfinite(a.sky_rms):
-            held = (f" (left-out scans' Sky RMS {a.sky_rms:.3f}\" against "
-                    f"{a.sky_rms_finding:.3f}\")")
-        sibling = option.candidate is r.candidate
-        what = signature_words(option.candidate, option.names)
-        if not sibling:
-            what += (", consistent with " + "; ".join(option.candidate.mechanisms)
-                     if option.candidate.harmonic else f": {option.candidate.title}")
-        how = ("cannot reliably be distinguished from it (r = "
-               f"{a.correlation:.2f})" if a.correlation > DISTINGUISH_R else
-               "predicts the left-out scans as well")
-        reason = (f"{option.label} [{' '.join(option.names)}] ({what}) {how}{held}; to tell "
-                  f"them apart: {apart}")
-        out.append(Alternative(res, a.correlation, reason, sibling=sibling, tell_apart=apart,
-                               heldout=(a.sky_rms, a.sky_rms_finding)))
+    for added in cv_stage(problem, usable, accepted, _model_terms(problem), room,
+                          _fitted_signal):
+        res = added.result
+        lp = math.log(max(min(1.0, res.p * n_family), 1e-300))
+        separation = Separation(res.r_model, res.partners, local_sigma(problem, res),
+                                correlation_words(res.name, res.r_model, res.partners))
+        out.append(Step(res, math.exp(lp), lp, added.sky_rms_before, added.sky_rms_after,
+                        gof_after=problem.gof(), signal=added.signal,
+                        separation=separation,
+                        heldout=(added.heldout_sky_rms_before, added.heldout_sky_rms_after)))
     return out
 
 
-def _refusals(problem: Problem, design: Design, choice: Choice, alpha: float
-              ) -> list[Refusal]:
-    """What the decision chose and did not keep, and what the final model mimics that shows
-    a hint (said against the one threshold every finding meets)."""
+def _below_detection(problem: Problem, results: list[TestResult], n_family: int,
+                     alpha: float) -> list[Refusal]:
+    """Candidates the final model mimics (r > 0.95) whose orthogonal part shows a hint
+    (``HINT_SIGMA`` locally) but stays below detection: said in words."""
     out = []
-    path = choice.path
-    need = sigma_from_p(alpha)
-    for j, pick in enumerate(path.picks):
-        o = design.options[pick.option]
-        if j >= choice.kept:
-            before, after = choice.inner[j], choice.inner[j + 1]
-            out.append(Refusal(None, f"{o.label} ({pick.significance:.1f} sigma) does not "
-                                     f"predict held-out data: the selection repeated on "
-                                     f"held-out folds predicts them worse with it "
-                                     f"(held-out loss {before:.1f} -> {after:.1f}, units "
-                                     "of the noise)" if j == choice.kept else
-                                     f"{o.label} ({pick.significance:.1f} sigma) follows "
-                                     "a refused finding", o.candidate.name))
-        elif j not in choice.findings:
-            stable = choice.stability[j] >= STABLE_FRACTION
-            out.append(Refusal(None, f"{o.label} ({pick.significance:.1f} sigma) follows an "
-                                     "unstable finding" if stable else
-                                     f"{o.label} ({pick.significance:.1f} sigma) is "
-                                     f"unstable: chosen in {100 * choice.stability[j]:.0f}% "
-                                     f"of {choice.n_resamples} bootstrap resamples of the "
-                                     f"scans (a finding needs "
-                                     f"{100 * STABLE_FRACTION:.0f}%)", o.candidate.name))
-    chosen = {design.options[p.option].candidate.name for p in path.picks}
-    room = parameter_bound(design.u) - design.m \
-        - sum(len(p.cols) for p in path.picks)
-    for pick in path.last:
-        o = design.options[pick.option]
-        if o.candidate.name in chosen or pick.r_model <= DISTINGUISH_R \
-                or pick.log_p < math.log(alpha) or pick.dof > room:
+    for r in results:
+        if r.r_model <= DISTINGUISH_R or log_p_family(problem, r, n_family) < math.log(alpha):
             continue
-        alone = _two_sided(math.log(max(pick.p_local, 1e-320)))
-        if alone < HINT_SIGMA:
+        sigma = local_sigma(problem, r)
+        if sigma < HINT_SIGMA:
             continue
-        tried = f" and {pick.trials:.0f} shapes" if pick.trials > 1.0 else ""
-        out.append(Refusal(None, f"{o.label} is mimicked by the model (r = "
-                                 f"{pick.r_model:.2f}): the part it cannot absorb is "
-                                 f"{alone:.1f} sigma alone, {pick.significance:.1f} sigma "
-                                 f"corrected for the {design.n_family} candidates{tried} "
-                                 f"tried; below detection (every finding needs "
-                                 f"{need:.2f} sigma)", o.candidate.name))
+        needed = sigma_from_p(alpha / (2.0 * n_family * max(r.trials, 1.0)))
+        out.append(Refusal(r, f"{correlation_words(r.name, r.r_model, r.partners)}: the part "
+                              f"they cannot absorb is {sigma:.1f} sigma, below detection "
+                              f"({needed:.1f} sigma here)"))
     return out
-
-
-def _stop_words(choice: Choice) -> str:
-    """Why the decision stopped, in words."""
-    path = choice.path
-    if choice.kept < len(path.picks):
-        return "the next finding did not predict held-out data"
-    return path.stop
-
-

@@ -247,39 +247,47 @@ def test_the_tpoint_cases_are_the_benchmarks_output():
 
 
 def test_the_real_data_procedures_are_the_benchmarks_output():
-    """The Diagnose section's real-data paragraph quotes benchmarks/real.py's kept output:
-    each file's ratio to the base, the two Sky RMS and its number of findings, and the AuxTel
-    comparisons; and the targets hold there (at most 1.02 everywhere; on AuxTel at most four
-    findings and better than the base)."""
-    output = (RESULTS / "real.txt").read_text(encoding="utf-8")
-    section = " ".join(_diagnose_section("On real data", "**Equatorial mounts.**").split())
-    words = {0: None, 1: "one", 2: "two", 3: "three", 4: "four"}
-    files = 0
-    for block in output.split("\n\n"):
-        head = re.match(r"(\S+)\.dat: \d+ stars", block)
-        if head is None:
-            continue
-        files += 1
-        base, ours, ratio = re.search(r"base ([\d.]+)\", diagnose ([\d.]+)\" \(ratio ([\d.]+)",
-                                      block).groups()
-        n = len(re.findall(r"^  \d\. ", block, re.M))
-        assert float(ratio) <= 1.02, head.group(1)
-        quoted = f"{head.group(1)} {ratio}"
-        if n:
-            quoted += f" ({ours}\" against {base}\", {words[n]}"
-        assert quoted in section, quoted
-        if head.group(1) == "auxtel_20200315":
-            assert n <= 4 and float(ours) < float(base)
-            auto, fauto = re.search(r"every fold ([\d.]+)\"; TPOINT's own 22 terms .*? "
-                                    r"refitted without each star ([\d.]+)\"", block).groups()
-            assert f"repeated in every fold reaches {auto}\"" in section
-            assert f"refitted without each star {fauto}\"" in section
-    assert files >= 2
+    output = (RESULTS / "blind_real.txt").read_text(encoding="utf-8")
+    auxtel, mmt = output.split("mmt_20210821", 1)
+    section = _diagnose_section("On real data", "Speed (`python benchmarks/blind.py --speed")
+    ours, auto = re.search(r"procedure: diagnose ([\d.]+)\", an unpenalized automatic search to "
+                           r"22 terms ([\d.]+)\"", auxtel).groups()
+    forward = re.search(r"training stars' own leave-one-out: ([\d.]+)\"", auxtel).group(1)
+    eight = re.search(r"eight terms +8 terms: CV Sky RMS leave-one-out ([\d.]+)\"",
+                      auxtel).group(1)
+    fauto = re.search(r"FAUTO 22 terms.*?leave-one-out ([\d.]+)\"", auxtel).group(1)
+    assert (f"diagnose reaches {ours}\", against {auto}\" for an unpenalized automatic search "
+            f"to 22 terms and {forward}\" for a forward selection") in section
+    assert f"({eight}\" for the eight terms)" in section
+    assert f"TPOINT's own 22 terms refitted reach {fauto}\"" in section
+    assert float(ours) <= float(auto)  # diagnose's target (benchmarks/blind.py)
+    ours_m = re.search(r"procedure: diagnose ([\d.]+)\"", mmt).group(1)
+    eight_m = re.search(r"eight terms +8 terms: CV Sky RMS leave-one-out ([\d.]+)\"",
+                        mmt).group(1)
+    assert f"held-out stars at {ours_m}\" against {eight_m}\" for the eight terms" in section
+    # what the command printed about the findings
+    orders, r_orders = re.search(r"el_periodic_el\[7\] and el_periodic_el with n = ([\d, ]+) "
+                                 r"cannot reliably be distinguished \(r = ([\d.-]+)\)",
+                                 auxtel).groups()
+    assert f"(n = {orders} beside it, r = {r_orders})" in section
+    r_tftx = re.search(r"^model: TF and TX are strongly correlated \(r = ([-\d.]+)\)", auxtel,
+                       re.M).group(1)
+    assert f"TF and TX are \"strongly correlated\" (r = {r_tftx})" in section
+    kept = re.findall(r"^\d\. .*\(kept by cross-validation", auxtel, re.M)
+    significant = re.findall(r"^\d\. .*\([\d.]+ sigma; Sky RMS", auxtel, re.M)
+    words = {1: "one", 2: "two", 3: "three", 4: "four"}
+    assert (f"gets {words[len(kept) + len(significant)]} findings, "
+            f"{words[len(significant)]} significant and {words[len(kept)]} kept by "
+            "cross-validation") in section
+    pair = re.search(r"^1\. az_runout_2a \[HASA2 HACA2\]: amplitude_arcsec = ([\d.]+), .*?"
+                     r"\(([\d.]+) sigma;", mmt, re.M).groups()
+    assert f"HASA2/HACA2 pair ({float(pair[0]):.2f}\", {pair[1]} sigma)" in section
+    kept_m = re.findall(r"^\d\. .*\(kept by cross-validation", mmt, re.M)
+    assert f"{words[len(kept_m)]} findings kept by cross-validation follow" in section
     bound = (RESULTS / "blind_bound.txt").read_text(encoding="utf-8")
     best = re.search(r"^  best with 4 finding\(s\) of (\d+): ([\d.]+)\"", bound, re.M).groups()
-    assert f"does better than {best[1]}\"" in section
+    assert f"better than {best[1]}\" with the held-out stars in view" in section
     assert f"every combination of {best[0]} findings" in section
-
 
 def test_the_crane_diagnose_case_is_the_benchmarks_output():
     """The Diagnose section's equatorial paragraph and docs/telescopes.md's table of the case

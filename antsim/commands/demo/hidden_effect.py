@@ -1,15 +1,14 @@
 """Chapter 5 of the walk-through, a hidden effect: a third campaign (24 hours, the fitted
 model in use) on an antenna with an uneven azimuth track, a fault the ten-term model cannot
 describe. Its residuals show it against azimuth; ``antsim diagnose`` is asked to name it (in
-this process, through its documented JSON output); its own figures and Sky RMS, before and
-after, show what the fault cost."""
+this process, through its documented JSON output), and the ten terms refitted with what it
+names show what the fault cost."""
 
 from __future__ import annotations
 
 import contextlib
 import io
 import json
-import math
 from pathlib import Path
 from typing import Any
 
@@ -130,7 +129,7 @@ def tell(story: Story, base_text: str, scenario_path: Path, out: Path, model_pat
         numbers["diagnose"] = None
     else:
         numbers["diagnose"] = doc
-        numbers.update(_finding(story, ch, doc, fit, run_dir / "diagnose"))
+        numbers.update(_finding(story, ch, doc, fit, data, figdir))
     story.say(ch, (
         f"The answer: the simulation was given {HIDDEN_TERM} = {HIDDEN_ARCSEC:g}\", an "
         "elevation error proportional to sin 2A, which is what an uneven azimuth rail does "
@@ -140,10 +139,13 @@ def tell(story: Story, base_text: str, scenario_path: Path, out: Path, model_pat
     return numbers
 
 
-def _finding(story: Story, ch, doc: dict, fit, diagnose_dir: Path) -> dict[str, Any]:
-    """What diagnose named, in its words, with its own Sky RMS before and after (those of
-    its JSON and of the figures it drew into ``diagnose_dir``, shown here): one number
-    each, diagnose's."""
+def _finding(story: Story, ch, doc: dict, fit, data, figdir: Path) -> dict[str, Any]:
+    """What diagnose named, in its words, and the ten terms refitted with the terms it
+    named: the Sky RMS before and after quoted are those of the figures drawn."""
+    from antsim.figures.diagnose import before_after_figures
+    from controller.pointing.fitting import fit_model
+    from controller.pointing.terms import TermError, get_term
+
     findings = doc.get("findings") or []
     if not findings:
         story.say(ch, "antsim diagnose reported no mismatch: it found nothing the "
@@ -155,25 +157,21 @@ def _finding(story: Story, ch, doc: dict, fit, diagnose_dir: Path) -> dict[str, 
         f"{', '.join(best.get('terms') or []) or 'none'}). "
         f"{best.get('explanation', '')} Where (the size of the effect it fitted, and where "
         f"it is largest): {best.get('where', '')}."))
-    before, after = best.get("sky_rms_before_arcsec"), best.get("sky_rms_after_arcsec")
-    if before is None or after is None:
+    extra = []
+    for term in best.get("terms") or []:
+        with contextlib.suppress(TermError):
+            get_term(term)
+            extra.append(term)
+    if not extra:
         return {}
-    terms = ", ".join(best.get("terms") or [])
+    after = fit_model(data, [*fit.names, *extra], robust=True, name="diagnosed")
     story.say(ch, (
-        f"Fitted with the ten terms (an unweighted fit, TPOINT's Sky RMS, over the "
-        f"scans diagnose kept), {terms} take the sky rms from {before:.2f}\" to "
-        f"{after:.2f}\": diagnose's figures below, before and after. Its held-out figures, "
-        "the selection repeated on each fold's training scans and the left-out scans "
-        f"predicted, are {best.get('heldout_sky_rms_before_arcsec', math.nan):.2f}\" and "
-        f"{best.get('heldout_sky_rms_after_arcsec', math.nan):.2f}\"."))
-    for stem, what in (("residuals", "against elevation and azimuth"),
-                       ("histograms", "as histograms"), ("quiver", "on the sky")):
-        path = diagnose_dir / f"diagnose_{stem}.png"
-        if path.exists():
-            story.page_figure(
-                ch, path, f"Residuals before (ten terms) and after (ten terms + {terms}): "
-                          f"sky rms {before:.2f}\" \N{RIGHTWARDS ARROW} {after:.2f}\"",
-                f"diagnose's own figure: the residuals {what}, before (top) and after "
-                "(bottom). A signature that is gone from the bottom row was explained by "
-                "what was added.")
-    return {"after_sky_rms_arcsec": after, "before_sky_rms_arcsec": before}
+        f"Fitted with the ten terms, robustly as fit A, {', '.join(extra)} take the sky rms "
+        f"from {fit.sky_rms_arcsec:.1f}\" to {after.sky_rms_arcsec:.1f}\" (el "
+        f"{fit.el_rms_arcsec:.1f}\" to {after.el_rms_arcsec:.1f}\"): the figures below, "
+        "before and after."))
+    for f in before_after_figures(fit, after, data, figdir, "demo5_diagnose",
+                                  before_name="ten terms",
+                                  after_name="ten terms + " + ", ".join(extra)):
+        story.figure(ch, f)
+    return {"after_sky_rms_arcsec": after.sky_rms_arcsec}

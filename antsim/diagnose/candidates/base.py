@@ -288,9 +288,8 @@ class Candidate(ABC):
     model, its nonlinear parameters searched over :meth:`thetas` and :meth:`refine`d,
     :meth:`linear_test` per shape, :meth:`finish` for the parameters and the model terms it
     is confused with); :meth:`columns` (an offsets candidate's signature as regressors);
-    :meth:`params_from`; :meth:`label`; :meth:`options` (the decision's shapes and their
-    columns, :mod:`..decide`), ``look_elsewhere``; ``harmonic`` and ``mechanisms`` (how a
-    finding is named).
+    :meth:`params_from`; :meth:`label`; :meth:`cv_thetas` (the cross-validated stage's
+    shapes).
 
     Model update: :meth:`effect_from_params` (the simulator effect's parameters).
 
@@ -320,18 +319,6 @@ class Candidate(ABC):
     #: its signature is linear in its parameters at each shape: :meth:`columns` gives it
     #: (False: a nonlinear signature, fitted by its own :meth:`test`)
     linear_signature: bool = True
-    #: how the decision (:mod:`..decide`) pays for the best of its shapes: "none" (one
-    #: shape), "count" (each shape an independent trial: a harmonic family's orders, the
-    #: sources), "grid" (a grid of a continuous parameter: Nyholt's effective number of its
-    #: shapes), "tube" (a change at an unknown time: the tube formula)
-    look_elsewhere: ClassVar[str] = "none"
-    #: a pure harmonic of an axis angle (a pair of TPOINT's harmonic terms, or two orders):
-    #: named by its signature, with the mechanisms it is consistent with (``mechanisms``),
-    #: none of them asserted; False: its signature goes beyond a harmonic (a time, a
-    #: sensor, a source, both axes in a fixed relation) and its mechanism is named
-    harmonic: bool = False
-    #: the mechanisms a harmonic signature is consistent with, in words
-    mechanisms: tuple[str, ...] = ()
 
     def applicable(self, obs: Observations, known_noise: bool) -> bool:
         if obs.mount not in self.mounts:
@@ -361,13 +348,10 @@ class Candidate(ABC):
         """The shapes (values of the nonlinear parameters) :meth:`test` tries."""
         return [None]
 
-    def options(self, obs: Observations) -> list[tuple[Any, np.ndarray, tuple[str, ...]]]:
-        """The shapes the decision (:mod:`..decide`) tries, each with its raw columns (2n, q)
-        and their names: every shape of :meth:`thetas` (none for a candidate on other
-        recorded quantities)."""
-        if self.kind != "offsets":
-            return []
-        return [(theta, *self.columns(obs, theta)) for theta in self.thetas(obs)]
+    def cv_thetas(self, problem) -> list[Any]:
+        """The shapes the cross-validated stage (:mod:`..crossval`) compares: all of them
+        unless there is one per scan (a step's change time)."""
+        return self.thetas(problem.obs)
 
     def params_from(self, obs: Observations, theta: Any, coef: np.ndarray, cov: np.ndarray,
                     names: tuple[str, ...]) -> tuple[dict[str, Any], float, float]:

@@ -99,10 +99,6 @@ class StepCandidate(Candidate):
     AXES = ("az", "el")
     #: scans required on each side of a change
     MIN_SIDE = 3
-    look_elsewhere = "tube"
-    #: change times per axis the decision tries at most (a 24-hour campaign's 280 gaps
-    #: every 5 scans, about 25 minutes)
-    DECISION_TIMES = 56
 
     def __init__(self):
         self.explanation = Step.explanation
@@ -206,18 +202,15 @@ class StepCandidate(Candidate):
         ok = norm2 > 1e-9 * max(float(norm2.max()), 1e-300)
         return np.where(ok, xz ** 2 / np.where(ok, norm2, 1.0), 0.0), ok, norm2, dot
 
-    def options(self, obs):
-        """The decision's shapes (:mod:`..decide`): a change on either axis at each of at
-        most ``DECISION_TIMES`` change times evenly spread through the scans (the test
-        here, on the file, tries every gap): the decision on a fold or a resample is then a
-        fixed number of small columns, whatever the number of scans. Azimuth steps first,
-        each axis in time order (the tube formula's curves)."""
-        times = self.change_times(obs)
-        if times.size > self.DECISION_TIMES:
-            times = times[np.unique(np.linspace(0, times.size - 1,
-                                                self.DECISION_TIMES).round().astype(int))]
-        return [((axis, float(t)), *self.columns(obs, (axis, float(t))))
-                for axis in self.AXES for t in times]
+    def cv_thetas(self, problem: Problem):
+        """The most likely change time of each axis (the largest chi^2 decrease): held-out
+        fits at every gap between scans would refit the model once per scan (n^2: hours
+        for 200,000 scans)."""
+        gain = self._gains(problem, *problem.perp_for(problem.used))[0]
+        times = self.change_times(problem.obs)
+        m = times.size
+        return [self._theta(times, int(np.argmax(gain[:m]))),
+                self._theta(times, m + int(np.argmax(gain[m:])))]
 
     def test(self, problem: Problem, perp, z_perp, chi2_now) -> TestResult:
         obs = problem.obs

@@ -18,69 +18,19 @@ from .optics import BeamWidthCandidate, ExactTiltCandidate, SourceCandidate, Squ
 from .terms import FeedOffsetCandidate, HarmonicFamilyCandidate, TermsCandidate
 from .thermal import (
     SensorTermsCandidate,
-    SolarDishCandidate,
     SunsetCandidate,
     SunsetTransientCandidate,
     TemperatureCandidate,
 )
 
-__all__ = ["CANDIDATES", "HEATING", "candidate", "naming"]
+__all__ = ["CANDIDATES", "candidate"]
 
 
 def _harmonic(name: str, title: str, signature: str,
               mounts: tuple[str, ...] = ("altaz",)) -> TermsCandidate:
     cls = EFFECTS[name]
     return TermsCandidate(name, (cls.sin_term, cls.cos_term), title, signature,
-                          cls.explanation, effect=name, signs=cls.signs, mounts=mounts,
-                          mechanisms=MECHANISMS.get(name, ()))
-
-
-#: what each pure harmonic is consistent with: a harmonic of an axis angle is named as a
-#: harmonic ("dE varies as sin 2A"), these listed beside it, none asserted (a mechanism
-#: shows itself beyond the harmonic: on both axes in a fixed relation, in its phase, in
-#: time, in a sensor)
-MECHANISMS: dict[str, tuple[str, ...]] = {
-    "az_track_2a": ("an azimuth track or bearing race with two high points per turn (the "
-                    "mount nods as it rolls over them)",
-                    "a foundation or pedestal that settled unevenly",
-                    "an elevation-axis error that repeats twice per azimuth turn"),
-    "az_track_3a": ("an azimuth track or bearing race with three high points per turn",
-                    "a pedestal on three supports that settled unevenly"),
-    "az_runout_1a": ("an azimuth encoder mounted off the axis (runout)",
-                     "an eccentric azimuth bull gear or pinion"),
-    "az_runout_2a": ("an elliptical azimuth encoder disc or bull gear",
-                     "an encoder coupling that flexes twice per turn"),
-    "el_nod_1a": ("an azimuth track with one high point", "a foundation that settled on "
-                  "one side", "a tilted azimuth axis (whose dA tan E part AN, AW hold)"),
-    "el_eccentricity": ("an elevation encoder mounted off the axis",
-                        "a tube flexure beyond the sin Z law"),
-    "el_eccentricity_2e": ("an elliptical elevation encoder or gear",
-                           "a tube or counterweight flexure that varies twice per turn"),
-    "az_runout_1a_2a": ("an azimuth encoder off the axis and elliptical",
-                        "an eccentric, elliptical azimuth bull gear"),
-    "az_track_2a_3a": ("an azimuth track with two and three high points per turn",
-                       "a pedestal that settled unevenly"),
-    "el_periodic_el": ("an elevation gear or encoder error that repeats n times per turn",
-                       "an elevation-dependent table (optics, collimation) sampled in "
-                       "elevation", "a tube flexure of higher order"),
-    "xel_periodic_el": ("a collimation that changes with elevation (secondary, feed or "
-                        "instrument shifting sideways)",
-                        "Nasmyth or rotator optics misaligned"),
-    "el_periodic_az": ("an azimuth track with n high points (rail joints, segments)",
-                       "an azimuth bearing race with n undulations"),
-    "az_periodic_az": ("an azimuth encoder, pinion or bull-gear error that repeats n times "
-                       "per turn",),
-    "ha_periodic_ha": ("a polar gear, pinion or encoder error that repeats n times per "
-                       "turn",),
-    "dec_periodic_ha": ("a bent polar shaft", "an uneven polar bearing", "a yoke that "
-                        "flexes as the polar axis turns"),
-    "dec_periodic_dec": ("a declination gear or encoder error that repeats n times per "
-                         "turn",),
-    "xdec_periodic_dec": ("a collimation that changes with declination (the optics shift "
-                          "sideways)",),
-    "ha_encoder_eccentricity": ("an hour-angle encoder or polar gear off the polar axis",),
-    "dec_encoder_eccentricity": ("a declination encoder or gear off the declination axis",),
-}
+                          cls.explanation, effect=name, signs=cls.signs, mounts=mounts)
 
 
 IN_SPAN = "already in the 45-ft's ten-term model (W terms), so invisible with that baseline"
@@ -214,18 +164,15 @@ EQUATORIAL_FAMILIES = (
 def _equatorial_rows() -> list[Candidate]:
     lib: list[Candidate] = [_harmonic(*row, mounts=EQUATORIAL)
                             for row in EQUATORIAL_HARMONIC_ROWS]
-    lib += [TermsCandidate(name, terms, title, signature, cause, pair=pair, mounts=EQUATORIAL,
-                           mechanisms=MECHANISMS.get(name, ()))
+    lib += [TermsCandidate(name, terms, title, signature, cause, pair=pair, mounts=EQUATORIAL)
             for name, terms, title, signature, cause, pair in EQUATORIAL_TERM_ROWS]
-    lib += [HarmonicFamilyCandidate(*row, mounts=EQUATORIAL, mechanisms=MECHANISMS[row[0]])
-            for row in EQUATORIAL_FAMILIES]
+    lib += [HarmonicFamilyCandidate(*row, mounts=EQUATORIAL) for row in EQUATORIAL_FAMILIES]
     return lib
 
 
 def _library() -> list[Candidate]:
     lib: list[Candidate] = [_harmonic(*row) for row in HARMONIC_ROWS]
-    lib += [TermsCandidate(name, terms, title, signature, cause, pair=False,
-                           mechanisms=MECHANISMS[name])
+    lib += [TermsCandidate(name, terms, title, signature, cause, pair=False)
             for name, terms, title, signature, cause in TWO_ORDER_ROWS]
     lib += [
         TermsCandidate("gravity", ("TF",), "gravitational sag", "dE ~ cos E",
@@ -250,14 +197,12 @@ def _library() -> list[Candidate]:
                        "the azimuth axis is not vertical", pair=False,
                        blind_exclusion=IN_SPAN + " (W2, W3, W7, W8)"),
     ]
-    lib += [HarmonicFamilyCandidate(*row, mechanisms=MECHANISMS[row[0]])
-            for row in HARMONIC_FAMILIES]
+    lib += [HarmonicFamilyCandidate(*row) for row in HARMONIC_FAMILIES]
     lib += [
         FeedOffsetCandidate(),
         SunsetCandidate(),
         SunsetTransientCandidate(),
         TemperatureCandidate(),
-        SolarDishCandidate(),
         SensorTermsCandidate(),
         StepCandidate(),
         ClockCandidate(),
@@ -275,20 +220,6 @@ def _library() -> list[Candidate]:
 
 
 CANDIDATES: tuple[Candidate, ...] = tuple(_library())
-
-
-#: the candidates that name the Sun's heating of the structure (the ``thermal`` effect): its
-#: drift after sunset and its transient, its lag behind the air temperature, the dish it
-#: heats on the side it faces, the structure sensors' terms
-HEATING = ("sunset_drift", "sunset_transient", "temperature_drift", "solar_dish_heating",
-           "thermal_sensors")
-
-
-def naming(effect: str) -> set[str]:
-    """The candidates whose finding names the simulator effect ``effect``: those that
-    reproduce it, and for the Sun's heating every one of :data:`HEATING`."""
-    out = {c.name for c in CANDIDATES if c.effect == effect}
-    return out | set(HEATING) if effect == "thermal" else out
 
 
 def candidate(name: str) -> Candidate:

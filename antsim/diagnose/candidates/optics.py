@@ -46,7 +46,6 @@ class SourceCandidate(Candidate):
         "size_arcmin": "Gaussian FWHM of the source from its measured widths"}
     amplitude_param = "offset_arcsec"
     needs = ("source",)
-    look_elsewhere = "count"
     MIN_SCANS = 4
 
     mounts = ("altaz", "equatorial")
@@ -164,29 +163,6 @@ class ExactTiltCandidate(Candidate):
     def columns(self, obs, theta=None):
         raise NotImplementedError(f"{self.name}: its signature is not linear in its "
                                   "parameters (its own test fits it)")
-
-    #: the tilt and collimation (arcmin) at which the second-order signature is taken
-    #: (its fourth-order part is (h / 1 rad)^2 ~ 1e-5 of it)
-    EXPANSION_ARCMIN = 10.0
-
-    def options(self, obs):
-        """One shape for the decision: the signature to second order, linear in the six
-        products of the tilt's two components and the collimation (the quadratic forms its
-        even part spans: the reference degrees of freedom of its own test), arcsec per
-        arcmin^2. Its linear part, which AN, AW and CA hold, cancels in the even part."""
-        h = self.EXPANSION_ARCMIN
-        unit = np.eye(3)
-
-        def even(v: np.ndarray) -> np.ndarray:
-            return 0.5 * (self.error(obs, h * v) + self.error(obs, -h * v))
-
-        diag = [even(unit[i]) for i in range(3)]
-        cols = list(diag)
-        for i in range(3):
-            for j in range(i + 1, 3):
-                cols.append(even(unit[i] + unit[j]) - diag[i] - diag[j])
-        names = ("tn2", "te2", "c2", "tn_te", "tn_c", "te_c")
-        return [("second order", np.column_stack(cols) / h**2, names)]
 
     def error(self, obs: Observations, theta: Sequence[float]) -> np.ndarray:
         """Error (2n,) arcsec of an exact tilt (north, east components) and collimation,

@@ -31,11 +31,8 @@ class TermsCandidate(Candidate):
     def __init__(self, name: str, terms: Sequence[str], title: str, signature: str,
                  explanation: str, effect: str | None = None, pair: bool = True,
                  blind_exclusion: str | None = None, signs: tuple[float, float] = (1.0, 1.0),
-                 mounts: tuple[str, ...] = ("altaz",), mechanisms: Sequence[str] = ()):
+                 mounts: tuple[str, ...] = ("altaz",)):
         self.name = name
-        #: a pure harmonic (see :attr:`Candidate.harmonic`) when mechanisms are listed
-        self.mechanisms = tuple(mechanisms)
-        self.harmonic = bool(self.mechanisms)
         #: the vocabulary its terms are in: TPOINT's alt-az one, or its equatorial one
         self.mounts = tuple(mounts)
         self.terms = tuple(terms)
@@ -112,14 +109,11 @@ class HarmonicFamilyCandidate(TermsCandidate):
     ``H<result>S<arg><n>``, ``H<result>C<arg><n>`` of TPOINT's harmonic generator, n searched
     over ``orders`` (the look-elsewhere effect paid as that many trials)."""
 
-    look_elsewhere = "count"
-
     def __init__(self, name: str, result: str, arg: str, orders: Sequence[int], title: str,
-                 signature: str, explanation: str, mounts: tuple[str, ...] = ("altaz",),
-                 mechanisms: Sequence[str] = ()):
+                 signature: str, explanation: str, mounts: tuple[str, ...] = ("altaz",)):
         self.result, self.arg, self.orders = result, arg, tuple(orders)
         super().__init__(name, (self.order_terms(self.orders[0])), title, signature, explanation,
-                         effect="terms", mounts=mounts, mechanisms=mechanisms)
+                         effect="terms", mounts=mounts)
         #: the pattern (a finding names its actual terms, e.g. HESE7 HECE7)
         self.terms = (f"H{result}S{arg}n", f"H{result}C{arg}n")
         self.params_doc = {"n": "cycles per turn", "amplitude_arcsec": "amplitude (arcsec)",

@@ -1,6 +1,6 @@
 """Thermal candidates: an elevation drift that follows the sunset with a lag, one that
-follows the air temperature, the dish heated on the side the Sun faces, and the thermal
-deformation as structure temperature sensors see it (recordings of an antenna with sensors).
+follows the air temperature, and the thermal deformation as structure temperature sensors see
+it (recordings of an antenna with sensors).
 """
 
 from __future__ import annotations
@@ -22,7 +22,6 @@ from controller.pointing.model import PointingModel
 from controller.pointing.thermal import SENSOR_FAMILY
 
 from ..data import Observations
-from ..factors import kept_sun_grid
 from ..linalg import lstsq
 from ..problem import Problem
 from .base import (
@@ -36,8 +35,8 @@ from .base import (
 )
 from .terms import TermsCandidate
 
-__all__ = ['SensorTermsCandidate', 'SolarDishCandidate', 'SunsetCandidate',
-           'SunsetTransientCandidate', 'TemperatureCandidate', 'sun_vectors']
+__all__ = ['SensorTermsCandidate', 'SunsetCandidate', 'SunsetTransientCandidate',
+           'TemperatureCandidate']
 
 #: the time-constant searches' tolerance in log theta: 1% of tau, some 20 times finer than
 #: tau's own standard error (Fomalont's drift, 16 seeds: 22-31% of tau,
@@ -147,7 +146,6 @@ class _LaggedCandidate(Candidate):
         return best if res.delta_chi2 < best.delta_chi2 else res
 
     TAUS: tuple[float, ...] = ()
-    look_elsewhere = "grid"
 
     def thetas(self, obs):
         return list(self.TAUS)
@@ -404,99 +402,3 @@ class SensorTermsCandidate(TermsCandidate):
         need = PointingModel(list(self.terms)).regressors
         return super().applicable(obs, known_noise) and obs.structure is not None \
             and need <= set(obs.structure)
-
-
-#: the time grid (s) the Sun's direction is computed on for :func:`sun_vectors`, and the
-#: longest span one ephemeris covers (s; at most a year)
-SUN_STEP_S = 600.0
-SUN_CHUNK_S = 300 * 86400.0
-
-
-def sun_vectors(obs: Observations) -> np.ndarray:
-    """The Sun's direction (3, n): unit vectors north, east, up at each scan's time, from the
-    recordings' site and epoch (an ephemeris on a 10-minute grid, interpolated; kept by
-    site, epoch and span, :func:`..factors.kept_sun_grid`). ValueError where the recordings
-    do not name their site and epoch."""
-    meta = obs.meta
-    if not all(k in meta for k in ("epoch_utc", "latitude_deg", "longitude_deg")):
-        raise ValueError("the recordings name no site and epoch")
-    t0, t1 = float(np.nanmin(obs.t_s)), float(np.nanmax(obs.t_s))
-    grid = np.arange(t0 - SUN_STEP_S, t1 + 2 * SUN_STEP_S, SUN_STEP_S)
-    key = ("sun vectors", meta["epoch_utc"], meta["latitude_deg"], meta["longitude_deg"],
-           grid[0], grid.size)
-
-    def make() -> np.ndarray:
-        from astropy.time import Time, TimeDelta
-
-        from controller.astro.ephemeris import Ephemeris
-        from controller.astro.site import Site
-
-        site = Site(float(meta["latitude_deg"]), float(meta["longitude_deg"]),
-                    float(meta.get("height_m", 0.0)))
-        epoch = Time(str(meta["epoch_utc"]), scale="utc")
-        out = np.empty((3, grid.size))
-        for start in range(0, grid.size, int(SUN_CHUNK_S // SUN_STEP_S)):
-            part = slice(start, min(grid.size, start + int(SUN_CHUNK_S // SUN_STEP_S)))
-            t = grid[part]
-            eph = Ephemeris(site, epoch + TimeDelta(float(t[0]), format="sec"),
-                            float(t[-1] - t[0]) + 60.0, ())
-            az, el = eph.sun_altaz_rad(t - t[0])
-            out[:, part] = (np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el))
-        return out
-
-    vectors = kept_sun_grid(key, make)
-    return np.array([np.interp(obs.t_s, grid, row) for row in vectors])
-
-
-class SolarDishCandidate(Candidate):
-    """The Sun heating the side of the dish it shines on: a front-back gradient that tips
-    the beam in elevation as the cosine of the angle between the boresight and the Sun, a
-    left-right one that turns it across, both by day as the insolation (the sine of the
-    Sun's elevation): the error grows as the antenna points towards the Sun."""
-
-    name = "solar_dish_heating"
-    effect = "thermal"
-    title = "the Sun heating the dish on the side it faces"
-    signature = ("by day, dE ~ insolation x cos(angle between the boresight and the Sun), "
-                 "dA cos E ~ insolation x the Sun's component across the dish: largest "
-                 "pointing towards the Sun")
-    params_doc: ClassVar[dict[str, str]] = {
-        "el_arcsec": "elevation error with the Sun face-on and overhead (arcsec)",
-        "xel_arcsec": "cross-elevation error with the Sun square to the side and overhead "
-                      "(arcsec)"}
-    amplitude_param = "el_arcsec"
-    needs = ("time",)
-    blind_exclusion = ("the scenarios' own heating already warms the dish on the side the "
-                       "Sun faces (the thermal effect's dish gradient): one hidden beside it "
-                       "is no separate effect")
-
-    def __init__(self):
-        self.explanation = (ThermalEffect.explanation + "; the side the Sun shines on warms "
-                            "first, within minutes")
-
-    def applicable(self, obs, known_noise):
-        if not super().applicable(obs, known_noise):
-            return False
-        try:
-            sun = sun_vectors(obs)
-        except ValueError:
-            return False
-        return bool(np.any(sun[2][obs.good] > 0.0))
-
-    def columns(self, obs, theta=None):
-        sun_n, sun_e, sun_u = sun_vectors(obs)
-        insolation = np.clip(sun_u, 0.0, None)
-        a, e = obs.az_rad, obs.el_rad
-        facing = insolation * (np.cos(e) * (sun_n * np.cos(a) + sun_e * np.sin(a))
-                               + sun_u * np.sin(e))
-        across = insolation * (sun_e * np.cos(a) - sun_n * np.sin(a))
-        return np.column_stack([stacked(None, facing, obs.n), stacked(across, None, obs.n)]), \
-            ("el_arcsec", "xel_arcsec")
-
-    def params_from(self, obs, theta, coef, cov, names):
-        values = dict(zip(names, map(float, coef), strict=True))
-        values.setdefault("el_arcsec", 0.0)
-        values.setdefault("xel_arcsec", 0.0)
-        i = names.index("el_arcsec") if "el_arcsec" in names else None
-        sig = math.sqrt(max(float(cov[i, i]), 0.0)) if i is not None else float("nan")
-        return values, values["el_arcsec"], sig

@@ -1,6 +1,6 @@
 """antsim/commands/blindtest.py: a rate over no cases (a draw without a null case has no
 false alarms to count) is said in words, never "nan%", and is null in the JSON, which stays
-strict JSON (the report says so itself: tests/antsim/diagnose/test_blind.py)."""
+strict JSON."""
 
 from __future__ import annotations
 
@@ -9,6 +9,17 @@ import json
 import pytest
 
 from antsim.cli import main
+from antsim.commands.blindtest import _no_case_words, _null_for_no_rate
+
+
+def test_a_rate_of_no_cases_is_said_in_words():
+    text = ("correct identification 0/0 = nan% (group-aware nan%)\n"
+            "false alarms 0/0 = nan%\namplitude within 3 sigma 2/2 = 100.0%")
+    assert _no_case_words(text) == (
+        "correct identification 0/0 (no such case was drawn)\n"
+        "false alarms 0/0 (no such case was drawn)\namplitude within 3 sigma 2/2 = 100.0%")
+    assert _null_for_no_rate({"rates": {"a": float("nan"), "b": 0.5, "c": [float("inf")]}}) \
+        == {"rates": {"a": None, "b": 0.5, "c": [None]}}
 
 
 def _strict(text: str):

@@ -28,14 +28,8 @@ from antsim.world.effects.harmonics import HARMONIC_EFFECTS, AzimuthTrack2A
 from controller.units import RAD_PER_ARCSEC
 
 REAL = Path(__file__).resolve().parents[3] / "examples"
-#: the JSON contract of a finding (the demo and antsim blindtest read it): extended, never
-#: broken
 FINDING_KEYS = {"effect", "terms", "explanation", "where", "params", "significance",
                 "sky_rms_before_arcsec", "sky_rms_after_arcsec"}
-#: what the decision's validation adds to a finding
-FINDING_EXTRA_KEYS = {"signature", "mechanisms", "mechanism_asserted", "alternatives",
-                      "stability", "heldout_sky_rms_before_arcsec",
-                      "heldout_sky_rms_after_arcsec"}
 
 
 def synthetic(n: int = 160, seed: int = 3, noise_arcsec: float = 1.0,
@@ -274,13 +268,8 @@ def test_a_hidden_harmonic_is_named_with_its_terms_and_amplitude():
     doc = d.to_json()
     assert doc["mismatch"] is True
     first = doc["findings"][0]
-    assert set(first) == FINDING_KEYS | FINDING_EXTRA_KEYS
+    assert set(first) == FINDING_KEYS
     assert first["effect"] == "az_track_2a"
-    # a pure harmonic is named as one, its mechanisms listed and none asserted
-    assert first["signature"] == "dE varies as sin 2A and cos 2A"
-    assert first["mechanism_asserted"] is False and len(first["mechanisms"]) >= 2
-    assert first["stability"]["fraction"] >= 0.5 and first["stability"]["stable"]
-    assert first["heldout_sky_rms_after_arcsec"] < first["heldout_sky_rms_before_arcsec"]
     assert first["terms"] == ["HESA2", "HECA2"]
     r = d.findings[0].result
     assert abs(r.amplitude - a) < 3 * r.amplitude_sigma
@@ -326,10 +315,8 @@ HELD_OUT_STYLE = [({"HECE2": 30.0}, "el_eccentricity_2e"),
 def test_held_out_style_effects_are_named(extra, effect):
     d = diagnose(synthetic(extra=extra, seed=3))
     first = d.findings[0]
-    assert first.effect == effect
+    assert first.effect == effect and first.step.heldout is None
     assert first.step.significance > 4.0
-    before, after = first.step.heldout  # the nested held-out Sky RMS falls with it
-    assert after < before
     r = first.result
     hidden = np.array([extra.get(t, 0.0) for t in r.comp_names])
     fitted = np.array([r.params["terms_arcsec"][t] for t in r.comp_names])
@@ -339,19 +326,15 @@ def test_held_out_style_effects_are_named(extra, effect):
 def test_orders_of_a_family_the_data_cannot_tell_apart_are_reported():
     """Three cycles of elevation error (HESE3/HECE3, 10" in 1" noise, seed 3): over 15-85 deg
     the elevation-only effects left by IE, TF and TX are alike (r > 0.95 between their
-    fitted signatures), and one of them is named; the hidden order is one finding's
-    alternative (its model predicts every left-out star as well), the family's orders said
-    in one line with what would tell them apart (these elevation harmonics part below the
-    stars' 15 deg), each its own entry in the JSON."""
+    fitted signatures), and the simplest of them is named; the hidden order is among the
+    alternatives, the family's orders said in one line, each its own entry in the JSON."""
     d = diagnose(synthetic(extra={"HESE3": 6.0, "HECE3": 8.0}, seed=3))
-    assert len(d.findings) == 1
     first = d.findings[0]
-    assert first.effect in ("el_eccentricity", "el_eccentricity_2e", "el_periodic_el")
-    orders = {a.result.candidate.label(a.result.theta): a for a in first.step.alternatives}
+    assert first.effect in ("el_eccentricity", "el_eccentricity_2e")
+    orders = {a.result.candidate.label(a.result.theta): a for a in first.step.alternatives
+              if a.sibling}
     assert "el_periodic_el[3]" in orders and orders["el_periodic_el[3]"].correlation > 0.95
-    three = orders["el_periodic_el[3]"]
-    assert "elevation 1" in three.tell_apart  # 10-19 deg: below the stars
-    lines = [w for w in d.text().splitlines() if "el_periodic_el with n = " in w]
+    lines = [w for w in d.text().splitlines() if "and el_periodic_el with n = " in w]
     assert len(lines) == 1 and "3" in lines[0].split("n = ")[1], lines
     doc = d.to_json()
     assert "el_periodic_el[3]" in [a["alternative"] for a in doc["alternatives"]]
@@ -365,22 +348,16 @@ def test_a_mimicked_term_below_detection_is_refused_in_words():
     d = diagnose(synthetic(seed=4, extra={"HESE": 11.34}))
     assert d.findings == []
     words = [r.reason for r in d.selection.refused]
-    said = [w for w in words if w.startswith("el_eccentricity is mimicked by the model")]
-    assert len(said) == 1 and "below detection" in said[0], words
-    # one threshold, said on one scale: the refusal's family-corrected sigma is below the
-    # 2.58 sigma every finding meets, its local one beside it
-    alone, corrected = map(float, re.search(r"is ([\d.]+) sigma alone, ([\d.]+) sigma "
-                                            r"corrected", said[0]).groups())
-    assert corrected < 2.58 <= alone and "every finding needs 2.58 sigma" in said[0]
+    assert any(w.startswith("el_eccentricity and IE") and "cannot reliably be distinguished"
+               in w and "below detection" in w for w in words), words
     found = diagnose(synthetic(seed=5, extra={"HESE": 11.34})).findings
-    assert found[0].effect == "el_eccentricity" and found[0].step.significance >= 2.58
+    assert found[0].effect == "el_eccentricity" and found[0].step.heldout is None
 
 
 def test_a_pair_that_one_term_matches_is_offered_in_that_form():
     """A runout twice per turn with only its sine term (HASA2 1.5" in 1" noise): the pair is
-    named, and HASA2 alone explains as much (one TPOINT term that matched a pair's
-    improvement to 0.001" on a real file), said so; the updated model keeps the pair, the
-    form the decision chose and validated."""
+    named, and HASA2 alone explains as much (the MMT case, where one TPOINT term
+    matched a pair's improvement to 0.001"); the updated model takes that form."""
     d = diagnose(synthetic(extra={"HASA2": 1.5}, seed=7))
     first = d.findings[0]
     assert first.effect == "az_runout_2a" and first.terms == ["HASA2", "HACA2"]
@@ -389,7 +366,7 @@ def test_a_pair_that_one_term_matches_is_offered_in_that_form():
     assert simple.sky_rms_after == pytest.approx(first.step.sky_rms_after, abs=0.01)
     assert "HASA2 alone explains as much" in d.text()
     model = d.updated_model()
-    assert {"HASA2", "HACA2"} <= set(model.names)
+    assert "HASA2" in model.names and "HACA2" not in model.names
     # a pair both of whose terms matter has no one-term form
     both = diagnose(synthetic(extra={"HASA2": 1.5, "HACA2": -1.5}, seed=7))
     assert both.findings[0].effect == "az_runout_2a" and both.findings[0].step.simplest is None
@@ -419,20 +396,36 @@ def test_heldout_losses_are_refits_without_each_star():
         np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)
 
 
-def test_without_a_noise_prediction_only_the_threshold_adds_findings():
+def test_without_a_noise_prediction_prediction_extends_a_significant_model():
     """TPOINT-like data with three effects in 1" noise on 160 stars (seed 11): the track's
     twice-per-turn pair and the azimuth runout are significant, the fourth-order track term
-    (0.6") is not (1.5 sigma after the family's correction) and is not added, however it
-    might lower a held-out figure: one threshold decides what is a finding, and every
-    finding meets it (no finding at 0.0 sigma)."""
+    (0.6") is not (1.5 sigma after the family's correction); the cross-validated stage adds
+    it because it lowers the held-out Sky RMS by more than a standard error, said so, never
+    beyond 4 findings in all; with a noise prediction (a scenario) the stage does not run,
+    and data without a significant finding get none (the nulls above)."""
+    from dataclasses import replace
+
+    from antsim.diagnose.problem import Prediction
+
     obs = synthetic(extra={"HESA2": 2.0, "HECA2": 1.0, "HASA": 0.6, "HACA": -0.6,
                            "HESA4": 0.6}, seed=11)
     d = diagnose(obs)
-    assert d.findings[0].effect == "az_track_2a"
-    labels = [f.label for f in d.findings]
-    assert "el_periodic_az[4]" not in labels and len(labels) <= 3, labels
-    assert all(f.step.significance >= 2.58 for f in d.findings)
+    first, *rest = d.findings
+    assert first.effect == "az_track_2a" and first.step.heldout is None
+    kept = [f for f in rest if f.step.heldout is not None]
+    assert [f.result.candidate.label(f.result.theta) for f in kept] == ["el_periodic_az[4]"]
+    assert len(d.findings) <= 4 and "kept by cross-validation" in d.text()
+    for f in kept:
+        before, after = f.step.heldout
+        assert after < before
+        assert f.step.separation.r <= 0.95  # the stage adds nothing the model mimics
     assert d.summary["cv_sky_rms_after_arcsec"] < d.summary["cv_sky_rms_before_arcsec"]
+    # the same data with the noise known (as a scenario's simulations predict it): only the
+    # significance tests decide
+    n = obs.n
+    known = Prediction("simulated", np.zeros(n), np.zeros(n), np.ones(n), np.ones(n))
+    k = diagnose(replace(obs, kind="ecsv"), prediction=known)
+    assert all(f.step.heldout is None for f in k.findings)
 
 
 def test_the_step_scans_look_elsewhere_bound_holds():
@@ -507,11 +500,8 @@ def test_the_steps_running_sums_are_its_projected_columns(monkeypatch):
     assert fast.theta == slow.theta and fast.theta[0] == "el"
     assert abs(fast.theta[1] - 2.2 * 86400.0) < 86400.0 / n * 3  # found where it was put
     assert fast.trials == pytest.approx(slow.trials, rel=1e-9)
-    # the decision tries a fixed number of change times per axis, spread over the scans
-    times = step.change_times(obs)
-    shapes = [theta for theta, _, _ in step.options(obs)]
-    assert len(shapes) == 2 * min(step.DECISION_TIMES, times.size)
-    assert [t for a, t in shapes if a == "el"] == sorted(t for a, t in shapes if a == "az")
+    # the cross-validated stage compares each axis' most likely change time only
+    assert fast.theta[:2] in step.cv_thetas(problem)
     # a run of consecutive columns is read as a view: the same bits as the gathered rows
     from antsim.diagnose.candidates.changes import _as_slice, _rows_dot
     run = np.arange(3, m2 // 2 - 1)
@@ -616,21 +606,18 @@ def test_list_prints_the_library(capsys):
 
 # ------------------------------------------------------------------------------ real data
 def test_auxtel_stays_parsimonious_and_reports_the_degeneracy():
-    """TPOINT's automatic model chose 22 terms for these 44 stars: diagnose keeps at most 4
-    findings, each over the one threshold and stable, and its nested held-out Sky RMS (the
-    selection repeated on each fold) is below the eight terms'; the degeneracies are said in
-    TPOINT's words, and the finding the repeated selection does not predict with is refused
-    in words."""
     d = diagnose(load_observations(REAL / "auxtel_20200315.dat"))
     assert d.baseline.terms == ("IA", "IE", "NPAE", "CA", "AN", "AW", "TF", "TX")
-    assert 1 <= len(d.findings) <= 4
-    assert all(f.step.significance >= 2.58 and f.step.stability >= 0.5 for f in d.findings)
+    assert len(d.findings) <= 4
     text = d.text()
     assert "cannot reliably be distinguished" in text
     assert any("TF" in w and "TX" in w for w in d.degeneracies()), d.degeneracies()
     s = d.summary
     assert s["cv_sky_rms_after_arcsec"] < s["cv_sky_rms_before_arcsec"]
-    assert any("does not predict held-out data" in r.reason for r in d.selection.refused)
+    # the data's README: a good selector keeps no term whose size is set by a near-degenerate
+    # partner; what prediction alone keeps is never one the model mimics
+    kept = [f for f in d.findings if f.step.heldout is not None]
+    assert all(f.step.separation.r <= 0.95 for f in kept)
     # docs/diagnose.md quotes the findings as the command prints them
     readme = (Path(__file__).resolve().parents[3] / "docs" / "diagnose.md").read_text(
         encoding="utf-8")
@@ -641,11 +628,11 @@ def test_auxtel_stays_parsimonious_and_reports_the_degeneracy():
 
 
 def test_auxtel_procedure_predicts_held_out_stars():
-    """Diagnose as a procedure, the whole of its decision repeated inside each fold (11
-    folds of 4 stars here; every star alone in benchmarks/real.py, docs/results/real.txt:
-    14.08" against 20.16" for the eight terms): at most 4 findings in every fold, and the
-    held-out Sky RMS well below the eight terms' (measured 0.70 of it; 0.85 leaves room for
-    the folds' noise and still asks for a 3" gain, half the first finding's worth)."""
+    """Diagnose as a procedure, its selection repeated inside each fold (11 folds of 4 stars
+    here; every star alone in benchmarks/blind.py --real --nested: 10.37" against 11.11"
+    for an automatic 22-term search and 20.16" for the eight terms): at most 4 findings in
+    every fold, and the held-out Sky RMS well below the eight terms' (measured 12.7" against
+    20.1", a ratio of 0.63; 0.75 would still be 3.7" better, the first finding's worth)."""
     from antsim.diagnose.linalg import lstsq
 
     obs = load_observations(REAL / "auxtel_20200315.dat")
@@ -654,7 +641,7 @@ def test_auxtel_procedure_predicts_held_out_stars():
     sq = {"diagnose": 0.0, "eight": 0.0}
     for k in range(11):
         train = folds != k
-        d = diagnose(obs.select(train), held_out=False)
+        d = diagnose(obs.select(train))
         assert len(d.findings) <= 4
         for key, names in (("diagnose", d.updated_model().names), ("eight", d.baseline.terms)):
             x = term_columns(list(names), obs)
@@ -663,17 +650,18 @@ def test_auxtel_procedure_predicts_held_out_stars():
             r = (y - x @ coef).reshape(2, -1)[:, ~train]
             sq[key] += float(np.sum(r**2))
     held = {key: math.sqrt(v / obs.n) for key, v in sq.items()}
-    assert held["diagnose"] < 0.85 * held["eight"], held
+    assert held["diagnose"] < 0.75 * held["eight"], held
 
 
 def test_mmt_needs_at_most_a_small_addition():
-    """80 stars of the MMT fitted to 0.93" by the eight terms: at most one finding (the
-    twice-per-turn azimuth pair, 3.4 sigma), stable, that the nested held-out Sky RMS does
-    not make worse; the fit reproduces TPOINT's Sky RMS."""
+    """By significance at most one marginal pair; the cross-validated stage may add terms
+    that predict held-out stars better, each said to be kept by cross-validation."""
     d = diagnose(load_observations(REAL / "mmt_20210821_k_and_e.dat"))
-    assert len(d.findings) <= 1
-    for f in d.findings:
-        assert f.step.significance >= 2.58 and f.step.stability >= 0.5
+    assert sum(f.step.heldout is None for f in d.findings) <= 1
+    assert len(d.findings) <= 4
+    for f in d.findings[1:]:
+        assert f.step.heldout is not None and f.step.heldout[1] < f.step.heldout[0]
+        assert "kept by cross-validation" in d.text()
     s = d.summary
     assert s["sky_rms_before_arcsec"] == pytest.approx(0.9318, abs=0.002)
     assert s["cv_sky_rms_after_arcsec"] <= s["cv_sky_rms_before_arcsec"] + 1e-9
@@ -1066,6 +1054,118 @@ def test_the_added_columns_fit_and_the_closed_form_held_out_fits_are_the_refits(
         sum(float(np.sum(problem.whiten(problem.y - whole @ problem.fit(whole, problem.used
             & (folds != k)).coef, problem.used & (folds == k)) ** 2)) for k in range(5)),
         rel=1e-9)
+
+
+def test_the_cross_validated_stage_makes_its_options_parameters_before_its_basis(monkeypatch):
+    """Each round of the cross-validated stage asks every option for its parameters (a
+    step's change time: O(n k) sums over every scan) before it factors the model's
+    unweighted basis over the used rows, so that the two are never held together (200,000
+    scans: ~40 MB each at the command's peak, benchmarks/diagnose_scale.py); the data of the
+    test above, where the stage adds a finding and tries again."""
+    import antsim.diagnose.crossval as crossval
+    from antsim.diagnose.candidates.base import Candidate
+
+    calls = []
+    qr = crossval.economic_qr
+
+    def logged_qr(*args, **kwargs):
+        calls.append("basis")
+        return qr(*args, **kwargs)
+
+    def logged(cv_thetas):
+        def logged_thetas(self, problem):
+            calls.append("parameters")
+            return cv_thetas(self, problem)
+        return logged_thetas
+
+    monkeypatch.setattr(crossval, "economic_qr", logged_qr)
+    for cls in {type(c) for c in CANDIDATES} | {Candidate}:
+        if "cv_thetas" in vars(cls):
+            monkeypatch.setattr(cls, "cv_thetas", logged(vars(cls)["cv_thetas"]))
+    obs = synthetic(extra={"HESA2": 2.0, "HECA2": 1.0, "HASA": 0.6, "HACA": -0.6,
+                           "HESA4": 0.6}, seed=11)
+    diagnose(obs)
+    rounds = "".join("b" if c == "basis" else "p" for c in calls)
+    assert rounds.count("b") >= 2  # a finding added, then another round
+    assert re.fullmatch(r"(p+b)+", rounds), rounds
+
+
+def test_the_cross_validated_stage_ranks_its_options_as_the_held_out_losses_do(monkeypatch):
+    """Two code paths of the cross-validated stage's choice: the options' summed held-out
+    losses from per-fold Gram matrices (:class:`FoldSums`) against the losses computed in
+    full (:func:`heldout_losses`, the reference: every option's, the least sum winning, the
+    first of equals). The same projections in another order: 1e-9 relative (measured 1e-15;
+    the design's condition number is 60), the choice the same; an option nearly inside the
+    model's span (r^2 = 1 - 1e-8) is left to the full losses (None), and of two options with
+    the same columns the first is chosen, as the full losses choose it."""
+    from antsim.diagnose.crossval import (
+        FoldSums,
+        Ranked,
+        _best,
+        _losses,
+        contiguous_folds,
+        mimicked,
+    )
+    from antsim.diagnose.linalg import economic_qr, rows_fortran
+
+    problem = _scans_with_unused_and_scaled()
+    obs, n = problem.obs, problem.n
+    folds = contiguous_folds(obs.t_s, 5)
+    cur, rows = problem.current_columns(), problem.rows()
+    q0, r0 = economic_qr(rows_fortran(cur, rows))
+    d0 = np.abs(np.diag(r0))
+    labels = np.concatenate([folds[problem.used]] * 2)
+    sums = FoldSums(q0, d0, problem.y_raw[rows], labels, np.flatnonzero(rows))
+    options = [(candidate("el_periodic_az"), k) for k in (1, 2, 3, 4)] + [
+        (candidate("az_track_2a"), None), (candidate("az_runout_1a"), None)]
+    ranked = []
+    idx = np.flatnonzero(rows)
+    f2 = np.concatenate([problem.offset_scale, problem.offset_scale])
+    for c, theta in options:
+        raw, names = c.columns(obs, theta)
+        total = sums.total(problem.cand(raw))
+        # the option's rows gathered once for the mimicry check and the sums (cv_stage):
+        # the same products, the same bits
+        xg = raw.take(idx, axis=0)
+        assert sums.total_rows(xg * f2[idx, None]) == total
+        assert mimicked(problem, raw, xg) == mimicked(problem, raw)
+        assert np.array_equal(xg * problem.weights()[:, None], problem.whiten(raw))
+        losses = _losses(problem, cur, q0, d0, folds, raw)
+        assert total == pytest.approx(float(losses.sum()), rel=1e-9)
+        # the basis grouped by fold in a copy (scans out of time order) instead of read in
+        # place by runs: the same sums in another order, 1e-12 (the 1e-15 above, with room)
+        monkeypatch.setattr(FoldSums, "MAX_RUNS", 0)
+        grouped = FoldSums(q0, d0, problem.y_raw[rows], labels, np.flatnonzero(rows))
+        monkeypatch.undo()
+        assert grouped.total(problem.cand(raw)) == pytest.approx(total, rel=1e-12)
+        ranked.append(Ranked(total, c, theta, names))
+    def best_of(ranked):  # the reference: the least full sum, the first of equals
+        i = min(range(len(ranked)), key=lambda i: (float(_losses(
+            problem, cur, q0, d0, folds, ranked[i][1].columns(obs, ranked[i][2])[0]).sum()), i))
+        return ranked[i][1].name, ranked[i][2]
+
+    got = _best(problem, cur, q0, d0, folds, ranked)
+    assert (got[1].name, got[2]) == best_of(ranked)
+    assert got[1].name in ("el_periodic_az", "az_track_2a")  # the hidden 30" sin 2A
+    np.testing.assert_array_equal(got[0], _losses(problem, cur, q0, d0, folds, got[3]))
+    # el_periodic_az[2] has az_track_2a's columns: sums equal to rounding, and the full
+    # losses decide between them as the reference does, in either order
+    twin, track = ranked[1], ranked[4]
+    assert twin[0] == pytest.approx(track[0], rel=1e-12)
+    for pair in ([track, twin], [twin, track]):
+        assert (lambda b: (b[1].name, b[2]))(_best(problem, cur, q0, d0, folds, pair)) \
+            == best_of(pair)
+    inside = cur[:, :1] + 1e-4 * np.std(cur[:, 0]) * np.random.default_rng(5).normal(
+        size=(2 * n, 1))
+    assert sums.total(inside) is None
+    assert sums.total(1e-9 * problem.cand(options[0][0].columns(obs, 1)[0])) is None  # tiny
+    # a model with dependent columns: the full losses refit fold by fold, no sums
+    twice = np.column_stack([cur, cur[:, :1]])
+    q2, r2 = economic_qr(rows_fortran(twice, rows))
+    assert FoldSums(q2, np.abs(np.diag(r2)), problem.y_raw[rows], labels,
+                    np.flatnonzero(rows)).total(problem.cand(ranked[4][1].columns(
+                        obs, None)[0])) is None
+    assert _best(problem, cur, q0, d0, folds, []) is None
 
 
 def test_the_current_models_fit_is_kept_while_what_it_depends_on_stays():
