@@ -29,17 +29,33 @@ import os
 import warnings
 import zlib
 from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from zipfile import BadZipFile
 
 import numpy as np
+from scipy.optimize import nnls
 
+import controller
+from antsim.simulate.runner import recording_meta, simulate
 from controller.errors import InputError, Note
+from controller.pointing.data import PointingData
+from controller.pointing.equatorial import (
+    EQUATORIAL_MODELS,
+    equatorial_terms,
+    is_equatorial_term,
+    load_equatorial_model,
+)
+from controller.pointing.fitting import fit_model
 from controller.pointing.model import NAMED_MODELS, PointingModel
+from controller.pointing.modelio import load_model
+from controller.pointing.terms import TermError, get_term, is_term_name
 
 from .._version import __version__
+from ..simulate.streaming import release_prestarted
 from .data import Observations, from_columns, from_rows
+from .fastsim import shared_schedule_columns
 from .problem import Prediction
 
 __all__ = ["BaselineSpec", "SimulatedBaseline", "resolve_baseline", "white_prediction"]
@@ -76,14 +92,10 @@ def parse_model_option(spec: str, obs: Observations | None = None
     an equatorial mount's recordings ``obs``, of its equatorial vocabulary)."""
     if obs is not None and obs.mount == "equatorial":
         return _parse_equatorial_model(spec, obs)
-    from controller.pointing.terms import is_term_name
-
     if spec in NAMED_MODELS:
         return NAMED_MODELS[spec], f"the named model {spec}"
     path = Path(spec)
     if path.is_file():
-        from controller.pointing.modelio import load_model
-
         model = load_model(path)
         return model.names, f"the terms of {path}"
     names = tuple(t.strip().upper() for t in spec.split(",") if t.strip())
@@ -97,12 +109,6 @@ def parse_model_option(spec: str, obs: Observations | None = None
 
 
 def _parse_equatorial_model(spec: str, obs: Observations) -> tuple[tuple[str, ...], str]:
-    from controller.pointing.equatorial import (
-        EQUATORIAL_MODELS,
-        is_equatorial_term,
-        load_equatorial_model,
-    )
-
     if spec in EQUATORIAL_MODELS:
         return EQUATORIAL_MODELS[spec], f"the named equatorial model {spec}"
     if Path(spec).is_file():
@@ -142,8 +148,6 @@ def resolve_baseline(obs: Observations, scenario=None, model: str | None = None)
                 terms = tuple(named)
         origin = f"the model in the recordings' metadata ({obs.model_in_use.name})"
     elif obs.mount == "equatorial":
-        from controller.pointing.equatorial import EQUATORIAL_MODELS
-
         terms = EQUATORIAL_MODELS["crane11"]
         origin = "the equatorial model crane11 (IH ID CH NP MA ME TF FO DAF TX HCES)"
     else:
@@ -151,8 +155,6 @@ def resolve_baseline(obs: Observations, scenario=None, model: str | None = None)
         origin = "TPOINT's eight terms IA IE NPAE CA AN AW TF TX"
     feed_terms = [t for t in terms if _needs_feed_angle(t)]
     if feed_terms:
-        from controller.errors import InputError
-
         raise InputError(obs.path, "baseline terms", " ".join(feed_terms),
                          "diagnose does not use feed-angle terms in its baseline yet",
                          "give --model with the terms without them (e.g. --model ghigo10): "
@@ -163,15 +165,11 @@ def resolve_baseline(obs: Observations, scenario=None, model: str | None = None)
 def _named_models(obs: Observations):
     """The named models' term lists in the recordings' vocabulary."""
     if obs.mount == "equatorial":
-        from controller.pointing.equatorial import EQUATORIAL_MODELS
-
         return EQUATORIAL_MODELS.values()
     return NAMED_MODELS.values()
 
 
 def _needs_feed_angle(name: str) -> bool:
-    from controller.pointing.terms import TermError, get_term
-
     try:
         term = get_term(name)
     except TermError:
@@ -214,9 +212,6 @@ class SimProducts:
 
 def _products(obs: Observations, terms: Sequence) -> SimProducts:
     """One simulation's products; ``terms``: names or Term objects (an equatorial mount's)."""
-    from controller.pointing.data import PointingData
-    from controller.pointing.fitting import fit_model
-
     good = obs.good
     data = PointingData(obs.az_rad[good], obs.el_rad[good], obs.xel_arcsec[good],
                         obs.el_arcsec[good])
@@ -238,8 +233,6 @@ def _products(obs: Observations, terms: Sequence) -> SimProducts:
 def _simulate_rows(args):
     """Worker: one baseline simulation (top level so that a process pool can run it)."""
     scenario, seed = args
-    from antsim.simulate.runner import recording_meta, simulate
-
     result = simulate(scenario, seed)
     return result.rows, recording_meta(scenario, seed, result.model)
 
@@ -253,8 +246,6 @@ def code_fingerprint() -> str:
     redone when that code changes."""
     global _FINGERPRINT
     if _FINGERPRINT is None:
-        import controller
-
         h = hashlib.sha256()
         roots = [Path(__file__).resolve().parents[1], Path(controller.__file__).resolve().parent]
         skip_dirs = {"diagnose", "commands", "plan", "figures"}
@@ -341,8 +332,6 @@ class SimulatedBaseline:
         #: the terms each simulation is fitted with (an equatorial mount's own vocabulary)
         self.fit_terms = self.terms
         if self.mount == "equatorial":
-            from controller.pointing.equatorial import equatorial_terms
-
             self.fit_terms = equatorial_terms(self.terms, scenario.site.latitude_deg)
         seeds = []
         k = 0
@@ -394,12 +383,8 @@ class SimulatedBaseline:
                                f"by antsim for this scenario and seed ({why}); simulated "
                                "again"), stacklevel=3)
         if not todo or self.scenario.controller.method != "five_point":
-            from ..simulate.streaming import release_prestarted
-
             release_prestarted()  # no members to stream (antsim diagnose started one)
         else:
-            from .fastsim import shared_schedule_columns
-
             shared = shared_schedule_columns(self.scenario, todo, self.jobs)
             for seed, cols in shared.items():
                 prod = _products(from_columns(cols), self.fit_terms)
@@ -410,8 +395,6 @@ class SimulatedBaseline:
         if todo:
             args = [(self.scenario, s) for s in todo]
             if self.jobs > 1 and len(todo) > 1:
-                from concurrent.futures import ProcessPoolExecutor
-
                 with ProcessPoolExecutor(max_workers=min(self.jobs, len(todo))) as pool:
                     results = list(pool.map(_simulate_rows, args))
             else:
@@ -498,8 +481,6 @@ class SimulatedBaseline:
         """Per axis, the correlation in time of the noise: the simulations' deviations from
         their mean, paired within each simulation and binned by lag, fitted by a sum of
         exponentials with non-negative weights (positive definite by construction)."""
-        from scipy.optimize import nnls
-
         ref = self.products[0]
         geo = Observations(t_s=ref.t_s, az_rad=ref.az_rad, el_rad=ref.el_rad,
                            xel_arcsec=np.zeros(ref.t_s.size), el_arcsec=np.zeros(ref.t_s.size),

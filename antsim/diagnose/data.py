@@ -27,8 +27,11 @@ from typing import Any
 import numpy as np
 
 from controller.errors import InputError
+from controller.pointing.equatorial import equatorial_model, equatorial_terms
 from controller.pointing.model import PointingModel
 from controller.pointing.thermal import sensor_aux, structure_sensor_names
+from controller.pointing.tpoint import read_tpoint
+from controller.program.inputs import read_pointing_file
 
 __all__ = ["Observations", "load_observations"]
 
@@ -134,8 +137,6 @@ class Observations:
         names = list(names)
         if self.mount != "equatorial":
             return names
-        from controller.pointing.equatorial import equatorial_terms
-
         return list(equatorial_terms(names, math.degrees(self.latitude_rad)))
 
     def select(self, mask: np.ndarray) -> Observations:
@@ -272,8 +273,6 @@ def _model_from_meta(meta: Mapping[str, Any], mount: str = "altaz") -> PointingM
     terms = model.get("terms_arcsec") or {}
     try:
         if mount == "equatorial":
-            from controller.pointing.equatorial import equatorial_model
-
             return equatorial_model(list(terms), float(meta["site"]["latitude_deg"]),
                                     list(terms.values()), name=str(model.get("name")))
         return PointingModel(list(terms), list(terms.values()), name=str(model.get("name")))
@@ -286,8 +285,6 @@ def from_tpoint(path: str | Path, include_masked: bool = False,
     """Observations from a TPOINT pointing data file (no time, source or weather columns);
     ``meta["notes"]`` carries the reader's notes (how a file without a mount option was
     read)."""
-    from controller.pointing.tpoint import read_tpoint
-
     return _from_tpoint_data(read_tpoint(path, mount=mount), include_masked)
 
 
@@ -316,8 +313,6 @@ def load_observations(path: str | Path, mount: str | None = None,
     (:func:`controller.program.inputs.read_pointing_file`, which decides the kind and
     checks the file); ``mount="altaz"`` reads a TPOINT file's decimal records as Az/El
     (``--mount altaz``). ``meta["notes"]``: the reader's notes, a line each."""
-    from controller.program.inputs import read_pointing_file
-
     file = read_pointing_file(path, purpose="diagnose", csv_options=csv_options, mount=mount)
     if file.kind == "tpoint":
         obs = _from_tpoint_data(file.tpoint)

@@ -10,14 +10,21 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from fnmatch import fnmatch
 from pathlib import Path
 from typing import Any
 
+from antsim.bundled import find
 from antsim.options import MAX_SIMULATIONS, check_count, check_processes
 from antsim.progress import Progress
+from antsim.scenario import load_scenario
+from antsim.simulate.streaming import prestart
 from controller.errors import InputError
+from controller.program.recordings import recorded_mount
 
+from . import diagnose, load_observations
 from .core import Diagnosis
+from .modelit import write_outputs
 
 __all__ = ["OUTPUTS", "Asked", "check_options", "diagnose_file", "read_scenario",
            "refuse_links"]
@@ -52,8 +59,6 @@ def check_options(jobs: int, sims: int, resimulate: int | None, model: str | Non
 def refuse_links(out: Path) -> None:
     """A symbolic link where diagnose writes one of its files would be written through
     (its target overwritten): refused before anything runs."""
-    from fnmatch import fnmatch
-
     links = sorted(p.name for p in out.iterdir() if p.is_symlink() and (
         p.name in OUTPUTS or fnmatch(p.name, "diagnose*.png")))
     if links:
@@ -67,10 +72,6 @@ def read_scenario(spec: str, recordings: str | Path, jobs: int):
     """The scenario ``spec`` (a name or a TOML file) that should explain ``recordings``,
     refused when the recordings name another mount; its quiet campaign started on a second
     process where ``jobs`` allow (:func:`antsim.simulate.streaming.prestart`)."""
-    from antsim.bundled import find
-    from antsim.scenario import load_scenario
-    from controller.program.recordings import recorded_mount
-
     scenario = load_scenario(find(spec, field="--scenario"))
     mount = recorded_mount(recordings)
     if mount is not None and mount != scenario.mount.kind:  # before 7 s of simulation
@@ -81,8 +82,6 @@ def read_scenario(spec: str, recordings: str | Path, jobs: int):
     if Path(recordings).is_file():
         # a cold baseline's quiet campaign starts now, on the second core, while this
         # process imports the analysis and reads the recordings (antsim.simulate.streaming)
-        from antsim.simulate.streaming import prestart
-
         prestart(jobs, scenario)
     return scenario
 
@@ -99,8 +98,6 @@ def diagnose_file(recordings: str | Path, scenario=None, *, scenario_spec: str |
     the caller holds, :func:`refuse_links` checked) write its files, re-simulating
     ``resimulate`` times (None: 4). ``note``: told each of the reader's notes;
     ``progress``: the command's, told each stage."""
-    from . import diagnose, load_observations
-
     progress = progress if progress is not None else Progress("diagnose", False)
     progress.stage("reading the recordings")
     obs = load_observations(recordings, mount=mount, csv_options=list(csv_options))
@@ -123,8 +120,6 @@ def diagnose_file(recordings: str | Path, scenario=None, *, scenario_spec: str |
         raise InputError(str(recordings), "observations", obs.n, str(err)) from None
     if out is None:
         return Asked(diag)
-    from .modelit import write_outputs
-
     resim = 4 if resimulate is None else resimulate
     progress.stage("writing the outputs" + (f" and re-simulating {resim} times"
                                             if scenario and resim else ""))
