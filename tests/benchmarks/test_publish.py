@@ -105,6 +105,10 @@ def test_wall_times_are_compared_without_their_value():
     assert publish.normalized("wall time 1337 s\nfalse alarms 0/23", blind) == \
         "<time>\nfalse alarms 0/23"
     assert publish.normalized("tau 4947 +- 1109 s", blind) == "tau 4947 +- 1109 s"
+    # a time that ends the first line of many (not the text) is taken out too
+    accuracy = publish.BY_NAME["plan_accuracy"]
+    assert publish.normalized("plan x: 200 members; 1 worker; 14 s\n\nvariant  W1", accuracy) \
+        == "plan x: 200 members; 1 worker<time>\n\nvariant  W1"
 
 
 def test_the_records_are_the_registrys():
