@@ -271,3 +271,22 @@ def installed(built_wheel, tmp_path_factory) -> Installed:
                     "install", "--no-deps", "--no-index", "-q", str(built_wheel)], check=True,
                    capture_output=True, text=True)
     return Installed(root, built_wheel)
+
+
+def member_engine(scenario_text: str, directory: Path):
+    """(scenario, member engine) of a scenario's text: its quiet campaign's shared schedule
+    and a reference world, as antsim plan builds them (written to ``directory``)."""
+    import simpy
+
+    from antsim.scenario import load_scenario
+    from antsim.simulate.vectorized import MemberEngine, quiet_scenario, record_schedule
+    from antsim.world.world import World
+
+    path = directory / "scenario.toml"
+    path.write_text(scenario_text, encoding="utf-8")
+    scenario = load_scenario(path)
+    quiet = quiet_scenario(scenario)
+    shared, _ = record_schedule(quiet)
+    terms, name = scenario.controller.fit_spec()
+    return scenario, MemberEngine(scenario, shared, World(quiet, simpy.Environment(), 0),
+                                  terms, name)

@@ -9,12 +9,6 @@ import math
 import pytest
 
 from antsim.cli import main as cli_main
-from antsim.scenario import load_scenario
-from antsim.simulate.vectorized import (
-    MemberEngine,
-    quiet_scenario,
-    record_schedule,
-)
 
 PLAN = """name = "short"
 scenario = "{scenario}"
@@ -53,21 +47,11 @@ def smooth_engine(tmp_path_factory, short_ghigo_text):
     robust fit's rejections, not the noise, most of the members' scatter, which the
     prediction's Gaussian rejection draws underestimate (W1, W2, W4 by 40-55% with them:
     docs/physics.md, The night residual)."""
-    import simpy
-
-    from antsim.world.world import World
-    from tests.conftest import NOISE_ONLY, edit_text
+    from tests.conftest import NOISE_ONLY, edit_text, member_engine
 
     smooth = edit_text(short_ghigo_text, [e for e in NOISE_ONLY
                                           if e[0].startswith(("az_", "el_enc", "track_"))])
-    path = tmp_path_factory.mktemp("smooth") / "smooth.toml"
-    path.write_text(smooth, encoding="utf-8")
-    scenario = load_scenario(path)
-    quiet = quiet_scenario(scenario)
-    shared, _ = record_schedule(quiet)
-    terms, name = scenario.controller.fit_spec()
-    engine = MemberEngine(scenario, shared, World(quiet, simpy.Environment(), 0), terms, name)
-    return scenario, engine
+    return member_engine(smooth, tmp_path_factory.mktemp("smooth"))
 
 
 @pytest.fixture(scope="module")
