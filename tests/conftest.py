@@ -93,6 +93,15 @@ def short_ghigo_text(ghigo_text) -> str:
 
 
 @pytest.fixture(scope="session")
+def short_path(tmp_path_factory, short_ghigo_text) -> Path:
+    """The 1990 scenario cut to 3 hours, as a file (read only: a test that edits it writes
+    its own)."""
+    path = tmp_path_factory.mktemp("short_scenario") / "short.toml"
+    path.write_text(short_ghigo_text, encoding="utf-8")
+    return path
+
+
+@pytest.fixture(scope="session")
 def quiet_path() -> Path:
     """A noise-free, atmosphere-free one-hour test world (see the file's comments)."""
     return TEST_SCENARIOS / "quiet.toml"

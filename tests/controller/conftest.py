@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 from antsim.scenario import load_scenario
-from tests.antsim.serve.conftest import server, short_path  # noqa: F401 (the fixtures)
+from tests.antsim.serve.conftest import server  # noqa: F401 (the fixture)
 
 ROOT = Path(__file__).resolve().parents[2]
 GHIGO = ROOT / "scenarios" / "ghigo1990.toml"

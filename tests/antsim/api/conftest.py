@@ -33,14 +33,6 @@ def command_error(argv: list[str]) -> str:
 
 
 @pytest.fixture(scope="session")
-def short_path(tmp_path_factory, short_ghigo_text) -> Path:
-    """The 1990 scenario cut to 3 hours, as a file."""
-    path = tmp_path_factory.mktemp("api_scenario") / "short.toml"
-    path.write_text(short_ghigo_text, encoding="utf-8")
-    return path
-
-
-@pytest.fixture(scope="session")
 def command_run(tmp_path_factory, short_path) -> Path:
     """``antsim run short.toml --out DIR`` (its report too): DIR."""
     out = tmp_path_factory.mktemp("api_command") / "run"

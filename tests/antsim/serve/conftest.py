@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import socket
 import time
-from pathlib import Path
 
 import pytest
 
@@ -81,13 +80,6 @@ class LineClient:
     def close(self) -> None:
         self.file.close()
         self.sock.close()
-
-
-@pytest.fixture(scope="module")
-def short_path(tmp_path_factory, short_ghigo_text) -> Path:
-    path = tmp_path_factory.mktemp("serve") / "short.toml"
-    path.write_text(short_ghigo_text, encoding="utf-8")
-    return path
 
 
 @pytest.fixture(scope="module")
